@@ -1,0 +1,30 @@
+"""Cubic Hermite centreline on η ∈ [-1, 1] (design.md §2).
+
+``r(η) = H1 r1 + H2 t1 + H3 r2 + H4 t2`` with unit tangents t and the element length L
+entering H2, H4, so that dr/dη = L/2 · t at the nodes:
+
+    H1 = (2 - 3η + η³)/4        H2 = L/8 (1 - η - η² + η³)
+    H3 = (2 + 3η - η³)/4        H4 = L/8 (-1 - η + η² + η³)
+
+L is the arc length of the curve it defines (see :func:`mortar1d3d.mesh.hermite_lengths`).
+"""
+from ..._config import njit
+
+
+@njit
+def shape(eta, length, H):
+    e2 = eta * eta
+    e3 = e2 * eta
+    H[0] = 0.25 * (2.0 - 3.0 * eta + e3)
+    H[1] = 0.125 * length * (1.0 - eta - e2 + e3)
+    H[2] = 0.25 * (2.0 + 3.0 * eta - e3)
+    H[3] = 0.125 * length * (-1.0 - eta + e2 + e3)
+
+
+@njit
+def deriv(eta, length, dH):
+    e2 = eta * eta
+    dH[0] = 0.75 * (e2 - 1.0)
+    dH[1] = 0.125 * length * (-1.0 - 2.0 * eta + 3.0 * e2)
+    dH[2] = 0.75 * (1.0 - e2)
+    dH[3] = 0.125 * length * (-1.0 + 2.0 * eta + 3.0 * e2)

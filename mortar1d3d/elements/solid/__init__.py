@@ -1,0 +1,1 @@
+"""Solid element types, one module each; ``dispatch`` registers them."""

@@ -1,0 +1,409 @@
+"""Model generators: structured boxes, distorted meshes, fibre cubes and random curved beams.
+
+Everything here is deterministic (a seed in, the same arrays out) and vectorised with numpy:
+no Python loop over elements, fibres or nodes, so benchmark scenes build in well under a second.
+
+- :func:`box`: structured mesh of an axis-aligned box for every solid element type, with the
+  six face node sets ``x_min`` ... ``z_max``.
+- :func:`distort`: a copy of a solid mesh with its interior nodes moved by a smooth field.
+- :func:`fibre_cube`: the benchmark scene of design.md §5 (the unit cube, straight or helical
+  fibres drawn with splitmix64 so that other codes can rebuild the same curves).
+- :func:`random_curved_beams`: random helix pieces and arcs inside a box, for tests.
+- :func:`splitmix64`, :func:`splitmix64_uniforms`: the random stream of design.md §5.
+"""
+import numpy as np
+
+from .elements.solid.dispatch import SOLID_ELEMENTS, SOLID_MODULES
+from .mesh import BeamMesh, SolidMesh
+
+__all__ = ["box", "distort", "fibre_cube", "random_curved_beams", "splitmix64", "splitmix64_uniforms",
+           "FIBRE_LENGTH", "FIBRE_MARGIN", "HELIX_RADIUS", "HELIX_TURNS", "FACE_SETS"]
+
+# design.md §5: fixed so that every code builds the same scene from (n, fibres, m, curved, seed)
+FIBRE_LENGTH = 0.3      # L: axial length of every fibre
+FIBRE_MARGIN = 0.02     # gap between a fibre's bounding box and the cube faces
+HELIX_RADIUS = 0.03     # R of the curved fibres
+HELIX_TURNS = 2         # turns of the curved fibres
+
+#: Names of the face node sets of :func:`box`, in the order (axis, side).
+FACE_SETS = ("x_min", "x_max", "y_min", "y_max", "z_min", "z_max")
+
+_MASK64 = (1 << 64) - 1
+_SPLITMIX_GAMMA = np.uint64(0x9E3779B97F4A7C15)
+_SPLITMIX_M1 = np.uint64(0xBF58476D1CE4E5B9)
+_SPLITMIX_M2 = np.uint64(0x94D049BB133111EB)
+
+
+# -- random stream (design.md §5) ------------------------------------------------------------
+
+def splitmix64(seed, count):
+    """The first ``count`` outputs of splitmix64 started from ``state = seed``.
+
+    Each draw does ``state += 0x9E3779B97F4A7C15; z = state; z = (z ^ z>>30) * 0xBF58476D1CE4E5B9;
+    z = (z ^ z>>27) * 0x94D049BB133111EB; z ^= z>>31`` with 64-bit wrap-around. Since the state
+    only ever grows by the constant, draw k (1-based) starts from ``seed + k * gamma mod 2^64``,
+    which lets all draws be computed at once.
+
+    Parameters
+    ----------
+    seed : int
+        Any Python integer; taken modulo 2^64.
+    count : int
+
+    Returns
+    -------
+    (count,) uint64
+    """
+    state = np.uint64(int(seed) & _MASK64)
+    # numpy uint64 array arithmetic wraps modulo 2^64 silently, which is exactly the C semantics
+    z = state + np.arange(1, int(count) + 1, dtype=np.uint64) * _SPLITMIX_GAMMA
+    z = (z ^ (z >> np.uint64(30))) * _SPLITMIX_M1
+    z = (z ^ (z >> np.uint64(27))) * _SPLITMIX_M2
+    return z ^ (z >> np.uint64(31))
+
+
+def splitmix64_uniforms(seed, count):
+    """Uniform values ``(z >> 11) * 2^-53`` in [0, 1) of the first ``count`` splitmix64 draws.
+
+    Returns
+    -------
+    (count,) float64
+        Exact: ``z >> 11`` has 53 bits, so the conversion to float64 does not round.
+    """
+    return (splitmix64(seed, count) >> np.uint64(11)).astype(np.float64) * 2.0 ** -53
+
+
+# -- curves ------------------------------------------------------------------------------------
+
+def _helix_frame(d):
+    """Unit vectors e1, e2 normal to the unit axes ``d`` (k, 3), as design.md §5 defines them.
+
+    ``e1 = normalize(d × e*)`` with ``e* = e_x`` if ``|d_x| < 0.9`` else ``e_y`` (far from
+    parallel to d, so the cross product is well conditioned); ``e2 = d × e1``.
+    """
+    helper = np.zeros_like(d)
+    use_x = np.abs(d[:, 0]) < 0.9
+    helper[use_x, 0] = 1.0
+    helper[~use_x, 1] = 1.0
+    e1 = np.cross(d, helper)
+    e1 /= np.linalg.norm(e1, axis=1)[:, None]
+    return e1, np.cross(d, e1)
+
+
+def _helices(centres, axes, length, radius, turns, phase, n_elements):
+    """Nodes and unit tangents of helices sampled at ``s = i / n_elements``, i = 0..n_elements.
+
+    Helix k: ``c + (s - 1/2) length d + radius (cos θ e1 + sin θ e2)``, ``θ = phase + 2π turns s``,
+    s ∈ [0, 1]. Per-helix parameters are arrays of shape (k,) (``centres``, ``axes``: (k, 3));
+    ``radius = 0`` gives a straight segment with tangent d.
+
+    Returns
+    -------
+    positions, tangents : (k * (n_elements + 1), 3) float64
+        Helix k owns rows ``k (n_elements + 1)`` ... ``k (n_elements + 1) + n_elements``.
+    """
+    k = len(centres)
+    s = np.arange(n_elements + 1) / n_elements                                  # (p,)
+    length, radius, turns, phase = (np.broadcast_to(np.asarray(v, dtype=np.float64), (k,))[:, None]
+                                    for v in (length, radius, turns, phase))     # (k, 1)
+    e1, e2 = _helix_frame(axes)
+    theta = phase + 2.0 * np.pi * turns * s                                      # (k, p)
+    cos, sin = np.cos(theta)[..., None], np.sin(theta)[..., None]
+    r = radius[..., None]
+    positions = (centres[:, None, :] + ((s - 0.5) * length)[..., None] * axes[:, None, :]
+                 + r * (cos * e1[:, None, :] + sin * e2[:, None, :]))
+    tangents = (length[..., None] * axes[:, None, :]
+                + (2.0 * np.pi * turns)[..., None] * r * (cos * e2[:, None, :] - sin * e1[:, None, :]))
+    tangents /= np.linalg.norm(tangents, axis=2)[..., None]
+    return positions.reshape(-1, 3), tangents.reshape(-1, 3)
+
+
+def _chain_elements(n_curves, n_elements):
+    """(n_curves * n_elements, 2) node ids: curve f uses nodes f (m+1) ... f (m+1) + m, in order."""
+    first = (np.arange(n_curves)[:, None] * (n_elements + 1) + np.arange(n_elements)[None, :]).ravel()
+    return np.column_stack([first, first + 1])
+
+
+def fibre_cube(n, fibres, elements_per_fibre, curved=False, seed=12345):
+    """The benchmark scene of design.md §5: fibres in the unit cube meshed with n³ hex8.
+
+    Every fibre draws six splitmix64 uniforms u0..u5 (in this order, fibre after fibre, from
+    ``state = seed``): centre ``c_k = a + (1 - 2a) u_k`` (k = 0, 1, 2) with
+    ``a = L/2 + 0.02`` (``+ R`` if curved), axis ``d = (√(1-z²) cos φ, √(1-z²) sin φ, z)`` with
+    ``z = 2 u3 - 1``, ``φ = 2π u4``. A straight fibre has nodes ``c + (i/m - 1/2) L d``,
+    i = 0..m, and tangents d. A curved fibre is a helix of radius R = 0.03 with two turns around
+    the same axis (same axial extent L, centred at c), phase ``2π u5``:
+    ``c + (s - 1/2) L d + R (cos θ e1 + sin θ e2)``, ``θ = 2π u5 + 4π s``, nodes at ``s = i/m``,
+    tangents the normalised derivative; ``e1 = normalize(d × e*)`` (``e* = e_x`` if
+    ``|d_x| < 0.9`` else ``e_y``), ``e2 = d × e1``. u5 is drawn for straight fibres as well, so
+    the straight and curved scenes share their centres and axes.
+
+    The fibres stay inside the cube: a point at axial distance t and radial distance r from the
+    fibre's axis lies within ``sqrt(t² + r²)`` of c in every coordinate, which is at most
+    ``L/2`` (straight) or ``sqrt(L²/4 + R²) < L/2 + R`` (helix); ``a`` adds 0.02 to that, so all
+    nodes and the whole straight centrelines lie in ``[0.02, 0.98]³``. The Hermite interpolant
+    of a helix leaves the helix's cylinder by its interpolation error only (at most 0.009 for
+    ``elements_per_fibre = 1``, round-off from 3 elements on), which the margin covers: curved
+    centrelines lie strictly inside the cube as well. The Hermite length of a helix converges
+    like m⁻⁴: relative error 1.3e-4 at m = 20, below 1e-4 from m = 24 on. Fibres may cross
+    each other; they do not interact.
+
+    Parameters
+    ----------
+    n : int
+        Hexahedra per cube edge (the solid is ``box((0, 0, 0), (1, 1, 1), (n, n, n))``).
+    fibres : int
+        Number of fibres, >= 1.
+    elements_per_fibre : int
+        Hermite elements per fibre (m), >= 1.
+    curved : bool
+        Helices instead of straight fibres.
+    seed : int
+        Initial splitmix64 state.
+
+    Returns
+    -------
+    beams : BeamMesh
+        One Hermite mesh of ``fibres * (m + 1)`` nodes and ``fibres * m`` elements; fibre f
+        uses nodes ``f (m+1)`` ... ``f (m+1) + m``, elements are in fibre order.
+    solid : SolidMesh
+        n³ ``hexahedron`` elements with the face sets of :func:`box`.
+    """
+    n, fibres, m = int(n), int(fibres), int(elements_per_fibre)
+    if fibres < 1 or m < 1:
+        raise ValueError(f"fibre_cube: need fibres >= 1 and elements_per_fibre >= 1, got {fibres}, {m}")
+    L, R = FIBRE_LENGTH, HELIX_RADIUS
+    u = splitmix64_uniforms(seed, 6 * fibres).reshape(fibres, 6)
+    a = L / 2 + FIBRE_MARGIN + (R if curved else 0.0)
+    centres = a + (1.0 - 2.0 * a) * u[:, :3]
+    z = 2.0 * u[:, 3] - 1.0
+    phi = 2.0 * np.pi * u[:, 4]
+    rho = np.sqrt(1.0 - z * z)
+    axes = np.column_stack([rho * np.cos(phi), rho * np.sin(phi), z])
+    if curved:
+        positions, tangents = _helices(centres, axes, L, R, HELIX_TURNS, 2.0 * np.pi * u[:, 5], m)
+    else:
+        # the §5 formula itself (not the helix with R = 0), so other codes match to the last bit
+        s = np.arange(m + 1) / m
+        positions = (centres[:, None, :] + ((s - 0.5) * L)[None, :, None] * axes[:, None, :]).reshape(-1, 3)
+        tangents = np.repeat(axes, m + 1, axis=0)
+    beams = BeamMesh.hermite(positions, tangents, _chain_elements(fibres, m))
+    return beams, box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (n, n, n))
+
+
+def random_curved_beams(count, elements, seed=0, lower=(0.0, 0.0, 0.0), upper=(1.0, 1.0, 1.0)):
+    """Random smooth curves (helix pieces and circular arcs) inside a box, as Hermite beams.
+
+    Curve k is a helix ``c + (s - 1/2) h d + R (cos θ e1 + sin θ e2)``, ``θ = θ0 + 2π t s``,
+    s ∈ [0, 1], with a random unit axis d, radius ``R ∈ [0.05, 0.15] e``, axial length
+    ``h ∈ [0, 0.5] e`` (small h: nearly planar arcs), ``t ∈ [0.25, 1.5]`` turns and phase θ0,
+    where e is the shortest box edge; all drawn with ``numpy.random.default_rng(seed)``. The
+    centre is drawn so that every point of the curve keeps ``0.05 e`` from the box faces (each
+    coordinate stays within ``h/2 + R`` of c); the Hermite interpolant stays inside the box for
+    ``elements >= 3``.
+
+    Parameters
+    ----------
+    count : int
+        Number of curves, >= 1.
+    elements : int
+        Hermite elements per curve (m), >= 1.
+    seed : int
+    lower, upper : (3,) array_like of float
+        Box corners, ``upper > lower``.
+
+    Returns
+    -------
+    BeamMesh
+        Hermite mesh with ``count * (m + 1)`` nodes; curve k uses nodes ``k (m+1)`` ...
+        ``k (m+1) + m`` (layout as in :func:`fibre_cube`).
+    """
+    count, m = int(count), int(elements)
+    if count < 1 or m < 1:
+        raise ValueError(f"random_curved_beams: need count >= 1 and elements >= 1, got {count}, {m}")
+    lower, upper = _box_corners(lower, upper)
+    e = float((upper - lower).min())
+    rng = np.random.default_rng(seed)
+    radius = e * rng.uniform(0.05, 0.15, count)
+    height = e * rng.uniform(0.0, 0.5, count)
+    turns = rng.uniform(0.25, 1.5, count)
+    phase = rng.uniform(0.0, 2.0 * np.pi, count)
+    axes = rng.normal(size=(count, 3))
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    reach = 0.5 * height + radius + 0.05 * e                                     # (count,)
+    centres = lower + reach[:, None] + (upper - lower - 2.0 * reach[:, None]) * rng.uniform(size=(count, 3))
+    positions, tangents = _helices(centres, axes, height, radius, turns, phase, m)
+    return BeamMesh.hermite(positions, tangents, _chain_elements(count, m))
+
+
+# -- structured solid meshes -------------------------------------------------------------------
+
+def _box_corners(lower, upper):
+    lower = np.asarray(lower, dtype=np.float64).reshape(3)
+    upper = np.asarray(upper, dtype=np.float64).reshape(3)
+    if not (np.isfinite(lower).all() and np.isfinite(upper).all() and (upper > lower).all()):
+        raise ValueError(f"box: need finite corners with upper > lower, got {lower}, {upper}")
+    return lower, upper
+
+
+def _linear_weights(name, corner_module):
+    """(n_nodes, n_corners) linear shape functions of the corners at the nodes of ``name``.
+
+    A node of a straight-sided element sits at this average of the corners; on the doubled
+    lattice of quadratic elements the averages are integers (mid-edge, face and cell centres).
+    """
+    reference = SOLID_ELEMENTS[name].reference_nodes
+    shape = SOLID_MODULES[corner_module].shape.py_func      # pure Python: nothing compiles here
+    n_corners = SOLID_ELEMENTS[corner_module].n_nodes
+    W = np.empty((len(reference), n_corners))
+    for a, xi in enumerate(reference):
+        shape(xi, W[a])
+    return W
+
+
+def _kuhn_offsets():
+    """(6, 4, 3) corner offsets of the Kuhn (Freudenthal) split of the unit cube, det J > 0.
+
+    Tet π walks from (0,0,0) to (1,1,1) along the axes in the order of the permutation π; every
+    cube uses the same split, so the face diagonals (all from the (0,0) to the (1,1) corner of
+    the face) match between neighbours and the mesh is conforming. det[v1-v0, v2-v0, v3-v0] is
+    the sign of π: odd permutations swap their last two vertices.
+    """
+    perms = np.array([[0, 1, 2], [1, 2, 0], [2, 0, 1], [0, 2, 1], [2, 1, 0], [1, 0, 2]])
+    eye = np.eye(3, dtype=np.int64)
+    steps = eye[perms]                                                          # (6, 3 steps, 3)
+    offsets = np.concatenate([np.zeros((6, 1, 3), np.int64), np.cumsum(steps, axis=1)], axis=1)
+    offsets[3:, [2, 3]] = offsets[3:, [3, 2]]                                   # the odd permutations
+    return offsets
+
+
+def box(lower, upper, cells, element="hexahedron"):
+    """Structured mesh of the box ``[lower, upper]`` with ``cells = (nx, ny, nz)`` grid cells.
+
+    Every grid cell is one hexahedron (``hexahedron``, ``hexahedron20``, ``hexahedron27``) or six
+    tetrahedra (``tetra``, ``tetra10``: the Kuhn split along the cell diagonal from its lower to
+    its upper corner, the same in every cell, so neighbours conform). Nodes are shared, never
+    duplicated. Quadratic elements take their nodes from the lattice of
+    ``(2nx+1) x (2ny+1) x (2nz+1)`` points (half the cell size); lattice points no element uses
+    (face and cell centres for ``hexahedron20``) are left out.
+
+    Node numbering: lattice order, x fastest, then y, then z (compacted for ``hexahedron20``).
+    Element numbering: cells in the same order (x fastest), the six tetrahedra of a cell
+    consecutive. Node counts: hex8 and tetra ``(nx+1)(ny+1)(nz+1)``; hex27 and tetra10
+    ``(2nx+1)(2ny+1)(2nz+1)`` (the Kuhn split uses every lattice point: a face diagonal per
+    face, the body diagonal per cell); hex20 ``(nx+1)(ny+1)(nz+1) + nx(ny+1)(nz+1) +
+    (nx+1)ny(nz+1) + (nx+1)(ny+1)nz``.
+
+    Parameters
+    ----------
+    lower, upper : (3,) array_like of float
+        Box corners, ``upper > lower``.
+    cells : (3,) sequence of int
+        Grid cells per direction, each >= 1.
+    element : str
+        meshio name of the element type.
+
+    Returns
+    -------
+    SolidMesh
+        With ``point_sets`` ``x_min``, ``x_max``, ``y_min``, ``y_max``, ``z_min``, ``z_max``:
+        sorted int64 ids of the nodes on each face of the box.
+    """
+    lower, upper = _box_corners(lower, upper)
+    cells = np.asarray(cells).reshape(3)
+    if not (np.issubdtype(cells.dtype, np.integer) and (cells >= 1).all()):
+        raise ValueError(f"box: cells must be three integers >= 1, got {cells}")
+    if element not in SOLID_ELEMENTS:
+        raise ValueError(f"box: unknown element type {element!r}; known types: {', '.join(SOLID_ELEMENTS)}")
+    nx, ny, nz = (int(c) for c in cells)
+    descriptor = SOLID_ELEMENTS[element]
+    scale = descriptor.degree            # lattice points per cell edge
+    size = scale * np.array([nx, ny, nz]) + 1
+
+    # Every cell is meshed alike, so the nodes' lattice offsets from the cell's lower corner are
+    # computed once, for the 1 (hex) or 6 (tet) elements of one cell: linear interpolation of the
+    # element corners at the reference nodes. The weights are multiples of 1/8 (products of at
+    # most three 1/2's), so integer arithmetic on 8 W is exact.
+    if descriptor.family == "hex":
+        corners = ((SOLID_ELEMENTS["hexahedron"].reference_nodes[None] + 1) // 2).astype(np.int64)   # (1, 8, 3)
+        W = _linear_weights(element, "hexahedron")
+    else:
+        corners = _kuhn_offsets()                                                # (6, 4, 3)
+        W = _linear_weights(element, "tetra")
+    W8 = np.rint(8 * W).astype(np.int64)
+    offsets = (W8 @ (scale * corners)) // 8                                     # (per cell, n_nodes, 3)
+    strides = np.array([1, size[0], size[0] * size[1]])
+    # lower corner of every cell (x fastest) as a lattice id, plus the node offsets
+    c = np.arange(nx * ny * nz)
+    cell_base = scale * np.column_stack([c % nx, (c // nx) % ny, c // (nx * ny)]) @ strides
+    ids = (cell_base[:, None, None] + (offsets @ strides)[None]).reshape(-1, descriptor.n_nodes)
+
+    # keep only the lattice points in use, renumbered in lattice order
+    used = np.zeros(int(np.prod(size)), dtype=bool)
+    used[ids] = True
+    kept = np.flatnonzero(used)
+    new_id = np.cumsum(used) - 1
+    connectivity = new_id[ids]
+    I = np.column_stack([kept % size[0], (kept // size[0]) % size[1], kept // (size[0] * size[1])])
+
+    # linspace hits both corners exactly, so the face nodes lie exactly on the face planes
+    axes = [np.linspace(lower[k], upper[k], size[k]) for k in range(3)]
+    points = np.column_stack([axes[k][I[:, k]] for k in range(3)])
+    point_sets = {}
+    for k, axis in enumerate("xyz"):
+        point_sets[f"{axis}_min"] = np.flatnonzero(I[:, k] == 0)
+        point_sets[f"{axis}_max"] = np.flatnonzero(I[:, k] == size[k] - 1)
+    return SolidMesh(points, {element: connectivity}, point_sets=point_sets)
+
+
+# -- distortion --------------------------------------------------------------------------------
+
+def distort(solid, amplitude=0.1, seed=0):
+    """A copy of ``solid`` with its interior nodes moved by a smooth deterministic field.
+
+    Node x moves by ``amplitude * h ⊙ g(x) * ramp(x)``, where h (3,) is the cell size per
+    direction (the smallest element extent along each axis), every component of g is a sum of
+    three sines of random direction, phase and wavelength (6 to 12 cells; weights sum to one, so
+    ``|g_i| <= 1``), and ``ramp = min(1, distance to the bounding box / h)`` (per direction)
+    fades the motion out towards the boundary. Nodes on the bounding box faces do not move, so
+    the box keeps its faces, volume and point sets. The displacement gradient stays below about
+    ``2 * amplitude`` (in cell units), so the mesh remains valid up to ``amplitude ≈ 0.2``;
+    inverted elements raise :class:`~mortar1d3d.errors.MeshError` as in :class:`SolidMesh`.
+
+    Parameters
+    ----------
+    solid : SolidMesh
+    amplitude : float
+        Largest displacement per component, relative to the cell size.
+    seed : int
+        Seed of ``numpy.random.default_rng`` for the field's directions, phases, wavelengths.
+
+    Returns
+    -------
+    SolidMesh
+        Same cells and point sets, moved points.
+    """
+    X = solid.points
+    lo, hi = X.min(axis=0), X.max(axis=0)
+    h = np.full(3, np.inf)
+    for d, conn in solid.blocks:
+        P = X[conn]
+        h = np.minimum(h, (P.max(axis=1) - P.min(axis=1)).min(axis=0))
+    h = np.where(h > 0, h, hi - lo)            # a flat direction (no extent) has nothing to distort
+    rng = np.random.default_rng(seed)
+    n_waves = 3
+    directions = rng.normal(size=(3, n_waves, 3))
+    directions /= np.linalg.norm(directions, axis=2)[..., None]
+    wavenumber = 2.0 * np.pi / rng.uniform(6.0, 12.0, size=(3, n_waves))     # radians per cell
+    phase = rng.uniform(0.0, 2.0 * np.pi, size=(3, n_waves))
+    weight = rng.uniform(0.5, 1.0, size=(3, n_waves))
+    weight /= weight.sum(axis=1)[:, None]
+    Y = (X - lo) / h                                                            # cell units
+    arg = np.einsum("iwk,nk->niw", directions * wavenumber[..., None], Y) + phase
+    g = np.einsum("niw,iw->ni", np.sin(arg), weight)                            # (n_nodes, 3)
+    distance = np.minimum(X - lo, hi - X) / h                                   # cell units per axis
+    ramp = np.clip(distance.min(axis=1), 0.0, 1.0)
+    on_boundary = ((np.abs(X - lo) <= 1e-12 * (hi - lo)) | (np.abs(hi - X) <= 1e-12 * (hi - lo))).any(axis=1)
+    ramp[on_boundary] = 0.0
+    points = X + amplitude * h * g * ramp[:, None]
+    return SolidMesh(points, solid.cells, point_sets=solid.point_sets)

@@ -1,0 +1,1 @@
+"""Geometry kernels: broad phase, projection into solid elements, beam-face intersection, segmentation."""

@@ -1,0 +1,170 @@
+"""Broad phase: candidate (beam element, solid element) pairs whose bounding boxes overlap.
+
+Bounding boxes are conservative: the convex hull of the Bézier control points of a beam
+element (Hermite: r1, r1 + L/3 t1, r2 - L/3 t2, r2) and of the Bernstein control points of a
+solid element (``descriptor.bounding_matrix``) contains the element. Solid boxes are binned in
+a uniform grid; each beam box visits only the grid cells it covers, so the cost is
+O(n_beam + n_solid) for meshes of comparable element sizes, not O(n_beam · n_solid).
+"""
+import numpy as np
+from numba import prange
+
+from .._config import PARAMETER_TOL, njit, njit_parallel
+from ..elements.solid.dispatch import SOLID_ELEMENTS
+
+
+def solid_bounding_boxes(solid, padding=PARAMETER_TOL):
+    """(n_elements, 2, 3) boxes [min, max] of the solid elements, padded by ``padding``·h.
+
+    Returns the boxes and the element sizes h (box diagonals before padding).
+    """
+    boxes = np.empty((solid.n_elements, 2, 3))
+    start = 0
+    for d, conn in solid.blocks:
+        X = solid.points[conn]
+        C = np.einsum("ca,mai->mci", d.bounding_matrix, X) if d.degree > 1 else X
+        boxes[start:start + len(conn), 0] = C.min(axis=1)
+        boxes[start:start + len(conn), 1] = C.max(axis=1)
+        start += len(conn)
+    return _pad(boxes, padding)
+
+
+def beam_bounding_boxes(beams, padding=PARAMETER_TOL):
+    """(n_elements, 2, 3) padded boxes of the beam elements, and their sizes."""
+    Q = beams.coefficients()
+    name = beams.element_type.name
+    if name == "hermite":
+        L = beams.lengths[:, None]
+        C = np.stack([Q[:, 0], Q[:, 0] + L / 3 * Q[:, 1], Q[:, 2] - L / 3 * Q[:, 3], Q[:, 2]], axis=1)
+    elif name == "line3":
+        C = np.stack([Q[:, 0], 2 * Q[:, 2] - 0.5 * (Q[:, 0] + Q[:, 1]), Q[:, 1]], axis=1)
+    else:
+        C = Q[:, :2]
+    boxes = np.stack([C.min(axis=1), C.max(axis=1)], axis=1)
+    return _pad(boxes, padding)
+
+
+def _pad(boxes, padding):
+    size = np.linalg.norm(boxes[:, 1] - boxes[:, 0], axis=1)
+    # relative to the element size, plus a few ulps of the coordinates (far from the origin)
+    pad = padding * size + 8 * np.finfo(float).eps * np.abs(boxes).max(axis=(1, 2))
+    boxes[:, 0] -= pad[:, None]
+    boxes[:, 1] += pad[:, None]
+    return boxes, size
+
+
+@njit
+def _cell_range(box, lower, inv_cell, dims, lo, hi):
+    """Grid cells covered by ``box``; False if the box misses the grid."""
+    for i in range(3):
+        a = int(np.floor((box[0, i] - lower[i]) * inv_cell))
+        b = int(np.floor((box[1, i] - lower[i]) * inv_cell))
+        if b < 0 or a >= dims[i]:
+            return False
+        lo[i] = max(a, 0)
+        hi[i] = min(b, dims[i] - 1)
+    return True
+
+
+@njit
+def _bin_solids(solid_boxes, lower, inv_cell, dims):
+    """CSR (offsets, ids) of the solid elements whose box covers each grid cell."""
+    n_cells = dims[0] * dims[1] * dims[2]
+    counts = np.zeros(n_cells + 1, dtype=np.int64)
+    lo = np.empty(3, dtype=np.int64)
+    hi = np.empty(3, dtype=np.int64)
+    for s in range(solid_boxes.shape[0]):
+        if _cell_range(solid_boxes[s], lower, inv_cell, dims, lo, hi):
+            for i in range(lo[0], hi[0] + 1):
+                for j in range(lo[1], hi[1] + 1):
+                    for k in range(lo[2], hi[2] + 1):
+                        counts[(i * dims[1] + j) * dims[2] + k + 1] += 1
+    offsets = np.cumsum(counts)
+    fill = offsets[:-1].copy()
+    ids = np.empty(offsets[-1], dtype=np.int64)
+    for s in range(solid_boxes.shape[0]):
+        if _cell_range(solid_boxes[s], lower, inv_cell, dims, lo, hi):
+            for i in range(lo[0], hi[0] + 1):
+                for j in range(lo[1], hi[1] + 1):
+                    for k in range(lo[2], hi[2] + 1):
+                        c = (i * dims[1] + j) * dims[2] + k
+                        ids[fill[c]] = s
+                        fill[c] += 1
+    return offsets, ids
+
+
+@njit
+def _overlap(a, b):
+    for i in range(3):
+        if a[1, i] < b[0, i] or b[1, i] < a[0, i]:
+            return False
+    return True
+
+
+@njit
+def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, out):
+    """Sorted unique solid elements overlapping ``box``; writes into ``out`` if given, returns count."""
+    lo = np.empty(3, dtype=np.int64)
+    hi = np.empty(3, dtype=np.int64)
+    if not _cell_range(box, lower, inv_cell, dims, lo, hi):
+        return 0
+    total = 0
+    for i in range(lo[0], hi[0] + 1):
+        for j in range(lo[1], hi[1] + 1):
+            for k in range(lo[2], hi[2] + 1):
+                c = (i * dims[1] + j) * dims[2] + k
+                total += cell_offsets[c + 1] - cell_offsets[c]
+    found = np.empty(total, dtype=np.int64)
+    n = 0
+    for i in range(lo[0], hi[0] + 1):
+        for j in range(lo[1], hi[1] + 1):
+            for k in range(lo[2], hi[2] + 1):
+                c = (i * dims[1] + j) * dims[2] + k
+                for q in range(cell_offsets[c], cell_offsets[c + 1]):
+                    s = cell_ids[q]
+                    if _overlap(box, solid_boxes[s]):
+                        found[n] = s
+                        n += 1
+    found = np.sort(found[:n])
+    m = 0
+    for q in range(n):
+        if q == 0 or found[q] != found[q - 1]:
+            if out.shape[0] > 0:
+                out[m] = found[q]
+            m += 1
+    return m
+
+
+@njit_parallel
+def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims):
+    n_beam = beam_boxes.shape[0]
+    counts = np.zeros(n_beam + 1, dtype=np.int64)
+    empty = np.empty(0, dtype=np.int64)
+    for e in prange(n_beam):
+        counts[e + 1] = _candidates_of(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower,
+                                       inv_cell, dims, empty)
+    offsets = np.cumsum(counts)
+    solids = np.empty(offsets[-1], dtype=np.int64)
+    for e in prange(n_beam):
+        _candidates_of(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims,
+                       solids[offsets[e]:offsets[e + 1]])
+    return offsets, solids
+
+
+def find_candidate_pairs(beam_boxes, solid_boxes):
+    """Candidate pairs as CSR over beam elements: ``offsets`` (n_beam + 1,), ``solids`` (n_pairs,).
+
+    The solid elements of each beam element are sorted ascending (the ownership rules rely on
+    it). Exactly the pairs whose boxes overlap are returned (tests compare with brute force).
+    """
+    lower = solid_boxes[:, 0].min(axis=0)
+    upper = solid_boxes[:, 1].max(axis=0)
+    extent = np.maximum(upper - lower, 1e-300)
+    sizes = (solid_boxes[:, 1] - solid_boxes[:, 0]).max(axis=1)
+    cell = max(float(np.median(sizes)), float(extent.max()) / 256.0)
+    # keep the grid at most a few cells per element
+    while np.prod(np.ceil(extent / cell)) > 8 * len(solid_boxes) + 64:
+        cell *= 1.25
+    dims = np.maximum(np.ceil(extent / cell).astype(np.int64), 1)
+    offsets_c, ids = _bin_solids(solid_boxes, lower, 1.0 / cell, dims)
+    return _find_pairs(beam_boxes, solid_boxes, offsets_c, ids, lower, 1.0 / cell, dims)

@@ -1,0 +1,1 @@
+"""Quadrature and integration points (element-based and segment-based)."""

@@ -1,0 +1,1 @@
+"""Assembly of the mortar operators D, M and κ."""

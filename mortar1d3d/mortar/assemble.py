@@ -1,0 +1,324 @@
+"""``assemble_mortar``: the mortar operators D, M and κ of beams embedded in a solid.
+
+Per (beam element, solid element) group of integration points g (design.md §1):
+
+    D[j, k] += Σ_g Φ_j(η_g) H_k(η_g) w_g        M[j, a] += Σ_g Φ_j(η_g) N_a(ξ_g) w_g
+    κ[j]    += Σ_g Φ_j(η_g) w_g                  w_g = Gauss weight · (η_b - η_a)/2 · |r0'(η_g)|
+
+and every scalar entry stands for a 3×3 identity block.
+"""
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import prange
+
+from .._config import njit, njit_parallel
+from ..elements.multiplier import multiplier as multiplier_type
+from ..elements.multiplier import shape as lm_shape
+from ..elements.beam import MAX_FUNCTIONS
+from ..elements.beam import n_functions as beam_n_functions
+from ..elements.beam import shape as beam_shape
+from ..elements.solid import dispatch as solid_types
+from ..geometry.search import beam_bounding_boxes, find_candidate_pairs, solid_bounding_boxes
+from ..geometry.segmentation import segment
+from ..integration.rules import POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, element_points, segment_points
+from ..mesh import BeamMesh, SolidMesh
+from .sparse import block_csr
+
+SEGMENT_DTYPE = np.dtype([("beam_element", np.int64), ("solid_element", np.int64),
+                          ("eta_start", np.float64), ("eta_end", np.float64)])
+POINT_DTYPE = np.dtype([("beam_element", np.int64), ("solid_element", np.int64), ("eta", np.float64),
+                        ("xi", np.float64, (3,)), ("weight", np.float64), ("position", np.float64, (3,)),
+                        ("status", np.int64)])
+INTEGRATIONS = ("segment", "element")
+
+
+@dataclass
+class MortarOperators:
+    """The coupling operators and what produced them.
+
+    Attributes
+    ----------
+    D : scipy.sparse.csr_matrix, (3 n_lm, n_beam_centreline_dofs)
+    M : scipy.sparse.csr_matrix, (3 n_lm, 3 n_solid_nodes)
+    kappa : (n_lm,) float64
+        κ_j = ∫ Φ_j ds; zero for LM nodes that no integration point touched.
+    segments : structured array (SEGMENT_DTYPE)
+        Segment-based: the pieces [eta_start, eta_end] of beam elements inside one solid
+        element. Element-based: one row per (beam element, solid element) group of points,
+        spanning the η of its first and last point.
+    points : structured array (POINT_DTYPE)
+        The integration points that were assembled (η, ξ, weight incl. |r0'|, position).
+    n_integration_points : int
+    embedded_length : float
+        Σκ, the beam length that is coupled (certificate: compare with the beam length inside
+        the solid).
+    beam_length : float
+        Total reference length of the beams.
+    constraint_residual : float
+        ‖D q_B − M X_S‖ / ‖D q_B‖ at the reference positions: round-off for any correct
+        integration, since both sides integrate Φ_j times the same point.
+    diagnostics : dict
+        Counts: candidate pairs, face crossings, points not converged / outside their element.
+    timings : dict
+        Wall time in seconds per stage (search, segmentation, integration, assembly, csr).
+    """
+
+    D: object
+    M: object
+    kappa: np.ndarray
+    segments: np.ndarray
+    points: np.ndarray
+    n_lm: int
+    integration: str
+    n_gauss: int
+    lm: str
+    embedded_length: float
+    beam_length: float
+    constraint_residual: float
+    diagnostics: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def n_integration_points(self):
+        return len(self.points)
+
+    @property
+    def coupled_lm_nodes(self):
+        """Boolean mask (n_lm,) of LM nodes with κ > 0."""
+        return self.kappa > 0.0
+
+    def __repr__(self):
+        return (f"MortarOperators({self.integration}-based, n_gauss={self.n_gauss}, lm={self.lm}: "
+                f"D {self.D.shape} nnz {self.D.nnz}, M {self.M.shape} nnz {self.M.nnz}, "
+                f"{len(self.segments)} segments, {self.n_integration_points} points, "
+                f"embedded length {self.embedded_length:.6g} of {self.beam_length:.6g}, "
+                f"residual {self.constraint_residual:.2e})")
+
+
+class KernelInput:
+    """Flat arrays the geometry kernels work on (local frames: see geometry.projection)."""
+
+    def __init__(self, beams, solid):
+        self.points = solid.points
+        self.codes = solid.element_codes
+        self.conn = solid.connectivity
+        self.solid_origin = np.ascontiguousarray(solid.points[solid.connectivity[:, 0]])
+        self.solid_boxes, self.solid_h = solid_bounding_boxes(solid)
+        self.beam_boxes, _ = beam_bounding_boxes(beams)
+        Q = beams.coefficients()
+        self.beam_origin = np.ascontiguousarray(Q[:, 0])
+        position = np.array([1, 0, 1, 0]) if beams.element_type.name == "hermite" else np.array([1, 1, 1, 0])
+        self.Q = np.ascontiguousarray(Q - position[None, :, None] * self.beam_origin[:, None, :])
+        self.lengths = beams.lengths
+        self.beam_code = beams.element_type.code
+        self.pair_offsets, self.pair_solid = find_candidate_pairs(self.beam_boxes, self.solid_boxes)
+
+
+@njit_parallel
+def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
+                     codes, m_offsets, D_local, M_local, kappa_local):
+    n_groups = group_start.shape[0] - 1
+    nH = beam_n_functions(beam_code)
+    for g in prange(n_groups):
+        e = p_beam[group_start[g]]
+        s = p_solid[group_start[g]]
+        nN = solid_types.n_nodes(codes[s])
+        Phi = np.empty(4)
+        H = np.empty(MAX_FUNCTIONS)
+        N = np.empty(solid_types.MAX_NODES)
+        Dg = np.zeros((4, MAX_FUNCTIONS))
+        Mg = np.zeros((4, solid_types.MAX_NODES))
+        kg = np.zeros(4)
+        for q in range(group_start[g], group_start[g + 1]):
+            lm_shape(n_phi, eta[q], Phi)
+            beam_shape(beam_code, eta[q], lengths[e], H)
+            solid_types.shape(codes[s], xi[q], N)
+            w = weight[q]
+            for j in range(n_phi):
+                wj = w * Phi[j]
+                kg[j] += wj
+                for k in range(nH):
+                    Dg[j, k] += wj * H[k]
+                for a in range(nN):
+                    Mg[j, a] += wj * N[a]
+        for j in range(n_phi):
+            kappa_local[g, j] = kg[j]
+            for k in range(nH):
+                D_local[g, j * nH + k] = Dg[j, k]
+            base = m_offsets[g] + j * nN
+            for a in range(nN):
+                M_local[base + a] = Mg[j, a]
+
+
+@njit
+def _scatter_indices(group_start, p_beam, p_solid, n_phi, nH, lm_index, beam_cols, codes, conn,
+                     m_offsets, d_rows, d_cols, m_rows, m_cols, kappa_local, kappa):
+    for g in range(group_start.shape[0] - 1):
+        e = p_beam[group_start[g]]
+        s = p_solid[group_start[g]]
+        nN = solid_types.n_nodes(codes[s])
+        for j in range(n_phi):
+            row = lm_index[e, j]
+            kappa[row] += kappa_local[g, j]
+            for k in range(nH):
+                d_rows[g * n_phi * nH + j * nH + k] = row
+                d_cols[g * n_phi * nH + j * nH + k] = beam_cols[e, k]
+            base = m_offsets[g] + j * nN
+            for a in range(nN):
+                m_rows[base + a] = row
+                m_cols[base + a] = conn[s, a]
+
+
+def lm_numbering(beams, lm_type):
+    """(n_beam_elements, 4) LM node of each multiplier function, and the number of LM nodes.
+
+    Beam nodes first with their own index, then interior LM nodes element by element.
+    """
+    m = beams.n_elements
+    index = np.full((m, 4), -1, dtype=np.int64)
+    index[:, 0] = beams.elements[:, 0]
+    index[:, 1] = beams.elements[:, 1]
+    n_int = lm_type.n_interior
+    for i in range(n_int):
+        index[:, 2 + i] = beams.n_nodes + n_int * np.arange(m) + i
+    return index, beams.n_nodes + n_int * m
+
+
+def _check_int(name, value, low, high):
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
+        raise ValueError(f"{name} must be an integer in [{low}, {high}], got {value!r}")
+    return int(value)
+
+
+def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", search_points=6):
+    """Mortar operators D, M and κ coupling ``beams`` to ``solid`` (design.md §1).
+
+    Parameters
+    ----------
+    beams : BeamMesh
+    solid : SolidMesh
+    integration : {"segment", "element"}
+        Segment-based: Gauss points on each piece of a beam element inside one solid element
+        (exact up to quadrature). Element-based: Gauss points on the whole beam element, each
+        owned by the lowest-index solid element that contains it.
+    n_gauss : int
+        Gauss points per segment (segment-based) or per beam element (element-based).
+    lm : {"line2", "line3", "line4"}
+        Lagrange multiplier interpolation.
+    search_points : int
+        Start points along each beam element for the face intersections (>= 2).
+
+    Returns
+    -------
+    MortarOperators
+
+    Notes
+    -----
+    Steinbrecher, Mayr, Grill, Kremheller, Meier, Popp (2020), A mortar-type finite element
+    approach for embedding 1D beams into 3D solid volumes, Comput Mech 66:1377-1398.
+    Geometry is evaluated once, in the reference configuration.
+    """
+    if not isinstance(beams, BeamMesh):
+        raise TypeError(f"beams must be a BeamMesh, got {type(beams).__name__}")
+    if not isinstance(solid, SolidMesh):
+        raise TypeError(f"solid must be a SolidMesh, got {type(solid).__name__}")
+    if integration not in INTEGRATIONS:
+        raise ValueError(f"integration must be one of {INTEGRATIONS}, got {integration!r}")
+    n_gauss = _check_int("n_gauss", n_gauss, 1, 64)
+    search_points = _check_int("search_points", search_points, 2, 64)
+    lm_type = multiplier_type(lm)
+
+    timings = {}
+    t0 = time.perf_counter()
+    ctx = KernelInput(beams, solid)
+    t1 = time.perf_counter()
+    timings["search"] = t1 - t0
+    diagnostics = {"candidate_pairs": len(ctx.pair_solid)}
+
+    if integration == "segment":
+        seg_beam, seg_solid, seg_start, seg_end, n_cross = segment(ctx, search_points)
+        diagnostics["face_crossings"] = n_cross
+        t2 = time.perf_counter()
+        timings["segmentation"] = t2 - t1
+        p_beam, p_solid, eta, xi, weight, position, status = segment_points(
+            ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss)
+    else:
+        t2 = t1
+        timings["segmentation"] = 0.0
+        p_beam, p_solid, eta, xi, weight, position, status = element_points(ctx, n_gauss)
+    t3 = time.perf_counter()
+    timings["integration_points"] = t3 - t2
+
+    not_converged = int(np.count_nonzero(status == POINT_NOT_CONVERGED))
+    outside = int(np.count_nonzero(status == POINT_OUTSIDE))
+    diagnostics["points_not_converged"] = not_converged
+    diagnostics["points_outside_element"] = outside
+    if integration == "element":
+        diagnostics["points_uncoupled"] = int(np.count_nonzero(p_solid < 0))
+    if not_converged:
+        warnings.warn(f"assemble_mortar: {not_converged} integration points did not converge in their "
+                      "solid element's projection and were left out", RuntimeWarning, stacklevel=2)
+    if outside:
+        warnings.warn(f"assemble_mortar: {outside} integration points of segments lie outside their "
+                      "solid element (a missed face crossing?)", RuntimeWarning, stacklevel=2)
+    keep = (status == POINT_INSIDE) | (status == POINT_OUTSIDE)
+    if not keep.all():
+        p_beam, p_solid, eta, xi, weight, position, status = (
+            a[keep] for a in (p_beam, p_solid, eta, xi, weight, position, status))
+
+    # groups: runs of points with the same (beam element, solid element)
+    change = np.flatnonzero((p_beam[1:] != p_beam[:-1]) | (p_solid[1:] != p_solid[:-1])) + 1
+    group_start = np.concatenate([[0], change, [len(p_beam)]]).astype(np.int64) if len(p_beam) else np.zeros(1, np.int64)
+    n_groups = len(group_start) - 1
+    n_phi = lm_type.n_functions
+    nH = beam_n_functions.py_func(ctx.beam_code)
+    g_solid = p_solid[group_start[:-1]]
+    m_sizes = n_phi * solid_types.N_NODES[ctx.codes[g_solid]]
+    m_offsets = np.concatenate([[0], np.cumsum(m_sizes)]).astype(np.int64)
+    D_local = np.empty((n_groups, n_phi * nH))
+    M_local = np.empty(m_offsets[-1])
+    kappa_local = np.empty((n_groups, n_phi))
+    _group_operators(group_start, p_beam, p_solid, eta, xi, weight, ctx.beam_code, ctx.lengths,
+                     n_phi, ctx.codes, m_offsets, D_local, M_local, kappa_local)
+    lm_index, n_lm = lm_numbering(beams, lm_type)
+    d_rows = np.empty(D_local.size, dtype=np.int64)
+    d_cols = np.empty(D_local.size, dtype=np.int64)
+    m_rows = np.empty(M_local.size, dtype=np.int64)
+    m_cols = np.empty(M_local.size, dtype=np.int64)
+    kappa = np.zeros(n_lm)
+    _scatter_indices(group_start, p_beam, p_solid, n_phi, nH, lm_index, beams.function_columns(),
+                     ctx.codes, ctx.conn, m_offsets, d_rows, d_cols, m_rows, m_cols, kappa_local, kappa)
+    t4 = time.perf_counter()
+    timings["assembly"] = t4 - t3
+    D = block_csr(d_rows, d_cols, D_local.ravel(), (n_lm, beams.n_centreline_dofs // 3))
+    M = block_csr(m_rows, m_cols, M_local, (n_lm, solid.n_nodes))
+    t5 = time.perf_counter()
+    timings["csr"] = t5 - t4
+
+    if integration == "segment":
+        segments = np.empty(len(seg_beam), dtype=SEGMENT_DTYPE)
+        segments["beam_element"], segments["solid_element"] = seg_beam, seg_solid
+        segments["eta_start"], segments["eta_end"] = seg_start, seg_end
+    else:
+        segments = np.empty(n_groups, dtype=SEGMENT_DTYPE)
+        segments["beam_element"] = p_beam[group_start[:-1]]
+        segments["solid_element"] = g_solid
+        segments["eta_start"] = eta[group_start[:-1]]
+        segments["eta_end"] = eta[group_start[1:] - 1]
+    points = np.empty(len(p_beam), dtype=POINT_DTYPE)
+    for name, values in (("beam_element", p_beam), ("solid_element", p_solid), ("eta", eta), ("xi", xi),
+                         ("weight", weight), ("position", position), ("status", status)):
+        points[name] = values
+
+    DqB = D @ beams.centreline_dofs()
+    MXS = M @ solid.points.ravel()
+    scale = np.linalg.norm(DqB)
+    residual = float(np.linalg.norm(DqB - MXS) / scale) if scale > 0 else 0.0
+    timings["total"] = time.perf_counter() - t0
+    return MortarOperators(D=D, M=M, kappa=kappa, segments=segments, points=points, n_lm=n_lm,
+                           integration=integration, n_gauss=n_gauss, lm=lm_type.name,
+                           embedded_length=float(kappa.sum()), beam_length=beams.length,
+                           constraint_residual=residual, diagnostics=diagnostics, timings=timings)

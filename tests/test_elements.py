@@ -1,0 +1,568 @@
+"""Element interpolations: solid shape functions, dispatch registry, beam centrelines, multipliers.
+
+Everything is evaluated through the compiled (njit) kernels: ``dispatch.shape/deriv`` with the
+type code, and each element module's own ``shape/deriv``.
+"""
+import importlib
+import itertools
+
+import numpy as np
+import pytest
+from meshio.gmsh.common import _gmsh_to_meshio_order
+
+from mortar1d3d.elements import beam
+from mortar1d3d.elements.beam import hermite, lagrange
+from mortar1d3d.elements.solid import _family, dispatch, hex8, hex20, hex27, tet4, tet10
+
+# ``mortar1d3d.elements.multiplier`` (the attribute) is the function re-exported by the package
+# ``__init__``, which shadows the submodule of the same name: fetch the module itself.
+multiplier = importlib.import_module("mortar1d3d.elements.multiplier")
+
+NAMES = list(dispatch.SOLID_ELEMENTS)
+QUADRATIC = [n for n in NAMES if dispatch.SOLID_ELEMENTS[n].degree == 2]
+LINEAR = [n for n in NAMES if dispatch.SOLID_ELEMENTS[n].degree == 1]
+TOL = 1e-9  # parameter tolerance of the inside test (design.md §2)
+
+
+def descriptor(name):
+    return dispatch.SOLID_ELEMENTS[name]
+
+
+def random_points(d, n, rng):
+    """n points uniformly distributed inside the reference element of ``d``."""
+    if d.family == "hex":
+        return rng.uniform(-1.0, 1.0, size=(n, 3))
+    return rng.dirichlet(np.ones(4), size=n)[:, 1:]
+
+
+def shape_values(code, points):
+    """(len(points), n_nodes) shape function values through ``dispatch.shape``."""
+    n = dispatch.N_NODES[code]
+    out = np.empty((len(points), n))
+    N = np.empty(dispatch.MAX_NODES)
+    for q, xi in enumerate(np.ascontiguousarray(points, dtype=np.float64)):
+        dispatch.shape(code, xi, N)
+        out[q] = N[:n]
+    return out
+
+
+def shape_derivatives(code, points):
+    """(len(points), n_nodes, 3) derivatives through ``dispatch.deriv``."""
+    n = dispatch.N_NODES[code]
+    out = np.empty((len(points), n, 3))
+    dN = np.empty((dispatch.MAX_NODES, 3))
+    for q, xi in enumerate(np.ascontiguousarray(points, dtype=np.float64)):
+        dispatch.deriv(code, xi, dN)
+        out[q] = dN[:n]
+    return out
+
+
+def random_affine(rng):
+    """A well-conditioned random affine map x = A ξ + b (det A > 0)."""
+    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    if np.linalg.det(Q) < 0:
+        Q[:, 0] *= -1
+    A = Q @ np.diag(rng.uniform(0.5, 2.0, 3))
+    return A, rng.normal(size=3)
+
+
+def random_quadratic(rng):
+    """Random quadratic map f: R^3 -> R^3 (all monomials of total degree <= 2) and its gradient."""
+    c = rng.normal(size=3)
+    B = rng.normal(size=(3, 3))
+    C = rng.normal(size=(3, 3, 3))
+    C = 0.5 * (C + C.transpose(0, 2, 1))
+
+    def f(xi):
+        xi = np.atleast_2d(xi)
+        return c + xi @ B.T + np.einsum("kij,qi,qj->qk", C, xi, xi)
+
+    def df(xi):
+        xi = np.atleast_2d(xi)
+        return B[None] + 2.0 * np.einsum("kij,qj->qki", C, xi)
+
+    return f, df
+
+
+# --------------------------------------------------------------------------------------------
+# solid shape functions
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("name", NAMES)
+def test_partition_of_unity(name):
+    d = descriptor(name)
+    rng = np.random.default_rng(1)
+    pts = np.vstack([random_points(d, 50, rng), d.reference_nodes, d.centre])
+    N = shape_values(d.code, pts)
+    dN = shape_derivatives(d.code, pts)
+    np.testing.assert_allclose(N.sum(axis=1), 1.0, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(dN.sum(axis=1), 0.0, rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_kronecker_property_at_reference_nodes(name):
+    d = descriptor(name)
+    N = shape_values(d.code, d.reference_nodes)
+    np.testing.assert_allclose(N, np.eye(d.n_nodes), rtol=0, atol=1e-15)
+    assert d.reference_nodes.shape == (d.n_nodes, 3)
+    # nodes are distinct
+    assert len({tuple(p) for p in d.reference_nodes}) == d.n_nodes
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_derivatives_against_central_differences(name):
+    d = descriptor(name)
+    rng = np.random.default_rng(2)
+    pts = np.vstack([random_points(d, 20, rng), d.reference_nodes[:4]])
+    h = 1e-6
+    dN = shape_derivatives(d.code, pts)
+    for q, xi in enumerate(pts):
+        fd = np.empty((d.n_nodes, 3))
+        for i in range(3):
+            e = np.zeros(3)
+            e[i] = h
+            fd[:, i] = (shape_values(d.code, [xi + e])[0] - shape_values(d.code, [xi - e])[0]) / (2 * h)
+        np.testing.assert_allclose(dN[q], fd, rtol=0, atol=1e-8, err_msg=f"{name} at xi={xi}")
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_linear_completeness(name):
+    d = descriptor(name)
+    rng = np.random.default_rng(3)
+    A, b = random_affine(rng)
+    X = d.reference_nodes @ A.T + b
+    pts = random_points(d, 30, rng)
+    N = shape_values(d.code, pts)
+    dN = shape_derivatives(d.code, pts)
+    np.testing.assert_allclose(N @ X, pts @ A.T + b, rtol=0, atol=1e-13)
+    J = np.einsum("qai,ak->qki", dN, X)
+    np.testing.assert_allclose(J, np.broadcast_to(A, J.shape), rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("name", QUADRATIC)
+def test_quadratic_completeness(name):
+    d = descriptor(name)
+    rng = np.random.default_rng(4)
+    f, df = random_quadratic(rng)
+    X = f(d.reference_nodes)
+    pts = random_points(d, 30, rng)
+    N = shape_values(d.code, pts)
+    dN = shape_derivatives(d.code, pts)
+    np.testing.assert_allclose(N @ X, f(pts), rtol=0, atol=1e-12)
+    np.testing.assert_allclose(np.einsum("qai,ak->qki", dN, X), df(pts), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", LINEAR)
+def test_linear_elements_do_not_reproduce_quadratics(name):
+    # keeps the completeness test honest: a quadratic function is not interpolated exactly
+    d = descriptor(name)
+    xi = np.full((1, 3), 0.2)
+    N = shape_values(d.code, xi)[0]
+    assert abs(N @ d.reference_nodes[:, 0] ** 2 - 0.04) > 1e-3
+
+
+@pytest.mark.parametrize("name, monomial, exact", [
+    ("hexahedron20", (2, 1, 1), True),    # ξ²ηζ is in the serendipity space
+    ("hexahedron20", (2, 2, 0), False),   # ξ²η² is not
+    ("hexahedron27", (2, 2, 2), True),    # triquadratic
+    ("tetra10", (1, 1, 1), False),        # ξηζ (cubic) is not
+])
+def test_interpolation_space(name, monomial, exact):
+    d = descriptor(name)
+    rng = np.random.default_rng(5)
+    pts = random_points(d, 20, rng)
+    g = lambda p: np.prod(p ** np.array(monomial), axis=-1)  # noqa: E731
+    err = np.abs(shape_values(d.code, pts) @ g(d.reference_nodes) - g(pts)).max()
+    assert (err < 1e-13) == exact, err
+
+
+# gmsh reference nodes (https://gmsh.info/doc/texinfo/gmsh.html#Node-ordering), built as midpoints
+_HEX_CORNERS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
+                         [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], dtype=np.float64)
+_TET_CORNERS = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
+_GMSH_HEX_EDGES = [(0, 1), (0, 3), (0, 4), (1, 2), (1, 5), (2, 3), (2, 6), (3, 7), (4, 5), (4, 7),
+                   (5, 6), (6, 7)]
+_GMSH_HEX_FACES = [(0, 1, 2, 3), (0, 1, 5, 4), (0, 3, 7, 4), (1, 2, 6, 5), (2, 3, 7, 6), (4, 5, 6, 7)]
+_GMSH_TET_EDGES = [(0, 1), (1, 2), (0, 2), (0, 3), (2, 3), (1, 3)]
+
+
+def _gmsh_reference_nodes(name):
+    if name in ("hexahedron", "tetra"):
+        return (_HEX_CORNERS if name == "hexahedron" else _TET_CORNERS).copy()
+    if name == "tetra10":
+        sets = [(i,) for i in range(4)] + _GMSH_TET_EDGES
+        corners = _TET_CORNERS
+    else:
+        sets = [(i,) for i in range(8)] + _GMSH_HEX_EDGES
+        if name == "hexahedron27":
+            sets += _GMSH_HEX_FACES + [tuple(range(8))]
+        corners = _HEX_CORNERS
+    return np.array([corners[list(s)].mean(axis=0) for s in sets])
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_node_order_matches_gmsh_through_meshio(name):
+    d = descriptor(name)
+    gmsh = _gmsh_reference_nodes(name)
+    assert gmsh.shape == (d.n_nodes, 3)
+    perm = _gmsh_to_meshio_order(name, np.arange(d.n_nodes)[None, :])[0]
+    np.testing.assert_array_equal(gmsh[perm], d.reference_nodes)
+    # spot checks of the VTK layout
+    if name == "hexahedron27":
+        np.testing.assert_array_equal(d.reference_nodes[20:], [[-1, 0, 0], [1, 0, 0], [0, -1, 0],
+                                                              [0, 1, 0], [0, 0, -1], [0, 0, 1], [0, 0, 0]])
+    if name == "tetra10":
+        np.testing.assert_array_equal(d.reference_nodes[8], [0.5, 0, 0.5])   # edge (1, 3)
+        np.testing.assert_array_equal(d.reference_nodes[9], [0, 0.5, 0.5])   # edge (2, 3)
+
+
+def test_quadratic_nodes_extend_linear_nodes():
+    np.testing.assert_array_equal(hex20.REFERENCE_NODES[:8], hex8.REFERENCE_NODES)
+    np.testing.assert_array_equal(hex27.REFERENCE_NODES[:20], hex20.REFERENCE_NODES)
+    np.testing.assert_array_equal(tet10.REFERENCE_NODES[:4], tet4.REFERENCE_NODES)
+
+
+# --------------------------------------------------------------------------------------------
+# reference geometry: inside test, faces
+# --------------------------------------------------------------------------------------------
+def _face_corner_params(d):
+    return [(-1, -1), (1, -1), (1, 1), (-1, 1)] if d.family == "hex" else [(0, 0), (1, 0), (0, 1)]
+
+
+def _face_centre(d, face):
+    return face[0] if d.family == "hex" else face[0] + (face[1] + face[2]) / 3.0
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_is_inside(name):
+    d = descriptor(name)
+    code = d.code
+    for xi in d.reference_nodes:
+        assert dispatch.is_inside(code, xi, TOL), xi
+        assert dispatch.outside_distance(code, xi) <= 1e-15
+    assert dispatch.is_inside(code, d.centre.copy(), TOL)
+    assert dispatch.outside_distance(code, d.centre.copy()) < -0.2
+    for face in d.faces:
+        n = face[3] / np.linalg.norm(face[3])
+        c = _face_centre(d, face)
+        assert dispatch.is_inside(code, c, TOL)
+        assert dispatch.is_inside(code, c - 1e-6 * n, TOL)
+        assert not dispatch.is_inside(code, c + 1e-6 * n, TOL), (face, c + 1e-6 * n)
+        assert dispatch.is_inside(code, c + 0.5 * TOL * n, TOL)
+        assert not dispatch.is_inside(code, c + 0.5 * TOL * n, 0.0)
+    # far outside in every direction
+    for direction in itertools.product((-1, 0, 1), repeat=3):
+        if any(direction):
+            assert not dispatch.is_inside(code, d.centre + 2.0 * np.array(direction, float), TOL)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_centre(name):
+    d = descriptor(name)
+    xi = np.full(3, np.nan)
+    dispatch.centre(d.code, xi)
+    np.testing.assert_array_equal(xi, d.centre)
+    # the centre is the centroid of the corner nodes
+    n_corners = 8 if d.family == "hex" else 4
+    np.testing.assert_allclose(d.centre, d.reference_nodes[:n_corners].mean(axis=0), atol=1e-15)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_faces(name):
+    d = descriptor(name)
+    faces = dispatch.faces(d.code)
+    np.testing.assert_array_equal(faces, d.faces)
+    assert d.n_faces == (6 if d.family == "hex" else 4) == len(d.face_nodes)
+    assert d.faces.shape == (d.n_faces, 4, 3)
+    corner_sets = set()
+    for face, nodes in zip(d.faces, d.face_nodes):
+        origin, a, b, n = face
+        hits = []
+        for u, v in _face_corner_params(d):
+            p = origin + u * a + v * b
+            match = np.flatnonzero(np.all(d.reference_nodes == p, axis=1))
+            assert len(match) == 1, (face, p)
+            hits.append(int(match[0]))
+        assert set(hits) == set(nodes), (hits, nodes)
+        assert hits == list(nodes)     # same cyclic order as the parameter corners
+        corner_sets.add(frozenset(nodes))
+        # normal: orthogonal to the face, pointing away from the centre
+        assert abs(n @ a) < 1e-15 and abs(n @ b) < 1e-15
+        assert n @ (d.centre - origin) < 0
+        # every reference node is on the inner side or on the face
+        side = (d.reference_nodes - origin) @ n
+        assert np.all(side <= 1e-15)
+        # the nodes on the face plane are those of that face (corners + mid-edge/face nodes)
+        on = np.flatnonzero(np.abs(side) <= 1e-15)
+        assert set(nodes) <= set(on.tolist())
+        expected_on = {"hexahedron": 4, "hexahedron20": 8, "hexahedron27": 9, "tetra": 3, "tetra10": 6}
+        assert len(on) == expected_on[name]
+    assert len(corner_sets) == d.n_faces    # all faces distinct
+
+
+# --------------------------------------------------------------------------------------------
+# bounding matrix (convex hull of the mapped element)
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("name", LINEAR)
+def test_bounding_matrix_linear_is_identity(name):
+    d = descriptor(name)
+    rng = np.random.default_rng(6)
+    A, b = random_affine(rng)
+    X = d.reference_nodes @ A.T + b + 0.1 * rng.normal(size=(d.n_nodes, 3))
+    np.testing.assert_array_equal(d.bounding_matrix @ X, X)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_bounding_matrix_rows_are_affine_combinations(name):
+    d = descriptor(name)
+    assert d.bounding_matrix.shape[1] == d.n_nodes
+    np.testing.assert_allclose(d.bounding_matrix.sum(axis=1), 1.0, rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("name, lattice", [("hexahedron20", hex27.REFERENCE_NODES),
+                                           ("hexahedron27", hex27.REFERENCE_NODES),
+                                           ("tetra10", tet10.REFERENCE_NODES)])
+def test_bounding_matrix_of_affine_element_is_node_lattice(name, lattice):
+    # Bernstein control points of an affine map are the images of the equally spaced lattice
+    d = descriptor(name)
+    rng = np.random.default_rng(7)
+    A, b = random_affine(rng)
+    X = d.reference_nodes @ A.T + b
+    np.testing.assert_allclose(d.bounding_matrix @ X, lattice @ A.T + b, rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("name", QUADRATIC)
+def test_bounding_matrix_contains_curved_element(name):
+    d = descriptor(name)
+    rng = np.random.default_rng(8)
+    for _ in range(2):
+        A, b = random_affine(rng)
+        f, _df = random_quadratic(rng)
+        X = d.reference_nodes @ A.T + b + 0.15 * f(d.reference_nodes)
+        X += 0.05 * rng.normal(size=X.shape)     # any nodal values: still a quadratic map
+        P = d.bounding_matrix @ X
+        lo, hi = P.min(axis=0), P.max(axis=0)
+        pts = np.vstack([random_points(d, 2000, rng), d.reference_nodes])
+        x = shape_values(d.code, pts) @ X
+        assert np.all(x >= lo - 1e-12) and np.all(x <= hi + 1e-12)
+        # the box is not absurdly loose: it is within the nodes' box grown by the element size
+        size = np.ptp(X, axis=0).max()
+        assert np.all(lo >= X.min(axis=0) - size) and np.all(hi <= X.max(axis=0) + size)
+
+
+# --------------------------------------------------------------------------------------------
+# dispatch chains vs the registry
+# --------------------------------------------------------------------------------------------
+def test_registry_codes_and_sizes():
+    codes = sorted(d.code for d in dispatch.SOLID_ELEMENTS.values())
+    assert codes == list(range(len(dispatch.SOLID_ELEMENTS)))
+    assert set(dispatch.BY_CODE) == set(codes)
+    assert dispatch.MAX_NODES == max(d.n_nodes for d in dispatch.SOLID_ELEMENTS.values()) == 27
+    assert set(NAMES) == {"hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"}
+    for name, d in dispatch.SOLID_ELEMENTS.items():
+        assert d.name == name
+        assert dispatch.SOLID_MODULES[name].DESCRIPTOR is d
+        assert dispatch.BY_CODE[d.code] is d
+        assert dispatch.N_NODES[d.code] == d.n_nodes
+        assert dispatch.n_nodes(d.code) == d.n_nodes
+        assert dispatch.FAMILY[d.code] == (_family.HEX if d.family == "hex" else _family.TET)
+        assert dispatch.solid_element(name) is d
+        assert d.dim == 3
+    expected = {"hexahedron": (8, 1, "hex"), "hexahedron20": (20, 2, "hex"), "hexahedron27": (27, 2, "hex"),
+                "tetra": (4, 1, "tet"), "tetra10": (10, 2, "tet")}
+    assert {n: (d.n_nodes, d.degree, d.family) for n, d in dispatch.SOLID_ELEMENTS.items()} == expected
+
+
+def test_solid_element_unknown_name():
+    with pytest.raises(ValueError, match="unknown solid element type 'wedge'.*hexahedron"):
+        dispatch.solid_element("wedge")
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_dispatch_equals_module_kernels(name):
+    d = descriptor(name)
+    module = dispatch.SOLID_MODULES[name]
+    rng = np.random.default_rng(9)
+    for xi in random_points(d, 10, rng):
+        # dispatch writes exactly n_nodes entries
+        N = np.full(dispatch.MAX_NODES, np.nan)
+        dN = np.full((dispatch.MAX_NODES, 3), np.nan)
+        dispatch.shape(d.code, xi, N)
+        dispatch.deriv(d.code, xi, dN)
+        assert np.all(np.isnan(N[d.n_nodes:])) and np.all(np.isnan(dN[d.n_nodes:]))
+        # the module's own compiled kernels
+        Nm = np.empty(d.n_nodes)
+        dNm = np.empty((d.n_nodes, 3))
+        module.shape(xi, Nm)
+        module.deriv(xi, dNm)
+        np.testing.assert_array_equal(N[:d.n_nodes], Nm)
+        np.testing.assert_array_equal(dN[:d.n_nodes], dNm)
+        # and the pure-Python versions (used by mesh validation) agree
+        Np = np.empty(d.n_nodes)
+        dNp = np.empty((d.n_nodes, 3))
+        module.shape.py_func(xi, Np)
+        module.deriv.py_func(xi, dNp)
+        np.testing.assert_allclose(Np, Nm, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(dNp, dNm, rtol=0, atol=1e-14)
+
+
+def test_hex8_closed_form():
+    xi = np.array([0.3, -0.7, 0.1])
+    N = np.empty(8)
+    hex8.shape(xi, N)
+    assert N[6] == pytest.approx(0.125 * 1.3 * 0.3 * 1.1, abs=1e-16)
+    assert N[0] == pytest.approx(0.125 * 0.7 * 1.7 * 0.9, abs=1e-16)
+
+
+def test_tet10_closed_form():
+    xi = np.array([0.2, 0.3, 0.1])
+    L = np.array([0.4, 0.2, 0.3, 0.1])
+    N = np.empty(10)
+    tet10.shape(xi, N)
+    np.testing.assert_allclose(N[:4], L * (2 * L - 1), atol=1e-16)
+    np.testing.assert_allclose(N[4:], 4 * np.array([L[0] * L[1], L[1] * L[2], L[0] * L[2],
+                                                    L[0] * L[3], L[1] * L[3], L[2] * L[3]]), atol=1e-16)
+
+
+# --------------------------------------------------------------------------------------------
+# Lagrange multiplier functions
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("name", ["line2", "line3", "line4"])
+def test_multiplier_functions(name):
+    m = multiplier.multiplier(name)
+    n = m.n_functions
+    assert n == {"line2": 2, "line3": 3, "line4": 4}[name]
+    assert m.n_interior == n - 2
+    np.testing.assert_allclose(m.nodes, {"line2": [-1, 1], "line3": [-1, 1, 0],
+                                         "line4": [-1, 1, -1 / 3, 1 / 3]}[name], atol=1e-16)
+    Phi = np.full(multiplier.MAX_FUNCTIONS, np.nan)
+    values = np.empty((n, n))
+    for k, eta in enumerate(m.nodes):
+        multiplier.shape(n, eta, Phi)
+        values[k] = Phi[:n]
+    np.testing.assert_allclose(values, np.eye(n), rtol=0, atol=1e-15)
+    assert np.all(np.isnan(Phi[n:]))
+    etas = np.linspace(-1, 1, 17)
+    V = np.empty((len(etas), n))
+    for k, eta in enumerate(etas):
+        multiplier.shape(n, eta, Phi)
+        V[k] = Phi[:n]
+    np.testing.assert_allclose(V.sum(axis=1), 1.0, rtol=0, atol=1e-14)
+    # reproduces polynomials of degree n - 1
+    coeffs = np.array([-0.2, 0.7, -1.1, 0.3])[-n:]
+    np.testing.assert_allclose(V @ np.polyval(coeffs, m.nodes), np.polyval(coeffs, etas), rtol=0, atol=1e-13)
+
+
+def test_multiplier_unknown_name():
+    assert set(multiplier.MULTIPLIERS) == {"line2", "line3", "line4"}
+    with pytest.raises(ValueError, match="unknown Lagrange multiplier type 'line5'"):
+        multiplier.multiplier("line5")
+
+
+# --------------------------------------------------------------------------------------------
+# beam centrelines
+# --------------------------------------------------------------------------------------------
+def _hermite(eta, L):
+    H = np.empty(4)
+    dH = np.empty(4)
+    hermite.shape(eta, L, H)
+    hermite.deriv(eta, L, dH)
+    return H, dH
+
+
+def test_hermite_closed_form():
+    eta, L = 0.37, 2.3
+    H, _ = _hermite(eta, L)
+    expected = [(2 - 3 * eta + eta ** 3) / 4, L / 8 * (1 - eta - eta ** 2 + eta ** 3),
+                (2 + 3 * eta - eta ** 3) / 4, L / 8 * (-1 - eta + eta ** 2 + eta ** 3)]
+    np.testing.assert_allclose(H, expected, rtol=1e-15, atol=0)
+
+
+def test_hermite_derivative_against_central_differences():
+    h = 1e-6
+    for L in (0.1, 1.0, 3.7):
+        for eta in np.linspace(-1, 1, 9):
+            _, dH = _hermite(eta, L)
+            fd = (_hermite(eta + h, L)[0] - _hermite(eta - h, L)[0]) / (2 * h)
+            np.testing.assert_allclose(dH, fd, rtol=0, atol=1e-8 * max(L, 1))
+
+
+def test_hermite_interpolates_positions_and_tangents():
+    rng = np.random.default_rng(10)
+    r1, r2 = rng.normal(size=3), rng.normal(size=3)
+    t1, t2 = rng.normal(size=3), rng.normal(size=3)
+    t1 /= np.linalg.norm(t1)
+    t2 /= np.linalg.norm(t2)
+    L = 1.7
+    Q = np.array([r1, t1, r2, t2])
+    H, dH = _hermite(-1.0, L)
+    np.testing.assert_allclose(H @ Q, r1, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(dH @ Q, 0.5 * L * t1, rtol=0, atol=1e-15)
+    H, dH = _hermite(1.0, L)
+    np.testing.assert_allclose(H @ Q, r2, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(dH @ Q, 0.5 * L * t2, rtol=0, atol=1e-15)
+    # a straight segment with L = chord is parametrised at constant speed L/2
+    t = (r2 - r1) / np.linalg.norm(r2 - r1)
+    c = np.linalg.norm(r2 - r1)
+    Q = np.array([r1, t, r2, t])
+    for eta in np.linspace(-1, 1, 7):
+        H, dH = _hermite(eta, c)
+        np.testing.assert_allclose(H @ Q, r1 + 0.5 * (1 + eta) * (r2 - r1), rtol=0, atol=1e-14)
+        np.testing.assert_allclose(dH @ Q, 0.5 * (r2 - r1), rtol=0, atol=1e-14)
+
+
+def test_lagrange_kronecker_and_derivatives():
+    H = np.empty(3)
+    dH = np.empty(3)
+    for k, eta in enumerate((-1.0, 1.0)):
+        lagrange.line2_shape(eta, H)
+        np.testing.assert_array_equal(H[:2], np.eye(2)[k])
+    for k, eta in enumerate((-1.0, 1.0, 0.0)):
+        lagrange.line3_shape(eta, H)
+        np.testing.assert_array_equal(H, np.eye(3)[k])
+    h = 1e-6
+    Hp, Hm = np.empty(3), np.empty(3)
+    for eta in np.linspace(-1, 1, 9):
+        lagrange.line2_deriv(eta, dH)
+        lagrange.line2_shape(eta + h, Hp)
+        lagrange.line2_shape(eta - h, Hm)
+        np.testing.assert_allclose(dH[:2], (Hp[:2] - Hm[:2]) / (2 * h), rtol=0, atol=1e-8)
+        lagrange.line3_deriv(eta, dH)
+        lagrange.line3_shape(eta + h, Hp)
+        lagrange.line3_shape(eta - h, Hm)
+        np.testing.assert_allclose(dH, (Hp - Hm) / (2 * h), rtol=0, atol=1e-8)
+        lagrange.line3_shape(eta, H)
+        assert H.sum() == pytest.approx(1.0, abs=1e-15)
+
+
+@pytest.mark.parametrize("name", ["hermite", "line", "line3"])
+def test_beam_dispatch_equals_modules(name):
+    et = beam.beam_element(name)
+    assert beam.n_functions(et.code) == et.n_functions
+    assert len(et.function_node) == len(et.function_offset) == et.n_functions <= beam.MAX_FUNCTIONS
+    L = 1.3
+    for eta in (-1.0, -0.4, 0.25, 1.0):
+        H = np.full(beam.MAX_FUNCTIONS, np.nan)
+        dH = np.full(beam.MAX_FUNCTIONS, np.nan)
+        beam.shape(et.code, eta, L, H)
+        beam.deriv(et.code, eta, L, dH)
+        Hm = np.empty(et.n_functions)
+        dHm = np.empty(et.n_functions)
+        if name == "hermite":
+            hermite.shape(eta, L, Hm)
+            hermite.deriv(eta, L, dHm)
+        elif name == "line":
+            lagrange.line2_shape(eta, Hm)
+            lagrange.line2_deriv(eta, dHm)
+        else:
+            lagrange.line3_shape(eta, Hm)
+            lagrange.line3_deriv(eta, dHm)
+        np.testing.assert_array_equal(H[:et.n_functions], Hm)
+        np.testing.assert_array_equal(dH[:et.n_functions], dHm)
+        assert np.all(np.isnan(H[et.n_functions:]))
+
+
+def test_beam_element_registry():
+    assert {n: e.code for n, e in beam.BEAM_ELEMENTS.items()} == {"hermite": 0, "line": 1, "line3": 2}
+    assert beam.beam_element("hermite").dofs_per_node == 6
+    with pytest.raises(ValueError, match="unknown beam element type 'line4'"):
+        beam.beam_element("line4")
