@@ -18,3 +18,7 @@ njit_parallel = numba.njit(parallel=True, **JIT_OPTIONS)
 NEWTON_RESIDUAL_TOL = 1e-12   # |x(xi) - p| <= tol * h
 PARAMETER_TOL = 1e-9          # inside test, merging of intersection points (parameter space)
 NEWTON_MAX_ITERATIONS = 20
+
+#: items per parallel chunk: work buffers are allocated once per chunk, never per item, and the
+#: chunking does not depend on the number of threads (results are bit-identical for any count)
+CHUNK = 64

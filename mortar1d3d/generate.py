@@ -317,7 +317,7 @@ def box(lower, upper, cells, element="hexahedron"):
         raise ValueError(f"box: unknown element type {element!r}; known types: {', '.join(SOLID_ELEMENTS)}")
     nx, ny, nz = (int(c) for c in cells)
     descriptor = SOLID_ELEMENTS[element]
-    scale = descriptor.degree            # lattice points per cell edge
+    scale = descriptor.degree            # lattice intervals per cell edge (1 linear, 2 quadratic)
     size = scale * np.array([nx, ny, nz]) + 1
 
     # Every cell is meshed alike, so the nodes' lattice offsets from the cell's lower corner are

@@ -30,7 +30,10 @@ def _as_points(points, what):
 
 
 def _as_connectivity(cells, n_per_cell, n_points, what):
-    arr = np.asarray(cells)
+    try:
+        arr = np.asarray(cells)
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"{what}: expected an (m, {n_per_cell}) integer array ({exc})") from None
     if arr.ndim != 2 or arr.shape[1] != n_per_cell:
         raise MeshError(f"{what}: expected shape (m, {n_per_cell}), got {arr.shape}")
     if arr.size and not np.issubdtype(arr.dtype, np.integer):
@@ -53,7 +56,7 @@ def _jacobian_determinants(descriptor, X):
     dN = np.empty((len(sample), descriptor.n_nodes, 3))
     for q, xi in enumerate(sample):
         deriv(xi, dN[q])
-    J = np.einsum("mak,qai->mqki", X, dN)   # J[m, q] = ∂x/∂ξ of element m at sample q
+    J = np.matmul(X.transpose(0, 2, 1)[:, None], dN[None])   # J[m, q] = ∂x/∂ξ of element m at sample q
     return np.linalg.det(J)
 
 
@@ -212,7 +215,10 @@ class BeamMesh:
     """
 
     def __init__(self, element_type, positions, elements, tangents=None):
-        self.element_type = beam_element(element_type)
+        try:
+            self.element_type = beam_element(element_type)
+        except ValueError as exc:
+            raise MeshError(str(exc)) from None
         self.positions = _as_points(positions, "beam positions")
         self.elements = _as_connectivity(elements, self.element_type.n_nodes, len(self.positions),
                                          f"beam elements ({self.element_type.name})")

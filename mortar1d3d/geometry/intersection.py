@@ -1,94 +1,84 @@
 """Intersection of a beam centreline with a face of a solid element.
 
 Every face of the supported elements is affine in parameter space, ``ξ = o + u a + v b``, so the
-intersection is one 3×3 Newton problem in (η, u, v):
+intersection is one 3×3 Newton problem in z = (η, u, v):
 
-    F(η, u, v) = x(o + u a + v b) - r(η) = 0,   ∂F/∂(η, u, v) = [-r'(η), J a, J b].
+    F(z) = x(o + u a + v b) - r(η) = 0,   ∂F/∂z = [-r'(η), J a, J b].
 """
-import numpy as np
-
 from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit
 from .beam import beam_point
 from .linalg import norm3, solve3
 from .projection import CONVERGED, FAILED, jacobian, map_point
 
 _BACKTRACKS = 8
+_MAX_ETA = 10.0     # Newton wandering this far beyond the beam element: no crossing there
 
 
 @njit
-def face_coordinates(face, xi, uv):
-    """Least-squares (u, v) of the point of the face plane nearest to ``xi`` (parameter space)."""
+def face_coordinates(face, xi0, xi1, xi2):
+    """Least-squares (u, v) of the point of the face plane nearest to ξ (parameter space)."""
     a = face[1]
     b = face[2]
     aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2]
     bb = b[0] * b[0] + b[1] * b[1] + b[2] * b[2]
     ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-    ra = 0.0
-    rb = 0.0
-    for i in range(3):
-        ra += a[i] * (xi[i] - face[0, i])
-        rb += b[i] * (xi[i] - face[0, i])
+    d0, d1, d2 = xi0 - face[0, 0], xi1 - face[0, 1], xi2 - face[0, 2]
+    ra = a[0] * d0 + a[1] * d1 + a[2] * d2
+    rb = b[0] * d0 + b[1] * d1 + b[2] * d2
     det = aa * bb - ab * ab
-    uv[0] = (bb * ra - ab * rb) / det
-    uv[1] = (aa * rb - ab * ra) / det
+    return (bb * ra - ab * rb) / det, (aa * rb - ab * ra) / det
 
 
 @njit
-def _residual(solid_code, X, beam_code, Q, length, shift, face, z, xi, N, H, dH, x, r, dr, F):
-    """F = x(ξ(u, v)) - r(η) at z = (η, u, v); also sets ξ, r, dr. Returns |F|."""
+def _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face, eta, u, v, xi, N, H, dH):
+    """F at (η, u, v); sets ξ. Returns (|F|, F0, F1, F2, dr0, dr1, dr2)."""
     for i in range(3):
-        xi[i] = face[0, i] + z[1] * face[1, i] + z[2] * face[2, i]
-    map_point(solid_code, X, xi, N, x)
-    beam_point(beam_code, Q, length, shift, z[0], H, dH, r, dr)
-    for i in range(3):
-        F[i] = x[i] - r[i]
-    return norm3(F)
+        xi[i] = face[0, i] + u * face[1, i] + v * face[2, i]
+    x0, x1, x2 = map_point(solid_code, X, xi, N)
+    r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q, length, s0, s1, s2, eta, H, dH)
+    f0, f1, f2 = x0 - r0, x1 - r1, x2 - r2
+    return norm3(f0, f1, f2), f0, f1, f2, d0, d1, d2
 
 
 @njit
-def intersect_face(solid_code, X, h, beam_code, Q, length, shift, face, z, xi, N, dN, H, dH):
+def intersect_face(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH):
     """Newton on F(η, u, v) = 0 from the start ``z`` = (η, u, v); result in ``z`` and ``xi``.
 
-    Returns CONVERGED (|F| <= 1e-12 h) or FAILED. The caller decides whether η and ξ lie in
-    the beam element and in the face.
+    Returns CONVERGED (|F| <= 1e-12 h) or FAILED. The caller decides whether η lies in the
+    beam element and ξ on the face.
     """
     tol = NEWTON_RESIDUAL_TOL * h
-    x = np.empty(3)
-    r = np.empty(3)
-    dr = np.empty(3)
-    F = np.empty(3)
-    d = np.empty(3)
-    trial = np.empty(3)
-    J = np.empty((3, 3))
-    A = np.empty((3, 3))
-
-    fn = _residual(solid_code, X, beam_code, Q, length, shift, face, z, xi, N, H, dH, x, r, dr, F)
+    fn, f0, f1, f2, d0, d1, d2 = _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face,
+                                           z[0], z[1], z[2], xi, N, H, dH)
     for _ in range(NEWTON_MAX_ITERATIONS):
         if fn <= tol:
             return CONVERGED
-        jacobian(solid_code, X, xi, dN, J)
-        for i in range(3):
-            A[i, 0] = -dr[i]
-            A[i, 1] = J[i, 0] * face[1, 0] + J[i, 1] * face[1, 1] + J[i, 2] * face[1, 2]
-            A[i, 2] = J[i, 0] * face[2, 0] + J[i, 1] * face[2, 1] + J[i, 2] * face[2, 2]
-            F[i] = -F[i]
-        if solve3(A, F, d) == 0.0:
+        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(solid_code, X, xi, dN)
+        a, b = face[1], face[2]
+        det, s_eta, s_u, s_v = solve3(
+            -d0, j00 * a[0] + j01 * a[1] + j02 * a[2], j00 * b[0] + j01 * b[1] + j02 * b[2],
+            -d1, j10 * a[0] + j11 * a[1] + j12 * a[2], j10 * b[0] + j11 * b[1] + j12 * b[2],
+            -d2, j20 * a[0] + j21 * a[1] + j22 * a[2], j20 * b[0] + j21 * b[1] + j22 * b[2],
+            -f0, -f1, -f2)
+        if det == 0.0:
             return FAILED
         step = 1.0
         accepted = False
         for _b in range(_BACKTRACKS):
-            for i in range(3):
-                trial[i] = z[i] + step * d[i]
-            ft = _residual(solid_code, X, beam_code, Q, length, shift, face, trial, xi, N, H, dH, x, r, dr, F)
+            e_t = z[0] + step * s_eta
+            u_t = z[1] + step * s_u
+            v_t = z[2] + step * s_v
+            ft, g0, g1, g2, c0, c1, c2 = _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face,
+                                                   e_t, u_t, v_t, xi, N, H, dH)
             if ft < fn or ft <= tol:
                 accepted = True
                 break
             step *= 0.5
         if not accepted:
-            _residual(solid_code, X, beam_code, Q, length, shift, face, z, xi, N, H, dH, x, r, dr, F)
+            _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face, z[0], z[1], z[2], xi, N, H, dH)
             return CONVERGED if fn <= 1e3 * tol else FAILED
-        z[0], z[1], z[2] = trial[0], trial[1], trial[2]
-        fn = ft
-        if abs(z[0]) > 10.0:
-            return FAILED      # far beyond the beam element: no crossing there
+        z[0], z[1], z[2] = e_t, u_t, v_t
+        fn, f0, f1, f2, d0, d1, d2 = ft, g0, g1, g2, c0, c1, c2
+        if abs(z[0]) > _MAX_ETA:
+            return FAILED
     return CONVERGED if fn <= tol else FAILED

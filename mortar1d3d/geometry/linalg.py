@@ -1,24 +1,28 @@
-"""Tiny dense kernels used in the hot loops (3×3 solves without allocation)."""
+"""Tiny dense kernels for the hot loops: 3-vectors and 3×3 matrices as scalars (no allocation)."""
 from .._config import njit
 
 
 @njit
-def solve3(A, b, x):
-    """Solve the 3×3 system A x = b by Cramer's rule. Returns det(A); x is untouched if det == 0."""
-    c00 = A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1]
-    c01 = A[1, 2] * A[2, 0] - A[1, 0] * A[2, 2]
-    c02 = A[1, 0] * A[2, 1] - A[1, 1] * A[2, 0]
-    det = A[0, 0] * c00 + A[0, 1] * c01 + A[0, 2] * c02
+def solve3(a00, a01, a02, a10, a11, a12, a20, a21, a22, b0, b1, b2):
+    """Solve the 3×3 system A x = b by Cramer's rule. Returns (det, x0, x1, x2); x = 0 if det == 0."""
+    c00 = a11 * a22 - a12 * a21
+    c01 = a12 * a20 - a10 * a22
+    c02 = a10 * a21 - a11 * a20
+    det = a00 * c00 + a01 * c01 + a02 * c02
     if det == 0.0:
-        return det
+        return det, 0.0, 0.0, 0.0
     inv = 1.0 / det
-    b0, b1, b2 = b[0], b[1], b[2]
-    x[0] = inv * (c00 * b0 + (A[0, 2] * A[2, 1] - A[0, 1] * A[2, 2]) * b1 + (A[0, 1] * A[1, 2] - A[0, 2] * A[1, 1]) * b2)
-    x[1] = inv * (c01 * b0 + (A[0, 0] * A[2, 2] - A[0, 2] * A[2, 0]) * b1 + (A[0, 2] * A[1, 0] - A[0, 0] * A[1, 2]) * b2)
-    x[2] = inv * (c02 * b0 + (A[0, 1] * A[2, 0] - A[0, 0] * A[2, 1]) * b1 + (A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]) * b2)
-    return det
+    x0 = inv * (c00 * b0 + (a02 * a21 - a01 * a22) * b1 + (a01 * a12 - a02 * a11) * b2)
+    x1 = inv * (c01 * b0 + (a00 * a22 - a02 * a20) * b1 + (a02 * a10 - a00 * a12) * b2)
+    x2 = inv * (c02 * b0 + (a01 * a20 - a00 * a21) * b1 + (a00 * a11 - a01 * a10) * b2)
+    return det, x0, x1, x2
 
 
 @njit
-def norm3(v):
-    return (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) ** 0.5
+def norm3(a, b, c):
+    return (a * a + b * b + c * c) ** 0.5
+
+
+@njit
+def n_chunks(n, chunk):
+    return (n + chunk - 1) // chunk

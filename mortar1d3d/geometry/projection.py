@@ -3,16 +3,15 @@
 Coordinates passed to these kernels are *local*: element nodes and points minus the element's
 origin (its first node), so that round-off is relative to the element size h, not to the
 distance from the global origin (design.md §2: tolerances relative to the element size).
+All buffers come from the caller; nothing here allocates.
 """
-import numpy as np
-
 from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit
 from ..elements.solid import dispatch as solid
 from .linalg import norm3, solve3
 
 CONVERGED = 0
 FAILED = 1
-#: outcome of a projection, as stored per point
+#: outcome of locating a point in an element, as stored per integration point
 INSIDE, OUTSIDE, NOT_CONVERGED = 0, 1, 2
 
 _MAX_PARAMETER = 1e3      # |ξ| beyond this: the point is far outside; stop early
@@ -20,62 +19,66 @@ _BACKTRACKS = 8
 
 
 @njit
-def map_point(code, X, xi, N, x):
-    """x = Σ_a N_a(ξ) X_a for element type ``code`` with local nodes ``X`` (n, 3)."""
+def map_point(code, X, xi, N):
+    """x(ξ) = Σ_a N_a(ξ) X_a for element type ``code`` with local nodes ``X``; returns (x0, x1, x2)."""
     solid.shape(code, xi, N)
-    n = solid.n_nodes(code)
-    x[0] = x[1] = x[2] = 0.0
-    for a in range(n):
-        for i in range(3):
-            x[i] += N[a] * X[a, i]
+    x0 = x1 = x2 = 0.0
+    for a in range(solid.n_nodes(code)):
+        x0 += N[a] * X[a, 0]
+        x1 += N[a] * X[a, 1]
+        x2 += N[a] * X[a, 2]
+    return x0, x1, x2
 
 
 @njit
-def jacobian(code, X, xi, dN, J):
-    """J[i, k] = ∂x_i/∂ξ_k."""
+def jacobian(code, X, xi, dN):
+    """J[i, k] = ∂x_i/∂ξ_k as a 9-tuple, row by row."""
     solid.deriv(code, xi, dN)
-    n = solid.n_nodes(code)
-    for i in range(3):
-        for k in range(3):
-            s = 0.0
-            for a in range(n):
-                s += X[a, i] * dN[a, k]
-            J[i, k] = s
+    j00 = j01 = j02 = j10 = j11 = j12 = j20 = j21 = j22 = 0.0
+    for a in range(solid.n_nodes(code)):
+        x0, x1, x2 = X[a, 0], X[a, 1], X[a, 2]
+        d0, d1, d2 = dN[a, 0], dN[a, 1], dN[a, 2]
+        j00 += x0 * d0
+        j01 += x0 * d1
+        j02 += x0 * d2
+        j10 += x1 * d0
+        j11 += x1 * d1
+        j12 += x1 * d2
+        j20 += x2 * d0
+        j21 += x2 * d1
+        j22 += x2 * d2
+    return j00, j01, j02, j10, j11, j12, j20, j21, j22
 
 
 @njit
-def project_point(code, X, p, h, xi, N, dN):
-    """Newton iteration for x(ξ) = p with backtracking line search on |x(ξ) - p|.
+def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
+    """Newton iteration for x(ξ) = p with a backtracking line search on |x(ξ) - p|.
 
-    ``xi`` holds the start value on entry and the result on exit. Converged when
-    |x(ξ) - p| <= 1e-12 h. Returns CONVERGED or FAILED (singular Jacobian, no decrease,
-    parameters running away, or 20 iterations).
+    ``xi`` (3,) holds the start value on entry and the result on exit; ``trial`` (3,) is
+    scratch. Converged when |x(ξ) - p| <= 1e-12 h. Returns CONVERGED or FAILED (singular
+    Jacobian, no decrease, parameters running away, or 20 iterations).
     """
     tol = NEWTON_RESIDUAL_TOL * h
-    x = np.empty(3)
-    r = np.empty(3)
-    d = np.empty(3)
-    trial = np.empty(3)
-    J = np.empty((3, 3))
-    map_point(code, X, xi, N, x)
-    for i in range(3):
-        r[i] = p[i] - x[i]
-    rn = norm3(r)
+    x0, x1, x2 = map_point(code, X, xi, N)
+    r0, r1, r2 = p0 - x0, p1 - x1, p2 - x2
+    rn = norm3(r0, r1, r2)
     for _ in range(NEWTON_MAX_ITERATIONS):
         if rn <= tol:
             return CONVERGED
-        jacobian(code, X, xi, dN, J)
-        if solve3(J, r, d) == 0.0:
+        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, dN)
+        det, d0, d1, d2 = solve3(j00, j01, j02, j10, j11, j12, j20, j21, j22, r0, r1, r2)
+        if det == 0.0:
             return FAILED
         step = 1.0
+        rt = rn
         accepted = False
         for _b in range(_BACKTRACKS):
-            for i in range(3):
-                trial[i] = xi[i] + step * d[i]
-            map_point(code, X, trial, N, x)
-            for i in range(3):
-                r[i] = p[i] - x[i]
-            rt = norm3(r)
+            trial[0] = xi[0] + step * d0
+            trial[1] = xi[1] + step * d1
+            trial[2] = xi[2] + step * d2
+            x0, x1, x2 = map_point(code, X, trial, N)
+            t0, t1, t2 = p0 - x0, p1 - x1, p2 - x2
+            rt = norm3(t0, t1, t2)
             if rt < rn or rt <= tol:
                 accepted = True
                 break
@@ -84,6 +87,7 @@ def project_point(code, X, p, h, xi, N, dN):
             # no decrease along the Newton direction: at round-off level this is convergence
             return CONVERGED if rn <= 1e3 * tol else FAILED
         xi[0], xi[1], xi[2] = trial[0], trial[1], trial[2]
+        r0, r1, r2 = t0, t1, t2
         rn = rt
         if abs(xi[0]) > _MAX_PARAMETER or abs(xi[1]) > _MAX_PARAMETER or abs(xi[2]) > _MAX_PARAMETER:
             return FAILED
@@ -93,19 +97,24 @@ def project_point(code, X, p, h, xi, N, dN):
 @njit
 def load_element(points, conn, element, code, origin, X):
     """Copy the local (origin-relative) node coordinates of ``element`` into ``X``."""
-    n = solid.n_nodes(code)
-    for a in range(n):
+    for a in range(solid.n_nodes(code)):
         node = conn[element, a]
-        for i in range(3):
-            X[a, i] = points[node, i] - origin[element, i]
+        X[a, 0] = points[node, 0] - origin[element, 0]
+        X[a, 1] = points[node, 1] - origin[element, 1]
+        X[a, 2] = points[node, 2] - origin[element, 2]
 
 
 @njit
-def locate(code, X, p, h, tol, xi, N, dN):
-    """Project ``p`` from the element centre; INSIDE, OUTSIDE or NOT_CONVERGED."""
+def locate(code, X, p0, p1, p2, h, tol, xi, trial, N, dN):
+    """Project p from the element centre: INSIDE, OUTSIDE or NOT_CONVERGED; ξ in ``xi``."""
     solid.centre(code, xi)
-    if project_point(code, X, p, h, xi, N, dN) != CONVERGED:
+    if project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) != CONVERGED:
         return NOT_CONVERGED
     if solid.is_inside(code, xi, tol):
         return INSIDE
     return OUTSIDE
+
+
+@njit
+def in_box(box, x0, x1, x2):
+    return (box[0, 0] <= x0 <= box[1, 0]) and (box[0, 1] <= x1 <= box[1, 1]) and (box[0, 2] <= x2 <= box[1, 2])

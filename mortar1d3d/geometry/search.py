@@ -10,7 +10,7 @@ import numpy as np
 from numba import prange
 
 from .._config import PARAMETER_TOL, njit, njit_parallel
-from ..elements.solid.dispatch import SOLID_ELEMENTS
+from ..elements.solid.dispatch import BY_CODE, MAX_NODES, N_NODES
 
 
 def solid_bounding_boxes(solid, padding=PARAMETER_TOL):
@@ -18,39 +18,82 @@ def solid_bounding_boxes(solid, padding=PARAMETER_TOL):
 
     Returns the boxes and the element sizes h (box diagonals before padding).
     """
+    table = np.zeros((len(BY_CODE), MAX_NODES, MAX_NODES))
+    for code, d in BY_CODE.items():
+        table[code, : d.bounding_matrix.shape[0], : d.n_nodes] = d.bounding_matrix
+    n_control = np.array([BY_CODE[c].bounding_matrix.shape[0] for c in range(len(BY_CODE))])
     boxes = np.empty((solid.n_elements, 2, 3))
-    start = 0
-    for d, conn in solid.blocks:
-        X = solid.points[conn]
-        C = np.einsum("ca,mai->mci", d.bounding_matrix, X) if d.degree > 1 else X
-        boxes[start:start + len(conn), 0] = C.min(axis=1)
-        boxes[start:start + len(conn), 1] = C.max(axis=1)
-        start += len(conn)
-    return _pad(boxes, padding)
+    size = np.empty(solid.n_elements)
+    _solid_boxes(solid.points, solid.connectivity, solid.element_codes, table, n_control, N_NODES,
+                 padding, boxes, size)
+    return boxes, size
 
 
 def beam_bounding_boxes(beams, padding=PARAMETER_TOL):
     """(n_elements, 2, 3) padded boxes of the beam elements, and their sizes."""
-    Q = beams.coefficients()
-    name = beams.element_type.name
-    if name == "hermite":
-        L = beams.lengths[:, None]
-        C = np.stack([Q[:, 0], Q[:, 0] + L / 3 * Q[:, 1], Q[:, 2] - L / 3 * Q[:, 3], Q[:, 2]], axis=1)
-    elif name == "line3":
-        C = np.stack([Q[:, 0], 2 * Q[:, 2] - 0.5 * (Q[:, 0] + Q[:, 1]), Q[:, 1]], axis=1)
-    else:
-        C = Q[:, :2]
-    boxes = np.stack([C.min(axis=1), C.max(axis=1)], axis=1)
-    return _pad(boxes, padding)
-
-
-def _pad(boxes, padding):
-    size = np.linalg.norm(boxes[:, 1] - boxes[:, 0], axis=1)
-    # relative to the element size, plus a few ulps of the coordinates (far from the origin)
-    pad = padding * size + 8 * np.finfo(float).eps * np.abs(boxes).max(axis=(1, 2))
-    boxes[:, 0] -= pad[:, None]
-    boxes[:, 1] += pad[:, None]
+    boxes = np.empty((beams.n_elements, 2, 3))
+    size = np.empty(beams.n_elements)
+    _beam_boxes(beams.coefficients(), beams.lengths, beams.element_type.code, padding, boxes, size)
     return boxes, size
+
+
+@njit
+def _finish_box(box, padding):
+    """Pad by ``padding`` times the diagonal plus a few ulps of the coordinates; return the diagonal."""
+    size = 0.0
+    big = 0.0
+    for i in range(3):
+        size += (box[1, i] - box[0, i]) ** 2
+        big = max(big, abs(box[0, i]), abs(box[1, i]))
+    size = size ** 0.5
+    pad = padding * size + 8 * 2.220446049250313e-16 * big
+    for i in range(3):
+        box[0, i] -= pad
+        box[1, i] += pad
+    return size
+
+
+@njit_parallel
+def _solid_boxes(points, conn, codes, table, n_control, n_nodes, padding, boxes, size):
+    for s in prange(conn.shape[0]):
+        code = codes[s]
+        for i in range(3):
+            boxes[s, 0, i] = np.inf
+            boxes[s, 1, i] = -np.inf
+        for c in range(n_control[code]):
+            for i in range(3):
+                v = 0.0
+                for a in range(n_nodes[code]):
+                    w = table[code, c, a]
+                    if w != 0.0:
+                        v += w * points[conn[s, a], i]
+                boxes[s, 0, i] = min(boxes[s, 0, i], v)
+                boxes[s, 1, i] = max(boxes[s, 1, i], v)
+        size[s] = _finish_box(boxes[s], padding)
+
+
+@njit_parallel
+def _beam_boxes(Q, lengths, code, padding, boxes, size):
+    # control points of the Bezier form: Hermite r1, r1 + L/3 t1, r2 - L/3 t2, r2;
+    # line3 r1, 2 r_mid - (r1 + r2)/2, r2; line r1, r2
+    for e in prange(Q.shape[0]):
+        for i in range(3):
+            if code == 0:
+                c0 = Q[e, 0, i]
+                c1 = Q[e, 0, i] + lengths[e] / 3.0 * Q[e, 1, i]
+                c2 = Q[e, 2, i] - lengths[e] / 3.0 * Q[e, 3, i]
+                c3 = Q[e, 2, i]
+            elif code == 2:
+                c0 = Q[e, 0, i]
+                c1 = 2.0 * Q[e, 2, i] - 0.5 * (Q[e, 0, i] + Q[e, 1, i])
+                c2 = c1
+                c3 = Q[e, 1, i]
+            else:
+                c0 = c1 = c2 = Q[e, 0, i]
+                c3 = Q[e, 1, i]
+            boxes[e, 0, i] = min(min(c0, c1), min(c2, c3))
+            boxes[e, 1, i] = max(max(c0, c1), max(c2, c3))
+        size[e] = _finish_box(boxes[e], padding)
 
 
 @njit

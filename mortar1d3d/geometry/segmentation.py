@@ -19,28 +19,15 @@ intervals they tile [-1, 1] exactly.
 import numpy as np
 from numba import prange
 
-from .._config import PARAMETER_TOL, njit, njit_parallel
+from .._config import CHUNK, PARAMETER_TOL, njit, njit_parallel
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from .beam import beam_point
 from .intersection import face_coordinates, intersect_face
-from .projection import CONVERGED, INSIDE, load_element, locate, project_point
+from .linalg import n_chunks
+from .projection import CONVERGED, INSIDE, in_box, load_element, locate, project_point
 
-_NEAR_FACE = 0.3     # |g| below this (parameter units) at a local minimum: try a crossing there
-
-
-@njit
-def _signed_face_distance(face, xi):
-    g = 0.0
-    for i in range(3):
-        g += face[3, i] * (xi[i] - face[0, i])
-    return g
-
-
-@njit
-def _shift(beam_origin, e, solid_origin, s, shift):
-    for i in range(3):
-        shift[i] = beam_origin[e, i] - solid_origin[s, i]
+_NEAR_FACE = 0.3     # |g| below this (parameter units) at a local minimum of |g|: try a crossing there
 
 
 @njit
@@ -53,97 +40,114 @@ def _face_centre(code, face, xi):
 
 @njit
 def crossings_capacity(search_points):
-    """Most crossings one pair can report (one per face and start)."""
+    """Most crossings one pair can report (two starts per face and sample)."""
     return 2 * search_points * solid.MAX_FACES
+
+
+@njit
+def _try_crossing(code, X, h, beam_code, Qe, length, s0, s1, s2, face, eta0, xs0, xs1, xs2,
+                  z, xi, N, dN, H, dH):
+    """Run the face Newton from (η0, ξ0); the crossing's η, or NaN if none in element and face."""
+    tol = PARAMETER_TOL
+    u, v = face_coordinates(face, xs0, xs1, xs2)
+    z[0], z[1], z[2] = eta0, u, v
+    if intersect_face(code, X, h, beam_code, Qe, length, s0, s1, s2, face, z, xi, N, dN, H, dH) != CONVERGED:
+        return np.nan
+    if z[0] < -1.0 - tol or z[0] > 1.0 + tol or not solid.is_inside(code, xi, tol):
+        return np.nan
+    return min(max(z[0], -1.0), 1.0)
 
 
 @njit_parallel
 def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h,
                     beam_code, Q, lengths, beam_origin, search_points, out_eta, out_count):
     n_pairs = pair_beam.shape[0]
-    tol = PARAMETER_TOL
-    for p in prange(n_pairs):
-        e = pair_beam[p]
-        s = pair_solid[p]
-        code = codes[s]
-        h = solid_h[s]
+    S = search_points
+    for c in prange(n_chunks(n_pairs, CHUNK)):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
         H = np.empty(MAX_FUNCTIONS)
         dH = np.empty(MAX_FUNCTIONS)
-        r = np.empty(3)
-        dr = np.empty(3)
-        shift = np.empty(3)
         xi = np.empty(3)
+        trial = np.empty(3)
         z = np.empty(3)
-        uv = np.empty(2)
-        load_element(points, conn, s, code, solid_origin, X)
-        _shift(beam_origin, e, solid_origin, s, shift)
-        faces = solid.faces(code)
-        n_faces = faces.shape[0]
-
-        # samples along the beam element and their parameter coordinates
-        S = search_points
+        start = np.empty(3)
         eta_s = np.empty(S)
         xi_s = np.empty((S, 3))
         ok = np.empty(S, dtype=np.bool_)
-        solid.centre(code, xi)
-        for k in range(S):
-            eta_s[k] = -1.0 + 2.0 * k / (S - 1)
-            beam_point(beam_code, Q[e], lengths[e], shift, eta_s[k], H, dH, r, dr)
-            start = xi.copy()
-            ok[k] = project_point(code, X, r, h, xi, N, dN) == CONVERGED
-            if ok[k]:
-                xi_s[k] = xi
-            else:
-                solid.centre(code, xi)
-                xi_s[k] = start
-
-        count = 0
-        for f in range(n_faces):
-            face = faces[f]
-            g = np.empty(S)
+        g = np.empty(S)
+        for p in range(c * CHUNK, min(n_pairs, (c + 1) * CHUNK)):
+            e = pair_beam[p]
+            s = pair_solid[p]
+            code = codes[s]
+            h = solid_h[s]
+            Qe = Q[e]
+            load_element(points, conn, s, code, solid_origin, X)
+            s0 = beam_origin[e, 0] - solid_origin[s, 0]
+            s1 = beam_origin[e, 1] - solid_origin[s, 1]
+            s2 = beam_origin[e, 2] - solid_origin[s, 2]
+            # samples along the beam element and their parameter coordinates (warm-started)
+            solid.centre(code, xi)
             for k in range(S):
-                g[k] = _signed_face_distance(face, xi_s[k])
-            for k in range(S):
-                # start candidates: a sign change towards the next sample, a near local minimum
-                # of |g|, or a sample whose projection failed
-                starts_eta = np.empty(2)
-                starts_xi = np.empty((2, 3))
-                n_starts = 0
-                if not ok[k]:
-                    starts_eta[0] = eta_s[k]
-                    _face_centre(code, face, starts_xi[0])
-                    n_starts = 1
+                eta_s[k] = -1.0 + 2.0 * k / (S - 1)
+                r0, r1, r2, _, _, _ = beam_point(beam_code, Qe, lengths[e], s0, s1, s2, eta_s[k], H, dH)
+                start[:] = xi
+                ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
+                if ok[k]:
+                    xi_s[k] = xi
                 else:
+                    xi_s[k] = start
+                    solid.centre(code, xi)
+            faces = solid.faces(code)
+            count = 0
+            for f in range(faces.shape[0]):
+                face = faces[f]
+                for k in range(S):
+                    g[k] = (face[3, 0] * (xi_s[k, 0] - face[0, 0]) + face[3, 1] * (xi_s[k, 1] - face[0, 1])
+                            + face[3, 2] * (xi_s[k, 2] - face[0, 2]))
+                for k in range(S):
+                    if not ok[k]:
+                        # the projection failed here: start on the face centre
+                        _face_centre(code, face, start)
+                        eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s[k],
+                                            start[0], start[1], start[2], z, xi, N, dN, H, dH)
+                        if not np.isnan(eta):
+                            out_eta[p, count] = eta
+                            count += 1
+                        continue
                     if k + 1 < S and ok[k + 1] and g[k] * g[k + 1] <= 0.0:
+                        # sign change: start from the linear interpolation of the zero
                         t = 0.5 if g[k] == g[k + 1] else g[k] / (g[k] - g[k + 1])
-                        starts_eta[n_starts] = eta_s[k] + t * (eta_s[k + 1] - eta_s[k])
-                        starts_xi[n_starts] = xi_s[k] + t * (xi_s[k + 1] - xi_s[k])
-                        n_starts += 1
+                        eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face,
+                                            eta_s[k] + t * (eta_s[k + 1] - eta_s[k]),
+                                            xi_s[k, 0] + t * (xi_s[k + 1, 0] - xi_s[k, 0]),
+                                            xi_s[k, 1] + t * (xi_s[k + 1, 1] - xi_s[k, 1]),
+                                            xi_s[k, 2] + t * (xi_s[k + 1, 2] - xi_s[k, 2]), z, xi, N, dN, H, dH)
+                        if not np.isnan(eta):
+                            out_eta[p, count] = eta
+                            count += 1
                     left = abs(g[k - 1]) if k > 0 else np.inf
                     right = abs(g[k + 1]) if k + 1 < S else np.inf
                     if abs(g[k]) < _NEAR_FACE and abs(g[k]) <= left and abs(g[k]) <= right:
-                        starts_eta[n_starts] = eta_s[k]
-                        starts_xi[n_starts] = xi_s[k]
-                        n_starts += 1
-                for q in range(n_starts):
-                    face_coordinates(face, starts_xi[q], uv)
-                    z[0] = starts_eta[q]
-                    z[1] = uv[0]
-                    z[2] = uv[1]
-                    status = intersect_face(code, X, h, beam_code, Q[e], lengths[e], shift, face, z,
-                                            xi, N, dN, H, dH)
-                    if status != CONVERGED:
-                        continue
-                    if z[0] < -1.0 - tol or z[0] > 1.0 + tol:
-                        continue
-                    if not solid.is_inside(code, xi, tol):
-                        continue
-                    out_eta[p, count] = min(max(z[0], -1.0), 1.0)
-                    count += 1
-        out_count[p] = count
+                        # close to the face without a sign change: a touch or a double crossing
+                        eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s[k],
+                                            xi_s[k, 0], xi_s[k, 1], xi_s[k, 2], z, xi, N, dN, H, dH)
+                        if not np.isnan(eta):
+                            out_eta[p, count] = eta
+                            count += 1
+            out_count[p] = count
+
+
+@njit
+def _insertion_sort(a, n):
+    for i in range(1, n):
+        v = a[i]
+        j = i - 1
+        while j >= 0 and a[j] > v:
+            a[j + 1] = a[j]
+            j -= 1
+        a[j + 1] = v
 
 
 @njit_parallel
@@ -152,76 +156,71 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
           seg_start, seg_end, seg_count):
     n_beam = pair_offsets.shape[0] - 1
     tol = PARAMETER_TOL
-    for e in prange(n_beam):
-        p0 = pair_offsets[e]
-        p1 = pair_offsets[e + 1]
-        n_cross = 0
-        for p in range(p0, p1):
-            n_cross += crossing_count[p]
-        cuts = np.empty(n_cross + 2)
-        m = 0
-        for p in range(p0, p1):
-            for q in range(crossing_count[p]):
-                cuts[m] = crossing_eta[p, q]
-                m += 1
-        cuts = np.sort(cuts[:m])
-        points_eta = np.empty(m + 2)
-        points_eta[0] = -1.0
-        n_pts = 1
-        for q in range(m):
-            if cuts[q] > points_eta[n_pts - 1] + tol and cuts[q] < 1.0 - tol:
-                points_eta[n_pts] = cuts[q]
-                n_pts += 1
-        points_eta[n_pts] = 1.0
-        n_pts += 1
-
+    for c in prange(n_chunks(n_beam, CHUNK)):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
         H = np.empty(MAX_FUNCTIONS)
         dH = np.empty(MAX_FUNCTIONS)
-        r = np.empty(3)
-        dr = np.empty(3)
-        x = np.empty(3)
-        shift = np.empty(3)
         xi = np.empty(3)
-        base = seg_offsets[e]
-        n_seg = 0
-        for iv in range(n_pts - 1):
-            a = points_eta[iv]
-            b = points_eta[iv + 1]
-            mid = 0.5 * (a + b)
-            owner = -1
-            # global position of the midpoint (beam-local frame; the solid shift is added below)
-            for i in range(3):
-                shift[i] = 0.0
-            beam_point(beam_code, Q[e], lengths[e], shift, mid, H, dH, r, dr)
+        trial = np.empty(3)
+        cuts = np.empty(64)
+        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
+            p0 = pair_offsets[e]
+            p1 = pair_offsets[e + 1]
+            m = 0
             for p in range(p0, p1):
-                s = pair_solid[p]
-                inside_box = True
-                for i in range(3):
-                    xg = r[i] + beam_origin[e, i]
-                    if xg < solid_boxes[s, 0, i] or xg > solid_boxes[s, 1, i]:
-                        inside_box = False
-                if not inside_box:
+                m += crossing_count[p]
+            if m + 2 > cuts.shape[0]:
+                cuts = np.empty(2 * (m + 2))
+            # breakpoints: -1, the crossings (sorted, merged within the tolerance), +1
+            m = 0
+            for p in range(p0, p1):
+                for q in range(crossing_count[p]):
+                    cuts[1 + m] = crossing_eta[p, q]
+                    m += 1
+            _insertion_sort(cuts[1:], m)
+            cuts[0] = -1.0
+            n_pts = 1
+            for q in range(1, m + 1):
+                if cuts[q] > cuts[n_pts - 1] + tol and cuts[q] < 1.0 - tol:
+                    cuts[n_pts] = cuts[q]
+                    n_pts += 1
+            cuts[n_pts] = 1.0
+            n_pts += 1
+
+            base = seg_offsets[e]
+            n_seg = 0
+            for iv in range(n_pts - 1):
+                a = cuts[iv]
+                b = cuts[iv + 1]
+                mid = 0.5 * (a + b)
+                r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
+                # the midpoint decides: lowest-index candidate element containing it owns the piece
+                owner = -1
+                for p in range(p0, p1):
+                    s = pair_solid[p]
+                    if not in_box(solid_boxes[s], r0 + beam_origin[e, 0], r1 + beam_origin[e, 1],
+                                  r2 + beam_origin[e, 2]):
+                        continue
+                    code = codes[s]
+                    load_element(points, conn, s, code, solid_origin, X)
+                    if locate(code, X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
+                              r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
+                              r2 + (beam_origin[e, 2] - solid_origin[s, 2]),
+                              solid_h[s], tol, xi, trial, N, dN) == INSIDE:
+                        owner = s
+                        break
+                if owner < 0:
                     continue
-                code = codes[s]
-                load_element(points, conn, s, code, solid_origin, X)
-                for i in range(3):
-                    x[i] = r[i] + (beam_origin[e, i] - solid_origin[s, i])
-                if locate(code, X, x, solid_h[s], tol, xi, N, dN) == INSIDE:
-                    owner = s
-                    break
-            if owner < 0:
-                continue
-            if n_seg > 0 and seg_solid[base + n_seg - 1] == owner and seg_end[base + n_seg - 1] == a:
-                seg_end[base + n_seg - 1] = b
-            else:
-                seg_solid[base + n_seg] = owner
-                seg_start[base + n_seg] = a
-                seg_end[base + n_seg] = b
-                n_seg += 1
-        seg_count[e] = n_seg
+                if n_seg > 0 and seg_solid[base + n_seg - 1] == owner and seg_end[base + n_seg - 1] == a:
+                    seg_end[base + n_seg - 1] = b
+                else:
+                    seg_solid[base + n_seg] = owner
+                    seg_start[base + n_seg] = a
+                    seg_end[base + n_seg] = b
+                    n_seg += 1
+            seg_count[e] = n_seg
 
 
 def segment(ctx, search_points):

@@ -12,12 +12,14 @@ the projection. Only the set of points differs (design.md §1):
 import numpy as np
 from numba import prange
 
-from .._config import PARAMETER_TOL, njit_parallel
+from .._config import CHUNK, PARAMETER_TOL, njit_parallel
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from ..geometry.beam import beam_point
-from ..geometry.linalg import norm3
-from ..geometry.projection import CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, load_element, locate, project_point
+from ..geometry.linalg import n_chunks, norm3
+from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, in_box, load_element, locate,
+                                   project_point)
+from .quadrature import gauss_legendre
 
 #: point outcome codes (as stored in ``status``)
 POINT_INSIDE, POINT_OUTSIDE, POINT_NOT_CONVERGED, POINT_UNCOUPLED = INSIDE, OUTSIDE, NOT_CONVERGED, 3
@@ -28,45 +30,47 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, gx, gw, codes, conn
                     solid_origin, solid_h, beam_code, Q, lengths, beam_origin,
                     eta, xi, weight, position, status):
     n_gauss = gx.shape[0]
-    tol = PARAMETER_TOL
-    for g in prange(seg_beam.shape[0]):
-        e = seg_beam[g]
-        s = seg_solid[g]
-        code = codes[s]
+    n_seg = seg_beam.shape[0]
+    loose = 1e3 * PARAMETER_TOL
+    for c in prange(n_chunks(n_seg, CHUNK)):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
         H = np.empty(MAX_FUNCTIONS)
         dH = np.empty(MAX_FUNCTIONS)
-        r = np.empty(3)
-        dr = np.empty(3)
-        shift = np.empty(3)
         x = np.empty(3)
-        load_element(points, conn, s, code, solid_origin, X)
-        for i in range(3):
-            shift[i] = beam_origin[e, i] - solid_origin[s, i]
-        half = 0.5 * (seg_end[g] - seg_start[g])
-        mid = 0.5 * (seg_end[g] + seg_start[g])
-        solid.centre(code, x)
-        for q in range(n_gauss):
-            k = g * n_gauss + q
-            eta[k] = mid + half * gx[q]
-            beam_point(beam_code, Q[e], lengths[e], shift, eta[k], H, dH, r, dr)
-            weight[k] = gw[q] * half * norm3(dr)
-            for i in range(3):
-                position[k, i] = r[i] + solid_origin[s, i]
-            # warm start from the previous point of the segment (same element, nearby)
-            if project_point(code, X, r, solid_h[s], x, N, dN) != CONVERGED:
-                solid.centre(code, x)
-                if project_point(code, X, r, solid_h[s], x, N, dN) != CONVERGED:
-                    status[k] = NOT_CONVERGED
+        trial = np.empty(3)
+        for g in range(c * CHUNK, min(n_seg, (c + 1) * CHUNK)):
+            e = seg_beam[g]
+            s = seg_solid[g]
+            code = codes[s]
+            load_element(points, conn, s, code, solid_origin, X)
+            s0 = beam_origin[e, 0] - solid_origin[s, 0]
+            s1 = beam_origin[e, 1] - solid_origin[s, 1]
+            s2 = beam_origin[e, 2] - solid_origin[s, 2]
+            half = 0.5 * (seg_end[g] - seg_start[g])
+            mid = 0.5 * (seg_end[g] + seg_start[g])
+            solid.centre(code, x)
+            for q in range(n_gauss):
+                k = g * n_gauss + q
+                eta[k] = mid + half * gx[q]
+                r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q[e], lengths[e], s0, s1, s2, eta[k], H, dH)
+                weight[k] = gw[q] * half * norm3(d0, d1, d2)
+                position[k, 0] = r0 + solid_origin[s, 0]
+                position[k, 1] = r1 + solid_origin[s, 1]
+                position[k, 2] = r2 + solid_origin[s, 2]
+                # warm start from the previous point of the segment; retry from the centre
+                if project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) != CONVERGED:
                     solid.centre(code, x)
-                    xi[k] = x
-                    continue
-            xi[k] = x
-            # a segment lies in its element: a point outside by more than the tolerance
-            # means a crossing was missed; it is reported, not hidden
-            status[k] = INSIDE if solid.is_inside(code, x, 1e3 * tol) else OUTSIDE
+                    if project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) != CONVERGED:
+                        status[k] = NOT_CONVERGED
+                        solid.centre(code, x)
+                        xi[k] = x
+                        continue
+                xi[k] = x
+                # a segment lies in its element: a point clearly outside means a missed
+                # crossing; it is reported, not hidden
+                status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
 
 
 @njit_parallel
@@ -74,44 +78,42 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
                     solid_boxes, beam_code, Q, lengths, beam_origin,
                     owner, eta, xi, weight, position, status):
     n_gauss = gx.shape[0]
+    n_beam = pair_offsets.shape[0] - 1
     tol = PARAMETER_TOL
-    for e in prange(pair_offsets.shape[0] - 1):
+    for c in prange(n_chunks(n_beam, CHUNK)):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
         H = np.empty(MAX_FUNCTIONS)
         dH = np.empty(MAX_FUNCTIONS)
-        r = np.empty(3)
-        dr = np.empty(3)
-        zero = np.zeros(3)
         x = np.empty(3)
-        xl = np.empty(3)
-        for q in range(n_gauss):
-            k = e * n_gauss + q
-            eta[k] = gx[q]
-            beam_point(beam_code, Q[e], lengths[e], zero, gx[q], H, dH, r, dr)
-            weight[k] = gw[q] * norm3(dr)
-            for i in range(3):
-                position[k, i] = r[i] + beam_origin[e, i]
-            owner[k] = -1
-            status[k] = POINT_UNCOUPLED
-            for p in range(pair_offsets[e], pair_offsets[e + 1]):
-                s = pair_solid[p]
-                inside_box = True
-                for i in range(3):
-                    if position[k, i] < solid_boxes[s, 0, i] or position[k, i] > solid_boxes[s, 1, i]:
-                        inside_box = False
-                if not inside_box:
-                    continue
-                code = codes[s]
-                load_element(points, conn, s, code, solid_origin, X)
-                for i in range(3):
-                    xl[i] = r[i] + (beam_origin[e, i] - solid_origin[s, i])
-                if locate(code, X, xl, solid_h[s], tol, x, N, dN) == INSIDE:
-                    owner[k] = s
-                    status[k] = POINT_INSIDE
-                    xi[k] = x
-                    break
+        trial = np.empty(3)
+        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
+            for q in range(n_gauss):
+                k = e * n_gauss + q
+                eta[k] = gx[q]
+                r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, gx[q], H, dH)
+                weight[k] = gw[q] * norm3(d0, d1, d2)
+                position[k, 0] = r0 + beam_origin[e, 0]
+                position[k, 1] = r1 + beam_origin[e, 1]
+                position[k, 2] = r2 + beam_origin[e, 2]
+                owner[k] = -1
+                status[k] = POINT_UNCOUPLED
+                # the lowest-index candidate element containing the point owns it
+                for p in range(pair_offsets[e], pair_offsets[e + 1]):
+                    s = pair_solid[p]
+                    if not in_box(solid_boxes[s], position[k, 0], position[k, 1], position[k, 2]):
+                        continue
+                    code = codes[s]
+                    load_element(points, conn, s, code, solid_origin, X)
+                    if locate(code, X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
+                              r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
+                              r2 + (beam_origin[e, 2] - solid_origin[s, 2]),
+                              solid_h[s], tol, x, trial, N, dN) == INSIDE:
+                        owner[k] = s
+                        status[k] = POINT_INSIDE
+                        xi[k] = x
+                        break
 
 
 def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):
@@ -143,6 +145,5 @@ def element_points(ctx, n_gauss):
 
 
 def gauss_legendre_arrays(n_gauss):
-    from .quadrature import gauss_legendre
     x, w = gauss_legendre(n_gauss)
     return np.ascontiguousarray(x), np.ascontiguousarray(w)

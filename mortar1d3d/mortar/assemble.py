@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import prange
 
-from .._config import njit, njit_parallel
+from .._config import CHUNK, njit, njit_parallel
+from ..geometry.linalg import n_chunks
 from ..elements.multiplier import multiplier as multiplier_type
 from ..elements.multiplier import shape as lm_shape
 from ..elements.beam import MAX_FUNCTIONS
@@ -122,35 +123,39 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
                      codes, m_offsets, D_local, M_local, kappa_local):
     n_groups = group_start.shape[0] - 1
     nH = beam_n_functions(beam_code)
-    for g in prange(n_groups):
-        e = p_beam[group_start[g]]
-        s = p_solid[group_start[g]]
-        nN = solid_types.n_nodes(codes[s])
+    for c in prange(n_chunks(n_groups, CHUNK)):
         Phi = np.empty(4)
         H = np.empty(MAX_FUNCTIONS)
         N = np.empty(solid_types.MAX_NODES)
-        Dg = np.zeros((4, MAX_FUNCTIONS))
-        Mg = np.zeros((4, solid_types.MAX_NODES))
-        kg = np.zeros(4)
-        for q in range(group_start[g], group_start[g + 1]):
-            lm_shape(n_phi, eta[q], Phi)
-            beam_shape(beam_code, eta[q], lengths[e], H)
-            solid_types.shape(codes[s], xi[q], N)
-            w = weight[q]
+        Dg = np.empty((4, MAX_FUNCTIONS))
+        Mg = np.empty((4, solid_types.MAX_NODES))
+        kg = np.empty(4)
+        for g in range(c * CHUNK, min(n_groups, (c + 1) * CHUNK)):
+            e = p_beam[group_start[g]]
+            s = p_solid[group_start[g]]
+            nN = solid_types.n_nodes(codes[s])
+            Dg[:] = 0.0
+            Mg[:] = 0.0
+            kg[:] = 0.0
+            for q in range(group_start[g], group_start[g + 1]):
+                lm_shape(n_phi, eta[q], Phi)
+                beam_shape(beam_code, eta[q], lengths[e], H)
+                solid_types.shape(codes[s], xi[q], N)
+                w = weight[q]
+                for j in range(n_phi):
+                    wj = w * Phi[j]
+                    kg[j] += wj
+                    for k in range(nH):
+                        Dg[j, k] += wj * H[k]
+                    for a in range(nN):
+                        Mg[j, a] += wj * N[a]
             for j in range(n_phi):
-                wj = w * Phi[j]
-                kg[j] += wj
+                kappa_local[g, j] = kg[j]
                 for k in range(nH):
-                    Dg[j, k] += wj * H[k]
+                    D_local[g, j * nH + k] = Dg[j, k]
+                base = m_offsets[g] + j * nN
                 for a in range(nN):
-                    Mg[j, a] += wj * N[a]
-        for j in range(n_phi):
-            kappa_local[g, j] = kg[j]
-            for k in range(nH):
-                D_local[g, j * nH + k] = Dg[j, k]
-            base = m_offsets[g] + j * nN
-            for a in range(nN):
-                M_local[base + a] = Mg[j, a]
+                    M_local[base + a] = Mg[j, a]
 
 
 @njit
