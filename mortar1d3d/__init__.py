@@ -12,4 +12,6 @@ __version__ = "0.1.0"
 __all__ = ["BeamMesh", "SolidMesh", "MeshError", "generate", "__version__"]
 from .mortar.assemble import MortarOperators, assemble_mortar  # noqa: E402
 
-__all__ += ["MortarOperators", "assemble_mortar"]
+from .warmup import warmup  # noqa: E402
+
+__all__ += ["MortarOperators", "assemble_mortar", "warmup"]

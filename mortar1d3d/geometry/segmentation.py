@@ -3,10 +3,12 @@
 Two stages, both parallel over independent items with pre-sized output slots:
 
 1. ``_pair_crossings`` (per candidate pair): sample the beam element at ``search_points``
-   parameters, project the samples into the solid element and, for every face whose signed
-   parameter distance changes sign between neighbouring samples (or comes close to zero), run
-   the face-intersection Newton from the interpolated start. Accepted crossings have η in the
-   beam element and ξ on the face (tolerance 1e-9).
+   parameters and project the samples into the solid element (ξ and dξ/dη = J⁻¹ r').
+   For every face, the signed parameter distance g(η) = n·(ξ(η) - o) is modelled on each
+   sample interval by the cubic Hermite interpolant of g and dg/dη; the face Newton starts
+   at every sign change of that cubic, and at its minimum when it comes close to zero
+   (a touch, or a leave-and-re-enter between two samples that linear interpolation would
+   miss). Accepted crossings have η in the beam element and ξ on the face (tolerance 1e-9).
 2. ``_tile`` (per beam element): the crossings of all its pairs plus η = ±1, sorted and merged
    within 1e-9, cut the element into intervals; each interval's midpoint goes to the *lowest
    index* candidate element containing it (so a piece on a shared face, edge or node is counted
@@ -25,9 +27,11 @@ from ..elements.solid import dispatch as solid
 from .beam import beam_point
 from .intersection import face_coordinates, intersect_face
 from .linalg import n_chunks
-from .projection import CONVERGED, INSIDE, in_box, load_element, locate, project_point
+from .linalg import solve3
+from .projection import CONVERGED, INSIDE, in_box, jacobian, load_element, locate, project_point
 
-_NEAR_FACE = 0.3     # |g| below this (parameter units) at a local minimum of |g|: try a crossing there
+_NEAR_FACE = 0.1     # min |g| of the cubic model below this fraction of its variation: try a touch there
+_SCAN = 8            # points per sample interval at which the cubic model of g is scanned
 
 
 @njit
@@ -40,8 +44,8 @@ def _face_centre(code, face, xi):
 
 @njit
 def crossings_capacity(search_points):
-    """Most crossings one pair can report (two starts per face and sample)."""
-    return 2 * search_points * solid.MAX_FACES
+    """Most crossings one pair reports (further ones are dropped and counted by the caller)."""
+    return 4 * search_points * solid.MAX_FACES
 
 
 @njit
@@ -58,11 +62,20 @@ def _try_crossing(code, X, h, beam_code, Qe, length, s0, s1, s2, face, eta0, xs0
     return min(max(z[0], -1.0), 1.0)
 
 
+@njit
+def _hermite_g(g0, g1, d0, d1, t):
+    """Cubic Hermite model of the face distance on a sample interval (t in [0, 1], d scaled by h)."""
+    t2 = t * t
+    t3 = t2 * t
+    return ((2 * t3 - 3 * t2 + 1) * g0 + (t3 - 2 * t2 + t) * d0 + (-2 * t3 + 3 * t2) * g1 + (t3 - t2) * d1)
+
+
 @njit_parallel
 def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h,
                     beam_code, Q, lengths, beam_origin, search_points, out_eta, out_count):
     n_pairs = pair_beam.shape[0]
     S = search_points
+    cap = out_eta.shape[1]
     for c in prange(n_chunks(n_pairs, CHUNK)):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
@@ -75,8 +88,10 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
         start = np.empty(3)
         eta_s = np.empty(S)
         xi_s = np.empty((S, 3))
+        dxi_s = np.empty((S, 3))
         ok = np.empty(S, dtype=np.bool_)
         g = np.empty(S)
+        dg = np.empty(S)
         for p in range(c * CHUNK, min(n_pairs, (c + 1) * CHUNK)):
             e = pair_beam[p]
             s = pair_solid[p]
@@ -87,17 +102,21 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
             s0 = beam_origin[e, 0] - solid_origin[s, 0]
             s1 = beam_origin[e, 1] - solid_origin[s, 1]
             s2 = beam_origin[e, 2] - solid_origin[s, 2]
-            # samples along the beam element and their parameter coordinates (warm-started)
+            # samples along the beam element: ξ(η) and dξ/dη = J⁻¹ r'(η) (warm-started Newton)
             solid.centre(code, xi)
             for k in range(S):
                 eta_s[k] = -1.0 + 2.0 * k / (S - 1)
-                r0, r1, r2, _, _, _ = beam_point(beam_code, Qe, lengths[e], s0, s1, s2, eta_s[k], H, dH)
+                r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Qe, lengths[e], s0, s1, s2, eta_s[k], H, dH)
                 start[:] = xi
                 ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
                 if ok[k]:
                     xi_s[k] = xi
+                    j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, dN)
+                    det, dxi_s[k, 0], dxi_s[k, 1], dxi_s[k, 2] = solve3(j00, j01, j02, j10, j11, j12, j20, j21,
+                                                                       j22, d0, d1, d2)
                 else:
                     xi_s[k] = start
+                    dxi_s[k] = 0.0
                     solid.centre(code, xi)
             faces = solid.faces(code)
             count = 0
@@ -106,34 +125,57 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                 for k in range(S):
                     g[k] = (face[3, 0] * (xi_s[k, 0] - face[0, 0]) + face[3, 1] * (xi_s[k, 1] - face[0, 1])
                             + face[3, 2] * (xi_s[k, 2] - face[0, 2]))
+                    dg[k] = face[3, 0] * dxi_s[k, 0] + face[3, 1] * dxi_s[k, 1] + face[3, 2] * dxi_s[k, 2]
                 for k in range(S):
                     if not ok[k]:
                         # the projection failed here: start on the face centre
                         _face_centre(code, face, start)
                         eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s[k],
                                             start[0], start[1], start[2], z, xi, N, dN, H, dH)
-                        if not np.isnan(eta):
+                        if not np.isnan(eta) and count < cap:
                             out_eta[p, count] = eta
                             count += 1
+                for k in range(S - 1):
+                    if not (ok[k] and ok[k + 1]):
                         continue
-                    if k + 1 < S and ok[k + 1] and g[k] * g[k + 1] <= 0.0:
-                        # sign change: start from the linear interpolation of the zero
-                        t = 0.5 if g[k] == g[k + 1] else g[k] / (g[k] - g[k + 1])
+                    step = eta_s[k + 1] - eta_s[k]
+                    g0, g1 = g[k], g[k + 1]
+                    d0, d1 = dg[k] * step, dg[k + 1] * step
+                    # cheap reject: the cubic stays clearly on one side of the face
+                    if min(g0, g1) > 0.5 * (abs(d0) + abs(d1)) or max(g0, g1) < -0.5 * (abs(d0) + abs(d1)):
+                        continue
+                    # scan the cubic model: start Newton at each sign change and at a near touch
+                    prev = g0
+                    best = abs(g0)
+                    best_t = 0.0
+                    for i in range(1, _SCAN + 1):
+                        t = i / _SCAN
+                        cur = _hermite_g(g0, g1, d0, d1, t)
+                        t_start = -1.0
+                        if prev * cur <= 0.0 and not (prev == 0.0 and i > 1):
+                            t_start = t - 1.0 / _SCAN + (1.0 / _SCAN) * (prev / (prev - cur) if prev != cur else 0.5)
+                        if abs(cur) < best:
+                            best = abs(cur)
+                            best_t = t
+                        prev = cur
+                        if t_start < 0.0:
+                            continue
                         eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face,
-                                            eta_s[k] + t * (eta_s[k + 1] - eta_s[k]),
-                                            xi_s[k, 0] + t * (xi_s[k + 1, 0] - xi_s[k, 0]),
-                                            xi_s[k, 1] + t * (xi_s[k + 1, 1] - xi_s[k, 1]),
-                                            xi_s[k, 2] + t * (xi_s[k + 1, 2] - xi_s[k, 2]), z, xi, N, dN, H, dH)
-                        if not np.isnan(eta):
+                                            eta_s[k] + t_start * step,
+                                            xi_s[k, 0] + t_start * (xi_s[k + 1, 0] - xi_s[k, 0]),
+                                            xi_s[k, 1] + t_start * (xi_s[k + 1, 1] - xi_s[k, 1]),
+                                            xi_s[k, 2] + t_start * (xi_s[k + 1, 2] - xi_s[k, 2]), z, xi, N, dN, H, dH)
+                        if not np.isnan(eta) and count < cap:
                             out_eta[p, count] = eta
                             count += 1
-                    left = abs(g[k - 1]) if k > 0 else np.inf
-                    right = abs(g[k + 1]) if k + 1 < S else np.inf
-                    if abs(g[k]) < _NEAR_FACE and abs(g[k]) <= left and abs(g[k]) <= right:
-                        # close to the face without a sign change: a touch or a double crossing
-                        eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s[k],
-                                            xi_s[k, 0], xi_s[k, 1], xi_s[k, 2], z, xi, N, dN, H, dH)
-                        if not np.isnan(eta):
+                    if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0:
+                        # close to the face without a sign change: a touch or a missed double crossing
+                        eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face,
+                                            eta_s[k] + best_t * step,
+                                            xi_s[k, 0] + best_t * (xi_s[k + 1, 0] - xi_s[k, 0]),
+                                            xi_s[k, 1] + best_t * (xi_s[k + 1, 1] - xi_s[k, 1]),
+                                            xi_s[k, 2] + best_t * (xi_s[k + 1, 2] - xi_s[k, 2]), z, xi, N, dN, H, dH)
+                        if not np.isnan(eta) and count < cap:
                             out_eta[p, count] = eta
                             count += 1
             out_count[p] = count

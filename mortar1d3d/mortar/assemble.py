@@ -26,7 +26,7 @@ from ..geometry.search import beam_bounding_boxes, find_candidate_pairs, solid_b
 from ..geometry.segmentation import segment
 from ..integration.rules import POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, element_points, segment_points
 from ..mesh import BeamMesh, SolidMesh
-from .sparse import block_csr
+from .sparse import gathered_block_csr, row_sources
 
 SEGMENT_DTYPE = np.dtype([("beam_element", np.int64), ("solid_element", np.int64),
                           ("eta_start", np.float64), ("eta_end", np.float64)])
@@ -158,23 +158,31 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
                     M_local[base + a] = Mg[j, a]
 
 
-@njit
-def _scatter_indices(group_start, p_beam, p_solid, n_phi, nH, lm_index, beam_cols, codes, conn,
-                     m_offsets, d_rows, d_cols, m_rows, m_cols, kappa_local, kappa):
-    for g in range(group_start.shape[0] - 1):
+@njit_parallel
+def _group_columns(group_start, p_beam, p_solid, n_phi, nH, beam_cols, codes, conn, m_offsets, d_cols, m_cols):
+    """Global columns of every local entry (same layout as the local matrices)."""
+    for g in prange(group_start.shape[0] - 1):
         e = p_beam[group_start[g]]
         s = p_solid[group_start[g]]
         nN = solid_types.n_nodes(codes[s])
         for j in range(n_phi):
-            row = lm_index[e, j]
-            kappa[row] += kappa_local[g, j]
             for k in range(nH):
-                d_rows[g * n_phi * nH + j * nH + k] = row
                 d_cols[g * n_phi * nH + j * nH + k] = beam_cols[e, k]
             base = m_offsets[g] + j * nN
             for a in range(nN):
-                m_rows[base + a] = row
                 m_cols[base + a] = conn[s, a]
+
+
+@njit
+def _kappa(src_offsets, src, n_phi, beam_groups, kappa_local, kappa):
+    for r in range(src_offsets.shape[0] - 1):
+        v = 0.0
+        for t in range(src_offsets[r], src_offsets[r + 1]):
+            e = src[t] // n_phi
+            j = src[t] % n_phi
+            for g in range(beam_groups[e], beam_groups[e + 1]):
+                v += kappa_local[g, j]
+        kappa[r] = v
 
 
 def lm_numbering(beams, lm_type):
@@ -289,17 +297,22 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     _group_operators(group_start, p_beam, p_solid, eta, xi, weight, ctx.beam_code, ctx.lengths,
                      n_phi, ctx.codes, m_offsets, D_local, M_local, kappa_local)
     lm_index, n_lm = lm_numbering(beams, lm_type)
-    d_rows = np.empty(D_local.size, dtype=np.int64)
     d_cols = np.empty(D_local.size, dtype=np.int64)
-    m_rows = np.empty(M_local.size, dtype=np.int64)
     m_cols = np.empty(M_local.size, dtype=np.int64)
-    kappa = np.zeros(n_lm)
-    _scatter_indices(group_start, p_beam, p_solid, n_phi, nH, lm_index, beams.function_columns(),
-                     ctx.codes, ctx.conn, m_offsets, d_rows, d_cols, m_rows, m_cols, kappa_local, kappa)
+    _group_columns(group_start, p_beam, p_solid, n_phi, nH, beams.function_columns(), ctx.codes, ctx.conn,
+                   m_offsets, d_cols, m_cols)
+    # groups are ordered by beam element: the groups of element e are beam_groups[e]:beam_groups[e+1]
+    beam_groups = np.searchsorted(p_beam[group_start[:-1]], np.arange(beams.n_elements + 1)).astype(np.int64)
+    src_offsets, src = row_sources(lm_index, n_phi, n_lm)
+    kappa = np.empty(n_lm)
+    _kappa(src_offsets, src, n_phi, beam_groups, kappa_local, kappa)
     t4 = time.perf_counter()
     timings["assembly"] = t4 - t3
-    D = block_csr(d_rows, d_cols, D_local.ravel(), (n_lm, beams.n_centreline_dofs // 3))
-    M = block_csr(m_rows, m_cols, M_local, (n_lm, solid.n_nodes))
+    D = gathered_block_csr(src_offsets, src, n_phi, beam_groups, np.arange(n_groups, dtype=np.int64) * (n_phi * nH),
+                           np.full(n_groups, nH, dtype=np.int64), d_cols, D_local.ravel(),
+                           (n_lm, beams.n_centreline_dofs // 3))
+    M = gathered_block_csr(src_offsets, src, n_phi, beam_groups, m_offsets[:-1],
+                           solid_types.N_NODES[ctx.codes[g_solid]], m_cols, M_local, (n_lm, solid.n_nodes))
     t5 = time.perf_counter()
     timings["csr"] = t5 - t4
 

@@ -76,6 +76,96 @@ def block_csr(rows, cols, vals, shape, block=3):
     """
     n_rows, n_cols = shape
     start, ucols, uvals, unique = _sorted_unique(rows, cols, vals, n_rows, n_cols)
+    return _finish(start, ucols, uvals, unique, n_rows, n_cols, block)
+
+
+@njit
+def row_sources(lm_index, n_phi, n_rows):
+    """CSR over LM rows of the (beam element, local function) pairs that feed each row."""
+    n_beam = lm_index.shape[0]
+    counts = np.zeros(n_rows + 1, dtype=np.int64)
+    for e in range(n_beam):
+        for j in range(n_phi):
+            counts[lm_index[e, j] + 1] += 1
+    offsets = np.cumsum(counts)
+    fill = offsets[:-1].copy()
+    src = np.empty(offsets[-1], dtype=np.int64)   # e * n_phi + j, ascending per row
+    for e in range(n_beam):
+        for j in range(n_phi):
+            r = lm_index[e, j]
+            src[fill[r]] = e * n_phi + j
+            fill[r] += 1
+    return offsets, src
+
+
+@njit_parallel
+def _gather_bounds(src_offsets, src, n_phi, beam_groups, width, bound):
+    for r in prange(src_offsets.shape[0] - 1):
+        total = 0
+        for t in range(src_offsets[r], src_offsets[r + 1]):
+            e = src[t] // n_phi
+            for g in range(beam_groups[e], beam_groups[e + 1]):
+                total += width[g]
+        bound[r] = total
+
+
+@njit_parallel
+def _gather_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, cols, vals, start, ucols, uvals,
+                 unique):
+    for r in prange(src_offsets.shape[0] - 1):
+        a = start[r]
+        n = 0
+        # gather in a fixed order (beam elements ascending, groups, columns): deterministic sums
+        for t in range(src_offsets[r], src_offsets[r + 1]):
+            e = src[t] // n_phi
+            j = src[t] % n_phi
+            for g in range(beam_groups[e], beam_groups[e + 1]):
+                base = entry_start[g] + j * width[g]
+                for q in range(width[g]):
+                    ucols[a + n] = cols[base + q]
+                    uvals[a + n] = vals[base + q]
+                    n += 1
+        for i in range(a + 1, a + n):       # stable insertion sort by column (short rows)
+            c = ucols[i]
+            v = uvals[i]
+            k = i - 1
+            while k >= a and ucols[k] > c:
+                ucols[k + 1] = ucols[k]
+                uvals[k + 1] = uvals[k]
+                k -= 1
+            ucols[k + 1] = c
+            uvals[k + 1] = v
+        m = 0
+        for t in range(a, a + n):
+            if m > 0 and ucols[a + m - 1] == ucols[t]:
+                uvals[a + m - 1] += uvals[t]
+            else:
+                ucols[a + m] = ucols[t]
+                uvals[a + m] = uvals[t]
+                m += 1
+        unique[r] = m
+
+
+def gathered_block_csr(src_offsets, src, n_phi, beam_groups, entry_start, width, cols, vals, shape, block=3):
+    """Block CSR of per-group local matrices, gathered row by row (parallel, deterministic).
+
+    Group g of beam element e (groups of e are ``beam_groups[e]:beam_groups[e+1]``) holds, for
+    each local multiplier function j, ``width[g]`` entries at ``entry_start[g] + j*width[g]``
+    with global columns ``cols`` and values ``vals``; row ``r`` receives the entries of the
+    (e, j) listed in ``src[src_offsets[r]:src_offsets[r+1]]`` (as ``e*n_phi + j``).
+    """
+    n_rows, n_cols = shape
+    bound = np.empty(n_rows, dtype=np.int64)
+    _gather_bounds(src_offsets, src, n_phi, beam_groups, width, bound)
+    start = np.concatenate([np.zeros(1, np.int64), np.cumsum(bound)])
+    ucols = np.empty(start[-1], dtype=np.int64)
+    uvals = np.empty(start[-1])
+    unique = np.empty(n_rows, dtype=np.int64)
+    _gather_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, cols, vals, start, ucols, uvals, unique)
+    return _finish(start, ucols, uvals, unique, n_rows, n_cols, block)
+
+
+def _finish(start, ucols, uvals, unique, n_rows, n_cols, block):
     nnz = int(unique.sum()) * block
     big = max(nnz, block * max(n_rows, n_cols)) >= np.iinfo(np.int32).max
     index_type = np.int64 if big else np.int32   # what scipy would convert to anyway
