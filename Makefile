@@ -22,7 +22,7 @@ test: $(STAMP)
 	$(PY) -m pytest -q
 
 bench: $(STAMP)
-	NUMBA_NUM_THREADS=2 $(PY) -m pytest benchmarks -q -p no:randomly --benchmark-only --benchmark-columns=min,median,max,rounds
+	NUMBA_NUM_THREADS=2 $(PY) -m pytest benchmarks -q -p no:randomly -p no:xdist --benchmark-only --benchmark-columns=min,median,max,rounds
 
 clean:
 	rm -rf $(VENV) results .pytest_cache .benchmarks

@@ -5,7 +5,40 @@ Every kernel in the package is compiled with :data:`njit`, so that the on-disk c
 Nothing compiles at import time: kernels are compiled lazily on first call (or by
 :func:`mortar1d3d.warmup`).
 """
+import hashlib
+import os
+from pathlib import Path
+
 import numba
+
+
+def _source_fingerprint():
+    """Hash of the package's source files.
+
+    Numba's cache checks only the file of the cached function itself, not of the kernels it
+    calls from other modules: after editing a callee, a stale caller would be loaded. Keying
+    the cache directory by the whole package's sources makes any edit start a fresh cache.
+    """
+    digest = hashlib.sha1()
+    root = Path(__file__).resolve().parent
+    for path in sorted(root.rglob("*.py")):
+        digest.update(str(path.relative_to(root)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _configure_cache():
+    base = os.environ.get("NUMBA_CACHE_DIR")
+    if not base:
+        package_cache = Path(__file__).resolve().parent / "__pycache__"
+        base = package_cache if os.access(package_cache.parent, os.W_OK) else Path.home() / ".cache" / "mortar1d3d"
+    directory = Path(base) / f"mortar1d3d-{_source_fingerprint()}"
+    numba.config.CACHE_DIR = str(directory)
+    return directory
+
+
+#: where compiled kernels are cached (set before any kernel is decorated)
+CACHE_DIR = _configure_cache()
 
 #: Options shared by all kernels. ``fastmath`` stays off: the geometry relies on IEEE
 #: comparisons (inside tests, merging tolerances) and bit-identical results across threads.

@@ -179,7 +179,7 @@ def hermite_lengths(positions, tangents, elements, rtol=1e-14, max_iterations=50
                     0.75 * (1.0 - e * e), 0.125 * (-1 + 2 * e + 3 * e * e)] for e in x])   # dH2, dH4 per unit L
     r1, r2 = positions[elements[:, 0]], positions[elements[:, 1]]
     t1, t2 = tangents[elements[:, 0]], tangents[elements[:, 1]]
-    A = dH[:, 0, None, None] * r1 + dH[:, 2, None, None] * r2          # (q, m, 3)
+    A = dH[:, 2, None, None] * (r2 - r1)      # dH1 = -dH3: differences keep L translation invariant
     B = dH[:, 1, None, None] * t1 + dH[:, 3, None, None] * t2
     L = np.linalg.norm(r2 - r1, axis=1)
     converged = np.zeros(len(L), dtype=bool)

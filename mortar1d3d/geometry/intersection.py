@@ -5,6 +5,8 @@ intersection is one 3×3 Newton problem in z = (η, u, v):
 
     F(z) = x(o + u a + v b) - r(η) = 0,   ∂F/∂z = [-r'(η), J a, J b].
 """
+import numpy as np
+
 from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit
 from .beam import beam_point
 from .linalg import norm3, solve3
@@ -12,6 +14,8 @@ from .projection import CONVERGED, FAILED, jacobian, map_point
 
 _BACKTRACKS = 8
 _MAX_ETA = 10.0     # Newton wandering this far beyond the beam element: no crossing there
+_POLISH_STEP = 1e-11        # parameter step below which a converged crossing is final
+_POLISH_ITERATIONS = 40     # linear convergence at a tangential touch halves the error per step
 
 
 @njit
@@ -44,15 +48,24 @@ def _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face, eta, u, v, 
 def intersect_face(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH):
     """Newton on F(η, u, v) = 0 from the start ``z`` = (η, u, v); result in ``z`` and ``xi``.
 
-    Returns CONVERGED (|F| <= 1e-12 h) or FAILED. The caller decides whether η lies in the
-    beam element and ξ on the face.
+    Returns CONVERGED (|F| <= 1e-12 h within 20 iterations) or FAILED. The caller decides
+    whether η lies in the beam element and ξ on the face.
+
+    Once |F| is below the tolerance the iteration goes on until the step is below 1e-11:
+    one extra step for a transversal crossing (quadratic convergence), more for a beam that
+    touches the face tangentially (a double root, linear convergence), where the residual
+    test alone leaves η off by O(√tol) and two spurious crossings on either side of the touch.
     """
     tol = NEWTON_RESIDUAL_TOL * h
     fn, f0, f1, f2, d0, d1, d2 = _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face,
                                            z[0], z[1], z[2], xi, N, H, dH)
-    for _ in range(NEWTON_MAX_ITERATIONS):
-        if fn <= tol:
+    last_step = np.inf
+    for it in range(NEWTON_MAX_ITERATIONS + _POLISH_ITERATIONS):
+        converged = fn <= tol
+        if converged and last_step <= _POLISH_STEP:
             return CONVERGED
+        if not converged and it >= NEWTON_MAX_ITERATIONS:
+            return FAILED
         j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(solid_code, X, xi, dN)
         a, b = face[1], face[2]
         det, s_eta, s_u, s_v = solve3(
@@ -61,7 +74,7 @@ def intersect_face(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, 
             -d2, j20 * a[0] + j21 * a[1] + j22 * a[2], j20 * b[0] + j21 * b[1] + j22 * b[2],
             -f0, -f1, -f2)
         if det == 0.0:
-            return FAILED
+            return CONVERGED if converged else FAILED
         step = 1.0
         accepted = False
         for _b in range(_BACKTRACKS):
@@ -77,6 +90,7 @@ def intersect_face(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, 
         if not accepted:
             _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face, z[0], z[1], z[2], xi, N, H, dH)
             return CONVERGED if fn <= 1e3 * tol else FAILED
+        last_step = step * max(abs(s_eta), abs(s_u), abs(s_v))
         z[0], z[1], z[2] = e_t, u_t, v_t
         fn, f0, f1, f2, d0, d1, d2 = ft, g0, g1, g2, c0, c1, c2
         if abs(z[0]) > _MAX_ETA:

@@ -98,14 +98,19 @@ def _beam_boxes(Q, lengths, code, padding, boxes, size):
 
 @njit
 def _cell_range(box, lower, inv_cell, dims, lo, hi):
-    """Grid cells covered by ``box``; False if the box misses the grid."""
+    """Grid cells covered by ``box``; False if the box misses the grid.
+
+    Cell coordinates are clamped in floating point before the conversion to integers, so
+    boxes far outside (or huge) neither overflow nor miss the cells they touch; a box that
+    touches the grid's upper face gets the last cell.
+    """
     for i in range(3):
-        a = int(np.floor((box[0, i] - lower[i]) * inv_cell))
-        b = int(np.floor((box[1, i] - lower[i]) * inv_cell))
-        if b < 0 or a >= dims[i]:
+        a = (box[0, i] - lower[i]) * inv_cell
+        b = (box[1, i] - lower[i]) * inv_cell
+        if b < 0.0 or a > dims[i] or not (a <= b):
             return False
-        lo[i] = max(a, 0)
-        hi[i] = min(b, dims[i] - 1)
+        lo[i] = int(np.floor(min(max(a, 0.0), dims[i] - 1.0)))
+        hi[i] = int(np.floor(min(max(b, 0.0), dims[i] - 1.0)))
     return True
 
 

@@ -32,6 +32,7 @@ from .projection import CONVERGED, INSIDE, in_box, jacobian, load_element, locat
 
 _NEAR_FACE = 0.1     # min |g| of the cubic model below this fraction of its variation: try a touch there
 _SCAN = 8            # points per sample interval at which the cubic model of g is scanned
+_SLIVER = 1e-6       # intervals shorter than this (in η) between crossings: tangential touches
 
 
 @njit
@@ -192,6 +193,27 @@ def _insertion_sort(a, n):
         a[j + 1] = v
 
 
+@njit
+def _owner(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points, solid_origin,
+           solid_h, tol, X, xi, trial, N, dN, only):
+    """Lowest-index candidate of beam element ``e`` containing the point r (beam-local frame);
+    -1 if none. With ``only`` >= 0, test just that element."""
+    for p in range(p0, p1):
+        s = pair_solid[p]
+        if only >= 0 and s != only:
+            continue
+        if not in_box(solid_boxes[s], r0 + beam_origin[e, 0], r1 + beam_origin[e, 1], r2 + beam_origin[e, 2]):
+            continue
+        code = codes[s]
+        load_element(points, conn, s, code, solid_origin, X)
+        if locate(code, X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
+                  r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
+                  r2 + (beam_origin[e, 2] - solid_origin[s, 2]),
+                  solid_h[s], tol, xi, trial, N, dN) == INSIDE:
+            return s
+    return -1
+
+
 @njit_parallel
 def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, points, solid_origin,
           solid_h, solid_boxes, beam_code, Q, lengths, beam_origin, seg_offsets, seg_solid,
@@ -207,6 +229,7 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
         xi = np.empty(3)
         trial = np.empty(3)
         cuts = np.empty(64)
+        owners = np.empty(64, dtype=np.int64)
         for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
             p0 = pair_offsets[e]
             p1 = pair_offsets[e + 1]
@@ -215,6 +238,7 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                 m += crossing_count[p]
             if m + 2 > cuts.shape[0]:
                 cuts = np.empty(2 * (m + 2))
+                owners = np.empty(2 * (m + 2), dtype=np.int64)
             # breakpoints: -1, the crossings (sorted, merged within the tolerance), +1
             m = 0
             for p in range(p0, p1):
@@ -231,28 +255,46 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
             cuts[n_pts] = 1.0
             n_pts += 1
 
+            # owner of every interval: the lowest-index candidate containing its midpoint
+            for iv in range(n_pts - 1):
+                mid = 0.5 * (cuts[iv] + cuts[iv + 1])
+                r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
+                owners[iv] = _owner(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
+                                    solid_origin, solid_h, tol, X, xi, trial, N, dN, -1)
+            # a sliver between two crossings closer than _SLIVER is a tangential touch of a face
+            # (a double root, resolved only to ~sqrt(eps)): it joins a neighbour that contains it,
+            # or is dropped when both neighbours are uncoupled (touching the solid from outside)
+            iv = 0
+            while iv < n_pts - 1:
+                if cuts[iv + 1] - cuts[iv] >= _SLIVER:
+                    iv += 1
+                    continue
+                last = iv       # run of consecutive slivers iv..last, judged by its neighbours
+                while last + 1 < n_pts - 1 and cuts[last + 2] - cuts[last + 1] < _SLIVER:
+                    last += 1
+                before = owners[iv - 1] if iv > 0 else -1
+                after = owners[last + 1] if last + 1 < n_pts - 1 else -1
+                for k in range(iv, last + 1):
+                    if owners[k] < 0 or owners[k] == before or owners[k] == after:
+                        continue
+                    if before < 0 and after < 0:
+                        owners[k] = -1
+                        continue
+                    mid = 0.5 * (cuts[k] + cuts[k + 1])
+                    r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
+                    for neighbour in (before, after):
+                        if neighbour >= 0 and _owner(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes,
+                                                     codes, conn, points, solid_origin, solid_h, tol, X, xi, trial,
+                                                     N, dN, neighbour) == neighbour:
+                            owners[k] = neighbour
+                            break
+                iv = last + 1
             base = seg_offsets[e]
             n_seg = 0
             for iv in range(n_pts - 1):
+                owner = owners[iv]
                 a = cuts[iv]
                 b = cuts[iv + 1]
-                mid = 0.5 * (a + b)
-                r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
-                # the midpoint decides: lowest-index candidate element containing it owns the piece
-                owner = -1
-                for p in range(p0, p1):
-                    s = pair_solid[p]
-                    if not in_box(solid_boxes[s], r0 + beam_origin[e, 0], r1 + beam_origin[e, 1],
-                                  r2 + beam_origin[e, 2]):
-                        continue
-                    code = codes[s]
-                    load_element(points, conn, s, code, solid_origin, X)
-                    if locate(code, X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
-                              r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
-                              r2 + (beam_origin[e, 2] - solid_origin[s, 2]),
-                              solid_h[s], tol, xi, trial, N, dN) == INSIDE:
-                        owner = s
-                        break
                 if owner < 0:
                     continue
                 if n_seg > 0 and seg_solid[base + n_seg - 1] == owner and seg_end[base + n_seg - 1] == a:

@@ -18,7 +18,7 @@ from ..elements.solid import dispatch as solid
 from ..geometry.beam import beam_point
 from ..geometry.linalg import n_chunks, norm3
 from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, in_box, load_element, locate,
-                                   project_point)
+                                   polish, project_point)
 from .quadrature import gauss_legendre
 
 #: point outcome codes (as stored in ``status``)
@@ -67,6 +67,7 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, gx, gw, codes, conn
                         solid.centre(code, x)
                         xi[k] = x
                         continue
+                polish(code, X, r0, r1, r2, x, trial, N, dN)
                 xi[k] = x
                 # a segment lies in its element: a point clearly outside means a missed
                 # crossing; it is reported, not hidden
@@ -106,10 +107,11 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
                         continue
                     code = codes[s]
                     load_element(points, conn, s, code, solid_origin, X)
-                    if locate(code, X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
-                              r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
-                              r2 + (beam_origin[e, 2] - solid_origin[s, 2]),
-                              solid_h[s], tol, x, trial, N, dN) == INSIDE:
+                    l0 = r0 + (beam_origin[e, 0] - solid_origin[s, 0])
+                    l1 = r1 + (beam_origin[e, 1] - solid_origin[s, 1])
+                    l2 = r2 + (beam_origin[e, 2] - solid_origin[s, 2])
+                    if locate(code, X, l0, l1, l2, solid_h[s], tol, x, trial, N, dN) == INSIDE:
+                        polish(code, X, l0, l1, l2, x, trial, N, dN)
                         owner[k] = s
                         status[k] = POINT_INSIDE
                         xi[k] = x

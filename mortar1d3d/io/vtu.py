@@ -104,12 +104,12 @@ def _speed_integrals(kind, Q, a, b):
     eta = (0.5 * (a + b))[..., None] + half[..., None] * t            # (..., n, q)
     shared = a.ndim == 1
     out = np.empty((len(Q),) + a.shape[-1:])
+    if shared:
+        dB = _basis_deriv(kind, eta.reshape(-1))                        # (n q, 4)
     for start in range(0, len(Q), _CHUNK_ROWS):
         rows = slice(start, start + _CHUNK_ROWS)
         Qc = Q[rows]
-        if shared:
-            dB = _basis_deriv(kind, eta.reshape(-1))                    # (n q, 4)
-        else:
+        if not shared:
             dB = _basis_deriv(kind, eta[rows].reshape(len(Qc), -1))     # (r, n q, 4)
         speed = np.linalg.norm(_apply(dB, Qc), axis=2).reshape(len(Qc), -1, len(t))
         out[rows] = (speed @ w) * (half if shared else half[rows])

@@ -242,7 +242,10 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
         raise ValueError(f"integration must be one of {INTEGRATIONS}, got {integration!r}")
     n_gauss = _check_int("n_gauss", n_gauss, 1, 64)
     search_points = _check_int("search_points", search_points, 2, 64)
-    lm_type = multiplier_type(lm)
+    try:
+        lm_type = multiplier_type(lm)
+    except ValueError as exc:
+        raise ValueError(f"lm: {exc}") from None
 
     timings = {}
     t0 = time.perf_counter()

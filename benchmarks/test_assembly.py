@@ -1,0 +1,81 @@
+"""Throughput of the whole ``assemble_mortar`` call (design.md §5).
+
+Scene ``generate.fibre_cube(20, 1000, 20)`` (8000 hex8, 1000 fibres of 20 Hermite elements),
+``n_gauss = 4``; element-based and segment-based integration on straight fibres, segment-based
+on curved (helical) fibres; each with 1 Numba thread and with 2 threads. The timed call is the
+whole ``assemble_mortar`` (search, segmentation, integration points, local operators, CSR,
+certificate); JIT compilation is excluded by the session fixture ``warm_jit`` (tiny scene
+first) plus one untimed warm-up round on the benchmark scene.
+
+Figures in ``extra_info``: integration points, Gauss points per second (points / median
+round time) in total and per thread, and the median per-stage ``ops.timings`` over the rounds.
+"""
+import statistics
+import time
+
+import numba
+import pytest
+
+import mortar1d3d as m13
+from conftest import N_GAUSS, SCENE, TARGETS, available_cpus
+
+ROUNDS = 10
+WARMUP_ROUNDS = 1
+
+VARIANTS = [  # (variant name, integration, curved)
+    ("element-based, straight", "element", False),
+    ("segment-based, straight", "segment", False),
+    ("segment-based, curved", "segment", True),
+]
+
+
+@pytest.fixture(params=[1, 2], ids=["1thread", "2threads"])
+def threads(request):
+    n = request.param
+    if n > numba.config.NUMBA_NUM_THREADS:
+        pytest.skip(f"{n} threads requested, NUMBA_NUM_THREADS={numba.config.NUMBA_NUM_THREADS}")
+    if n > available_cpus():
+        pytest.skip(f"{n} threads requested, {available_cpus()} CPU(s) available")
+    default = numba.get_num_threads()
+    numba.set_num_threads(n)
+    yield n
+    numba.set_num_threads(default)
+
+
+@pytest.mark.parametrize("variant,integration,curved", VARIANTS,
+                         ids=[f"{i}-{'curved' if c else 'straight'}" for _, i, c in VARIANTS])
+def test_assemble_mortar(benchmark, warm_jit, scene, threads, bench_results, variant, integration, curved):
+    beams, solid = scene(curved)
+    assert numba.get_num_threads() == threads
+    records = []  # (wall time, n points, timings) of every call, warm-up rounds first
+
+    def run():
+        t = time.perf_counter()
+        ops = m13.assemble_mortar(beams, solid, integration=integration, n_gauss=N_GAUSS)
+        records.append((time.perf_counter() - t, ops.n_integration_points, ops.timings, ops.diagnostics))
+
+    benchmark.group = "assemble_mortar, fibre_cube(%d, %d, %d)" % SCENE
+    benchmark.pedantic(run, rounds=ROUNDS, warmup_rounds=WARMUP_ROUNDS, iterations=1)
+
+    timed = records[-ROUNDS:] if len(records) > ROUNDS else records
+    n_points = timed[-1][1]
+    assert n_points > 0 and all(r[1] == n_points for r in timed), "integration points differ between rounds"
+    stats = benchmark.stats.stats if benchmark.stats is not None else None  # None with --benchmark-disable
+    median = stats.median if stats is not None else statistics.median(r[0] for r in timed)
+    best = stats.min if stats is not None else min(r[0] for r in timed)
+    stages = {k: float(statistics.median(r[2][k] for r in timed)) for k in timed[-1][2]}
+    gp_per_s = n_points / median
+    target = TARGETS[f"{integration}_gp_per_s_per_core"]
+
+    record = {
+        "integration": integration, "curved": curved, "threads": threads, "n_gauss": N_GAUSS,
+        "scene": list(SCENE), "n_integration_points": n_points, "rounds": len(timed),
+        "median_s": median, "min_s": best,
+        "gp_per_s": gp_per_s, "gp_per_s_per_core": gp_per_s / threads,
+        "gp_per_s_best": n_points / best,
+        "target_gp_per_s_per_core": target,
+        "timings_median_s": stages,
+        "diagnostics": {k: int(v) for k, v in timed[-1][3].items()},
+    }
+    benchmark.extra_info.update(record)
+    bench_results["assembly"].setdefault(variant, {})[threads] = record
