@@ -138,3 +138,29 @@ def polish(code, X, p0, p1, p2, xi, trial, N, dN):
     x0, x1, x2 = map_point(code, X, trial, N)
     if norm3(p0 - x0, p1 - x1, p2 - x2) < norm3(r0, r1, r2):
         xi[0], xi[1], xi[2] = trial[0], trial[1], trial[2]
+
+
+@njit
+def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points, solid_origin,
+           solid_h, tol, X, xi, trial, N, dN, only):
+    """Lowest-index candidate of beam element ``e`` containing the point r (beam-local frame).
+
+    Candidates are ``pair_solid[p0:p1]`` (ascending); returns -1 if none contains the point.
+    With ``only`` >= 0, tests just that element. On success ``xi`` holds the point's ξ.
+    This is the ownership rule of both integrations (design.md §1-§2): a point on a face,
+    edge or node shared by several elements belongs to the lowest-index one.
+    """
+    for p in range(p0, p1):
+        s = pair_solid[p]
+        if only >= 0 and s != only:
+            continue
+        if not in_box(solid_boxes[s], r0 + beam_origin[e, 0], r1 + beam_origin[e, 1], r2 + beam_origin[e, 2]):
+            continue
+        code = codes[s]
+        load_element(points, conn, s, code, solid_origin, X)
+        if locate(code, X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
+                  r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
+                  r2 + (beam_origin[e, 2] - solid_origin[s, 2]),
+                  solid_h[s], tol, xi, trial, N, dN) == INSIDE:
+            return s
+    return -1

@@ -28,7 +28,7 @@ from .beam import beam_point
 from .intersection import face_coordinates, intersect_face
 from .linalg import n_chunks
 from .linalg import solve3
-from .projection import CONVERGED, INSIDE, in_box, jacobian, load_element, locate, project_point
+from .projection import CONVERGED, first_containing, jacobian, load_element, project_point
 
 _NEAR_FACE = 0.1     # min |g| of the cubic model below this fraction of its variation: try a touch there
 _SCAN = 8            # points per sample interval at which the cubic model of g is scanned
@@ -61,6 +61,16 @@ def _try_crossing(code, X, h, beam_code, Qe, length, s0, s1, s2, face, eta0, xs0
     if z[0] < -1.0 - tol or z[0] > 1.0 + tol or not solid.is_inside(code, xi, tol):
         return np.nan
     return min(max(z[0], -1.0), 1.0)
+
+
+@njit
+def _try_between(code, X, h, beam_code, Qe, length, s0, s1, s2, face, eta_s, xi_s, k, t, z, xi, N, dN, H, dH):
+    """``_try_crossing`` from the point at fraction t of sample interval k (linear start values)."""
+    return _try_crossing(code, X, h, beam_code, Qe, length, s0, s1, s2, face,
+                         eta_s[k] + t * (eta_s[k + 1] - eta_s[k]),
+                         xi_s[k, 0] + t * (xi_s[k + 1, 0] - xi_s[k, 0]),
+                         xi_s[k, 1] + t * (xi_s[k + 1, 1] - xi_s[k, 1]),
+                         xi_s[k, 2] + t * (xi_s[k + 1, 2] - xi_s[k, 2]), z, xi, N, dN, H, dH)
 
 
 @njit
@@ -161,21 +171,15 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                         prev = cur
                         if t_start < 0.0:
                             continue
-                        eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face,
-                                            eta_s[k] + t_start * step,
-                                            xi_s[k, 0] + t_start * (xi_s[k + 1, 0] - xi_s[k, 0]),
-                                            xi_s[k, 1] + t_start * (xi_s[k + 1, 1] - xi_s[k, 1]),
-                                            xi_s[k, 2] + t_start * (xi_s[k + 1, 2] - xi_s[k, 2]), z, xi, N, dN, H, dH)
+                        eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
+                                           t_start, z, xi, N, dN, H, dH)
                         if not np.isnan(eta) and count < cap:
                             out_eta[p, count] = eta
                             count += 1
                     if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0:
                         # close to the face without a sign change: a touch or a missed double crossing
-                        eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face,
-                                            eta_s[k] + best_t * step,
-                                            xi_s[k, 0] + best_t * (xi_s[k + 1, 0] - xi_s[k, 0]),
-                                            xi_s[k, 1] + best_t * (xi_s[k + 1, 1] - xi_s[k, 1]),
-                                            xi_s[k, 2] + best_t * (xi_s[k + 1, 2] - xi_s[k, 2]), z, xi, N, dN, H, dH)
+                        eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
+                                           best_t, z, xi, N, dN, H, dH)
                         if not np.isnan(eta) and count < cap:
                             out_eta[p, count] = eta
                             count += 1
@@ -191,27 +195,6 @@ def _insertion_sort(a, n):
             a[j + 1] = a[j]
             j -= 1
         a[j + 1] = v
-
-
-@njit
-def _owner(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points, solid_origin,
-           solid_h, tol, X, xi, trial, N, dN, only):
-    """Lowest-index candidate of beam element ``e`` containing the point r (beam-local frame);
-    -1 if none. With ``only`` >= 0, test just that element."""
-    for p in range(p0, p1):
-        s = pair_solid[p]
-        if only >= 0 and s != only:
-            continue
-        if not in_box(solid_boxes[s], r0 + beam_origin[e, 0], r1 + beam_origin[e, 1], r2 + beam_origin[e, 2]):
-            continue
-        code = codes[s]
-        load_element(points, conn, s, code, solid_origin, X)
-        if locate(code, X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
-                  r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
-                  r2 + (beam_origin[e, 2] - solid_origin[s, 2]),
-                  solid_h[s], tol, xi, trial, N, dN) == INSIDE:
-            return s
-    return -1
 
 
 @njit_parallel
@@ -259,7 +242,7 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
             for iv in range(n_pts - 1):
                 mid = 0.5 * (cuts[iv] + cuts[iv + 1])
                 r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
-                owners[iv] = _owner(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
+                owners[iv] = first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
                                     solid_origin, solid_h, tol, X, xi, trial, N, dN, -1)
             # a sliver between two crossings closer than _SLIVER is a tangential touch of a face
             # (a double root, resolved only to ~sqrt(eps)): it joins a neighbour that contains it,
@@ -283,7 +266,7 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                     mid = 0.5 * (cuts[k] + cuts[k + 1])
                     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
                     for neighbour in (before, after):
-                        if neighbour >= 0 and _owner(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes,
+                        if neighbour >= 0 and first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes,
                                                      codes, conn, points, solid_origin, solid_h, tol, X, xi, trial,
                                                      N, dN, neighbour) == neighbour:
                             owners[k] = neighbour

@@ -17,7 +17,7 @@ from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from ..geometry.beam import beam_point
 from ..geometry.linalg import n_chunks, norm3
-from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, in_box, load_element, locate,
+from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, first_containing, load_element,
                                    polish, project_point)
 from .quadrature import gauss_legendre
 
@@ -101,21 +101,17 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
                 owner[k] = -1
                 status[k] = POINT_UNCOUPLED
                 # the lowest-index candidate element containing the point owns it
-                for p in range(pair_offsets[e], pair_offsets[e + 1]):
-                    s = pair_solid[p]
-                    if not in_box(solid_boxes[s], position[k, 0], position[k, 1], position[k, 2]):
-                        continue
-                    code = codes[s]
-                    load_element(points, conn, s, code, solid_origin, X)
-                    l0 = r0 + (beam_origin[e, 0] - solid_origin[s, 0])
-                    l1 = r1 + (beam_origin[e, 1] - solid_origin[s, 1])
-                    l2 = r2 + (beam_origin[e, 2] - solid_origin[s, 2])
-                    if locate(code, X, l0, l1, l2, solid_h[s], tol, x, trial, N, dN) == INSIDE:
-                        polish(code, X, l0, l1, l2, x, trial, N, dN)
-                        owner[k] = s
-                        status[k] = POINT_INSIDE
-                        xi[k] = x
-                        break
+                s = first_containing(r0, r1, r2, e, pair_solid, pair_offsets[e], pair_offsets[e + 1], beam_origin,
+                                     solid_boxes, codes, conn, points, solid_origin, solid_h, tol, X, x, trial, N,
+                                     dN, -1)
+                if s >= 0:
+                    # X still holds the owner's nodes (it was the last element tested)
+                    polish(codes[s], X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
+                           r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
+                           r2 + (beam_origin[e, 2] - solid_origin[s, 2]), x, trial, N, dN)
+                    owner[k] = s
+                    status[k] = POINT_INSIDE
+                    xi[k] = x
 
 
 def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):
