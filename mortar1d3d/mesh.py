@@ -8,7 +8,7 @@ import numpy as np
 
 from .elements.beam import BEAM_ELEMENTS, beam_element
 from .elements.beam import hermite as _hermite
-from .elements.solid.dispatch import MAX_NODES, SOLID_ELEMENTS, SOLID_MODULES, solid_element
+from .elements.solid.dispatch import MAX_NODES, N_NODES, SOLID_ELEMENTS, SOLID_MODULES, solid_element
 from .errors import MeshError, format_ids
 
 # cell types of lower dimension that a volume mesh file may carry (boundary markers)
@@ -158,9 +158,7 @@ class SolidMesh:
 
     def element_nodes(self, element):
         """Node ids of element ``element`` (global number)."""
-        code = self.element_codes[element]
-        n = [d for d in SOLID_ELEMENTS.values() if d.code == code][0].n_nodes
-        return self.connectivity[element, :n]
+        return self.connectivity[element, : N_NODES[self.element_codes[element]]]
 
     def __repr__(self):
         kinds = ", ".join(f"{len(c)} {d.name}" for d, c in self.blocks)
@@ -318,11 +316,14 @@ class BeamMesh:
             return np.hstack([self.positions, self.tangents]).ravel()
         return self.positions.ravel().copy()
 
-    def coefficients(self):
-        """Per-element vector coefficients ``q_k`` of ``r(η) = Σ H_k q_k``: (m, 4, 3), zero-padded."""
-        m = self.n_elements
+    def coefficients(self, elements=None):
+        """Vector coefficients ``q_k`` of ``r(η) = Σ H_k q_k`` per element: (m, 4, 3), zero-padded.
+
+        ``elements``: optional element ids (default: all).
+        """
+        e = self.elements if elements is None else self.elements[np.atleast_1d(elements)]
+        m = len(e)
         Q = np.zeros((m, 4, 3))
-        e = self.elements
         if self.element_type.name == "hermite":
             Q[:, 0], Q[:, 1], Q[:, 2], Q[:, 3] = (self.positions[e[:, 0]], self.tangents[e[:, 0]],
                                                   self.positions[e[:, 1]], self.tangents[e[:, 1]])
@@ -352,7 +353,7 @@ class BeamMesh:
     def evaluate(self, element, eta):
         """Reference centreline positions r(η) of one element at parameters ``eta``: (len(eta), 3)."""
         eta = np.atleast_1d(np.asarray(eta, dtype=float))
-        Q = self.coefficients()[element]
+        Q = self.coefficients(element)[0]
         L = self.lengths[element]
         if self.element_type.name == "hermite":
             H = np.empty((len(eta), 4))

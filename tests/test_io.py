@@ -1,6 +1,5 @@
 """VTU/PVD output: files read back with meshio hold exactly the meshes, samples and operator data."""
 import os
-import time
 import xml.etree.ElementTree as ET
 
 import meshio
@@ -197,21 +196,10 @@ def test_write_beams_extra_point_data(tmp_path, scene):
     assert not (tmp_path / "c.vtu").exists()
 
 
-def test_write_beams_20000_elements_is_fast(tmp_path):
+def test_write_beams_20000_elements(tmp_path):
+    """Large output is complete and exact (its speed is measured in benchmarks/test_io_speed.py)."""
     beams, _ = generate.fibre_cube(2, 1000, 20, curved=True)
     assert beams.n_elements == 20000
-    def best_of(n, f):
-        best = np.inf
-        for _ in range(n):
-            start = time.perf_counter()
-            f()
-            best = min(best, time.perf_counter() - start)
-        return best
-
-    # unloaded: sampling ~0.06 s, uncompressed file ~0.1 s, zlib file ~0.4 s; the bounds leave
-    # room for a loaded machine and still fail for a per-element Python loop
-    assert best_of(3, lambda: sample_beams(beams)) < 0.5
-    assert best_of(2, lambda: write_beams(tmp_path / "raw.vtu", beams, compression=None)) < 1.0
     path = write_beams(tmp_path / "big.vtu", beams)
     mesh = meshio.read(path)
     assert mesh.points.shape == (20000 * 8, 3)

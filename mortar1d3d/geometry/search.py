@@ -9,7 +9,8 @@ O(n_beam + n_solid) for meshes of comparable element sizes, not O(n_beam · n_so
 import numpy as np
 from numba import prange
 
-from .._config import PARAMETER_TOL, njit, njit_parallel
+from .._config import CHUNK, PARAMETER_TOL, njit, njit_parallel
+from .linalg import n_chunks
 from ..elements.solid.dispatch import BY_CODE, MAX_NODES, N_NODES
 
 
@@ -29,11 +30,15 @@ def solid_bounding_boxes(solid, padding=PARAMETER_TOL):
     return boxes, size
 
 
-def beam_bounding_boxes(beams, padding=PARAMETER_TOL):
-    """(n_elements, 2, 3) padded boxes of the beam elements, and their sizes."""
+def beam_bounding_boxes(beams, padding=PARAMETER_TOL, coefficients=None):
+    """(n_elements, 2, 3) padded boxes of the beam elements, and their sizes.
+
+    ``coefficients``: ``beams.coefficients()`` if the caller has them already.
+    """
     boxes = np.empty((beams.n_elements, 2, 3))
     size = np.empty(beams.n_elements)
-    _beam_boxes(beams.coefficients(), beams.lengths, beams.element_type.code, padding, boxes, size)
+    Q = beams.coefficients() if coefficients is None else coefficients
+    _beam_boxes(Q, beams.lengths, beams.element_type.code, padding, boxes, size)
     return boxes, size
 
 
@@ -150,19 +155,24 @@ def _overlap(a, b):
 
 
 @njit
-def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, out):
-    """Sorted unique solid elements overlapping ``box``; writes into ``out`` if given, returns count."""
+def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, found, out):
+    """Sorted unique solid elements overlapping ``box``.
+
+    ``found`` is a work buffer, grown (and returned) when too small; the ids are written into
+    ``out`` when it has room. Returns (count, found).
+    """
     lo = np.empty(3, dtype=np.int64)
     hi = np.empty(3, dtype=np.int64)
     if not _cell_range(box, lower, inv_cell, dims, lo, hi):
-        return 0
+        return 0, found
     total = 0
     for i in range(lo[0], hi[0] + 1):
         for j in range(lo[1], hi[1] + 1):
             for k in range(lo[2], hi[2] + 1):
                 c = (i * dims[1] + j) * dims[2] + k
                 total += cell_offsets[c + 1] - cell_offsets[c]
-    found = np.empty(total, dtype=np.int64)
+    if total > found.shape[0]:
+        found = np.empty(2 * total, dtype=np.int64)
     n = 0
     for i in range(lo[0], hi[0] + 1):
         for j in range(lo[1], hi[1] + 1):
@@ -173,14 +183,14 @@ def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, di
                     if _overlap(box, solid_boxes[s]):
                         found[n] = s
                         n += 1
-    found = np.sort(found[:n])
+    found[:n].sort()
     m = 0
     for q in range(n):
         if q == 0 or found[q] != found[q - 1]:
             if out.shape[0] > 0:
                 out[m] = found[q]
             m += 1
-    return m
+    return m, found
 
 
 @njit_parallel
@@ -188,14 +198,18 @@ def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell
     n_beam = beam_boxes.shape[0]
     counts = np.zeros(n_beam + 1, dtype=np.int64)
     empty = np.empty(0, dtype=np.int64)
-    for e in prange(n_beam):
-        counts[e + 1] = _candidates_of(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower,
-                                       inv_cell, dims, empty)
+    for c in prange(n_chunks(n_beam, CHUNK)):
+        found = np.empty(64, dtype=np.int64)
+        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
+            counts[e + 1], found = _candidates_of(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower,
+                                                  inv_cell, dims, found, empty)
     offsets = np.cumsum(counts)
     solids = np.empty(offsets[-1], dtype=np.int64)
-    for e in prange(n_beam):
-        _candidates_of(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims,
-                       solids[offsets[e]:offsets[e + 1]])
+    for c in prange(n_chunks(n_beam, CHUNK)):
+        found = np.empty(64, dtype=np.int64)
+        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
+            _, found = _candidates_of(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims,
+                                      found, solids[offsets[e]:offsets[e + 1]])
     return offsets, solids
 
 

@@ -108,8 +108,8 @@ class KernelInput:
         self.conn = solid.connectivity
         self.solid_origin = np.ascontiguousarray(solid.points[solid.connectivity[:, 0]])
         self.solid_boxes, self.solid_h = solid_bounding_boxes(solid)
-        self.beam_boxes, _ = beam_bounding_boxes(beams)
         Q = beams.coefficients()
+        self.beam_boxes, _ = beam_bounding_boxes(beams, coefficients=Q)
         self.beam_origin = np.ascontiguousarray(Q[:, 0])
         position = np.array([1, 0, 1, 0]) if beams.element_type.name == "hermite" else np.array([1, 1, 1, 0])
         self.Q = np.ascontiguousarray(Q - position[None, :, None] * self.beam_origin[:, None, :])
