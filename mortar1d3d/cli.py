@@ -1,17 +1,67 @@
-"""Command line: ``mortar1d3d demo``, ``mortar1d3d warmup``."""
+"""Command line: ``mortar1d3d run|plan scene.toml``, ``mortar1d3d demo``, ``mortar1d3d warmup``."""
 import argparse
 import runpy
 import sys
+import time
 from pathlib import Path
+
+
+def _run(args):
+    from .errors import MeshError
+    from .model import solve
+    from .scene import Scene, SceneError
+    from .solvers.newton import ConvergenceError
+    try:
+        scene = Scene.from_toml(args.scene)
+        if not args.quiet:
+            print(f"mortar1d3d run {args.scene}: {scene!r}", flush=True)
+        start = time.perf_counter()
+        result = solve(scene, progress=not args.quiet)
+        out = Path(args.out) if args.out else Path("results") / scene.name
+        paths = result.write(out, samples_per_element=args.samples)
+    except (SceneError, MeshError, ConvergenceError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2 if isinstance(exc, (SceneError, MeshError)) else 3
+    if not args.quiet:
+        print(f"{result!r}")
+        print(f"wrote {len(paths)} files to {out}/ (open {out / 'result.pvd'} in ParaView) "
+              f"in {time.perf_counter() - start:.2f} s")
+    return 0
+
+
+def _plan(args):
+    from .errors import MeshError
+    from .model import plan
+    from .scene import Scene, SceneError
+    try:
+        effects = plan(Scene.from_toml(args.scene))
+    except (SceneError, MeshError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(f"mortar1d3d plan {args.scene}: solve() will run")
+    for e in effects:
+        print(f"  {e}")
+    return 0
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(prog="mortar1d3d", description="Beams embedded in 3D solids (mortar coupling)")
     sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="solve a scene file and write a ParaView series")
+    run.add_argument("scene", help="TOML scene file")
+    run.add_argument("--out", help="output directory (default results/<scene name>)")
+    run.add_argument("--samples", type=int, default=8, help="beam samples per element in the output")
+    run.add_argument("--quiet", action="store_true", help="no progress output")
+    pl = sub.add_parser("plan", help="print what solving a scene file will compute")
+    pl.add_argument("scene")
     demo = sub.add_parser("demo", help="assemble the benchmark scene, print certificates, write VTU and a plot")
     demo.add_argument("--out", default="results/demo")
     sub.add_parser("warmup", help="compile (or load cached) kernels")
     args, rest = parser.parse_known_args(argv)
+    if args.command == "run":
+        return _run(args)
+    if args.command == "plan":
+        return _plan(args)
     if args.command == "warmup":
         from .warmup import warmup
         warmup(verbose=True)

@@ -276,6 +276,10 @@ class BeamMesh:
         t = np.linspace(t0, t1, n_elements + 1)
         positions = np.array([np.asarray(f(ti), dtype=float).reshape(3) for ti in t])
         tangents = np.array([np.asarray(df(ti), dtype=float).reshape(3) for ti in t])
+        norm = np.linalg.norm(tangents, axis=1)
+        if not (np.isfinite(norm).all() and (norm > 0).all()):
+            raise MeshError("from_curve: df(t) is zero or not finite at some node")
+        tangents /= norm[:, None]
         elements = np.column_stack([np.arange(n_elements), np.arange(1, n_elements + 1)])
         return cls.hermite(positions, tangents, elements)
 

@@ -1,0 +1,734 @@
+"""Model: the operators a :class:`~mortar1d3d.scene.Scene` needs, and nothing else.
+
+Global unknowns ``z = [d_S; d_B(group 0); d_B(group 1); ...; λ]``: solid displacements
+(``3*node + i``), then the centreline DOFs of each beam group (beams of one model share a
+:class:`BeamMesh` and one set of mortar operators: Hermite ``[r, t]`` per node for
+``torsion_free``, positions for ``truss``), then Lagrange multipliers (coupled LM rows) when the
+coupling is enforced with Lagrange multipliers.
+
+Every stage that does work increments ``Model.counts[<effect>]`` with the names that
+:func:`plan` lists, so that tests can prove what ran.
+"""
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from .errors import MeshError, format_ids
+from .generate import _helices, box as box_mesh
+from .mesh import BeamMesh, SolidMesh
+from .mortar.assemble import assemble_mortar
+from .scene import BOX_FACES, Scene, SceneError
+
+DEFAULT_PENALTY_FACTOR = 1e3     # ε = 1e3 E_solid when the scene gives no penalty
+AUTO_DIRECT_LIMIT = 60_000       # unknowns up to which solver = "auto" factorises directly
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One thing :func:`solve` will compute: a stable ``name`` and how often/what exactly."""
+
+    name: str
+    when: str
+    detail: str = ""
+
+    def __str__(self):
+        return f"{self.name:<28} {self.when:<22} {self.detail}"
+
+
+# --------------------------------------------------------------------------------------------
+# beam meshes from curve specifications
+# --------------------------------------------------------------------------------------------
+def _chord_tangents(points):
+    d = np.diff(points, axis=0)
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    t = np.empty_like(points)
+    t[0], t[-1] = d[0], d[-1]
+    t[1:-1] = d[:-1] + d[1:]
+    norm = np.linalg.norm(t[1:-1], axis=1)
+    if (norm < 1e-12).any():
+        raise MeshError("polyline folds back on itself (opposite consecutive segments)")
+    t[1:-1] /= norm[:, None]
+    return t
+
+
+def _curve_functions(curve):
+    """(f, df, t0, t1) of a smooth curve spec."""
+    if "line" in curve:
+        a, b = curve["line"]
+        return (lambda t: a + t * (b - a)), (lambda t: b - a), 0.0, 1.0
+    if "helix" in curve:
+        h = curve["helix"]
+
+        def sample(t):
+            t = np.atleast_1d(t)
+            pts, tan = [], []
+            for ti in t:
+                p, d = _helix_point(h, ti)
+                pts.append(p)
+                tan.append(d)
+            return np.array(pts), np.array(tan)
+        return (lambda t: sample(t)[0][0]), (lambda t: sample(t)[1][0]), 0.0, 1.0
+    return curve["function"], curve["derivative"], float(curve["t"][0]), float(curve["t"][1])
+
+
+def _helix_point(h, s):
+    from .generate import _helix_frame
+    e1, e2 = _helix_frame(h["axis"][None, :])
+    theta = h["phase"] + 2.0 * math.pi * h["turns"] * s
+    p = h["centre"] + (s - 0.5) * h["length"] * h["axis"] + h["radius"] * (math.cos(theta) * e1[0] + math.sin(theta) * e2[0])
+    d = h["length"] * h["axis"] + 2.0 * math.pi * h["turns"] * h["radius"] * (math.cos(theta) * e2[0] - math.sin(theta) * e1[0])
+    return p, d
+
+
+def _read_beam_file(path, hermite):
+    import meshio
+    m = meshio.read(path)
+    lines = [c.data for c in m.cells if c.type == "line"]
+    if not lines:
+        raise MeshError(f"{path}: no 'line' cells")
+    elements = np.vstack(lines)
+    if hermite:
+        if "tangent" in m.point_data:
+            tangents = m.point_data["tangent"]
+        else:
+            order = np.concatenate([elements[:, 0], elements[-1:, 1]])
+            if len(np.unique(order)) != len(order) or not (elements[1:, 0] == elements[:-1, 1]).all():
+                raise MeshError(f"{path}: without point data 'tangent' the line cells must form one chain")
+            tangents = np.zeros_like(m.points, dtype=float)
+            tangents[order] = _chord_tangents(m.points[order].astype(float))
+        return BeamMesh.hermite(m.points, tangents, elements)
+    return BeamMesh.lagrange(m.points, elements)
+
+
+def build_beam_mesh(spec, path):
+    """BeamMesh of one validated ``beams[i]`` entry (``hermite`` for torsion_free, ``line`` for truss)."""
+    hermite = spec["model"] == "torsion_free"
+    try:
+        if "mesh" in spec:
+            mesh = spec["mesh"]
+            return mesh if isinstance(mesh, BeamMesh) else _read_beam_file(mesh, hermite)
+        curve, n = spec["curve"], spec["elements"]
+        if "polyline" in curve:
+            pts = curve["polyline"]
+            elements = np.column_stack([np.arange(n), np.arange(1, n + 1)])
+            return BeamMesh.hermite(pts, _chord_tangents(pts), elements) if hermite else BeamMesh.lagrange(pts, elements)
+        f, df, t0, t1 = _curve_functions(curve)
+        if hermite:
+            return BeamMesh.from_curve(f, df, t0, t1, n)
+        t = np.linspace(t0, t1, n + 1)
+        pts = np.array([np.asarray(f(ti), dtype=float).reshape(3) for ti in t])
+        return BeamMesh.lagrange(pts, np.column_stack([np.arange(n), np.arange(1, n + 1)]))
+    except MeshError as exc:
+        raise SceneError(f"{path}: {exc}") from None
+
+
+def build_solid_mesh(spec):
+    mesh = spec["mesh"]
+    try:
+        if isinstance(mesh, SolidMesh):
+            return mesh
+        if isinstance(mesh, dict):
+            return box_mesh(mesh["box"][0], mesh["box"][1], mesh["cells"], mesh["element"])
+        import meshio
+        return SolidMesh.from_meshio(meshio.read(mesh))
+    except (MeshError, OSError) as exc:
+        raise SceneError(f"solid.mesh: {exc}") from None
+
+
+@dataclass
+class BeamGroup:
+    """Beams of one model in one BeamMesh (entries keep their order)."""
+
+    model: str
+    entries: list                      # scene beam indices
+    mesh: BeamMesh = None
+    node_offsets: list = field(default_factory=list)     # first node of each entry in ``mesh``
+    element_offsets: list = field(default_factory=list)
+    entry_elements: list = field(default_factory=list)   # (start, stop) element range per entry
+    dof_offset: int = 0
+    physics: object = None             # BeamModel
+    operators: object = None           # MortarOperators
+    coupling: object = None            # Coupling
+
+    @property
+    def dofs_per_node(self):
+        return 6 if self.model == "torsion_free" else 3
+
+
+class Model:
+    """Meshes, sets, and (after :meth:`prepare`) the operators of a scene.
+
+    Construction is cheap (meshes and sets only); :meth:`prepare` assembles what the scene
+    needs. ``counts`` records every stage that ran.
+    """
+
+    def __init__(self, scene):
+        if not isinstance(scene, Scene):
+            raise TypeError(f"expected a Scene, got {type(scene).__name__}")
+        self.scene = scene
+        self.counts = Counter()
+        self.linear = scene.analysis["kinematics"] == "linear"
+        self.solid_mesh = build_solid_mesh(scene.solid) if scene.solid is not None else None
+        self.n_solid_nodes = self.solid_mesh.n_nodes if self.solid_mesh is not None else 0
+        # beams grouped by model, entry order kept inside each group
+        self.groups, self.entry_group = [], []
+        meshes = [build_beam_mesh(b, f"beams[{i}]") for i, b in enumerate(scene.beams)]
+        for i, b in enumerate(scene.beams):
+            group = next((g for g in self.groups if g.model == b["model"]), None)
+            if group is None:
+                group = BeamGroup(model=b["model"], entries=[])
+                self.groups.append(group)
+            group.entries.append(i)
+            self.entry_group.append(group)
+        offset = 3 * self.n_solid_nodes
+        for g in self.groups:
+            parts = [meshes[i] for i in g.entries]
+            g.mesh = parts[0] if len(parts) == 1 else BeamMesh.join(parts)
+            g.node_offsets = list(np.cumsum([0] + [p.n_nodes for p in parts[:-1]]))
+            g.element_offsets = list(np.cumsum([0] + [p.n_elements for p in parts[:-1]]))
+            g.entry_elements = [(int(o), int(o) + p.n_elements) for o, p in zip(g.element_offsets, parts)]
+            g.dof_offset = offset
+            offset += g.mesh.n_centreline_dofs
+        self.n_displacement_dofs = offset
+        self.n_multipliers = 0
+        c = scene.coupling
+        self.penalty = None
+        if scene.coupled:
+            self.penalty = c["penalty"] if c["penalty"] is not None else DEFAULT_PENALTY_FACTOR * scene.solid["material"]["E"]
+        self._check_solver()
+        self.fixed_dofs, self.fixed_values, self.dirichlet_dofs = self._dirichlet()
+        self.prepared = False
+
+    # -- sets -----------------------------------------------------------------------------------
+    def _beam_nodes(self, entry, which, path):
+        if entry >= len(self.scene.beams):
+            raise SceneError(f"{path}: beam {entry} does not exist (the scene has {len(self.scene.beams)} beams)")
+        g = self.entry_group[entry]
+        k = g.entries.index(entry)
+        start, stop = g.entry_elements[k]
+        if which == "start":
+            return g, g.mesh.elements[start, :1].copy()
+        if which == "end":
+            return g, g.mesh.elements[stop - 1, 1:2].copy()
+        return g, np.unique(g.mesh.elements[start:stop])
+
+    def select(self, spec, path):
+        """Resolve a set spec to ``("solid", node ids)`` or ``("beam", group, node ids)``.
+
+        Raises SceneError (naming ``path``) when the set selects nothing.
+        """
+        if isinstance(spec, dict):
+            if self.solid_mesh is None:
+                raise SceneError(f"{path}: 'inside' selects solid nodes, but the scene has no solid")
+            lo, hi = np.asarray(spec["inside"], dtype=float)
+            X = self.solid_mesh.points
+            tol = 1e-9 * float(np.linalg.norm(np.ptp(X, axis=0)))
+            nodes = np.flatnonzero(((X >= lo - tol) & (X <= hi + tol)).all(axis=1))
+            if nodes.size == 0:
+                raise SceneError(f"{path}: the box {lo.tolist()} – {hi.tolist()} contains no solid node")
+            return ("solid", nodes)
+        parts = spec.split(":")
+        if parts[0] == "solid":
+            if self.solid_mesh is None:
+                raise SceneError(f"{path}: {spec!r} names a solid set, but the scene has no solid")
+            name = parts[1]
+            X = self.solid_mesh.points
+            if name in BOX_FACES:
+                axis = "xyz".index(name[0])
+                target = X[:, axis].min() if name.endswith("min") else X[:, axis].max()
+                tol = 1e-9 * float(np.linalg.norm(np.ptp(X, axis=0)))
+                nodes = np.flatnonzero(np.abs(X[:, axis] - target) <= tol)
+            elif name in self.solid_mesh.point_sets:
+                nodes = np.unique(np.asarray(self.solid_mesh.point_sets[name], dtype=np.int64))
+            else:
+                known = sorted(set(BOX_FACES) | set(self.solid_mesh.point_sets))
+                raise SceneError(f"{path}: unknown solid set {name!r}; known: {', '.join(known)}")
+            if nodes.size == 0:
+                raise SceneError(f"{path}: {spec!r} selects no node")
+            return ("solid", nodes)
+        entry = int(parts[1])
+        g, nodes = self._beam_nodes(entry, parts[2] if len(parts) == 3 else None, path)
+        return ("beam", g, nodes)
+
+    def _set_dofs(self, sel, components, tangents=False):
+        comps = np.asarray(components, dtype=np.int64)
+        if sel[0] == "solid":
+            return (3 * sel[1][:, None] + comps[None, :]).ravel()
+        g, nodes = sel[1], sel[2]
+        base = g.dof_offset + g.dofs_per_node * nodes[:, None] + (3 if tangents else 0)
+        return (base + comps[None, :]).ravel()
+
+    def _dirichlet(self):
+        dofs, values, per_entry = [], [], []
+        for i, d in enumerate(self.scene.dirichlet):
+            sel = self.select(d["on"], f"dirichlet[{i}].on")
+            idx = self._set_dofs(sel, d["components"])
+            val = np.tile(d["value"][d["components"]], len(idx) // len(d["components"]))
+            dofs.append(idx)
+            values.append(val)
+            if d["clamp"]:
+                g = sel[1]
+                if g.model != "torsion_free":
+                    raise SceneError(f"dirichlet[{i}].clamp: beam {d['on']!r} has no tangent DOFs ({g.model})")
+                t_idx = self._set_dofs(sel, [0, 1, 2], tangents=True)
+                dofs.append(t_idx)
+                values.append(np.zeros(len(t_idx)))
+            per_entry.append(idx)     # position DOFs only: their reactions are forces
+        if not dofs:
+            return np.zeros(0, np.int64), np.zeros(0), per_entry
+        dofs, values = np.concatenate(dofs), np.concatenate(values)
+        order = np.argsort(dofs, kind="stable")
+        dofs, values = dofs[order], values[order]
+        same = dofs[1:] == dofs[:-1]
+        if same.any():
+            clash = same & (values[1:] != values[:-1])
+            if clash.any():
+                raise SceneError(f"dirichlet: DOFs {format_ids(dofs[1:][clash])} are prescribed twice with "
+                                 "different values")
+            keep = np.concatenate([[True], ~same])
+            dofs, values = dofs[keep], values[keep]
+        return dofs, values, per_entry
+
+    def _check_solver(self):
+        solver, enforcement = self.scene.analysis["solver"], self.scene.coupling["enforcement"]
+        lagrange = self.scene.coupled and enforcement == "lagrange"
+        if solver == "block" and not lagrange:
+            raise SceneError("analysis.solver: 'block' is the saddle-point solver of Lagrange-multiplier coupling; "
+                             "use 'auto', 'direct' or 'amg'")
+        if solver == "amg" and lagrange:
+            raise SceneError("analysis.solver: Lagrange-multiplier coupling gives a saddle point; use 'auto', "
+                             "'direct' or 'block' (AMG on the solid block inside a block preconditioner)")
+
+    # -- effects --------------------------------------------------------------------------------
+    @property
+    def lagrange(self):
+        return self.scene.coupled and self.scene.coupling["enforcement"] == "lagrange"
+
+    def linear_solver_method(self, n_unknowns=None):
+        """The linear solver that ``analysis.solver`` resolves to for this model."""
+        solver = self.scene.analysis["solver"]
+        if solver != "auto":
+            return solver
+        n = self.n_displacement_dofs if n_unknowns is None else n_unknowns
+        if n <= AUTO_DIRECT_LIMIT:
+            return "direct"
+        return "block" if self.lagrange else "amg"
+
+    def effects(self):
+        """The list of :class:`Effect` that :func:`solve` will run for this scene."""
+        sc, nonlinear = self.scene, not self.linear
+        every = "every iteration" if nonlinear else "once"
+        out = []
+        if self.solid_mesh is not None:
+            m = self.solid_mesh
+            kinds = ", ".join(f"{len(c)} {d.name}" for d, c in m.blocks)
+            out.append(Effect("solid.mesh", "once", f"{kinds}; {m.n_nodes} nodes"))
+        for g in self.groups:
+            out.append(Effect("beams.mesh", "once", f"{g.model}: {len(g.entries)} beam(s), {g.mesh.n_elements} "
+                                                    f"{g.mesh.element_type.name} elements"))
+        if sc.coupled:
+            c = sc.coupling
+            out.append(Effect("mortar.search", "once", "broad phase, reference configuration"))
+            if c["integration"] == "segment":
+                out.append(Effect("mortar.segmentation", "once", f"beam–face intersections, {c['search_points']} "
+                                                                 "search points"))
+            out.append(Effect("mortar.integration_points", "once", f"{c['integration']}-based, n_gauss={c['n_gauss']}"))
+            out.append(Effect("mortar.assembly", "once", f"D, M, kappa (lm={c['lm']})"))
+            if c["enforcement"] == "lagrange":
+                out.append(Effect("coupling.lagrange", "once", f"constraint rows B = [-M, D] ({c['constraint']})"))
+            else:
+                out.append(Effect(f"coupling.{c['constraint']}_penalty", "once",
+                                  f"constant stiffness, penalty {self.penalty:.4g}"))
+        out.append(Effect("check.rigid_body_modes", "once", "before any solve"))
+        if self.solid_mesh is not None:
+            mat = sc.solid["material"]["model"]
+            if nonlinear:
+                out.append(Effect("solid.internal_force", every, f"total Lagrangian, {mat}"))
+                out.append(Effect("solid.tangent", every, "consistent tangent"))
+            else:
+                out.append(Effect("solid.stiffness", "once", f"small strain, {mat}"))
+        if self.groups:
+            if nonlinear:
+                out.append(Effect("beam.internal_force", every, ", ".join(g.model for g in self.groups)))
+                out.append(Effect("beam.tangent", every, "consistent tangent"))
+            else:
+                out.append(Effect("beam.stiffness", "once", "linearised at the reference configuration"))
+        kinds = {item["type"] for item in sc.loads}
+        for kind, when, detail in (("point", "once", "dead nodal forces"),
+                                   ("traction", "once", "dead surface traction"),
+                                   ("body", "once", "dead body force")):
+            if kind in kinds:
+                out.append(Effect(f"load.{kind}", when, detail))
+        if "pressure" in kinds:
+            if nonlinear:
+                out.append(Effect("load.pressure", every, "follower pressure on the current surface"))
+                out.append(Effect("load.pressure_tangent", every, "load stiffness of the follower pressure"))
+            else:
+                out.append(Effect("load.pressure", "once", "pressure on the reference surface (linear kinematics)"))
+        if "moment" in kinds:
+            out.append(Effect("load.moment", every, "beam end moment"))
+        if nonlinear:
+            a = sc.analysis
+            out.append(Effect("solver.newton", "every load step", f"{a['steps']} load steps, rtol {a['rtol']:g}, "
+                                                                  f"at most {a['max_iterations']} iterations"))
+        else:
+            out.append(Effect("solver.linear", "once", "one linear solve, no Newton loop"))
+        method = self.linear_solver_method()
+        detail = {"direct": "sparse LU (scipy)", "amg": "CG + smoothed aggregation AMG (rigid-body modes)",
+                  "block": "MINRES + block preconditioner (AMG solid block, Schur from kappa)"}[method]
+        out.append(Effect(f"linear_solver.{method}", every, detail))
+        return out
+
+    # -- operators ------------------------------------------------------------------------------
+    def prepare(self):
+        """Assemble everything that is constant: mortar operators, coupling, dead loads; check supports."""
+        if self.prepared:
+            return self
+        from .physics.beam import BeamModel
+        from .physics.coupling import Coupling
+        from .physics.materials import material
+        from .physics.solid import SolidModel
+        sc = self.scene
+        n = self.n_displacement_dofs
+        if self.solid_mesh is not None:
+            mat = sc.solid["material"]
+            try:
+                self.solid_physics = SolidModel(self.solid_mesh, material(mat["model"], mat["E"], mat["nu"]),
+                                                kinematics="linear" if self.linear else "nonlinear")
+            except ValueError as exc:
+                raise SceneError(f"solid.material: {exc}") from None
+        for g in self.groups:
+            EA = np.concatenate([np.full(b - a, sc.beams[i]["section"]["EA"]) for i, (a, b) in zip(g.entries, g.entry_elements)])
+            EI = np.concatenate([np.full(b - a, sc.beams[i]["section"]["EI"]) for i, (a, b) in zip(g.entries, g.entry_elements)])
+            g.physics = BeamModel(g.mesh, EA, EI, model=g.model)
+        if sc.coupled:
+            c = sc.coupling
+            for g in self.groups:
+                g.operators = assemble_mortar(g.mesh, self.solid_mesh, integration=c["integration"],
+                                              n_gauss=c["n_gauss"], lm=c["lm"], search_points=c["search_points"])
+                self.counts["mortar.search"] += 1
+                if c["integration"] == "segment":
+                    self.counts["mortar.segmentation"] += 1
+                self.counts["mortar.integration_points"] += 1
+                self.counts["mortar.assembly"] += 1
+                g.coupling = Coupling(g.operators, g.mesh, self.solid_mesh, g.dof_offset, n,
+                                      constraint=c["constraint"], enforcement=c["enforcement"], penalty=self.penalty)
+                self.counts["coupling.lagrange" if self.lagrange else f"coupling.{c['constraint']}_penalty"] += 1
+            if self.lagrange:
+                self.constraint_matrix = sp.vstack([g.coupling.constraint_matrix() for g in self.groups], format="csr")
+                self.n_multipliers = self.constraint_matrix.shape[0]
+            else:
+                K = self.groups[0].coupling.K
+                for g in self.groups[1:]:
+                    K = K + g.coupling.K
+                self.coupling_stiffness = K.tocsr()
+        self._prepare_loads()
+        self.n_unknowns = n + self.n_multipliers
+        self.free = np.setdiff1d(np.arange(self.n_unknowns), self.fixed_dofs)
+        self.fixed = self.fixed_dofs
+        self.check_supports()
+        self.prepared = True
+        return self
+
+    def _prepare_loads(self):
+        from .physics.surface import Pressure, boundary_faces, traction_force
+        n = self.n_displacement_dofs
+        self.dead_load = np.zeros(n)
+        self.pressures, self.moments = [], []
+        for i, item in enumerate(self.scene.loads):
+            path = f"load[{i}]"
+            kind = item["type"]
+            if kind == "body":
+                self.dead_load[: 3 * self.n_solid_nodes] += self.solid_physics.body_force(item["value"])
+                self.counts["load.body"] += 1
+                continue
+            sel = self.select(item["on"], f"{path}.on")
+            if kind == "point":
+                self.dead_load[self._set_dofs(sel, [0, 1, 2])] += np.tile(item["value"], len(self._set_dofs(sel, [0, 1, 2])) // 3)
+                self.counts["load.point"] += 1
+            elif kind in ("traction", "pressure"):
+                faces = boundary_faces(self.solid_mesh, sel[1])
+                if len(faces) == 0:
+                    raise SceneError(f"{path}.on: {item['on']!r} contains no boundary face of the solid")
+                if kind == "traction":
+                    self.dead_load[: 3 * self.n_solid_nodes] += traction_force(self.solid_mesh, faces, item["value"])
+                    self.counts["load.traction"] += 1
+                else:
+                    self.pressures.append(Pressure(self.solid_mesh, faces, item["value"]))
+            else:   # moment on a Hermite beam end: acts on the node's tangent DOFs
+                g, nodes = sel[1], sel[2]
+                dofs = g.dof_offset + 6 * nodes[0] + 3 + np.arange(3)
+                self.moments.append((dofs, item["value"]))
+        if self.linear:
+            # linear kinematics: pressure and moments are evaluated once, on the reference configuration
+            for p in self.pressures:
+                f, _ = p.evaluate(np.zeros(3 * self.n_solid_nodes), tangent=False)
+                self.dead_load[: 3 * self.n_solid_nodes] += f
+                self.counts["load.pressure"] += 1
+            for dofs, moment in self.moments:
+                from .physics.beam import end_moment
+                f, _ = end_moment(self._reference[dofs] if hasattr(self, "_reference") else self.reference()[dofs], moment)
+                self.dead_load[dofs] += f
+                self.counts["load.moment"] += 1
+            self.pressures, self.moments = [], []
+
+    def reference(self):
+        """Reference values of the displacement unknowns' base configuration (positions/tangents)."""
+        if not hasattr(self, "_reference"):
+            ref = np.zeros(self.n_displacement_dofs)
+            if self.solid_mesh is not None:
+                ref[: 3 * self.n_solid_nodes] = self.solid_mesh.points.ravel()
+            for g in self.groups:
+                ref[g.dof_offset: g.dof_offset + g.mesh.n_centreline_dofs] = g.mesh.centreline_dofs()
+            self._reference = ref
+        return self._reference
+
+    # -- supports -------------------------------------------------------------------------------
+    def _bodies(self):
+        """Groups of displacement DOFs that move together (solid + coupled beams; free beams alone)."""
+        bodies = []
+        solid_body = [np.arange(3 * self.n_solid_nodes)] if self.solid_mesh is not None else []
+        for g in self.groups:
+            coupled_elements = (np.unique(g.operators.points["beam_element"]) if g.operators is not None
+                                else np.zeros(0, np.int64))
+            for k, entry in enumerate(g.entries):
+                a, b = g.entry_elements[k]
+                nodes = np.unique(g.mesh.elements[a:b])
+                dofs = (g.dof_offset + g.dofs_per_node * nodes[:, None] + np.arange(g.dofs_per_node)).ravel()
+                inside = np.any((coupled_elements >= a) & (coupled_elements < b))
+                if inside:
+                    solid_body.append(dofs)
+                else:
+                    bodies.append((f"beam {entry}" + (" (outside the solid, so not coupled)"
+                                                      if self.solid_mesh is not None else ""), dofs))
+        if solid_body:
+            label = "the solid" + (" with its coupled beams" if len(solid_body) > 1 else "")
+            bodies.insert(0, (label, np.concatenate(solid_body)))
+        return bodies
+
+    def rigid_body_modes(self, dofs=None):
+        """(n_dofs, 6) rigid-body modes of the displacement DOFs (translations, rotations about the
+        centroid of ``dofs``); tangent DOFs of Hermite beams rotate, never translate."""
+        ref = self.reference()
+        n = self.n_displacement_dofs
+        is_tangent = np.zeros(n // 3, dtype=bool)
+        for g in self.groups:
+            if g.model == "torsion_free":
+                first = g.dof_offset // 3
+                is_tangent[first + 1: first + 2 * g.mesh.n_nodes: 2] = True
+        X = ref.reshape(-1, 3)
+        triplets = np.arange(n // 3) if dofs is None else np.unique(dofs // 3)
+        pos = triplets[~is_tangent[triplets]]
+        centre = X[pos].mean(axis=0) if len(pos) else np.zeros(3)
+        size = float(np.ptp(X[pos], axis=0).max()) if len(pos) > 1 else 1.0
+        size = size if size > 0 else 1.0
+        R = np.zeros((n // 3, 3, 6))
+        P = (X - centre) / size
+        P[is_tangent] = X[is_tangent]
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = 1.0
+            R[~is_tangent, k, k] = 1.0
+            R[:, :, 3 + k] = np.cross(e, P)
+        return R.reshape(n, 6)
+
+    def check_supports(self):
+        """Raise SceneError if a body can move as a rigid body (before any solve)."""
+        self.counts["check.rigid_body_modes"] += 1
+        fixed = np.zeros(self.n_displacement_dofs, dtype=bool)
+        fixed[self.fixed_dofs[self.fixed_dofs < self.n_displacement_dofs]] = True
+        names = ("translation in x", "translation in y", "translation in z",
+                 "rotation about x", "rotation about y", "rotation about z")
+        for label, dofs in self._bodies():
+            R = self.rigid_body_modes(dofs)[dofs]
+            s_all = np.linalg.svd(R, compute_uv=False)
+            rank_all = int(np.count_nonzero(s_all > 1e-10 * s_all[0]))
+            Rf = R[fixed[dofs]]
+            if len(Rf):
+                s_fix = np.linalg.svd(Rf, compute_uv=False)
+                rank_fix = int(np.count_nonzero(s_fix > 1e-10 * s_all[0]))
+            else:
+                rank_fix = 0
+            if rank_fix < rank_all:
+                col = np.linalg.norm(Rf, axis=0) if len(Rf) else np.zeros(6)
+                free = [names[k] for k in range(6) if col[k] <= 1e-10 * s_all[0] and np.linalg.norm(R[:, k]) > 0]
+                what = ", ".join(free) if free else f"{rank_all - rank_fix} combination(s) of rigid-body motions"
+                raise SceneError(f"dirichlet: {label} can move freely ({rank_all - rank_fix} rigid-body mode(s) not "
+                                 f"fixed: {what}); add supports ([[dirichlet]]) that stop these motions")
+
+    # -- the nonlinear system (see solvers.newton) ---------------------------------------------
+    def prescribed(self, t):
+        return t * self.fixed_values
+
+    def _embed(self, K, offset):
+        """Place a square block at (offset, offset) of an (n_displacement_dofs)² matrix."""
+        n = self.n_displacement_dofs
+        K = K.tocoo()
+        return sp.csr_matrix((K.data, (K.row + offset, K.col + offset)), shape=(n, n))
+
+    def _count(self, part, tangent):
+        if self.linear:
+            self.counts[f"{part}.stiffness"] += 1
+        else:
+            self.counts[f"{part}.internal_force"] += 1
+            if tangent:
+                self.counts[f"{part}.tangent"] += 1
+
+    def internal(self, d, tangent=True):
+        """Internal forces and tangent of solid + beams + penalty coupling at displacements ``d``."""
+        n = self.n_displacement_dofs
+        r = np.zeros(n)
+        blocks = []
+        if self.solid_mesh is not None:
+            nS = 3 * self.n_solid_nodes
+            f, K = self.solid_physics.evaluate(d[:nS], tangent=tangent)
+            self._count("solid", tangent)
+            r[:nS] = f
+            blocks.append(K)
+        for g in self.groups:
+            sl = slice(g.dof_offset, g.dof_offset + g.mesh.n_centreline_dofs)
+            f, K = g.physics.evaluate(d[sl], tangent=tangent)
+            self._count("beam", tangent)
+            r[sl] = f
+            blocks.append(K)
+        K = sp.block_diag(blocks, format="csr") if tangent else None
+        if self.scene.coupled and not self.lagrange:
+            r += self.coupling_stiffness @ d
+            if tangent:
+                K = K + self.coupling_stiffness
+        return r, K
+
+    def residual(self, z, t, tangent=True):
+        """Residual ``r = f_int + (coupling) − t f_ext`` over all unknowns, and its Jacobian."""
+        n = self.n_displacement_dofs
+        d = z[:n]
+        r, K = self.internal(d, tangent)
+        r -= t * self.dead_load
+        nS = 3 * self.n_solid_nodes
+        for p in self.pressures:
+            f, Kp = p.evaluate(d[:nS], tangent=tangent)
+            self.counts["load.pressure"] += 1
+            r[:nS] -= t * f
+            if tangent:
+                self.counts["load.pressure_tangent"] += 1
+                K = K - t * self._embed(Kp, 0)
+        if self.moments:
+            from .physics.beam import end_moment
+            q = self.reference() + d
+            for dofs, moment in self.moments:
+                f, Km = end_moment(q[dofs], t * moment)
+                self.counts["load.moment"] += 1
+                r[dofs] -= f
+                if tangent:
+                    K = K - sp.csr_matrix((Km.ravel(), (np.repeat(dofs, 3), np.tile(dofs, 3))), shape=K.shape)
+        if self.lagrange:
+            B, lam = self.constraint_matrix, z[n:]
+            r = np.concatenate([r + B.T @ lam, B @ d])
+            if tangent:
+                K = sp.bmat([[K, B.T], [B, None]], format="csr")
+        self.last_residual = r
+        return r, (K.tocsr() if tangent else None)
+
+    def solve_linear(self, A, b, x0=None):
+        """Solve a reduced (Dirichlet DOFs removed) linear system of this model."""
+        from .solvers.linear import solve_linear, solve_saddle
+        method = self.linear_solver_method(len(b))
+        self.counts[f"linear_solver.{method}"] += 1
+        free = self.free
+        if not self.lagrange:
+            R = self.rigid_body_modes()[free] if method == "amg" else None
+            x, info = solve_linear(A, b, method=method, near_nullspace=R)
+            self.last_linear_info = info
+            return x
+        n = self.n_displacement_dofs
+        primal = free < n
+        p_idx = np.flatnonzero(primal)
+        m_idx = np.flatnonzero(~primal)
+        K = A[p_idx][:, p_idx]
+        B = A[m_idx][:, p_idx]
+        kappa = np.concatenate([np.repeat(g.operators.kappa[g.coupling.coupled], 3) for g in self.groups])
+        solid = np.flatnonzero(free[p_idx] < 3 * self.n_solid_nodes)
+        beam = np.flatnonzero(free[p_idx] >= 3 * self.n_solid_nodes)
+        R = self.rigid_body_modes()[free[p_idx]]
+        x, lam, info = solve_saddle(K, B, kappa, b[p_idx], b[m_idx], method="direct" if method == "direct" else "block",
+                                    solid=solid, beam=beam, penalty_scale=self.penalty, near_nullspace=R)
+        self.last_linear_info = info
+        out = np.empty(len(b))
+        out[p_idx], out[m_idx] = x, lam
+        return out
+
+
+# --------------------------------------------------------------------------------------------
+# public entry points
+# --------------------------------------------------------------------------------------------
+def _as_scene(scene):
+    if isinstance(scene, (str, bytes)) or hasattr(scene, "__fspath__"):
+        return Scene.from_toml(scene)
+    return scene
+
+
+def plan(scene):
+    """The effects :func:`solve` will run for ``scene``, in order (list of :class:`Effect`).
+
+    Builds the meshes and resolves the sets (so a bad set is reported here), assembles nothing.
+    """
+    return Model(_as_scene(scene)).effects()
+
+
+def _print_step(record, index, _n):
+    res = record.residuals[-1] if record.residuals else 0.0
+    print(f"  step {index:4d}  load factor {record.load_factor:8.4f}  iterations {record.iterations:3d}  "
+          f"residual {res:9.3e}" + (f"  (after {record.cuts} cut(s))" if record.cuts else "")
+          + f"  {record.time:6.2f} s", flush=True)
+
+
+def solve(scene, *, progress=False):
+    """Run a scene: assemble what it needs, solve, return a :class:`~mortar1d3d.result.Result`.
+
+    Parameters
+    ----------
+    scene : Scene or path to a TOML scene file
+    progress : bool or callable
+        True prints one line per load step; a callable gets ``(StepRecord, step_index, None)``.
+
+    Raises
+    ------
+    SceneError
+        Invalid scene, empty sets, or rigid-body motions not fixed (before any solve).
+    ConvergenceError
+        Newton's method gave up (message says where and what to try).
+    """
+    import time as _time
+
+    from .result import Result
+    from .solvers.newton import StepRecord, solve_load_steps
+    start = _time.perf_counter()
+    model = Model(_as_scene(scene)).prepare()
+    callback = _print_step if progress is True else (progress or None)
+    z0 = np.zeros(model.n_unknowns)
+    if model.linear:
+        model.counts["solver.linear"] += 1
+        r0, K0 = model.residual(z0, 1.0)
+        z = z0.copy()
+        z[model.fixed] = model.prescribed(1.0)
+        free = model.free
+        rhs = -(r0 + K0 @ z)[free]
+        z[free] += model.solve_linear(K0[free][:, free], rhs)
+        model.last_residual = r0 + K0 @ z
+        record = StepRecord(load_factor=1.0, iterations=1,
+                            residuals=[float(np.linalg.norm(r0[free] + (K0 @ z0)[free])),
+                                       float(np.linalg.norm(model.last_residual[free]))],
+                            increments=[float(np.linalg.norm(z[free]))], time=_time.perf_counter() - start)
+        records, history = [record], [z.copy()]
+        if callback:
+            callback(record, 1, 1)
+    else:
+        a = model.scene.analysis
+        model.counts["solver.newton"] += 1
+        z, records, history = solve_load_steps(model, z0, a["steps"], rtol=a["rtol"], increment_rtol=a["rtol"],
+                                               max_iterations=a["max_iterations"], max_cuts=a["max_cuts"],
+                                               progress=callback)
+    return Result(model, z, records, history, wall_time=_time.perf_counter() - start)

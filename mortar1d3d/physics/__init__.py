@@ -1,0 +1,1 @@
+"""Physics on top of the mortar engine: solids, beams, materials, loads, coupling enforcement."""

@@ -1,0 +1,192 @@
+"""Coupling enforcement from the engine's constant operators (design.md §1).
+
+Global unknowns are stacked ``[d_S; d_B]`` (solid displacements first, then the beam centreline
+DOFs). Because the tying constraint ``u_B − u_S = 0`` is linear in the displacements and the
+operators are built once in the reference configuration, every variant below has a constant
+stiffness: it is assembled once and reused in every Newton iteration.
+
+=============  ================  ==========================================================
+constraint     enforcement       what is added
+=============  ================  ==========================================================
+``mortar``     ``penalty``       ``ε Bᵀ κ⁻¹ B`` with ``B = [−M, D]``; ``λ = ε κ⁻¹ B d``
+``mortar``     ``lagrange``      constraint rows ``B d = 0`` and multipliers λ (saddle point)
+``gauss_point`` ``penalty``      ``ε Σ_g w_g Gᵀ_g G_g`` with ``G_g d = u_B(η_g) − u_S(ξ_g)``
+=============  ================  ==========================================================
+"""
+import numpy as np
+import scipy.sparse as sp
+
+from .._config import njit
+from ..elements.beam import MAX_FUNCTIONS
+from ..elements.beam import shape as beam_shape
+from ..elements.multiplier import multiplier as multiplier_type
+from ..elements.multiplier import shape as lm_shape
+from ..elements.solid import dispatch as solid_types
+from ..mortar.assemble import lm_numbering
+
+CONSTRAINTS = ("mortar", "gauss_point")
+ENFORCEMENTS = ("penalty", "lagrange")
+
+
+@njit
+def _point_operator(p_beam, p_solid, eta, xi, beam_code, lengths, beam_cols, codes, conn, n_solid_nodes,
+                    rows, cols, vals):
+    """Scalar entries of G: row g holds H_k(η_g) at the beam columns, −N_l(ξ_g) at the solid ones."""
+    H = np.empty(MAX_FUNCTIONS)
+    N = np.empty(solid_types.MAX_NODES)
+    k = 0
+    for g in range(len(p_beam)):
+        e = p_beam[g]
+        beam_shape(beam_code, eta[g], lengths[e], H)
+        for a in range(MAX_FUNCTIONS):
+            c = beam_cols[e, a]
+            if c >= 0:
+                rows[k] = g
+                cols[k] = n_solid_nodes + c
+                vals[k] = H[a]
+                k += 1
+        s = p_solid[g]
+        code = codes[s]
+        solid_types.shape(code, xi[g], N)
+        for a in range(solid_types.N_NODES[code]):
+            rows[k] = g
+            cols[k] = conn[s, a]
+            vals[k] = -N[a]
+            k += 1
+    return k
+
+
+@njit
+def _lm_projection(p_beam, eta, weight, lm_index, n_phi, rows, cols, vals):
+    """Entries Φ_j(η_g) w_g of the lumped projection from integration points to LM nodes."""
+    Phi = np.empty(4)
+    k = 0
+    for g in range(len(p_beam)):
+        lm_shape(n_phi, eta[g], Phi)
+        for a in range(n_phi):
+            rows[k] = lm_index[p_beam[g], a]
+            cols[k] = g
+            vals[k] = Phi[a] * weight[g]
+            k += 1
+
+
+def _expand3(A):
+    """Scalar operator → 3×3 identity blocks (scalar row/column c becomes 3c..3c+2)."""
+    return sp.kron(A, sp.identity(3, format="csr"), format="csr")
+
+
+class Coupling:
+    """Constant coupling operators for one beam mesh tied to one solid.
+
+    Parameters
+    ----------
+    ops : MortarOperators
+        From :func:`mortar1d3d.assemble_mortar` (its integration points are reused by the
+        Gauss-point variant).
+    beams : BeamMesh
+    solid : SolidMesh
+    beam_offset : int
+        Index of this beam mesh's first centreline DOF in the global vector ``[d_S; d_B...]``.
+    n_dofs : int
+        Size of the global displacement vector.
+    constraint : {"mortar", "gauss_point"}
+    enforcement : {"penalty", "lagrange"}
+    penalty : float
+        ε, a line-spring stiffness (force / length²).
+    """
+
+    def __init__(self, ops, beams, solid, beam_offset, n_dofs, constraint="mortar", enforcement="penalty",
+                 penalty=1.0):
+        if constraint not in CONSTRAINTS:
+            raise ValueError(f"coupling constraint must be one of {CONSTRAINTS}, got {constraint!r}")
+        if enforcement not in ENFORCEMENTS:
+            raise ValueError(f"coupling enforcement must be one of {ENFORCEMENTS}, got {enforcement!r}")
+        if constraint == "gauss_point" and enforcement != "penalty":
+            raise ValueError("the gauss_point constraint is enforced by penalty only (one constraint per "
+                             "integration point over-constrains a Lagrange multiplier field)")
+        if not (np.isfinite(penalty) and penalty > 0):
+            raise ValueError(f"coupling penalty must be a finite number > 0, got {penalty!r}")
+        self.ops, self.constraint, self.enforcement, self.penalty = ops, constraint, enforcement, float(penalty)
+        self.n_dofs = n_dofs
+        n_S, n_B = 3 * solid.n_nodes, beams.n_centreline_dofs
+        self.n_lm = ops.n_lm
+        self.coupled = ops.kappa > 0.0
+        self.coupled_rows = np.flatnonzero(np.repeat(self.coupled, 3))
+        kinv = np.zeros(ops.n_lm)
+        kinv[self.coupled] = 1.0 / ops.kappa[self.coupled]
+        self.kappa_inverse = np.repeat(kinv, 3)
+        # B = [−M, D] placed into the global columns
+        left = sp.csr_matrix((3 * ops.n_lm, beam_offset - n_S)) if beam_offset > n_S else None
+        right = sp.csr_matrix((3 * ops.n_lm, n_dofs - beam_offset - n_B)) if n_dofs > beam_offset + n_B else None
+        blocks = [-ops.M] + ([left] if left is not None else []) + [ops.D] + ([right] if right is not None else [])
+        self.B = sp.hstack(blocks, format="csr")
+        if constraint == "gauss_point":
+            self.G, self.point_weights = self._gauss_point_operator(ops, beams, solid, beam_offset, n_dofs)
+            self._lm_from_points = self._projection(ops, beams)
+        if enforcement == "penalty":
+            if constraint == "mortar":
+                K = self.B.T @ sp.diags(self.kappa_inverse) @ self.B
+            else:
+                K = self.G.T @ sp.diags(np.repeat(self.point_weights, 3)) @ self.G
+            self.K = (self.penalty * K).tocsr()
+            self.K.sum_duplicates()
+
+    # -- operators ----------------------------------------------------------------------------
+    @staticmethod
+    def _gauss_point_operator(ops, beams, solid, beam_offset, n_dofs):
+        p = ops.points
+        n_pts = len(p)
+        nnz = n_pts * (MAX_FUNCTIONS + solid_types.MAX_NODES)
+        rows, cols, vals = np.empty(nnz, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
+        k = _point_operator(np.ascontiguousarray(p["beam_element"]), np.ascontiguousarray(p["solid_element"]),
+                            np.ascontiguousarray(p["eta"]), np.ascontiguousarray(p["xi"]),
+                            beams.element_type.code, beams.lengths, beams.function_columns(),
+                            solid.element_codes, solid.connectivity, solid.n_nodes, rows, cols, vals)
+        # solid node columns stay; beam columns c → global DOF triplet (beam_offset / 3 + c)
+        cols = cols[:k]
+        beam = cols >= solid.n_nodes
+        cols[beam] += beam_offset // 3 - solid.n_nodes
+        G = sp.csr_matrix((vals[:k], (rows[:k], cols)), shape=(n_pts, n_dofs // 3))
+        return _expand3(G), np.ascontiguousarray(p["weight"])
+
+    @staticmethod
+    def _projection(ops, beams):
+        lm = multiplier_type(ops.lm)
+        lm_index, n_lm = lm_numbering(beams, lm)
+        p = ops.points
+        n = len(p) * lm.n_functions
+        rows, cols, vals = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
+        _lm_projection(np.ascontiguousarray(p["beam_element"]), np.ascontiguousarray(p["eta"]),
+                       np.ascontiguousarray(p["weight"]), lm_index, lm.n_functions, rows, cols, vals)
+        return sp.csr_matrix((vals, (rows, cols)), shape=(n_lm, len(p)))
+
+    # -- evaluation ---------------------------------------------------------------------------
+    @property
+    def n_multipliers(self):
+        """Number of Lagrange multiplier unknowns (coupled LM rows × 3); 0 for penalty."""
+        return len(self.coupled_rows) if self.enforcement == "lagrange" else 0
+
+    def constraint_matrix(self):
+        """Rows of B for the coupled LM nodes (the saddle-point constraint block)."""
+        return self.B[self.coupled_rows]
+
+    def gap(self, d):
+        """Weighted gap ``g = D d_B − M d_S``: (n_lm, 3)."""
+        return (self.B @ d).reshape(-1, 3)
+
+    def line_load(self, d, multipliers=None):
+        """Coupling line load λ at the LM nodes, (n_lm, 3) (zero at uncoupled LM nodes).
+
+        Penalty mortar: ``λ = ε κ⁻¹ g``. Lagrange: the multipliers. Gauss-point penalty: the
+        point values ``ε (u_B − u_S)`` projected to the LM nodes with the lumped (κ-weighted)
+        projection ``λ_j = κ_j⁻¹ Σ_g Φ_j(η_g) w_g λ_g``.
+        """
+        out = np.zeros(3 * self.n_lm)
+        if self.enforcement == "lagrange":
+            out[self.coupled_rows] = multipliers
+        elif self.constraint == "mortar":
+            out = self.penalty * self.kappa_inverse * (self.B @ d)
+        else:
+            lam_g = self.penalty * (self.G @ d).reshape(-1, 3)
+            out = (self.kappa_inverse.reshape(-1, 3) * (self._lm_from_points @ lam_g)).ravel()
+        return out.reshape(-1, 3)

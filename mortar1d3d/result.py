@@ -1,0 +1,182 @@
+"""Results of :func:`mortar1d3d.solve`: fields, line loads, reactions, history, VTU/PVD output."""
+import shutil
+import uuid
+from pathlib import Path
+
+import numpy as np
+
+from .elements.multiplier import multiplier as multiplier_type
+from .elements.multiplier import shape as lm_shape
+from .mortar.assemble import lm_numbering
+
+
+class Result:
+    """What a solve produced.
+
+    Attributes
+    ----------
+    solid_displacement : (n_solid_nodes, 3) float64
+    beam_displacement : (n_beam_nodes, 3) float64
+        Centreline position displacements, beams in scene order, each beam's nodes in order.
+    beam_tangent_displacement : (n_beam_nodes, 3) float64
+        Change of the nodal tangent vectors (zero rows for truss beams).
+    line_load : (n_lm, 3) float64
+        Coupling line load λ at the LM nodes (beam groups in order of first appearance;
+        zero at LM nodes no integration point touched).
+    steps : list of StepRecord
+        Per converged load step: load factor, Newton residual norms, iterations, cuts.
+    reactions : list of (3,) float64
+        Sum of the support forces over each ``[[dirichlet]]`` entry's position DOFs.
+    counts : collections.Counter
+        The effects that ran and how often (names as in :func:`mortar1d3d.plan`).
+    wall_time : float
+    """
+
+    def __init__(self, model, z, steps, history, wall_time=0.0):
+        self.model, self.z, self.steps, self.history, self.wall_time = model, z, steps, history, wall_time
+        self.scene = model.scene
+        self.counts = model.counts
+        n = model.n_displacement_dofs
+        self.solid_displacement = z[: 3 * model.n_solid_nodes].reshape(-1, 3).copy()
+        pos, tan = [], []
+        for entry in range(len(self.scene.beams)):
+            g = model.entry_group[entry]
+            nodes = self._entry_nodes(g, entry)
+            q = z[g.dof_offset: g.dof_offset + g.mesh.n_centreline_dofs].reshape(g.mesh.n_nodes, -1)
+            pos.append(q[nodes, :3])
+            tan.append(q[nodes, 3:6] if g.model == "torsion_free" else np.zeros((len(nodes), 3)))
+        self.beam_displacement = np.vstack(pos) if pos else np.zeros((0, 3))
+        self.beam_tangent_displacement = np.vstack(tan) if tan else np.zeros((0, 3))
+        self.line_load = self._line_load(z)
+        r = getattr(model, "last_residual", None)
+        self.reactions = []
+        for dofs in model.dirichlet_dofs:
+            force = np.zeros(3)
+            if r is not None:
+                np.add.at(force, dofs % 3, r[dofs])
+            self.reactions.append(force)
+
+    # -- helpers --------------------------------------------------------------------------------
+    @staticmethod
+    def _entry_nodes(g, entry):
+        k = g.entries.index(entry)
+        a, b = g.entry_elements[k]
+        return np.unique(g.mesh.elements[a:b])
+
+    def _line_load(self, z):
+        model = self.model
+        n = model.n_displacement_dofs
+        parts, start = [], n
+        for g in model.groups:
+            if g.coupling is None:
+                continue
+            lam = None
+            if model.lagrange:
+                k = g.coupling.n_multipliers
+                lam = z[start: start + k]
+                start += k
+            parts.append(g.coupling.line_load(z[:n], lam))
+        return np.vstack(parts) if parts else np.zeros((0, 3))
+
+    @property
+    def load_factor(self):
+        return self.steps[-1].load_factor if self.steps else 0.0
+
+    def __repr__(self):
+        umax = np.abs(self.solid_displacement).max() if self.solid_displacement.size else 0.0
+        bmax = np.abs(self.beam_displacement).max() if self.beam_displacement.size else 0.0
+        return (f"Result({len(self.steps)} steps, {sum(s.iterations for s in self.steps)} iterations, "
+                f"max |u_S| {umax:.4g}, max |u_B| {bmax:.4g}, {self.wall_time:.2f} s)")
+
+    # -- output ---------------------------------------------------------------------------------
+    def write(self, directory, samples_per_element=8, *, compression="zlib"):
+        """Write a ParaView series: ``result.pvd`` plus VTU files per load step.
+
+        Per step k (k = 0 is the reference state): ``solid_<k>.vtu`` (point data
+        ``displacement``; cell data ``green_lagrange_strain`` and ``cauchy_stress`` as 3×3
+        tensors, averaged over each element's Gauss points), ``beams_<k>.vtu`` (the reference
+        centrelines sampled as polylines with ``displacement``, ``axial_force``, ``curvature`` and
+        the coupling ``line_load`` λ(η)); once: ``segments.vtu`` and ``points.vtu`` (the coupling's
+        segments and integration points). Open ``result.pvd`` and apply *Warp By Vector* with
+        ``displacement``.
+
+        Everything is written into a temporary directory first and moved into ``directory`` only
+        when complete: a failure leaves no partial files.
+
+        Returns
+        -------
+        list of pathlib.Path
+        """
+        from .io.vtu import write_beams, write_integration_points, write_pvd, write_segments, write_solid
+        directory = Path(directory)
+        directory.parent.mkdir(parents=True, exist_ok=True)
+        tmp = directory.parent / f".{directory.name}.tmp-{uuid.uuid4().hex[:8]}"
+        tmp.mkdir()
+        model = self.model
+        n = model.n_displacement_dofs
+        try:
+            entries, written = [], []
+            static = []
+            for gi, g in enumerate(model.groups):
+                if g.operators is not None:
+                    suffix = f"_{gi}" if len(model.groups) > 1 else ""
+                    static.append(write_segments(tmp / f"segments{suffix}.vtu", g.mesh, g.operators,
+                                                 compression=compression).name)
+                    static.append(write_integration_points(tmp / f"points{suffix}.vtu", g.operators,
+                                                           compression=compression).name)
+            states = [(0.0, np.zeros_like(self.z))] + [(s.load_factor, z) for s, z in zip(self.steps, self.history)]
+            for k, (t, z) in enumerate(states):
+                files = []
+                if model.solid_mesh is not None:
+                    u = z[: 3 * model.n_solid_nodes]
+                    fields = model.solid_physics.cell_fields(u)
+                    cell = {name: np.asarray(v).reshape(len(v), -1) for name, v in fields.items()}
+                    files.append(write_solid(tmp / f"solid_{k:04d}.vtu", model.solid_mesh,
+                                             point_data={"displacement": u.reshape(-1, 3)}, cell_data=cell,
+                                             compression=compression).name)
+                lam_all = self._line_load(z)
+                lm_start = 0
+                for gi, g in enumerate(model.groups):
+                    suffix = f"{gi}_" if len(model.groups) > 1 else ""
+                    d = z[g.dof_offset: g.dof_offset + g.mesh.n_centreline_dofs]
+                    data = self._beam_samples(g, d, samples_per_element)
+                    if g.coupling is not None:
+                        data["line_load"] = self._line_load_samples(g, lam_all[lm_start: lm_start + g.coupling.n_lm],
+                                                                    samples_per_element)
+                        lm_start += g.coupling.n_lm
+                    files.append(write_beams(tmp / f"beams_{suffix}{k:04d}.vtu", g.mesh, samples_per_element,
+                                             point_data=data, compression=compression).name)
+                for part, name in enumerate(files + static):
+                    entries.append((t, part, name))
+                written += files
+            written += static
+            written.append(write_pvd(tmp / "result.pvd", entries).name)
+            directory.mkdir(parents=True, exist_ok=True)
+            for name in written:
+                (tmp / name).replace(directory / name)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        return [directory / name for name in written]
+
+    @staticmethod
+    def _beam_samples(g, d, s):
+        eta = np.linspace(-1.0, 1.0, s)
+        sample = g.physics.sample(d, eta)
+        out = {}
+        for key in ("displacement", "axial_force", "curvature"):
+            if key in sample:
+                v = np.asarray(sample[key])
+                out[key] = v.reshape(g.mesh.n_elements * s, *v.shape[2:])
+        return out
+
+    @staticmethod
+    def _line_load_samples(g, lam, s):
+        lm = multiplier_type(g.operators.lm)
+        index, _ = lm_numbering(g.mesh, lm)
+        eta = np.linspace(-1.0, 1.0, s)
+        Phi = np.zeros((s, 4))
+        for i, e in enumerate(eta):
+            lm_shape.py_func(lm.n_functions, e, Phi[i])
+        Phi = Phi[:, : lm.n_functions]
+        values = np.einsum("sj,ejc->esc", Phi, lam[index[:, : lm.n_functions]])
+        return values.reshape(-1, 3)

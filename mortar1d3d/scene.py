@@ -1,0 +1,421 @@
+"""Scenes: what is simulated, from Python or a TOML file (design.md §3).
+
+A :class:`Scene` holds validated, normalised plain data (numbers, strings, lists, and in Python
+also mesh objects or callables). It says what exists and what happens; :mod:`mortar1d3d.model`
+turns it into operators, and :func:`plan` lists the effects :func:`solve` will run.
+
+Every error names the key path, e.g. ``beams[1].section.radius: expected a number > 0, got -2``.
+"""
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from .elements.solid.dispatch import SOLID_ELEMENTS
+from .mesh import BeamMesh, SolidMesh
+
+MATERIAL_MODELS = ("linear_elastic", "saint_venant_kirchhoff", "neo_hooke")
+BEAM_MODELS = ("torsion_free", "truss", "simo_reissner")
+IMPLEMENTED_BEAM_MODELS = ("torsion_free", "truss")
+LOAD_TYPES = ("point", "traction", "pressure", "body", "moment")
+SOLVERS = ("auto", "direct", "amg", "block")
+BOX_FACES = ("x_min", "x_max", "y_min", "y_max", "z_min", "z_max")
+
+
+class SceneError(ValueError):
+    """Invalid scene: the message starts with the key path of the offending entry."""
+
+
+_MISSING = object()
+
+
+def _fail(path, message):
+    raise SceneError(f"{path}: {message}")
+
+
+def _describe(value):
+    text = repr(value)
+    if len(text) > 60:
+        text = text[:57] + "..."
+    return f"{text} ({type(value).__name__})"
+
+
+def _table(value, path, allowed, required=()):
+    if not isinstance(value, dict):
+        _fail(path, f"expected a table (dict), got {_describe(value)}")
+    unknown = [k for k in value if k not in allowed]
+    if unknown:
+        _fail(f"{path}.{unknown[0]}" if path else unknown[0],
+              f"unknown key; allowed keys here: {', '.join(allowed)}")
+    for key in required:
+        if key not in value:
+            _fail(f"{path}.{key}" if path else key, "missing (required)")
+    return value
+
+
+def _number(value, path, *, low=None, high=None, low_open=False, high_open=False):
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        _fail(path, f"expected a number, got {_describe(value)}")
+    value = float(value)
+    if not math.isfinite(value):
+        _fail(path, f"expected a finite number, got {value}")
+    if low is not None and (value <= low if low_open else value < low):
+        _fail(path, f"expected a number {'>' if low_open else '>='} {low:g}, got {value:g}")
+    if high is not None and (value >= high if high_open else value > high):
+        _fail(path, f"expected a number {'<' if high_open else '<='} {high:g}, got {value:g}")
+    return value
+
+
+def _integer(value, path, low=1, high=None):
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        _fail(path, f"expected an integer, got {_describe(value)}")
+    value = int(value)
+    if value < low or (high is not None and value > high):
+        _fail(path, f"expected an integer in [{low}, {high if high is not None else '∞'}], got {value}")
+    return value
+
+
+def _choice(value, path, choices):
+    if not isinstance(value, str):
+        _fail(path, f"expected one of {', '.join(map(repr, choices))}, got {_describe(value)}")
+    if value not in choices:
+        _fail(path, f"unknown value {value!r}; expected one of {', '.join(map(repr, choices))}")
+    return value
+
+
+def _vector(value, path, n=3):
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__"):
+        _fail(path, f"expected a list of {n} numbers, got {_describe(value)}")
+    if len(value) != n:
+        _fail(path, f"expected a list of {n} numbers, got {len(value)} entries")
+    return np.array([_number(v, f"{path}[{i}]") for i, v in enumerate(value)])
+
+
+def _points(value, path, min_count=2):
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__"):
+        _fail(path, f"expected a list of points [[x, y, z], ...], got {_describe(value)}")
+    if len(value) < min_count:
+        _fail(path, f"expected at least {min_count} points, got {len(value)}")
+    return np.array([_vector(p, f"{path}[{i}]") for i, p in enumerate(value)])
+
+
+def _boolean(value, path):
+    if not isinstance(value, (bool, np.bool_)):
+        _fail(path, f"expected true or false, got {_describe(value)}")
+    return bool(value)
+
+
+# --------------------------------------------------------------------------------------------
+# sections
+# --------------------------------------------------------------------------------------------
+def _solid(value, base_dir):
+    path = "solid"
+    _table(value, path, ("mesh", "material"), required=("mesh",))
+    if "material" not in value:
+        _fail("solid.material", "missing: give e.g. { model = \"saint_venant_kirchhoff\", E = 1e9, nu = 0.3 }")
+    mesh = value["mesh"]
+    if isinstance(mesh, SolidMesh):
+        mesh_spec = mesh
+    elif isinstance(mesh, (str, Path)):
+        file = Path(mesh)
+        if not file.is_absolute():
+            file = Path(base_dir or ".") / file
+        if not file.exists():
+            _fail("solid.mesh", f"mesh file {str(file)!r} does not exist")
+        mesh_spec = file
+    else:
+        _table(mesh, "solid.mesh", ("box", "cells", "element"), required=("box", "cells"))
+        box = _points(mesh["box"], "solid.mesh.box")
+        if len(box) != 2:
+            _fail("solid.mesh.box", f"expected two corners [[x0, y0, z0], [x1, y1, z1]], got {len(box)} points")
+        if not (box[1] > box[0]).all():
+            _fail("solid.mesh.box", "the upper corner must be greater than the lower one in x, y and z")
+        cells = [_integer(c, f"solid.mesh.cells[{i}]") for i, c in enumerate(_list(mesh["cells"], "solid.mesh.cells", 3))]
+        element = _choice(mesh.get("element", "hexahedron"), "solid.mesh.element", tuple(SOLID_ELEMENTS))
+        mesh_spec = {"box": box, "cells": cells, "element": element}
+    material = _table(value["material"], "solid.material", ("model", "E", "nu"), required=("model", "E", "nu"))
+    material = {"model": _choice(material["model"], "solid.material.model", MATERIAL_MODELS),
+                "E": _number(material["E"], "solid.material.E", low=0.0, low_open=True),
+                "nu": _number(material["nu"], "solid.material.nu", low=-1.0, high=0.5, low_open=True,
+                              high_open=True)}
+    return {"mesh": mesh_spec, "material": material}
+
+
+def _list(value, path, n=None):
+    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__"):
+        _fail(path, f"expected a list, got {_describe(value)}")
+    if n is not None and len(value) != n:
+        _fail(path, f"expected {n} entries, got {len(value)}")
+    return list(value)
+
+
+def _curve(value, path):
+    _table(value, path, ("line", "polyline", "helix", "function", "derivative", "t"))
+    kinds = [k for k in ("line", "polyline", "helix", "function") if k in value]
+    if len(kinds) != 1:
+        _fail(path, "give exactly one of line, polyline, helix, function")
+    kind = kinds[0]
+    if kind == "line":
+        points = _points(value["line"], f"{path}.line")
+        if len(points) != 2:
+            _fail(f"{path}.line", f"expected two points, got {len(points)} (use polyline for more)")
+        if np.linalg.norm(points[1] - points[0]) == 0.0:
+            _fail(f"{path}.line", "the two points coincide")
+        return {"line": points}
+    if kind == "polyline":
+        points = _points(value["polyline"], f"{path}.polyline")
+        if (np.linalg.norm(np.diff(points, axis=0), axis=1) == 0.0).any():
+            _fail(f"{path}.polyline", "consecutive points coincide")
+        return {"polyline": points}
+    if kind == "helix":
+        h = _table(value["helix"], f"{path}.helix", ("centre", "axis", "radius", "length", "turns", "phase"),
+                   required=("centre", "axis", "radius", "length", "turns"))
+        axis = _vector(h["axis"], f"{path}.helix.axis")
+        if np.linalg.norm(axis) == 0.0:
+            _fail(f"{path}.helix.axis", "must not be zero")
+        return {"helix": {"centre": _vector(h["centre"], f"{path}.helix.centre"), "axis": axis / np.linalg.norm(axis),
+                          "radius": _number(h["radius"], f"{path}.helix.radius", low=0.0, low_open=True),
+                          "length": _number(h["length"], f"{path}.helix.length", low=0.0, low_open=True),
+                          "turns": _number(h["turns"], f"{path}.helix.turns", low=0.0),
+                          "phase": _number(h.get("phase", 0.0), f"{path}.helix.phase")}}
+    f, df = value["function"], value.get("derivative", _MISSING)
+    if not callable(f):
+        _fail(f"{path}.function", "expected a callable f(t) -> (3,) (Python scenes only)")
+    if df is _MISSING or not callable(df):
+        _fail(f"{path}.derivative", "expected a callable df(t) -> (3,) next to function")
+    t = _vector(value.get("t", [0.0, 1.0]), f"{path}.t", 2)
+    return {"function": f, "derivative": df, "t": t}
+
+
+def _beam(value, i, base_dir):
+    path = f"beams[{i}]"
+    _table(value, path, ("curve", "mesh", "elements", "model", "section"), required=("section",))
+    model = _choice(value.get("model", "torsion_free"), f"{path}.model", BEAM_MODELS)
+    if model not in IMPLEMENTED_BEAM_MODELS:
+        _fail(f"{path}.model", f"{model!r} beams are not implemented yet; use one of "
+                               f"{', '.join(map(repr, IMPLEMENTED_BEAM_MODELS))}")
+    if ("curve" in value) == ("mesh" in value):
+        _fail(path, "give exactly one of curve or mesh")
+    out = {"model": model}
+    if "curve" in value:
+        out["curve"] = _curve(value["curve"], f"{path}.curve")
+        if "polyline" in out["curve"]:
+            if "elements" in value:
+                _fail(f"{path}.elements", "a polyline has one element per segment; leave elements out")
+            out["elements"] = len(out["curve"]["polyline"]) - 1
+        else:
+            if "elements" not in value:
+                _fail(f"{path}.elements", "missing (number of beam elements along the curve)")
+            out["elements"] = _integer(value["elements"], f"{path}.elements")
+    else:
+        mesh = value["mesh"]
+        if "elements" in value:
+            _fail(f"{path}.elements", "the mesh defines the elements; leave elements out")
+        if isinstance(mesh, BeamMesh):
+            wanted = "hermite" if model == "torsion_free" else "line"
+            if mesh.element_type.name != wanted:
+                _fail(f"{path}.mesh", f"{model} beams need a {wanted!r} BeamMesh, got {mesh.element_type.name!r}")
+            out["mesh"] = mesh
+        elif isinstance(mesh, (str, Path)):
+            file = Path(mesh) if Path(mesh).is_absolute() else Path(base_dir or ".") / mesh
+            if not file.exists():
+                _fail(f"{path}.mesh", f"mesh file {str(file)!r} does not exist")
+            out["mesh"] = file
+        else:
+            _fail(f"{path}.mesh", f"expected a BeamMesh or a file name, got {_describe(mesh)}")
+    s = _table(value["section"], f"{path}.section", ("E", "radius", "EA", "EI"))
+    by_radius, explicit = ("E" in s or "radius" in s), ("EA" in s or "EI" in s)
+    if by_radius == explicit:
+        _fail(f"{path}.section", "give either E and radius (circular section) or EA and EI, not both")
+    if by_radius:
+        E = _number(_required(s, "E", f"{path}.section"), f"{path}.section.E", low=0.0, low_open=True)
+        r = _number(_required(s, "radius", f"{path}.section"), f"{path}.section.radius", low=0.0,
+                    low_open=True)
+        out["section"] = {"EA": E * math.pi * r * r, "EI": E * math.pi * r ** 4 / 4.0, "E": E, "radius": r}
+    else:
+        EA = _number(_required(s, "EA", f"{path}.section"), f"{path}.section.EA", low=0.0, low_open=True)
+        if model == "truss":
+            EI = _number(s.get("EI", 0.0), f"{path}.section.EI", low=0.0)
+        else:
+            EI = _number(_required(s, "EI", f"{path}.section"), f"{path}.section.EI", low=0.0, low_open=True)
+        out["section"] = {"EA": EA, "EI": EI}
+    return out
+
+
+def _required(table, key, path):
+    if key not in table:
+        _fail(f"{path}.{key}", "missing (required)")
+    return table[key]
+
+
+def _coupling(value):
+    path = "coupling"
+    _table(value, path, ("constraint", "integration", "enforcement", "penalty", "lm", "n_gauss", "search_points"))
+    out = {"constraint": _choice(value.get("constraint", "mortar"), "coupling.constraint", ("mortar", "gauss_point")),
+           "integration": _choice(value.get("integration", "segment"), "coupling.integration", ("segment", "element")),
+           "enforcement": _choice(value.get("enforcement", "penalty"), "coupling.enforcement", ("penalty", "lagrange")),
+           "lm": _choice(value.get("lm", "line2"), "coupling.lm", ("line2", "line3", "line4")),
+           "n_gauss": _integer(value.get("n_gauss", 6), "coupling.n_gauss", 1, 64),
+           "search_points": _integer(value.get("search_points", 6), "coupling.search_points", 2, 64),
+           "penalty": None}
+    if "penalty" in value:
+        out["penalty"] = _number(value["penalty"], "coupling.penalty", low=0.0, low_open=True)
+    if out["constraint"] == "gauss_point" and out["enforcement"] != "penalty":
+        _fail("coupling.enforcement", "the gauss_point constraint is enforced by penalty only")
+    return out
+
+
+def _set_spec(value, path):
+    if isinstance(value, str):
+        parts = value.split(":")
+        if parts[0] == "solid" and len(parts) == 2 and parts[1]:
+            return value
+        if parts[0] == "beam" and len(parts) in (2, 3):
+            try:
+                int(parts[1])
+            except ValueError:
+                _fail(path, f"{value!r}: expected beam:<index>[:start|end]")
+            if len(parts) == 3 and parts[2] not in ("start", "end"):
+                _fail(path, f"{value!r}: expected beam:<index>:start or beam:<index>:end")
+            return value
+        _fail(path, f"{value!r}: expected 'solid:x_min' … 'solid:z_max', 'solid:<point set>', "
+                    "'beam:<i>', 'beam:<i>:start|end', or {{ inside = [[x0, y0, z0], [x1, y1, z1]] }}")
+    _table(value, path, ("inside",), required=("inside",))
+    box = _points(value["inside"], f"{path}.inside")
+    if len(box) != 2 or not (box[1] >= box[0]).all():
+        _fail(f"{path}.inside", "expected two corners [[x0, y0, z0], [x1, y1, z1]] with x1 >= x0 etc.")
+    return {"inside": box}
+
+
+def _dirichlet(value, i):
+    path = f"dirichlet[{i}]"
+    _table(value, path, ("on", "value", "components", "clamp"), required=("on",))
+    comps = value.get("components", ["x", "y", "z"])
+    comps = _list(comps, f"{path}.components")
+    if not comps:
+        _fail(f"{path}.components", "empty: name at least one of 'x', 'y', 'z'")
+    idx = sorted({"xyz".index(_choice(c, f"{path}.components[{k}]", ("x", "y", "z"))) for k, c in enumerate(comps)})
+    out = {"on": _set_spec(value["on"], f"{path}.on"),
+           "value": _vector(value.get("value", [0.0, 0.0, 0.0]), f"{path}.value"),
+           "components": idx, "clamp": _boolean(value.get("clamp", False), f"{path}.clamp")}
+    if out["clamp"] and not (isinstance(out["on"], str) and out["on"].startswith("beam:")):
+        _fail(f"{path}.clamp", "clamp (fix the tangent too) applies to beam sets only")
+    return out
+
+
+def _load(value, i):
+    path = f"load[{i}]"
+    _table(value, path, ("type", "on", "value"), required=("type", "value"))
+    kind = _choice(value["type"], f"{path}.type", LOAD_TYPES)
+    out = {"type": kind}
+    if kind == "body":
+        if "on" in value:
+            _fail(f"{path}.on", "a body force acts on the whole solid; leave 'on' out")
+        out["on"] = None
+    else:
+        if "on" not in value:
+            _fail(f"{path}.on", "missing (the set the load acts on)")
+        out["on"] = _set_spec(value["on"], f"{path}.on")
+    if kind == "pressure":
+        out["value"] = _number(value["value"], f"{path}.value")
+    else:
+        out["value"] = _vector(value["value"], f"{path}.value")
+    if kind in ("traction", "pressure") and not (isinstance(out["on"], str) and out["on"].startswith("solid:")):
+        _fail(f"{path}.on", f"a {kind} acts on a solid surface: use 'solid:x_max' or a solid point set")
+    if kind == "moment" and not (isinstance(out["on"], str) and out["on"].startswith("beam:")
+                                 and out["on"].count(":") == 2):
+        _fail(f"{path}.on", "a moment acts on a beam end: use 'beam:<i>:start' or 'beam:<i>:end'")
+    return out
+
+
+def _analysis(value):
+    path = "analysis"
+    _table(value, path, ("kinematics", "steps", "solver", "max_iterations", "rtol", "max_cuts"))
+    return {"kinematics": _choice(value.get("kinematics", "nonlinear"), "analysis.kinematics", ("nonlinear", "linear")),
+            "steps": _integer(value.get("steps", 1), "analysis.steps", 1, 100000),
+            "solver": _choice(value.get("solver", "auto"), "analysis.solver", SOLVERS),
+            "max_iterations": _integer(value.get("max_iterations", 25), "analysis.max_iterations", 1, 1000),
+            "rtol": _number(value.get("rtol", 1e-8), "analysis.rtol", low=0.0, high=1.0, low_open=True, high_open=True),
+            "max_cuts": _integer(value.get("max_cuts", 6), "analysis.max_cuts", 0, 50)}
+
+
+class Scene:
+    """What is simulated: solid, beams, coupling, supports, loads and the analysis.
+
+    Build from Python with the same fields as the TOML file (design.md §3), or with
+    :meth:`from_toml` / :meth:`from_dict`. Python scenes may also pass a :class:`SolidMesh` as
+    ``solid["mesh"]``, a :class:`BeamMesh` as ``beams[i]["mesh"]`` and callables as curves.
+
+    Parameters
+    ----------
+    solid : dict, optional
+        ``{"mesh": ..., "material": {"model", "E", "nu"}}``; a scene may hold beams only.
+    beams : list of dict
+    coupling, analysis : dict, optional
+    dirichlet, load : list of dict
+    base_dir : path, optional
+        Directory that relative mesh file names are resolved against.
+
+    Raises
+    ------
+    SceneError
+        With the key path of the first invalid entry.
+    """
+
+    def __init__(self, solid=None, beams=(), coupling=None, dirichlet=(), load=(), analysis=None, *,
+                 base_dir=None, name="scene"):
+        self.name = name
+        self.base_dir = Path(base_dir) if base_dir is not None else None
+        self.solid = _solid(solid, base_dir) if solid is not None else None
+        self.beams = [_beam(b, i, base_dir) for i, b in enumerate(_list(beams, "beams"))]
+        if self.solid is None and not self.beams:
+            _fail("scene", "nothing to simulate: give a [solid] and/or [[beams]]")
+        if coupling is not None and (self.solid is None or not self.beams):
+            _fail("coupling", "a coupling needs both a solid and beams")
+        self.coupling = _coupling(coupling if coupling is not None else {})
+        self.dirichlet = [_dirichlet(d, i) for i, d in enumerate(_list(dirichlet, "dirichlet"))]
+        self.loads = [_load(item, i) for i, item in enumerate(_list(load, "load"))]
+        self.analysis = _analysis(analysis if analysis is not None else {})
+        for i, item in enumerate(self.loads):
+            if item["type"] == "body" and self.solid is None:
+                _fail(f"load[{i}]", "a body force needs a solid")
+            if item["type"] == "moment":
+                beam = int(item["on"].split(":")[1])
+                if beam < len(self.beams) and self.beams[beam]["model"] != "torsion_free":
+                    _fail(f"load[{i}].on", f"a moment needs a beam with bending stiffness; beam {beam} is a "
+                                           f"{self.beams[beam]['model']}")
+
+    @property
+    def coupled(self):
+        """True when solid and beams both exist (the coupling is then always active)."""
+        return self.solid is not None and bool(self.beams)
+
+    @classmethod
+    def from_dict(cls, data, *, base_dir=None, name="scene"):
+        """Scene from a nested dict with the TOML file's layout."""
+        _table(data, "", ("solid", "beams", "coupling", "dirichlet", "load", "analysis"))
+        return cls(solid=data.get("solid"), beams=data.get("beams", ()), coupling=data.get("coupling"),
+                   dirichlet=data.get("dirichlet", ()), load=data.get("load", ()), analysis=data.get("analysis"),
+                   base_dir=base_dir, name=name)
+
+    @classmethod
+    def from_toml(cls, path):
+        """Read a scene file; relative mesh paths are resolved next to it."""
+        path = Path(path)
+        try:
+            with open(path, "rb") as f:
+                data = tomllib.load(f)
+        except FileNotFoundError:
+            raise SceneError(f"scene file {str(path)!r} does not exist") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise SceneError(f"{path}: not valid TOML: {exc}") from None
+        return cls.from_dict(data, base_dir=path.parent, name=path.stem)
+
+    def __repr__(self):
+        parts = []
+        if self.solid is not None:
+            parts.append(f"solid ({self.solid['material']['model']})")
+        if self.beams:
+            parts.append(f"{len(self.beams)} beam(s)")
+        return f"Scene({self.name}: {', '.join(parts)}, {self.analysis['kinematics']}, {self.analysis['steps']} steps)"

@@ -1,0 +1,1 @@
+"""Nonlinear (Newton) and linear (direct, AMG, block-preconditioned) solvers."""

@@ -1,0 +1,164 @@
+"""Newton–Raphson with load steps and automatic step cutting.
+
+The nonlinear system is any object with
+
+* ``fixed`` (int array): unknowns prescribed by Dirichlet conditions, ``free`` the others;
+* ``prescribed(t)``: values of the fixed unknowns at load factor ``t``;
+* ``residual(z, t, tangent=True)``: ``(r, K)``, the full residual vector (internal minus external
+  forces, plus constraint rows if any) and its Jacobian (scipy sparse) or None;
+* ``solve_linear(K_ff, b, z_f)``: solution of the reduced linear system.
+"""
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+class ConvergenceError(RuntimeError):
+    """Newton's method gave up: the message says where, what was seen and what to try."""
+
+
+@dataclass
+class StepRecord:
+    """One converged load step.
+
+    Attributes
+    ----------
+    load_factor : float
+    iterations : int
+        Newton iterations (linear solves) of this step.
+    residuals : list of float
+        ‖r_free‖ before each iteration and after the last one.
+    increments : list of float
+        ‖Δz‖ of each iteration.
+    cuts : int
+        How many times the step to this load factor was halved before it converged.
+    time : float
+        Wall time of the step in seconds.
+    """
+
+    load_factor: float
+    iterations: int
+    residuals: list = field(default_factory=list)
+    increments: list = field(default_factory=list)
+    cuts: int = 0
+    time: float = 0.0
+
+
+class _StepFailed(Exception):
+    pass
+
+
+def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence):
+    """Iterate to equilibrium at load factor t from z (modified in place). Returns the record."""
+    free = system.free
+    z[system.fixed] = system.prescribed(t)
+    residuals, increments = [], []
+    r0 = d0 = None
+    for k in range(max_iterations + 1):
+        try:
+            r, K = system.residual(z, t, tangent=True)
+        except (FloatingPointError, ValueError, ArithmeticError) as exc:
+            raise _StepFailed(f"residual evaluation failed: {exc}") from None
+        rn = float(np.linalg.norm(r[free]))
+        residuals.append(rn)
+        if not math.isfinite(rn):
+            raise _StepFailed("the residual is not finite (NaN/inf: an element inverted or a "
+                              "material left its admissible range)")
+        if r0 is None:
+            r0 = rn
+            if rn == 0.0:
+                return residuals, increments
+        else:
+            # residual small relative to the first iteration, and either the last increment
+            # small relative to the first one or the residual at round-off (it cannot fall further)
+            if rn <= rtol * r0 and (increments[-1] <= increment_rtol * d0 or rn <= 1e-13 * r0):
+                return residuals, increments
+            if rn > divergence * r0:
+                raise _StepFailed(f"the residual grew from {r0:.3e} to {rn:.3e} (diverging)")
+        if k == max_iterations:
+            raise _StepFailed(f"no convergence in {max_iterations} iterations (residual {r0:.3e} → {rn:.3e}, "
+                              f"target {rtol * r0:.3e})")
+        try:
+            dz = system.solve_linear(K[free][:, free], -r[free], z[free])
+        except Exception as exc:  # a singular or unsolvable tangent ends this attempt
+            raise _StepFailed(f"the linear solve failed: {exc}") from None
+        dn = float(np.linalg.norm(dz))
+        if not math.isfinite(dn):
+            raise _StepFailed("the Newton increment is not finite (singular tangent?)")
+        z[free] += dz
+        increments.append(dn)
+        if d0 is None:
+            d0 = max(dn, 1e-300)
+
+
+def solve_load_steps(system, z0, steps, *, rtol=1e-8, increment_rtol=1e-8, max_iterations=25, max_cuts=6,
+                     divergence=1e6, progress=None):
+    """Load factors ``1/steps, 2/steps, ..., 1``, each solved by Newton–Raphson.
+
+    A step that fails (residual not finite, growing by more than ``divergence``, or not converged
+    in ``max_iterations``) is retried from the last converged state with half the load increment,
+    up to ``max_cuts`` times in a row; a converged cut step lets the increment grow back.
+
+    Parameters
+    ----------
+    system : object
+        See the module docstring.
+    z0 : (n,) float64
+        Start vector (the reference state, usually zeros).
+    steps : int
+    rtol, increment_rtol : float
+        Convergence: ‖r_k‖ <= rtol ‖r_0‖ and ‖Δz_k‖ <= increment_rtol ‖Δz_0‖ (both relative to the
+        first iteration of the step), or ‖r_k‖ <= 1e-13 ‖r_0‖.
+    progress : callable, optional
+        ``progress(record, step_index, n_steps)`` after every converged step.
+
+    Returns
+    -------
+    z : (n,) float64
+        Converged unknowns at load factor 1.
+    records : list of StepRecord
+    history : list of (n,) float64
+        Converged unknowns after each step.
+
+    Raises
+    ------
+    ConvergenceError
+        After ``max_cuts`` consecutive cuts; the message gives the load factor reached, the
+        residual history of the last attempt, and what to try.
+    """
+    z = np.array(z0, dtype=float)
+    t_done, base = 0.0, 1.0 / steps
+    dt = base
+    records, history = [], []
+    cuts = 0
+    while t_done < 1.0 - 1e-14:
+        t = min(1.0, t_done + dt)
+        trial = z.copy()
+        start = time.perf_counter()
+        try:
+            residuals, increments = _newton_step(system, trial, t, rtol, increment_rtol, max_iterations, divergence)
+        except _StepFailed as exc:
+            cuts += 1
+            if cuts > max_cuts:
+                raise ConvergenceError(
+                    f"Newton's method gave up at load factor {t:.6g} (last converged: {t_done:.6g}) after "
+                    f"{max_cuts} step cuts (smallest increment {dt:.3g}): {exc}. "
+                    "Try more load steps ([analysis] steps), check that the supports fix every rigid-body "
+                    "motion, lower the penalty if the coupling is very stiff, or use a smaller load."
+                ) from None
+            dt *= 0.5
+            continue
+        z = trial
+        t_done = t
+        rec = StepRecord(load_factor=t, iterations=len(increments), residuals=residuals, increments=increments,
+                         cuts=cuts, time=time.perf_counter() - start)
+        records.append(rec)
+        history.append(z.copy())
+        if progress is not None:
+            progress(rec, len(records), None)
+        if dt < base:
+            dt = min(base, 2.0 * dt)
+        cuts = 0
+    return z, records, history

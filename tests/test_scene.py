@@ -1,0 +1,158 @@
+"""Scene validation (key paths in every error), sets, and plans (no physics needed)."""
+import copy
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mortar1d3d as m13
+from mortar1d3d.model import Model
+from mortar1d3d.scene import Scene, SceneError
+
+EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "scenes" / "rebar_cantilever.toml"
+
+BASE = {
+    "solid": {"mesh": {"box": [[0, 0, 0], [1, 0.2, 0.2]], "cells": [4, 1, 1]},
+              "material": {"model": "saint_venant_kirchhoff", "E": 1e9, "nu": 0.3}},
+    "beams": [{"curve": {"line": [[0.05, 0.1, 0.1], [0.95, 0.1, 0.1]]}, "elements": 3,
+               "section": {"E": 2e11, "radius": 0.01}}],
+    "dirichlet": [{"on": "solid:x_min"}],
+    "load": [{"type": "traction", "on": "solid:x_max", "value": [0, 0, -1e5]}],
+    "analysis": {"steps": 2},
+}
+
+
+def scene_with(path, value):
+    data = copy.deepcopy(BASE)
+    node = data
+    keys = path.split(".")
+    for k in keys[:-1]:
+        node = node[int(k)] if isinstance(node, list) else node[k]
+    last = keys[-1]
+    if value is KeyError:
+        del node[last]
+    elif isinstance(node, list):
+        node[int(last)] = value
+    else:
+        node[last] = value
+    return data
+
+
+@pytest.mark.parametrize("path, value, message", [
+    ("solid.colour", "red", "solid.colour: unknown key"),
+    ("solid.material", KeyError, "solid.material: missing"),
+    ("solid.material.E", "hard", "solid.material.E: expected a number"),
+    ("solid.material.nu", 0.5, "solid.material.nu: expected a number < 0.5"),
+    ("solid.material.model", "rubber", "solid.material.model: unknown value 'rubber'"),
+    ("solid.mesh.cells", [4, 1], "solid.mesh.cells: expected 3 entries"),
+    ("solid.mesh.element", "pyramid", "solid.mesh.element: unknown value 'pyramid'"),
+    ("beams.0.section.radius", -0.01, "beams[0].section.radius: expected a number > 0"),
+    ("beams.0.section", {"E": 2e11}, "beams[0].section.radius: missing"),
+    ("beams.0.section", {"E": 2e11, "radius": 0.1, "EA": 1.0}, "beams[0].section: give either"),
+    ("beams.0.elements", 2.5, "beams[0].elements: expected an integer"),
+    ("beams.0.model", "simo_reissner", "beams[0].model: 'simo_reissner' beams are not implemented"),
+    ("beams.0.curve", {"line": [[0, 0, 0], [0, 0, 0]]}, "beams[0].curve.line: the two points coincide"),
+    ("beams.0.curve", {"spiral": 1}, "beams[0].curve.spiral: unknown key"),
+    ("dirichlet.0.on", "solid:top", None),        # unknown set: found when the model is built
+    ("dirichlet.0.on", "wall", "dirichlet[0].on: 'wall': expected"),
+    ("dirichlet.0.components", ["x", "w"], "dirichlet[0].components[1]: unknown value 'w'"),
+    ("load.0.type", "wind", "load[0].type: unknown value 'wind'"),
+    ("load.0.value", [1, 2], "load[0].value: expected a list of 3 numbers, got 2 entries"),
+    ("analysis.steps", 0, "analysis.steps: expected an integer in [1"),
+    ("analysis.kinematics", "quadratic", "analysis.kinematics: unknown value"),
+    ("analysis.tolerance", 1e-3, "analysis.tolerance: unknown key"),
+])
+def test_invalid_scene_names_key_path(path, value, message):
+    data = scene_with(path, value)
+    if message is None:
+        with pytest.raises(SceneError, match=r"dirichlet\[0\]\.on: unknown solid set 'top'"):
+            m13.plan(Scene.from_dict(data))
+        return
+    with pytest.raises(SceneError) as info:
+        Scene.from_dict(data)
+    assert str(info.value).startswith(message), str(info.value)
+
+
+def test_unknown_top_level_key_and_bad_toml(tmp_path):
+    with pytest.raises(SceneError, match="^solver: unknown key"):
+        Scene.from_dict({**BASE, "solver": {}})
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[solid\nmesh = 1\n")
+    with pytest.raises(SceneError, match="not valid TOML"):
+        Scene.from_toml(bad)
+    with pytest.raises(SceneError, match="does not exist"):
+        Scene.from_toml(tmp_path / "missing.toml")
+
+
+@pytest.mark.parametrize("on, message", [
+    ({"inside": [[5, 5, 5], [6, 6, 6]]}, r"dirichlet\[0\]\.on: the box .* contains no solid node"),
+    ("beam:3:end", r"dirichlet\[0\]\.on: beam 3 does not exist"),
+])
+def test_sets_that_select_nothing(on, message):
+    data = scene_with("dirichlet.0.on", on)
+    with pytest.raises(SceneError, match=message):
+        m13.plan(Scene.from_dict(data))
+
+
+def test_conflicting_dirichlet_values():
+    data = copy.deepcopy(BASE)
+    data["dirichlet"].append({"on": "solid:z_min", "value": [0, 0, 1e-3]})
+    with pytest.raises(SceneError, match="prescribed twice with different values"):
+        Model(Scene.from_dict(data))
+
+
+def test_sets_resolve_to_the_right_nodes():
+    model = Model(Scene.from_dict(BASE))
+    X = model.solid_mesh.points
+    _, nodes = model.select("solid:x_max", "t")
+    assert np.allclose(X[nodes, 0], 1.0) and len(nodes) == 2 * 2
+    _, nodes = model.select({"inside": [[0.4, -1, -1], [0.6, 1, 1]]}, "t")
+    assert np.allclose(X[nodes, 0], 0.5)
+    _, g, nodes = model.select("beam:0:end", "t")
+    assert np.allclose(g.mesh.positions[nodes[0]], [0.95, 0.1, 0.1])
+    _, g, nodes = model.select("beam:0", "t")
+    assert len(nodes) == 4
+    # Dirichlet DOFs: x_min has 4 solid nodes × 3 components
+    assert len(model.fixed_dofs) == 12 and (model.fixed_dofs < 3 * model.n_solid_nodes).all()
+
+
+def test_plan_lists_only_what_the_scene_declares():
+    names = [e.name for e in m13.plan(Scene.from_dict(BASE))]
+    assert names[:2] == ["solid.mesh", "beams.mesh"]
+    for expected in ("mortar.search", "mortar.segmentation", "mortar.assembly", "coupling.mortar_penalty",
+                     "solid.tangent", "beam.tangent", "load.traction", "solver.newton", "linear_solver.direct"):
+        assert expected in names
+    assert not any(n.startswith("load.pressure") for n in names)
+
+    solid_only = {k: v for k, v in BASE.items() if k != "beams"}
+    names = [e.name for e in m13.plan(Scene.from_dict(solid_only))]
+    assert not any(n.startswith(("mortar.", "coupling.", "beam")) for n in names)
+
+    linear = scene_with("analysis", {"kinematics": "linear"})
+    names = [e.name for e in m13.plan(Scene.from_dict(linear))]
+    assert "solver.linear" in names and "solver.newton" not in names and "solid.stiffness" in names
+
+    element = scene_with("coupling", {"integration": "element"})
+    names = [e.name for e in m13.plan(Scene.from_dict(element))]
+    assert "mortar.segmentation" not in names and "mortar.integration_points" in names
+
+    pressure = scene_with("load", [{"type": "pressure", "on": "solid:x_max", "value": 1e5}])
+    names = [e.name for e in m13.plan(Scene.from_dict(pressure))]
+    assert "load.pressure" in names and "load.pressure_tangent" in names
+
+
+def test_solver_choice_must_fit_enforcement():
+    with pytest.raises(SceneError, match="analysis.solver: 'block'"):
+        Model(Scene.from_dict(scene_with("analysis", {"solver": "block"})))
+    data = scene_with("coupling", {"enforcement": "lagrange"})
+    data["analysis"] = {"solver": "amg"}
+    with pytest.raises(SceneError, match="analysis.solver: Lagrange"):
+        Model(Scene.from_dict(data))
+
+
+def test_cli_plan_prints_the_effects():
+    out = subprocess.run([sys.executable, "-m", "mortar1d3d.cli", "plan", str(EXAMPLE)],
+                         capture_output=True, text=True, check=True).stdout
+    assert "mortar.segmentation" in out and "solver.newton" in out and "4 load steps" in out
