@@ -1,0 +1,1 @@
+"""Physics of the nonlinear model: solids, beams, materials, coupling and loads."""
