@@ -23,6 +23,11 @@ in ``Q(5,5)``, which 3 points per direction integrate exactly; on a 6-node trian
 2 + 1 + 1 = 4. Both rules are therefore exact for the follower pressure and its tangent on any
 (curved, deformed) face of every supported type, and exact for the dead traction on flat faces
 (where ``|X_,u × X_,v|`` is constant).
+
+Assembly. The kernels compute each face's local vector/matrix independently (``prange`` over
+faces, no shared accumulators); the global vector is summed with ``np.bincount`` and the CSR
+matrix through a cached map from local entries to CSR positions, both sequential in the face
+order. Results are bit-identical for any number of threads.
 """
 from functools import lru_cache
 
@@ -254,21 +259,49 @@ class _FaceSet:
         return sp.csr_matrix((data, indices.copy(), indptr.copy()), shape=(self.n_dofs, self.n_dofs))
 
     def _csr_pattern(self):
-        """CSR structure of the face matrices and the position of every local entry in it."""
-        rows = np.empty(self.k_offsets[-1], dtype=np.int64)
-        cols = np.empty_like(rows)
+        """CSR structure of the face matrices and the position of every local entry in it.
+
+        Built on node pairs (3 × 3 blocks), nine times fewer keys to sort than DOF pairs.
+        """
+        n_nodes = self.n_dofs // 3
         tables = face_tables()
+        n_face_nodes = tables.n_nodes[self.code]
+        pair_offsets = np.zeros(len(self) + 1, dtype=np.int64)
+        np.cumsum(n_face_nodes * n_face_nodes, out=pair_offsets[1:])
+        node_rows = np.empty(pair_offsets[-1], dtype=np.int64)
+        node_cols = np.empty_like(node_rows)
+        groups = []
         for c in np.unique(self.code):
             idx = np.flatnonzero(self.code == c)
-            m = 3 * tables.n_nodes[c]
-            dofs = self.dofs[self.f_offsets[idx, None] + np.arange(m)]          # (k, m)
-            at = self.k_offsets[idx, None] + np.arange(m * m)
-            rows[at] = np.repeat(dofs, m, axis=1)
-            cols[at] = np.tile(dofs, (1, m))
-        keys, position = np.unique(rows * self.n_dofs + cols, return_inverse=True)
+            m = tables.n_nodes[c]
+            nodes = self.dofs[self.f_offsets[idx, None] + 3 * np.arange(m)] // 3       # (k, m)
+            at = pair_offsets[idx, None] + np.arange(m * m)
+            node_rows[at] = np.repeat(nodes, m, axis=1)
+            node_cols[at] = np.tile(nodes, (1, m))
+            groups.append((idx, m, at))
+        keys, pair = np.unique(node_rows * n_nodes + node_cols, return_inverse=True)
+        pair = pair.ravel()
+        key_row = keys // n_nodes
+        count = np.bincount(key_row, minlength=n_nodes)           # blocks per node row
+        start = np.zeros(n_nodes + 1, dtype=np.int64)
+        np.cumsum(count, out=start[1:])
+        rank = np.arange(len(keys)) - start[key_row]               # block's place in its row
+        # DOF row 3a+i holds the 3 count[a] columns 3b+j of its blocks, b ascending
         indptr = np.zeros(self.n_dofs + 1, dtype=np.int64)
-        np.cumsum(np.bincount(keys // self.n_dofs, minlength=self.n_dofs), out=indptr[1:])
-        return indptr, keys % self.n_dofs, position.ravel(), len(keys)
+        np.cumsum(np.repeat(3 * count, 3), out=indptr[1:])
+        indices = np.empty(indptr[-1], dtype=np.int64)
+        for i in range(3):
+            for j in range(3):
+                indices[indptr[3 * key_row + i] + 3 * rank + j] = 3 * (keys % n_nodes) + j
+        position = np.empty(self.k_offsets[-1], dtype=np.int64)
+        ij = np.arange(3)
+        for idx, m, at in groups:
+            u = pair[at].reshape(len(idx), m, 1, m, 1)              # unique block of (k, l)
+            row = key_row[u]
+            pos = (indptr[3 * row + ij[None, None, :, None, None]] + 3 * rank[u] + ij[None, None, None, None, :])
+            local = self.k_offsets[idx, None] + np.arange(9 * m * m)    # (3k+i) 3m + 3l + j, row-major
+            position[local] = pos.reshape(len(idx), 9 * m * m)
+        return indptr, indices, position, len(indices)
 
 
 def _as_field(u, n_nodes, what):
