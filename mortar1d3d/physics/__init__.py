@@ -1,0 +1,1 @@
+"""Nonlinear physics on top of the mortar engine: beams, solids, materials, coupling, loads."""
