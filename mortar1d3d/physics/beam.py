@@ -113,7 +113,7 @@ def section(E=None, radius=None, EA=None, EI=None):
 # -- kernels ---------------------------------------------------------------------------------------
 
 @njit
-def _gauss_point(a, b, J, EA, EI, kappa0, want, grad, hess):
+def _gauss_point(a, b, J, EA, EI, kappa0, want, grad, hess, work):
     """Energy density per reference length at one Gauss point, and its derivatives.
 
     Parameters
@@ -130,6 +130,8 @@ def _gauss_point(a, b, J, EA, EI, kappa0, want, grad, hess):
         Output ``∂W/∂(a, b)``.
     hess : (6, 6) float64
         Output ``∂²W/∂(a, b)²``.
+    work : (12,) float64
+        Scratch (no allocation per Gauss point).
 
     Returns
     -------
@@ -192,9 +194,9 @@ def _gauss_point(a, b, J, EA, EI, kappa0, want, grad, hess):
     if want == 0:
         return W
 
-    Ca = np.empty(3)
-    Cb = np.empty(3)
-    px = np.empty(6)
+    Ca = work[0:3]
+    Cb = work[3:6]
+    px = work[6:12]
     for i in range(3):
         Ca[i] = 2.0 * (bb * a[i] - ab * b[i])
         Cb[i] = 2.0 * (u * b[i] - ab * a[i])
@@ -223,9 +225,9 @@ def _gauss_point(a, b, J, EA, EI, kappa0, want, grad, hess):
     return W
 
 
-@njit_parallel
-def _element_kernel(dH, ddH, J, kappa0, EA_w, EI_w, Q, want, energy, fe, ke):
-    """Energy, internal force and tangent of every element.
+@njit
+def _element_range(first, last, dH, ddH, J, kappa0, EA_w, EI_w, Q, want, energy, fe, ke):
+    """Energy, internal force and tangent of elements ``first`` ... ``last - 1``.
 
     Parameters
     ----------
@@ -247,48 +249,60 @@ def _element_kernel(dH, ddH, J, kappa0, EA_w, EI_w, Q, want, energy, fe, ke):
     ke : (n_el, 3 n_f, 3 n_f) float64
         Output (``want == 2``), symmetric.
     """
-    n_el, n_g, n_f = dH.shape
-    n_chunks = (n_el + CHUNK - 1) // CHUNK
-    for c in prange(n_chunks):
-        a = np.empty(3)
-        b = np.empty(3)
-        grad = np.empty(6)
-        hess = np.empty((6, 6))
-        for e in range(c * CHUNK, min(n_el, (c + 1) * CHUNK)):
-            total = 0.0
-            if want >= 1:
-                fe[e, :] = 0.0
-            if want == 2:
-                ke[e, :, :] = 0.0
-            for g in range(n_g):
+    n_g, n_f = dH.shape[1], dH.shape[2]
+    a = np.empty(3)
+    b = np.empty(3)
+    grad = np.empty(6)
+    hess = np.empty((6, 6))
+    work = np.empty(12)
+    for e in range(first, last):
+        total = 0.0
+        if want >= 1:
+            fe[e, :] = 0.0
+        if want == 2:
+            ke[e, :, :] = 0.0
+        for g in range(n_g):
+            for i in range(3):
+                a[i] = 0.0
+                b[i] = 0.0
+                for k in range(n_f):
+                    a[i] += dH[e, g, k] * Q[e, k, i]
+                    b[i] += ddH[e, g, k] * Q[e, k, i]
+            total += _gauss_point(a, b, J[e, g], EA_w[e, g], EI_w[e, g], kappa0[e, g], want, grad, hess, work)
+            if want == 0:
+                continue
+            for k in range(n_f):
                 for i in range(3):
-                    a[i] = 0.0
-                    b[i] = 0.0
-                    for k in range(n_f):
-                        a[i] += dH[e, g, k] * Q[e, k, i]
-                        b[i] += ddH[e, g, k] * Q[e, k, i]
-                total += _gauss_point(a, b, J[e, g], EA_w[e, g], EI_w[e, g], kappa0[e, g], want, grad, hess)
-                if want == 0:
-                    continue
-                for k in range(n_f):
+                    fe[e, 3 * k + i] += (dH[e, g, k] * grad[i] + ddH[e, g, k] * grad[3 + i])
+            if want < 2:
+                continue
+            for k in range(n_f):
+                for l in range(k, n_f):
+                    d1k, d2k, d1l, d2l = dH[e, g, k], ddH[e, g, k], dH[e, g, l], ddH[e, g, l]
                     for i in range(3):
-                        fe[e, 3 * k + i] += (dH[e, g, k] * grad[i] + ddH[e, g, k] * grad[3 + i])
-                if want < 2:
-                    continue
-                for k in range(n_f):
-                    for l in range(k, n_f):
-                        d1k, d2k, d1l, d2l = dH[e, g, k], ddH[e, g, k], dH[e, g, l], ddH[e, g, l]
-                        for i in range(3):
-                            for j in range(3):
-                                ke[e, 3 * k + i, 3 * l + j] += (
-                                    d1k * d1l * hess[i, j] + d1k * d2l * hess[i, 3 + j]
-                                    + d2k * d1l * hess[3 + i, j] + d2k * d2l * hess[3 + i, 3 + j])
-            energy[e] = total
-            if want == 2:
-                # mirror the upper triangle: exactly symmetric element (and so global) matrices
-                for r in range(3 * n_f):
-                    for s in range(r + 1, 3 * n_f):
-                        ke[e, s, r] = ke[e, r, s]
+                        for j in range(3):
+                            ke[e, 3 * k + i, 3 * l + j] += (
+                                d1k * d1l * hess[i, j] + d1k * d2l * hess[i, 3 + j]
+                                + d2k * d1l * hess[3 + i, j] + d2k * d2l * hess[3 + i, 3 + j])
+        energy[e] = total
+        if want == 2:
+            # mirror the upper triangle: exactly symmetric element (and so global) matrices
+            for r in range(3 * n_f):
+                for s in range(r + 1, 3 * n_f):
+                    ke[e, s, r] = ke[e, r, s]
+
+
+@njit_parallel
+def _element_chunks(dH, ddH, J, kappa0, EA_w, EI_w, Q, want, energy, fe, ke):
+    """:func:`_element_range` over chunks of :data:`CHUNK` elements in parallel.
+
+    Every element is computed by the same serial code whatever the thread count, so the
+    outputs are bit-identical for any number of threads.
+    """
+    n_el = dH.shape[0]
+    for c in prange((n_el + CHUNK - 1) // CHUNK):
+        _element_range(c * CHUNK, min(n_el, (c + 1) * CHUNK), dH, ddH, J, kappa0, EA_w, EI_w, Q, want,
+                       energy, fe, ke)
 
 
 # -- reference geometry (numpy) --------------------------------------------------------------------
@@ -481,8 +495,12 @@ class BeamModel:
         energy = np.empty(n_el)
         fe = np.empty((n_el, nd) if want >= 1 else (0, 0))
         ke = np.empty((n_el, nd, nd) if want == 2 else (0, 0, 0))
-        _element_kernel(self._dH, self._ddH, self._J, self._kappa0, self._EA_w, self._EI_w, Q, want,
-                        energy, fe, ke)
+        args = (self._dH, self._ddH, self._J, self._kappa0, self._EA_w, self._EI_w, Q, want, energy, fe, ke)
+        if n_el <= CHUNK:
+            # one chunk: a parallel region would only add its launch cost (large on a busy machine)
+            _element_range(0, n_el, *args)
+        else:
+            _element_chunks(*args)
         return energy, fe, ke
 
     def _csr_pattern(self):
