@@ -281,7 +281,7 @@ def _elastica_tip(k):
     """
     s = np.linspace(0.0, 1.0, 50)
     y = np.vstack([0 * s, 0 * s, s, 0 * s])
-    for kk in np.linspace(0.0, k, 11)[1:]:
+    for kk in np.linspace(0.0, k, 4)[1:]:
         sol = solve_bvp(lambda s, y, kk=kk: np.vstack([y[1], -kk * np.cos(y[0]), np.cos(y[0]), np.sin(y[0])]),
                         lambda ya, yb: np.array([ya[0], yb[1], ya[2], ya[3]]), s, y, tol=1e-10, max_nodes=100000)
         assert sol.success, sol.message

@@ -22,9 +22,10 @@ the non-constant ``J`` of a curved reference element cancels in it exactly and e
 
 The element kernel returns, per element, the energy, the internal force vector
 ``f = ∂Π/∂q`` and the consistent tangent ``K = ∂²Π/∂q²`` (exact, symmetric). Elements are
-evaluated in parallel chunks, each element into its own slice; the global vector and the CSR
-matrix are summed afterwards with :func:`numpy.bincount` in a fixed order, so results are
-bit-identical for any number of threads.
+evaluated in chunks (in parallel when there is more than one), each element into its own
+slice by the same serial code; the global vector and the CSR matrix are summed afterwards
+with :func:`numpy.bincount` in a fixed order, so results are bit-identical for any number
+of threads.
 """
 import math
 import warnings
@@ -408,6 +409,12 @@ class BeamModel:
     with 3). ``axial_gauss=n_gauss`` gives the fully integrated element. Both are exact
     derivatives of their discrete energy.
 
+    *Boundary conditions*: at a Hermite node ``r' = (L/2) t``, so the length of a nodal
+    tangent is the stretch ``1 + ε`` there. A clamp should fix the position and the tangent
+    *direction* (e.g. ``t_y = t_z = 0`` for a beam along x), not ``|t|``: fixing all three
+    tangent DOFs also forces ``ε = 0`` at that node, an O(h) boundary layer in the axial
+    strain of an extensible beam (harmless when ``EA`` is large).
+
     *Truss*: 2-node ``line`` element, ``W = ½ EA ε²`` with the engineering strain
     ``ε = |r2 - r1| / L - 1`` (length change over reference length), tension and
     compression alike; no bending, no buckling resistance.
@@ -564,6 +571,12 @@ class BeamModel:
             ``"position"`` (n_el, k, 3), ``"displacement"`` (n_el, k, 3) (position minus the
             reference position), ``"axial_force"`` ``N = EA ε`` (n_el, k), ``"curvature"``
             ``|k|`` (n_el, k; zeros for trusses), ``"strain"`` ε (n_el, k).
+
+        Notes
+        -----
+        For slender Hermite beams ``N = EA ε`` is a small difference of large numbers; it is
+        most accurate at the axial Gauss points (``η = 0, ±√(3/5)`` for the default rule) and
+        oscillates between them.
         """
         eta = np.atleast_1d(np.asarray(eta, dtype=float))
         if eta.ndim != 1 or not np.isfinite(eta).all():
