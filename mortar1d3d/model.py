@@ -273,7 +273,7 @@ class Model:
                 g = sel[1]
                 if g.model != "torsion_free":
                     raise SceneError(f"dirichlet[{i}].clamp: beam {d['on']!r} has no tangent DOFs ({g.model})")
-                t_idx = self._set_dofs(sel, [0, 1, 2], tangents=True)
+                t_idx = self._clamp_dofs(g, sel[2])
                 dofs.append(t_idx)
                 values.append(np.zeros(len(t_idx)))
             per_entry.append(idx)     # position DOFs only: their reactions are forces
@@ -291,6 +291,24 @@ class Model:
             keep = np.concatenate([[True], ~same])
             dofs, values = dofs[keep], values[keep]
         return dofs, values, per_entry
+
+    @staticmethod
+    def _clamp_dofs(g, nodes):
+        """Tangent DOFs a clamp fixes: the tangent's direction, not its length.
+
+        At a Hermite node the tangent's length is the local stretch; fixing it would force zero
+        axial strain there. When the reference tangent is parallel to a coordinate axis, the two
+        other components are fixed (direction clamped, stretch free); otherwise all three are
+        (the stretch at that node is then held at zero too).
+        """
+        out = []
+        for node in nodes:
+            t = g.mesh.tangents[node]
+            major = int(np.argmax(np.abs(t)))
+            aligned = np.abs(np.delete(t, major)).max() <= 1e-12
+            comps = [c for c in range(3) if c != major] if aligned else [0, 1, 2]
+            out.append(g.dof_offset + 6 * node + 3 + np.array(comps))
+        return np.concatenate(out)
 
     def _check_solver(self):
         solver, enforcement = self.scene.analysis["solver"], self.scene.coupling["enforcement"]
