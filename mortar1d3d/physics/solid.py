@@ -16,13 +16,19 @@ with reference derivatives ``∂N_a/∂X`` and weight ``w det J``:
 Full Gauss rules: hexahedron 2×2×2, hexahedron20 and hexahedron27 3×3×3, tetra 1 point,
 tetra10 4 points (degree 2).
 
-Parallel assembly without races, bit-identical for any number of threads: the elements are
-greedily coloured once (no two elements of a colour share a node); colours are processed in
-order, the elements of one colour in parallel, each adding its element vector and matrix
-directly into ``f_int`` and the CSR data of its own nodes' rows. Every entry thus receives its
-contributions in colour order, whatever the thread count. The CSR pattern (node graph expanded
-to 3×3 blocks) and, per element, the column slot of every node pair in the block row are
-computed once; work buffers are allocated per chunk of elements, never for all elements.
+Parallel assembly without races, bit-identical for any number of threads: the elements are cut
+into blocks of ``assembly_block`` (64) consecutive elements, and the blocks are greedily
+coloured once (no two blocks of a colour share a node). Colours are processed in order, the
+blocks of one colour in parallel, the elements of a block in order, each adding its element
+vector and matrix directly into ``f_int`` and the CSR data of its nodes' rows. Every entry thus
+receives its contributions in the same order whatever the thread count. Blocks rather than
+single elements keep the writes local: consecutive elements share nodes, so the matrix rows
+they touch stay in cache (colouring single elements made each colour sweep the whole matrix).
+Locality thus follows the element numbering (mesh generators number elements locally).
+
+The CSR pattern (node graph expanded to 3×3 blocks) and, per element, the column slot of every
+node pair in the block row are computed once; work buffers are allocated per block of elements,
+never for all elements.
 """
 import numpy as np
 import scipy.sparse as sp
@@ -37,6 +43,9 @@ from ..mesh import SolidMesh
 from .materials import VOIGT_INDEX, Material, hooke, stress_tangent
 
 KINEMATICS = ("nonlinear", "linear")
+
+#: consecutive elements per block of the coloured assembly (module docstring)
+ASSEMBLY_BLOCK = 64
 
 STATUS_OK = 0
 STATUS_INVERTED = 1      # det F <= 0 (or not finite) at a Gauss point
@@ -155,8 +164,8 @@ def _reference_kernel(points, connectivity, codes, gp_ptr, dn_ptr, rule_ptr, rul
 
 
 @njit
-def _graph_kernel(connectivity, codes, n_nodes):
-    """Node graph, CSR pattern, per-element block slots and a greedy element colouring.
+def _graph_kernel(connectivity, codes, n_nodes, block):
+    """Node graph, CSR pattern, per-element slots and a greedy colouring of element blocks.
 
     Returns
     -------
@@ -164,7 +173,8 @@ def _graph_kernel(connectivity, codes, n_nodes):
     slot_ptr, slots : per element, ``slots[slot_ptr[e] + a*n + b]`` = position of node b in
         the sorted neighbour list of node a
     indptr, indices : scalar CSR pattern, row ``3n+i`` holds ``3m+k`` for neighbours m, k < 3
-    colour_ptr, colour_elements : elements grouped by colour (ascending ids within a colour)
+    colour_ptr, colour_blocks : blocks (elements ``k*block`` to ``(k+1)*block - 1``) grouped by
+        colour, ascending within a colour; blocks of one colour share no node
     """
     n_el = codes.shape[0]
     # node -> elements
@@ -246,33 +256,36 @@ def _graph_kernel(connectivity, codes, n_nodes):
             for s in range(deg):
                 for k in range(3):
                     indices[start + 3 * s + k] = 3 * neighbours[node_ptr[v] + s] + k
-    # greedy colouring in element order: the smallest colour no earlier neighbour element has
-    colour = np.full(n_el, -1, dtype=np.int64)
-    forbidden = np.full(n_el + 1, -1, dtype=np.int64)
+    # greedy colouring of blocks of `block` consecutive elements: the smallest colour that no
+    # earlier block sharing a node has
+    n_blocks = (n_el + block - 1) // block
+    colour = np.full(n_blocks, -1, dtype=np.int64)
+    forbidden = np.full(n_blocks + 1, -1, dtype=np.int64)
     n_colours = 0
-    for e in range(n_el):
-        for a in range(N_NODES[codes[e]]):
-            v = connectivity[e, a]
-            for t in range(el_ptr[v], el_ptr[v + 1]):
-                f = node_elements[t]
-                if colour[f] >= 0:
-                    forbidden[colour[f]] = e
+    for k in range(n_blocks):
+        for e in range(k * block, min(n_el, (k + 1) * block)):
+            for a in range(N_NODES[codes[e]]):
+                v = connectivity[e, a]
+                for t in range(el_ptr[v], el_ptr[v + 1]):
+                    other = node_elements[t] // block
+                    if other != k and colour[other] >= 0:
+                        forbidden[colour[other]] = k
         c = 0
-        while forbidden[c] == e:
+        while forbidden[c] == k:
             c += 1
-        colour[e] = c
+        colour[k] = c
         if c + 1 > n_colours:
             n_colours = c + 1
     colour_count = np.zeros(n_colours + 1, dtype=np.int64)
-    for e in range(n_el):
-        colour_count[colour[e] + 1] += 1
+    for k in range(n_blocks):
+        colour_count[colour[k] + 1] += 1
     colour_ptr = np.cumsum(colour_count)
     fill = colour_ptr[:-1].copy()
-    colour_elements = np.empty(n_el, dtype=np.int64)
-    for e in range(n_el):
-        colour_elements[fill[colour[e]]] = e
-        fill[colour[e]] += 1
-    return node_ptr, neighbours, slot_ptr, slots, indptr, indices, colour_ptr, colour_elements
+    colour_blocks = np.empty(n_blocks, dtype=np.int64)
+    for k in range(n_blocks):
+        colour_blocks[fill[colour[k]]] = k
+        fill[colour[k]] += 1
+    return node_ptr, neighbours, slot_ptr, slots, indptr, indices, colour_ptr, colour_blocks
 
 
 @njit
@@ -432,15 +445,14 @@ def _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam,
 
 
 @njit_parallel
-def _assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_ptr, colour_elements, node_ptr,
+def _assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_ptr, colour_blocks, block, node_ptr,
                      slot_ptr, slots, mat_code, lam, mu, linear, want_tangent, f, data, element_energy, status):
     """Add every element's f_e (and K_e) into ``f`` and the CSR ``data``, colour by colour."""
     C0 = np.empty((6, 6))
     hooke(lam, mu, C0)
+    n_el = codes.shape[0]
     for colour in range(colour_ptr.shape[0] - 1):
-        first = colour_ptr[colour]
-        n_in = colour_ptr[colour + 1] - first
-        for c in prange(n_chunks(n_in, CHUNK)):
+        for c in prange(colour_ptr[colour], colour_ptr[colour + 1]):
             ue = np.empty((MAX_NODES, 3))
             fe = np.empty((MAX_NODES, 3))
             Ke = np.empty((9 * MAX_NODES, MAX_NODES))
@@ -451,8 +463,8 @@ def _assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_pt
             A = np.empty(81 + 54)
             G = np.empty((27, MAX_NODES))
             D = np.empty((3, MAX_NODES))
-            for t in range(first + c * CHUNK, first + min(n_in, (c + 1) * CHUNK)):
-                e = colour_elements[t]
+            k = colour_blocks[c]
+            for e in range(k * block, min(n_el, (k + 1) * block)):
                 energy, st = _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam, mu,
                                       linear, want_tangent, C0, ue, fe, Ke, F, S, Cv, P, A, G, D)
                 element_energy[e] = energy
@@ -562,13 +574,17 @@ class SolidModel:
     kinematics : {"nonlinear", "linear"}
         ``"nonlinear"``: Total Lagrangian finite deformation with the material's law.
         ``"linear"``: small strain, Hooke's law with the material's λ, μ (for every material).
+    assembly_block : int
+        Consecutive elements per block of the coloured parallel assembly (module docstring).
+        Results do not depend on the thread count; they may differ in the last bits between
+        block sizes (another summation order).
 
     Attributes
     ----------
     n_dofs : int
         ``3 * n_nodes``; ``dof = 3*node + i``.
     n_colours : int
-        Colours of the element colouring (parallel assembly, module docstring).
+        Colours of the element-block colouring (parallel assembly, module docstring).
     n_evaluations, n_tangents : int
         Calls of :meth:`evaluate`, and tangent matrices assembled (for linear kinematics the
         one cached K).
@@ -579,7 +595,7 @@ class SolidModel:
     hex27 17 KiB), plus ``4 n_nodes²`` bytes of CSR slots.
     """
 
-    def __init__(self, mesh, material, kinematics="nonlinear"):
+    def __init__(self, mesh, material, kinematics="nonlinear", *, assembly_block=ASSEMBLY_BLOCK):
         if not isinstance(mesh, SolidMesh):
             raise TypeError(f"SolidModel: mesh must be a SolidMesh, got {type(mesh).__name__}")
         if not isinstance(material, Material):
@@ -587,6 +603,9 @@ class SolidModel:
                             f"got {type(material).__name__}")
         if kinematics not in KINEMATICS:
             raise ValueError(f"SolidModel: unknown kinematics {kinematics!r}; known: {', '.join(KINEMATICS)}")
+        if int(assembly_block) < 1:
+            raise ValueError(f"SolidModel: assembly_block must be >= 1, got {assembly_block!r}")
+        self.assembly_block = int(assembly_block)
         self.mesh = mesh
         self.material = material
         self.kinematics = kinematics
@@ -612,7 +631,8 @@ class SolidModel:
             raise MeshError(f"solid elements with det J <= 0 at a Gauss point: {format_ids(bad)}")
 
         (self._node_ptr, _, self._slot_ptr, self._slots, indptr, indices, self._colour_ptr,
-         self._colour_elements) = _graph_kernel(self._connectivity, self._codes, mesh.n_nodes)
+         self._colour_blocks) = _graph_kernel(self._connectivity, self._codes, mesh.n_nodes,
+                                                   self.assembly_block)
         index_type = np.int32 if max(len(indices), self.n_dofs) < np.iinfo(np.int32).max else np.int64
         self._indptr = indptr.astype(index_type)
         self._indices = indices.astype(index_type)
@@ -636,8 +656,9 @@ class SolidModel:
         energy = np.empty(self.mesh.n_elements)
         status = np.empty(self.mesh.n_elements, dtype=np.int64)
         _assemble_kernel(u, self._connectivity, self._codes, self._gp_ptr, self._dn_ptr, self._dNdX, self._wJ,
-                         self._colour_ptr, self._colour_elements, self._node_ptr, self._slot_ptr, self._slots,
-                         self.material.code, self._lam, self._mu, linear, want_tangent, f, data, energy, status)
+                         self._colour_ptr, self._colour_blocks, self.assembly_block, self._node_ptr, self._slot_ptr,
+                         self._slots, self.material.code, self._lam, self._mu, linear, want_tangent, f, data, energy,
+                         status)
         bad = np.flatnonzero(status)
         if bad.size:
             raise InvertedElementsError(bad)
