@@ -114,13 +114,18 @@ def section(E=None, radius=None, EA=None, EI=None):
 # -- kernels ---------------------------------------------------------------------------------------
 
 @njit
-def _gauss_point(a, b, J, EA, EI, kappa0, want, grad, hess, work):
+def _gauss_point(a, b, a0, da, J, EA, EI, kappa0, want, grad, hess, work):
     """Energy density per reference length at one Gauss point, and its derivatives.
 
     Parameters
     ----------
     a, b : (3,) float64
         ``r'`` and ``r''`` (derivatives with respect to η) of the current centreline.
+    a0, da : (3,) float64
+        Reference ``r0'`` and its change ``a - a0`` (from the displacements alone): the axial
+        strain is formed as ``(2 a0·da + da·da) / (J (|a| + J))`` so that it carries no
+        cancellation error from the coordinates (``|a|/J - 1`` loses ``|X|/h`` digits, which a
+        large EA turns into a residual floor far above round-off of the load).
     J : float
         Reference ``|r0'|``.
     EA, EI, kappa0 : float
@@ -151,7 +156,8 @@ def _gauss_point(a, b, J, EA, EI, kappa0, want, grad, hess, work):
     """
     u = a[0] * a[0] + a[1] * a[1] + a[2] * a[2]
     na = math.sqrt(u)
-    eps = na / J - 1.0
+    eps = (2.0 * (a0[0] * da[0] + a0[1] * da[1] + a0[2] * da[2]) + da[0] * da[0] + da[1] * da[1]
+           + da[2] * da[2]) / (J * (na + J))
     W = 0.5 * EA * eps * eps
     if want >= 1:
         for i in range(6):
@@ -227,7 +233,7 @@ def _gauss_point(a, b, J, EA, EI, kappa0, want, grad, hess, work):
 
 
 @njit
-def _element_range(first, last, dH, ddH, J, kappa0, EA_w, EI_w, Q, want, energy, fe, ke):
+def _element_range(first, last, dH, ddH, A0, J, kappa0, EA_w, EI_w, Q, Qd, want, energy, fe, ke):
     """Energy, internal force and tangent of elements ``first`` ... ``last - 1``.
 
     Parameters
@@ -239,8 +245,10 @@ def _element_range(first, last, dH, ddH, J, kappa0, EA_w, EI_w, Q, want, energy,
     EA_w, EI_w : (n_el, n_g) float64
         Stiffnesses times the integration weight ``w J`` of the point; a point may serve
         only the axial (``EI_w = 0``) or only the bending term (``EA_w = 0``).
-    Q : (n_el, n_f, 3) float64
-        Current vector coefficients ``q_k``.
+    A0 : (n_el, n_g, 3) float64
+        Reference ``r0'`` at the points (``J = |A0|``).
+    Q, Qd : (n_el, n_f, 3) float64
+        Current vector coefficients ``q_k`` and their displacement part ``q_k - q0_k``.
     want : int
         0 energy, 1 and forces, 2 and tangents.
     energy : (n_el,) float64
@@ -253,6 +261,7 @@ def _element_range(first, last, dH, ddH, J, kappa0, EA_w, EI_w, Q, want, energy,
     n_g, n_f = dH.shape[1], dH.shape[2]
     a = np.empty(3)
     b = np.empty(3)
+    da = np.empty(3)
     grad = np.empty(6)
     hess = np.empty((6, 6))
     work = np.empty(12)
@@ -264,12 +273,14 @@ def _element_range(first, last, dH, ddH, J, kappa0, EA_w, EI_w, Q, want, energy,
             ke[e, :, :] = 0.0
         for g in range(n_g):
             for i in range(3):
-                a[i] = 0.0
+                da[i] = 0.0
                 b[i] = 0.0
                 for k in range(n_f):
-                    a[i] += dH[e, g, k] * Q[e, k, i]
+                    da[i] += dH[e, g, k] * Qd[e, k, i]
                     b[i] += ddH[e, g, k] * Q[e, k, i]
-            total += _gauss_point(a, b, J[e, g], EA_w[e, g], EI_w[e, g], kappa0[e, g], want, grad, hess, work)
+                a[i] = A0[e, g, i] + da[i]
+            total += _gauss_point(a, b, A0[e, g], da, J[e, g], EA_w[e, g], EI_w[e, g], kappa0[e, g], want, grad,
+                                  hess, work)
             if want == 0:
                 continue
             for k in range(n_f):
@@ -294,7 +305,7 @@ def _element_range(first, last, dH, ddH, J, kappa0, EA_w, EI_w, Q, want, energy,
 
 
 @njit_parallel
-def _element_chunks(dH, ddH, J, kappa0, EA_w, EI_w, Q, want, energy, fe, ke):
+def _element_chunks(dH, ddH, A0, J, kappa0, EA_w, EI_w, Q, Qd, want, energy, fe, ke):
     """:func:`_element_range` over chunks of :data:`CHUNK` elements in parallel.
 
     Every element is computed by the same serial code whatever the thread count, so the
@@ -302,7 +313,7 @@ def _element_chunks(dH, ddH, J, kappa0, EA_w, EI_w, Q, want, energy, fe, ke):
     """
     n_el = dH.shape[0]
     for c in prange((n_el + CHUNK - 1) // CHUNK):
-        _element_range(c * CHUNK, min(n_el, (c + 1) * CHUNK), dH, ddH, J, kappa0, EA_w, EI_w, Q, want,
+        _element_range(c * CHUNK, min(n_el, (c + 1) * CHUNK), dH, ddH, A0, J, kappa0, EA_w, EI_w, Q, Qd, want,
                        energy, fe, ke)
 
 
@@ -470,6 +481,7 @@ class BeamModel:
         cols = beams.function_columns()[:, :n_f]
         self._dofs = np.ascontiguousarray((3 * cols[:, :, None] + np.arange(3)).reshape(n_el, 3 * n_f))
         a0, b0 = _curve_derivatives(self._dH, self._ddH, self._coefficients(self._q0))
+        self._A0 = np.ascontiguousarray(a0)
         self._J = np.ascontiguousarray(np.linalg.norm(a0, axis=2))
         self._EA_w = np.ascontiguousarray(self.EA[:, None] * w_axial[None, :] * self._J)
         self._EI_w = np.ascontiguousarray(self.EI[:, None] * w_bending[None, :] * self._J)
@@ -498,11 +510,13 @@ class BeamModel:
 
     def _run(self, d, want):
         Q = self._current(d)
+        Qd = self._coefficients(np.asarray(d, dtype=float))
         n_el, nd = self._dofs.shape
         energy = np.empty(n_el)
         fe = np.empty((n_el, nd) if want >= 1 else (0, 0))
         ke = np.empty((n_el, nd, nd) if want == 2 else (0, 0, 0))
-        args = (self._dH, self._ddH, self._J, self._kappa0, self._EA_w, self._EI_w, Q, want, energy, fe, ke)
+        args = (self._dH, self._ddH, self._A0, self._J, self._kappa0, self._EA_w, self._EI_w, Q, Qd, want, energy,
+                fe, ke)
         if n_el <= CHUNK:
             # one chunk: a parallel region would only add its launch cost (large on a busy machine)
             _element_range(0, n_el, *args)

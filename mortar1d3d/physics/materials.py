@@ -88,7 +88,7 @@ def material(name, E, nu):
 
 
 @njit
-def stress_tangent(code, lam, mu, F, S, C):
+def stress_tangent(code, lam, mu, H, S, C):
     """2nd Piola–Kirchhoff stress, material tangent and strain energy density at ``F``.
 
     Parameters
@@ -97,8 +97,9 @@ def stress_tangent(code, lam, mu, F, S, C):
         Material code (:data:`MATERIALS` index).
     lam, mu : float
         Lamé parameters.
-    F : (3, 3) float64
-        Deformation gradient.
+    H : (3, 3) float64
+        Displacement gradient ``H = F - I`` (passed instead of F so that the strains of small
+        deformations carry no cancellation error: ``E = (H + Hᵀ + HᵀH)/2``, not ``(FᵀF - I)/2``).
     S : (3, 3) float64, out
         2nd Piola–Kirchhoff stress.
     C : (6, 6) float64, out
@@ -123,24 +124,31 @@ def stress_tangent(code, lam, mu, F, S, C):
       ``S = μ (I - C_g⁻¹) + λ ln J C_g⁻¹``,
       ``C_IJKL = λ C⁻¹_IJ C⁻¹_KL + (μ - λ ln J)(C⁻¹_IK C⁻¹_JL + C⁻¹_IL C⁻¹_JK)``.
     """
-    # right Cauchy–Green tensor (symmetric): six scalars, no allocation in the hot loop
-    c00 = F[0, 0] * F[0, 0] + F[1, 0] * F[1, 0] + F[2, 0] * F[2, 0]
-    c11 = F[0, 1] * F[0, 1] + F[1, 1] * F[1, 1] + F[2, 1] * F[2, 1]
-    c22 = F[0, 2] * F[0, 2] + F[1, 2] * F[1, 2] + F[2, 2] * F[2, 2]
-    c01 = F[0, 0] * F[0, 1] + F[1, 0] * F[1, 1] + F[2, 0] * F[2, 1]
-    c12 = F[0, 1] * F[0, 2] + F[1, 1] * F[1, 2] + F[2, 1] * F[2, 2]
-    c02 = F[0, 0] * F[0, 2] + F[1, 0] * F[1, 2] + F[2, 0] * F[2, 2]
+    # Green–Lagrange strain from H (six scalars, no allocation in the hot loop), then C_g = I + 2E
+    e00 = H[0, 0] + 0.5 * (H[0, 0] * H[0, 0] + H[1, 0] * H[1, 0] + H[2, 0] * H[2, 0])
+    e11 = H[1, 1] + 0.5 * (H[0, 1] * H[0, 1] + H[1, 1] * H[1, 1] + H[2, 1] * H[2, 1])
+    e22 = H[2, 2] + 0.5 * (H[0, 2] * H[0, 2] + H[1, 2] * H[1, 2] + H[2, 2] * H[2, 2])
+    e01 = 0.5 * (H[0, 1] + H[1, 0] + H[0, 0] * H[0, 1] + H[1, 0] * H[1, 1] + H[2, 0] * H[2, 1])
+    e12 = 0.5 * (H[1, 2] + H[2, 1] + H[0, 1] * H[0, 2] + H[1, 1] * H[1, 2] + H[2, 1] * H[2, 2])
+    e02 = 0.5 * (H[0, 2] + H[2, 0] + H[0, 0] * H[0, 2] + H[1, 0] * H[1, 2] + H[2, 0] * H[2, 2])
+    c00, c11, c22 = 1.0 + 2.0 * e00, 1.0 + 2.0 * e11, 1.0 + 2.0 * e22
+    c01, c12, c02 = 2.0 * e01, 2.0 * e12, 2.0 * e02
     if code == NEO_HOOKE:
-        J = (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1])
-             - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
-             + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
+        # J - 1 = tr H + (principal 2×2 minors of H) + det H, exact without cancellation
+        minors = (H[0, 0] * H[1, 1] - H[0, 1] * H[1, 0] + H[1, 1] * H[2, 2] - H[1, 2] * H[2, 1]
+                  + H[0, 0] * H[2, 2] - H[0, 2] * H[2, 0])
+        detH = (H[0, 0] * (H[1, 1] * H[2, 2] - H[1, 2] * H[2, 1])
+                - H[0, 1] * (H[1, 0] * H[2, 2] - H[1, 2] * H[2, 0])
+                + H[0, 2] * (H[1, 0] * H[2, 1] - H[1, 1] * H[2, 0]))
+        Jm1 = H[0, 0] + H[1, 1] + H[2, 2] + minors + detH
+        J = 1.0 + Jm1
         if not J > 0.0:
             S[:, :] = np.nan
             C[:, :] = np.nan
             return np.nan
-        lnJ = math.log(J)
+        lnJ = math.log1p(Jm1)
         inv = 1.0 / (J * J)          # det C_g = J²
-        # C_g⁻¹ stored in S first: C needs it, then S is built from it in place
+        # C_g⁻¹ stored in S first: C needs it, then S is built from it
         S[0, 0] = (c11 * c22 - c12 * c12) * inv
         S[1, 1] = (c00 * c22 - c02 * c02) * inv
         S[2, 2] = (c00 * c11 - c01 * c01) * inv
@@ -157,18 +165,22 @@ def stress_tangent(code, lam, mu, F, S, C):
                 value = lam * S[I, J_] * S[K, L] + beta * (S[I, K] * S[J_, L] + S[I, L] * S[J_, K])
                 C[p, q] = value
                 C[q, p] = value
-        for I in range(3):
-            for J_ in range(3):
-                S[I, J_] = -beta * S[I, J_]
-            S[I, I] += mu
-        return 0.5 * mu * (c00 + c11 + c22 - 3.0) - mu * lnJ + 0.5 * lam * lnJ * lnJ
+        # S = μ (I - C⁻¹) + λ ln J C⁻¹ = 2μ C⁻¹E + λ ln J C⁻¹ (no cancellation in I - C⁻¹)
+        i00, i11, i22, i01, i12, i02 = S[0, 0], S[1, 1], S[2, 2], S[0, 1], S[1, 2], S[0, 2]
+        CE00 = i00 * e00 + i01 * e01 + i02 * e02
+        CE11 = i01 * e01 + i11 * e11 + i12 * e12
+        CE22 = i02 * e02 + i12 * e12 + i22 * e22
+        CE01 = i00 * e01 + i01 * e11 + i02 * e12
+        CE12 = i01 * e02 + i11 * e12 + i12 * e22
+        CE02 = i00 * e02 + i01 * e12 + i02 * e22
+        S[0, 0] = 2.0 * mu * CE00 + lam * lnJ * i00
+        S[1, 1] = 2.0 * mu * CE11 + lam * lnJ * i11
+        S[2, 2] = 2.0 * mu * CE22 + lam * lnJ * i22
+        S[0, 1] = S[1, 0] = 2.0 * mu * CE01 + lam * lnJ * i01
+        S[1, 2] = S[2, 1] = 2.0 * mu * CE12 + lam * lnJ * i12
+        S[0, 2] = S[2, 0] = 2.0 * mu * CE02 + lam * lnJ * i02
+        return mu * (e00 + e11 + e22) - mu * lnJ + 0.5 * lam * lnJ * lnJ
     # saint_venant_kirchhoff and linear_elastic (Hooke's law between S and E)
-    e00 = 0.5 * (c00 - 1.0)
-    e11 = 0.5 * (c11 - 1.0)
-    e22 = 0.5 * (c22 - 1.0)
-    e01 = 0.5 * c01
-    e12 = 0.5 * c12
-    e02 = 0.5 * c02
     trace = e00 + e11 + e22
     S[0, 0] = lam * trace + 2.0 * mu * e00
     S[1, 1] = lam * trace + 2.0 * mu * e11

@@ -391,7 +391,11 @@ def _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam,
                    + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
             if not det > 0.0:
                 status = STATUS_INVERTED
-            W = stress_tangent(mat_code, lam, mu, F, S, Cv)
+            # the material takes H = F - I (P is free until P = F S below)
+            P[0, 0], P[0, 1], P[0, 2] = h00, h01, h02
+            P[1, 0], P[1, 1], P[1, 2] = h10, h11, h12
+            P[2, 0], P[2, 1], P[2, 2] = h20, h21, h22
+            W = stress_tangent(mat_code, lam, mu, P, S, Cv)
             for i in range(3):
                 for J in range(3):
                     P[i, J] = F[i, 0] * S[0, J] + F[i, 1] * S[1, J] + F[i, 2] * S[2, J]
@@ -534,6 +538,12 @@ def _cell_fields_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_co
                                 sigma += lam * trace
                             stress[e, i, j] += w * sigma
                     continue
+                stress_tangent(mat_code, lam, mu, F, S, Cv)     # takes H = ∇u
+                for i in range(3):
+                    for j in range(3):
+                        # E = (H + Hᵀ + HᵀH) / 2, without the cancellation of (FᵀF - I) / 2
+                        E = 0.5 * (F[i, j] + F[j, i] + F[0, i] * F[0, j] + F[1, i] * F[1, j] + F[2, i] * F[2, j])
+                        strain[e, i, j] += w * E
                 for i in range(3):
                     F[i, i] += 1.0
                 det = (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1])
@@ -541,13 +551,8 @@ def _cell_fields_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_co
                        + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
                 if not det > 0.0:
                     status[e] = STATUS_INVERTED
-                stress_tangent(mat_code, lam, mu, F, S, Cv)
                 for i in range(3):
                     for j in range(3):
-                        E = 0.5 * (F[0, i] * F[0, j] + F[1, i] * F[1, j] + F[2, i] * F[2, j])
-                        if i == j:
-                            E -= 0.5
-                        strain[e, i, j] += w * E
                         # σ = F S Fᵀ / J
                         sigma = 0.0
                         for I in range(3):
