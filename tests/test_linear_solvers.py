@@ -189,7 +189,7 @@ def test_direct_and_amg_agree(medium):
     assert info_d["method"] == "direct" and info_a["method"] == "amg"
     assert info_a["converged"] and info_a["residual"] <= 1e-10
     assert _rel(x_amg, x_direct) < 1e-8
-    assert info_a["iterations"] <= 30             # measured 19
+    assert info_a["iterations"] <= 35             # measured 23
     assert info_d["residual"] < 1e-12
 
 
@@ -275,15 +275,17 @@ def test_saddle_block_and_direct_agree(which, request):
     assert np.linalg.norm(prob["K"] @ x_d + prob["B"].T @ lam_d - prob["b"]) <= 1e-10 * np.linalg.norm(prob["b"])
 
 
-def test_saddle_iterations_bounded_under_refinement(small, medium):
+def test_saddle_iterations_bounded_under_refinement():
     counts = []
-    for prob in (small, medium):
-        _, _, info = solve_saddle(prob["K"], prob["B"], prob["kappa"], prob["b"], _constraint_rhs(prob),
+    for cells in [(12, 6, 6), (24, 12, 12)]:          # 1785 and 12207 free DOF
+        prob = coupled_problem(cells)
+        x, _, info = solve_saddle(prob["K"], prob["B"], prob["kappa"], prob["b"], _constraint_rhs(prob),
                                   "block", solid=prob["solid"], beam=prob["beam"], near_nullspace=prob["R"])
+        assert info["converged"] and info["amg_levels"] >= 2
         counts.append(info["iterations"])
-    # measured 11 (615 DOF) and 41 (3915 DOF); 46 at 27.8k DOF (too slow for the suite)
-    assert counts[0] <= 20
-    assert counts[1] <= 60
+    # measured 38 and 48 (46 at 3915 DOF)
+    assert counts[0] <= 50
+    assert counts[1] <= 1.5 * counts[0]
 
 
 def test_saddle_split_primal_agrees(small):
