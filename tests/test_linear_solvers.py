@@ -1,0 +1,306 @@
+"""Linear solvers: rigid-body modes, direct vs AMG+CG, saddle point (direct vs block MINRES).
+
+Test matrices are built here (a compact, test-only hex8 elasticity assembly on a structured box,
+clamped at x = 0, plus a chain of axial springs along a slanted line coupled through a synthetic
+mortar-like ``B = [-M, D]``: ``D = κ_j I`` at beam node j, ``M = κ_j N_l(x_j) I`` with the
+trilinear weights of the solid element containing beam node j). The chain has no transverse
+stiffness: only the coupling holds it, so ``K`` is singular on beam DOFs.
+"""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from mortar1d3d.solvers import LinearSolverError, rigid_body_modes, solve_linear, solve_saddle
+from mortar1d3d.solvers.linear import _minres
+_HEX8_CORNERS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
+                          [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], dtype=float)
+
+
+def hex8_stiffness(h, E=1.0, nu=0.3):
+    """24x24 stiffness of an axis-aligned brick with edge lengths h (2x2x2 Gauss)."""
+    lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+    C = np.zeros((6, 6))
+    C[:3, :3] = lam
+    C[np.arange(3), np.arange(3)] += 2 * mu
+    C[np.arange(3, 6), np.arange(3, 6)] = mu
+    g = 1 / np.sqrt(3)
+    Ke = np.zeros((24, 24))
+    for xi in np.array(np.meshgrid([-g, g], [-g, g], [-g, g])).reshape(3, -1).T:
+        # dN/dxi of the trilinear functions, then dN/dx = dN/dxi * 2/h (brick)
+        terms = 1 + _HEX8_CORNERS * xi
+        dN = np.empty((8, 3))
+        for i in range(3):
+            others = [j for j in range(3) if j != i]
+            dN[:, i] = _HEX8_CORNERS[:, i] * terms[:, others[0]] * terms[:, others[1]] / 8 * 2 / h[i]
+        Bm = np.zeros((6, 24))
+        for a in range(8):
+            Bm[0, 3 * a], Bm[1, 3 * a + 1], Bm[2, 3 * a + 2] = dN[a]
+            Bm[3, 3 * a], Bm[3, 3 * a + 1] = dN[a, 1], dN[a, 0]
+            Bm[4, 3 * a + 1], Bm[4, 3 * a + 2] = dN[a, 2], dN[a, 1]
+            Bm[5, 3 * a], Bm[5, 3 * a + 2] = dN[a, 2], dN[a, 0]
+        Ke += Bm.T @ C @ Bm * np.prod(h) / 8
+    return Ke
+
+
+def box_elasticity(cells, size=(1.0, 1.0, 1.0), E=1.0, nu=0.3):
+    """(K, points) of the hex8 elasticity stiffness on a structured box, dof = 3*node + i."""
+    nx, ny, nz = cells
+    h = np.asarray(size, float) / cells
+    grid = np.arange((nx + 1) * (ny + 1) * (nz + 1)).reshape(nz + 1, ny + 1, nx + 1)
+    i, j, k = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
+    i, j, k = i.ravel(), j.ravel(), k.ravel()
+    c = _HEX8_CORNERS.astype(int) > 0
+    conn = np.stack([grid[k + ck, j + cj, i + ci] for ci, cj, ck in c], axis=1)
+    dofs = (3 * conn[:, :, None] + np.arange(3)).reshape(len(conn), 24).astype(np.int32)
+    Ke = hex8_stiffness(h, E, nu)
+    rows = np.repeat(dofs, 24, axis=1).ravel()
+    cols = np.tile(dofs, (1, 24)).ravel()
+    data = np.broadcast_to(Ke.ravel(), (len(conn), 576)).ravel()
+    n = 3 * grid.size
+    K = sp.csr_matrix((data, (rows, cols)), shape=(n, n))
+    zz, yy, xx = np.meshgrid(*(np.linspace(0, s, m + 1) for s, m in zip(size[::-1], cells[::-1])), indexing="ij")
+    points = np.column_stack([xx.ravel(), yy.ravel(), zz.ravel()])
+    return K, points
+
+
+def trilinear_weights(points, cells, size):
+    """(element nodes (n, 8), weights (n, 8)) of points in the structured box."""
+    nx, ny, nz = cells
+    h = np.asarray(size, float) / cells
+    idx = np.minimum((points / h).astype(int), np.array(cells) - 1)
+    xi = 2 * (points / h - idx) - 1
+    grid = np.arange((nx + 1) * (ny + 1) * (nz + 1)).reshape(nz + 1, ny + 1, nx + 1)
+    c = _HEX8_CORNERS.astype(int) > 0
+    nodes = np.stack([grid[idx[:, 2] + ck, idx[:, 1] + cj, idx[:, 0] + ci] for ci, cj, ck in c], axis=1)
+    weights = np.prod(1 + _HEX8_CORNERS[None] * xi[:, None, :], axis=2) / 8
+    return nodes, weights
+
+
+def coupled_problem(cells, size=(2.0, 1.0, 1.0), n_beam=None, E=1.0, spring=1.0):
+    """Elastic box clamped at x = 0 + a chain of axial springs coupled through a synthetic B.
+
+    Returns dict(K (reduced), B (reduced columns), kappa, solid, beam, free, R (free rows), b, points...).
+    """
+    Ks, P = box_elasticity(cells, size, E=E)
+    n_s = Ks.shape[0]
+    if n_beam is None:
+        n_beam = cells[0] // 2 + 1
+    start = np.array([0.13, 0.52, 0.47]) * size
+    end = np.array([0.91, 0.44, 0.55]) * size
+    X_b = start + np.linspace(0, 1, n_beam)[:, None] * (end - start)
+    l = np.linalg.norm(end - start) / (n_beam - 1)
+    # beam: axial springs only, singular transversally (held only by the coupling)
+    e = (end - start) / np.linalg.norm(end - start)
+    ke = spring / l * np.kron(np.array([[1, -1], [-1, 1]]), np.outer(e, e))
+    rows, cols, vals = [], [], []
+    for k in range(n_beam - 1):
+        d = np.r_[3 * k:3 * k + 6]
+        rows.append(np.repeat(d, 6)); cols.append(np.tile(d, 6)); vals.append(ke.ravel())
+    Kb = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                       shape=(3 * n_beam, 3 * n_beam))
+    kappa = np.full(n_beam + 1, l)
+    kappa[[0, n_beam - 1]] = l / 2
+    kappa[-1] = 0.0                     # an LM node no pair touched
+    nodes, w = trilinear_weights(X_b, cells, size)
+    n_lm = n_beam + 1
+    Mr, Mc, Mv = [], [], []
+    for i in range(3):
+        Mr.append(np.repeat(3 * np.arange(n_beam) + i, 8)); Mc.append((3 * nodes + i).ravel())
+        Mv.append((w * kappa[:n_beam, None]).ravel())
+    M = sp.csr_matrix((np.concatenate(Mv), (np.concatenate(Mr), np.concatenate(Mc))), shape=(3 * n_lm, n_s))
+    D = sp.csr_matrix((np.repeat(kappa[:n_beam], 3), (np.arange(3 * n_beam), np.arange(3 * n_beam))),
+                      shape=(3 * n_lm, 3 * n_beam))
+    K_full = sp.block_diag([Ks, Kb], format="csr")
+    B_full = sp.hstack([-M, D], format="csr")
+    clamped = np.flatnonzero(P[:, 0] == 0)
+    fixed = (3 * clamped[:, None] + np.arange(3)).ravel()
+    free = np.setdiff1d(np.arange(K_full.shape[0]), fixed)
+    K = K_full[free][:, free]
+    B = B_full[:, free]
+    solid = np.flatnonzero(free < n_s)
+    beam = np.flatnonzero(free >= n_s)
+
+    R = rigid_body_modes(np.vstack([P, X_b]))[free]
+    f = np.zeros(K_full.shape[0])
+    loaded = np.flatnonzero(P[:, 0] == size[0])
+    f[3 * loaded + 2] = -1.0 / len(loaded)
+    f[3 * loaded + 1] = 0.3 / len(loaded)
+    f[n_s + 3 * (n_beam - 1) + 0] = 0.5        # pull the beam's end along x
+    return dict(K=K, B=B, kappa=kappa, solid=solid, beam=beam, free=free, R=R, b=f[free],
+                Ks=Ks, Kb=Kb, M=M, D=D, points=P, beam_points=X_b, n_s=n_s)
+
+
+def penalty_matrix(prob, epsilon):
+    kappa3 = np.repeat(prob["kappa"], 3)
+    winv = np.divide(1.0, kappa3, out=np.zeros_like(kappa3), where=kappa3 > 0)
+    B = prob["B"]
+    return (prob["K"] + epsilon * (B.T @ sp.diags(winv) @ B)).tocsr()
+
+
+@pytest.fixture(scope="module")
+def small():
+    """(8, 4, 4) cells: 615 free DOF, 5 beam nodes."""
+    return coupled_problem((8, 4, 4))
+
+
+@pytest.fixture(scope="module")
+def medium():
+    """(16, 8, 8) cells: 3915 free DOF, 9 beam nodes."""
+    return coupled_problem((16, 8, 8))
+
+
+def _rel(a, b):
+    return np.linalg.norm(a - b) / np.linalg.norm(b)
+
+
+# ----------------------------------------------------------------------------- rigid-body modes
+
+def test_rigid_body_modes_in_null_space_of_free_elasticity():
+    K, points = box_elasticity((3, 2, 2), (1.5, 1.0, 1.0))
+    R = rigid_body_modes(points + 10.0)       # far from the origin: centring keeps it exact
+    assert R.shape == (K.shape[0], 6)
+    assert np.abs(K @ R).max() < 1e-12 * abs(K).max()
+    assert np.linalg.matrix_rank(R) == 6
+    # and they span the whole null space (rank K = n - 6)
+    assert np.linalg.matrix_rank(K.toarray(), tol=1e-10) == K.shape[0] - 6
+
+
+def test_rigid_body_modes_tangents_rotate_only():
+    points = np.array([[1.0, 2.0, 3.0], [0.0, 0.0, 1.0]])      # a position and a unit tangent
+    R = rigid_body_modes(points, tangent_mask=[False, True])
+    t = R[3:6]
+    assert np.all(t[:, :3] == 0)                                # translations leave tangents alone
+    omega = np.eye(3)
+    np.testing.assert_allclose(t[:, 3:].T, np.cross(omega, [0.0, 0.0, 1.0]))
+    np.testing.assert_allclose(R[0:3, :3], np.eye(3))
+    # a rigid motion of the coupled problem's [solid; beam] triplets is tied exactly by B
+    prob = coupled_problem((4, 2, 2))
+    Bfull = sp.hstack([-prob["M"], prob["D"]])
+    Rfull = rigid_body_modes(np.vstack([prob["points"], prob["beam_points"]]))
+    assert np.abs(Bfull @ Rfull).max() < 1e-13
+
+
+# ----------------------------------------------------------------------------- SPD systems
+
+def test_direct_and_amg_agree(medium):
+    A = penalty_matrix(medium, 20.0)
+    x_direct, info_d = solve_linear(A, medium["b"], "direct")
+    x_amg, info_a = solve_linear(A, medium["b"], "amg", near_nullspace=medium["R"])
+    assert info_d["method"] == "direct" and info_a["method"] == "amg"
+    assert info_a["converged"] and info_a["residual"] <= 1e-10
+    assert _rel(x_amg, x_direct) < 1e-8
+    assert info_a["iterations"] <= 35             # measured 23
+    assert info_d["residual"] < 1e-12
+
+
+def test_near_nullspace_reduces_iterations(medium):
+    s = medium["solid"]
+    K = medium["K"][s][:, s]
+    b = medium["b"][s]
+    _, with_modes = solve_linear(K, b, "amg", near_nullspace=medium["R"][s])
+    _, without = solve_linear(K, b, "amg")
+    assert with_modes["iterations"] <= 20          # measured 13
+    assert with_modes["iterations"] * 1.5 < without["iterations"]     # measured 13 vs 27
+
+
+def test_auto_picks_direct_for_small_systems(small):
+    A = penalty_matrix(small, 20.0)
+    x, info = solve_linear(A, small["b"])
+    assert info["method"] == "direct"
+    assert np.linalg.norm(small["b"] - A @ x) <= 1e-12 * np.linalg.norm(small["b"])
+
+
+def test_amg_warm_start_and_prebuilt_hierarchy(medium):
+    from mortar1d3d.solvers import build_amg
+    A = penalty_matrix(medium, 20.0)
+    ml = build_amg(A, medium["R"])
+    x, info = solve_linear(A, medium["b"], preconditioner=ml)
+    assert info["method"] == "amg" and info["converged"]
+    # a slightly different matrix, the old hierarchy and the old solution as start
+    A2 = penalty_matrix(medium, 22.0)
+    x2, info2 = solve_linear(A2, medium["b"], preconditioner=ml, x0=x)
+    x2_direct, _ = solve_linear(A2, medium["b"], "direct")
+    assert _rel(x2, x2_direct) < 1e-8
+    assert info2["iterations"] < info["iterations"]
+
+
+def test_nonconvergence_raises_with_useful_message(medium):
+    A = penalty_matrix(medium, 20.0)
+    with pytest.raises(LinearSolverError, match=r"relative residual .* after 1 iterations.*Try:.*near_nullspace"):
+        solve_linear(A, medium["b"], "amg", maxiter=1)
+    with pytest.raises(LinearSolverError, match=r"MINRES did not converge.*after 1 iterations.*penalty_scale"):
+        solve_saddle(medium["K"], medium["B"], medium["kappa"], medium["b"], np.zeros(medium["B"].shape[0]),
+                     "block", near_nullspace=medium["R"], maxiter=1)
+
+
+def test_minres_kernel_matches_dense_solve():
+    rng = np.random.default_rng(3)
+    Q = rng.standard_normal((40, 40))
+    A = Q + Q.T                                    # symmetric indefinite
+    P = np.diag(np.abs(np.diag(A)) + 1.0)
+    b = rng.standard_normal(40)
+    x, it, ok = _minres(A, b, np.zeros(40), lambda r: r / np.diag(P), 1e-13, 200)
+    assert ok and it <= 80                         # 40 in exact arithmetic; measured 58
+    assert _rel(x, np.linalg.solve(A, b)) < 1e-9
+
+
+# ----------------------------------------------------------------------------- saddle points
+
+def _constraint_rhs(prob):
+    m = prob["B"].shape[0]
+    c = np.zeros(m)
+    c[:m - 3] = 1e-3 * np.sin(np.arange(m - 3))    # a prescribed gap; the last LM node has κ = 0
+    c[m - 3:] = 7.0                                # ignored: no multiplier there
+    return c
+
+
+@pytest.mark.parametrize("which", ["small", "medium"])
+def test_saddle_block_and_direct_agree(which, request):
+    prob = request.getfixturevalue(which)
+    c = _constraint_rhs(prob)
+    args = (prob["K"], prob["B"], prob["kappa"], prob["b"], c)
+    kw = dict(solid=prob["solid"], beam=prob["beam"])
+    x_d, lam_d, info_d = solve_saddle(*args, "direct", **kw)
+    x_b, lam_b, info_b = solve_saddle(*args, "block", near_nullspace=prob["R"], **kw)
+    assert info_b["converged"] and info_b["residual"] <= 1e-10
+    assert _rel(x_b, x_d) < 1e-8
+    assert _rel(lam_b, lam_d) < 1e-8
+    rows = slice(0, prob["B"].shape[0] - 3)
+    for x in (x_d, x_b):
+        gap = prob["B"] @ x - c
+        assert np.linalg.norm(gap[rows]) <= 1e-8 * np.linalg.norm(c[rows])
+    assert np.all(lam_d[-3:] == 0) and np.all(lam_b[-3:] == 0)
+    assert info_b["n_multipliers"] == prob["B"].shape[0] - 3
+    # the equilibrium rows: K x + Bᵀ λ = b
+    assert np.linalg.norm(prob["K"] @ x_d + prob["B"].T @ lam_d - prob["b"]) <= 1e-10 * np.linalg.norm(prob["b"])
+
+
+def test_saddle_iterations_bounded_under_refinement():
+    counts = []
+    for cells in [(12, 6, 6), (24, 12, 12)]:          # 1785 and 12207 free DOF
+        prob = coupled_problem(cells)
+        x, _, info = solve_saddle(prob["K"], prob["B"], prob["kappa"], prob["b"], _constraint_rhs(prob),
+                                  "block", solid=prob["solid"], beam=prob["beam"], near_nullspace=prob["R"])
+        assert info["converged"] and info["amg_levels"] >= 2
+        counts.append(info["iterations"])
+    # measured 38 and 48 (46 at 3915 DOF)
+    assert counts[0] <= 50
+    assert counts[1] <= 1.5 * counts[0]
+
+
+def test_saddle_split_primal_agrees(small):
+    c = _constraint_rhs(small)
+    x_d, lam_d, _ = solve_saddle(small["K"], small["B"], small["kappa"], small["b"], c, "direct")
+    x_s, lam_s, info = solve_saddle(small["K"], small["B"], small["kappa"], small["b"], c, "block",
+                                    solid=small["solid"], beam=small["beam"], near_nullspace=small["R"],
+                                    primal="split")
+    assert info["converged"]
+    assert _rel(x_s, x_d) < 1e-8 and _rel(lam_s, lam_d) < 1e-8
+
+
+def test_saddle_singular_raises(small):
+    # drop the coupling of the chain: its transverse DOFs are held by nothing
+    B = small["B"].tolil()
+    B[:, small["beam"]] = 0
+    with pytest.raises(LinearSolverError, match="singular"):
+        solve_saddle(small["K"], B.tocsr(), small["kappa"], small["b"], np.zeros(B.shape[0]), "direct")
