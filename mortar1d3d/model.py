@@ -23,7 +23,8 @@ from .mortar.assemble import assemble_mortar
 from .scene import BOX_FACES, Scene, SceneError
 
 DEFAULT_PENALTY_FACTOR = 1e3     # ε = 1e3 E_solid when the scene gives no penalty
-AUTO_DIRECT_LIMIT = 60_000       # unknowns up to which solver = "auto" factorises directly
+AUTO_DIRECT_LIMIT = 3_000        # unknowns up to which solver = "auto" factorises (measured crossover,
+                                 # solvers.linear.DIRECT_MAX_DOFS: SuperLU fill grows fast in 3D)
 
 
 @dataclass(frozen=True)
@@ -656,9 +657,12 @@ class Model:
         method = self.linear_solver_method(len(b))
         self.counts[f"linear_solver.{method}"] += 1
         free = self.free
+        # AMG aggregates 3×3 blocks only when every node keeps all or none of its components
+        triplets = np.bincount(free // 3, minlength=self.n_unknowns // 3 + 1)
+        block = 3 if np.isin(triplets, (0, 3)).all() else 1
         if not self.lagrange:
             R = self.rigid_body_modes()[free] if method == "amg" else None
-            x, info = solve_linear(A, b, method=method, near_nullspace=R)
+            x, info = solve_linear(A, b, method=method, near_nullspace=R, block_size=block if method == "amg" else None)
             self.last_linear_info = info
             return x
         n = self.n_displacement_dofs

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from mortar1d3d.solvers import LinearSolverError, rigid_body_modes, solve_linear, solve_saddle
+from mortar1d3d.solvers.linear import LinearSolverError, rigid_body_modes, solve_linear, solve_saddle
 from mortar1d3d.solvers.linear import _minres
 _HEX8_CORNERS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
                           [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], dtype=float)

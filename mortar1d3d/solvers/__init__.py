@@ -1,5 +1,2 @@
-"""Solvers: linear (direct, AMG, saddle-point block preconditioning); Newton comes later."""
-from .linear import (LinearSolverError, build_amg, rigid_body_modes, solve_linear,
-                     solve_saddle)
-
-__all__ = ["LinearSolverError", "build_amg", "rigid_body_modes", "solve_linear", "solve_saddle"]
+"""Solvers: ``newton`` (load steps, step cutting) and ``linear`` (direct, AMG, saddle-point block
+preconditioning). Import the submodules; nothing heavy (scipy, pyamg) is imported here."""
