@@ -211,7 +211,7 @@ def test_auto_picks_direct_for_small_systems(small):
 
 
 def test_amg_warm_start_and_prebuilt_hierarchy(medium):
-    from mortar1d3d.solvers import build_amg
+    from mortar1d3d.solvers.linear import build_amg
     A = penalty_matrix(medium, 20.0)
     ml = build_amg(A, medium["R"])
     x, info = solve_linear(A, medium["b"], preconditioner=ml)
