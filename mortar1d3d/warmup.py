@@ -1,21 +1,34 @@
-"""Compile (or load from Numba's on-disk cache) every kernel by running a tiny scene."""
+"""Compile (or load from Numba's on-disk cache) every kernel by running tiny scenes."""
 import time
 
 
 def warmup(verbose=False):
-    """Touch every stage once: search, segmentation, both integrations, assembly, CSR.
+    """Touch every stage once: the mortar engine (search, segmentation, both integrations,
+    assembly, CSR) and the physics (solid, torsion-free beam, truss, coupling, pressure).
 
-    Kernels dispatch on integer element codes, so one small scene compiles everything that
-    later scenes of any element type use. Returns the elapsed time in seconds.
+    Kernels dispatch on integer element codes, so small scenes compile everything that later
+    scenes of any element type use. Returns the elapsed time in seconds.
     """
     from . import generate
+    from .model import solve
     from .mortar.assemble import assemble_mortar
+    from .scene import Scene
 
     t0 = time.perf_counter()
     beams, solid = generate.fibre_cube(2, 1, 2)
     for integration in ("segment", "element"):
         assemble_mortar(beams, solid, integration=integration, n_gauss=2)
+    t1 = time.perf_counter()
+    box = {"box": [[0, 0, 0], [1, 0.2, 0.2]], "cells": [2, 1, 1]}
+    for model, material in (("torsion_free", "neo_hooke"), ("truss", "saint_venant_kirchhoff")):
+        solve(Scene(solid={"mesh": box, "material": {"model": material, "E": 1.0, "nu": 0.3}},
+                    beams=[{"curve": {"line": [[0.1, 0.1, 0.1], [0.9, 0.1, 0.1]]}, "elements": 2, "model": model,
+                            "section": {"EA": 1.0, "EI": 0.01}}],
+                    coupling={"constraint": "gauss_point"} if model == "truss" else None,
+                    dirichlet=[{"on": "solid:x_min"}],
+                    load=[{"type": "pressure", "on": "solid:z_max", "value": 1e-3}],
+                    analysis={"steps": 1}))
     elapsed = time.perf_counter() - t0
     if verbose:
-        print(f"mortar1d3d kernels ready in {elapsed:.2f} s")
+        print(f"mortar1d3d kernels ready in {elapsed:.2f} s (engine {t1 - t0:.2f} s, physics {elapsed - (t1 - t0):.2f} s)")
     return elapsed
