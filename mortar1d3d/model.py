@@ -364,6 +364,8 @@ class Model:
         out.append(Effect("check.rigid_body_modes", "once", "before any solve"))
         if self.solid_mesh is not None:
             mat = sc.solid["material"]["model"]
+            if sc.solid["material"].get("fibres"):
+                mat += f" + {len(sc.solid['material']['fibres'])} fibre families"
             if nonlinear:
                 out.append(Effect("solid.internal_force", every, f"total Lagrangian, {mat}"))
                 out.append(Effect("solid.tangent", every, "consistent tangent"))
@@ -416,7 +418,8 @@ class Model:
             mat = sc.solid["material"]
             try:
                 self.solid_physics = SolidModel(self.solid_mesh, material(mat["model"], mat["E"], mat["nu"]),
-                                                kinematics="linear" if self.linear else "nonlinear")
+                                                kinematics="linear" if self.linear else "nonlinear",
+                                                fibres=self._fibre_field(mat.get("fibres", ())))
             except ValueError as exc:
                 raise SceneError(f"solid.material: {exc}") from None
         for g in self.groups:
@@ -451,6 +454,28 @@ class Model:
         self.check_supports()
         self.prepared = True
         return self
+
+    def _fibre_field(self, families):
+        """FibreField of ``solid.material.fibres``: a family without ``inside`` reinforces every
+        element, one with ``inside`` the elements whose node centroid lies in the box."""
+        from .physics.fibre_material import FibreField, fibre_family
+        mesh = self.solid_mesh
+        rows = []
+        for i, f in enumerate(families):
+            path = f"solid.material.fibres[{i}]"
+            row = fibre_family(f["direction"], f["E"], f["volume_fraction"], path)
+            elements = None
+            if f["inside"] is not None:
+                lo, hi = f["inside"]
+                conn = mesh.connectivity
+                valid = conn >= 0
+                centroid = (mesh.points[np.where(valid, conn, 0)] * valid[..., None]).sum(axis=1) / valid.sum(axis=1)[:, None]
+                tol = 1e-9 * float(np.linalg.norm(np.ptp(mesh.points, axis=0)))
+                elements = ((centroid >= lo - tol) & (centroid <= hi + tol)).all(axis=1)
+                if not elements.any():
+                    raise SceneError(f"{path}.inside: no element centroid lies in {lo.tolist()} – {hi.tolist()}")
+            rows.append((row, elements))
+        return FibreField(mesh.n_elements, rows)
 
     def _prepare_loads(self):
         from .physics.surface import Pressure, boundary_faces, traction_force

@@ -134,12 +134,31 @@ def _solid(value, base_dir):
         cells = [_integer(c, f"solid.mesh.cells[{i}]") for i, c in enumerate(_list(mesh["cells"], "solid.mesh.cells", 3))]
         element = _choice(mesh.get("element", "hexahedron"), "solid.mesh.element", tuple(SOLID_ELEMENTS))
         mesh_spec = {"box": box, "cells": cells, "element": element}
-    material = _table(value["material"], "solid.material", ("model", "E", "nu"), required=("model", "E", "nu"))
-    material = {"model": _choice(material["model"], "solid.material.model", MATERIAL_MODELS),
-                "E": _number(material["E"], "solid.material.E", low=0.0, low_open=True),
-                "nu": _number(material["nu"], "solid.material.nu", low=-1.0, high=0.5, low_open=True,
+    raw = _table(value["material"], "solid.material", ("model", "E", "nu", "fibres"), required=("model", "E", "nu"))
+    material = {"model": _choice(raw["model"], "solid.material.model", MATERIAL_MODELS),
+                "E": _number(raw["E"], "solid.material.E", low=0.0, low_open=True),
+                "nu": _number(raw["nu"], "solid.material.nu", low=-1.0, high=0.5, low_open=True,
                               high_open=True)}
+    if "fibres" in raw:
+        material["fibres"] = [_fibre(f, f"solid.material.fibres[{i}]")
+                              for i, f in enumerate(_list(raw["fibres"], "solid.material.fibres"))]
     return {"mesh": mesh_spec, "material": material}
+
+
+def _fibre(value, path):
+    """A fibre family of a fibre-reinforced material: direction, E, volume_fraction, optional region."""
+    _table(value, path, ("direction", "E", "volume_fraction", "inside"), required=("direction", "E", "volume_fraction"))
+    direction = _vector(value["direction"], f"{path}.direction")
+    if np.linalg.norm(direction) == 0.0:
+        _fail(f"{path}.direction", "must not be zero")
+    out = {"direction": direction / np.linalg.norm(direction),
+           "E": _number(value["E"], f"{path}.E", low=0.0, low_open=True),
+           "volume_fraction": _number(value["volume_fraction"], f"{path}.volume_fraction", low=0.0, high=1.0,
+                                      low_open=True),
+           "inside": None}
+    if "inside" in value:
+        out["inside"] = _set_spec({"inside": value["inside"]}, path)["inside"]
+    return out
 
 
 def _list(value, path, n=None):

@@ -40,6 +40,7 @@ from ..errors import MeshError, format_ids
 from ..geometry.linalg import n_chunks
 from ..integration.quadrature import gauss_legendre
 from ..mesh import SolidMesh
+from .fibre_material import FibreField, add_fibres
 from .materials import VOIGT_INDEX, Material, hooke, stress_tangent
 
 KINEMATICS = ("nonlinear", "linear")
@@ -320,8 +321,11 @@ def _expand_voigt(Cv, F, S, w, linear, A):
 
 @njit
 def _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam, mu, linear, want_tangent,
-             C0, ue, fe, Ke, F, S, Cv, P, A, G, D):
+             C0, ue, fe, Ke, F, S, Cv, P, A, G, D, fibre_ptr, fibre_data, fibre_set):
     """Element vector and matrix of element e; returns (energy, status).
+
+    Fibres (:mod:`~mortar1d3d.physics.fibre_material`): rows ``fibre_ptr[s]:fibre_ptr[s+1]`` of
+    ``fibre_data`` with ``s = fibre_set[e]`` add their stress and tangent at every Gauss point.
 
     ``fe[a, i]`` (n, 3); ``Ke[9a + 3i + k, b]`` = K[(a, i), (b, k)] (node b fastest, so that the
     loops over b vectorise), exactly symmetric. Buffers are the caller's (one set per chunk).
@@ -339,6 +343,8 @@ def _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam,
                 Ke[r, b] = 0.0
     energy = 0.0
     status = STATUS_OK
+    fibre_lo = fibre_ptr[fibre_set[e]]
+    fibre_hi = fibre_ptr[fibre_set[e] + 1]
     for q in range(gp_ptr[e + 1] - gp_ptr[e]):
         x = dn_ptr[e] + 3 * n * q          # ∂N_a/∂X_j at dNdX[x + j*n + a]
         y = x + n
@@ -376,6 +382,13 @@ def _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam,
             P[1, 2] = P[2, 1] = C0[4, 4] * g12
             P[0, 2] = P[2, 0] = C0[5, 5] * g02
             W = 0.5 * (s0 * e00 + s1 * e11 + s2 * e22 + P[0, 1] * g01 + P[1, 2] * g12 + P[0, 2] * g02)
+            if fibre_hi > fibre_lo:
+                # fibres: σ += k (a·ε a) a⊗a, tangent C₀ + Σ k A⊗A (in Cv; F is free here)
+                F[0, 0], F[0, 1], F[0, 2] = h00, h01, h02
+                F[1, 0], F[1, 1], F[1, 2] = h10, h11, h12
+                F[2, 0], F[2, 1], F[2, 2] = h20, h21, h22
+                Cv[:, :] = C0
+                W += add_fibres(fibre_data, fibre_lo, fibre_hi, F, True, P, Cv)
         else:
             F[0, 0] = 1.0 + h00
             F[0, 1] = h01
@@ -396,6 +409,8 @@ def _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam,
             P[1, 0], P[1, 1], P[1, 2] = h10, h11, h12
             P[2, 0], P[2, 1], P[2, 2] = h20, h21, h22
             W = stress_tangent(mat_code, lam, mu, P, S, Cv)
+            if fibre_hi > fibre_lo:
+                W += add_fibres(fibre_data, fibre_lo, fibre_hi, P, False, S, Cv)
             for i in range(3):
                 for J in range(3):
                     P[i, J] = F[i, 0] * S[0, J] + F[i, 1] * S[1, J] + F[i, 2] * S[2, J]
@@ -409,7 +424,7 @@ def _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam,
         if not want_tangent:
             continue
         if linear:
-            _expand_voigt(C0, F, S, w, True, A)
+            _expand_voigt(Cv if fibre_hi > fibre_lo else C0, F, S, w, True, A)
         else:
             _expand_voigt(Cv, F, S, w, False, A)
         # this Gauss point's ∂N/∂X in a small contiguous buffer: the loops over b below vectorise
@@ -450,7 +465,8 @@ def _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam,
 
 @njit_parallel
 def _assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_ptr, colour_blocks, block, node_ptr,
-                     slot_ptr, slots, mat_code, lam, mu, linear, want_tangent, f, data, element_energy, status):
+                     slot_ptr, slots, mat_code, lam, mu, linear, want_tangent, fibre_ptr, fibre_data, fibre_set, f,
+                     data, element_energy, status):
     """Add every element's f_e (and K_e) into ``f`` and the CSR ``data``, colour by colour."""
     C0 = np.empty((6, 6))
     hooke(lam, mu, C0)
@@ -470,7 +486,8 @@ def _assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_pt
             k = colour_blocks[c]
             for e in range(k * block, min(n_el, (k + 1) * block)):
                 energy, st = _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam, mu,
-                                      linear, want_tangent, C0, ue, fe, Ke, F, S, Cv, P, A, G, D)
+                                      linear, want_tangent, C0, ue, fe, Ke, F, S, Cv, P, A, G, D, fibre_ptr,
+                                      fibre_data, fibre_set)
                 element_energy[e] = energy
                 status[e] = st
                 n = N_NODES[codes[e]]
@@ -497,7 +514,7 @@ def _assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_pt
 
 @njit_parallel
 def _cell_fields_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam, mu, linear,
-                        strain, stress, status):
+                        fibre_ptr, fibre_data, fibre_set, strain, stress, status):
     """Per element, the w det J-weighted mean over its Gauss points of E (ε) and σ."""
     n_el = codes.shape[0]
     for c in prange(n_chunks(n_el, CHUNK)):
@@ -507,6 +524,8 @@ def _cell_fields_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_co
         for e in range(c * CHUNK, min(n_el, (c + 1) * CHUNK)):
             n = N_NODES[codes[e]]
             status[e] = STATUS_OK
+            fibre_lo = fibre_ptr[fibre_set[e]]
+            fibre_hi = fibre_ptr[fibre_set[e] + 1]
             volume = 0.0
             for i in range(3):
                 for j in range(3):
@@ -537,8 +556,16 @@ def _cell_fields_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_co
                             if i == j:
                                 sigma += lam * trace
                             stress[e, i, j] += w * sigma
+                    if fibre_hi > fibre_lo:
+                        S[:, :] = 0.0
+                        add_fibres(fibre_data, fibre_lo, fibre_hi, F, True, S, Cv)
+                        for i in range(3):
+                            for j in range(3):
+                                stress[e, i, j] += w * S[i, j]
                     continue
                 stress_tangent(mat_code, lam, mu, F, S, Cv)     # takes H = ∇u
+                if fibre_hi > fibre_lo:
+                    add_fibres(fibre_data, fibre_lo, fibre_hi, F, False, S, Cv)
                 for i in range(3):
                     for j in range(3):
                         # E = (H + Hᵀ + HᵀH) / 2, without the cancellation of (FᵀF - I) / 2
@@ -579,6 +606,10 @@ class SolidModel:
     kinematics : {"nonlinear", "linear"}
         ``"nonlinear"``: Total Lagrangian finite deformation with the material's law.
         ``"linear"``: small strain, Hooke's law with the material's λ, μ (for every material).
+    fibres : FibreField, optional
+        Fibre families per element (:mod:`~mortar1d3d.physics.fibre_material`): their axial
+        energy ``½ k (a·E a)²`` is added to the material's (with linear kinematics
+        ``½ k (a·ε a)²``). None: no fibres.
     assembly_block : int
         Consecutive elements per block of the coloured parallel assembly (module docstring).
         Results do not depend on the thread count; they may differ in the last bits between
@@ -600,7 +631,7 @@ class SolidModel:
     hex27 17 KiB), plus ``4 n_nodes²`` bytes of CSR slots.
     """
 
-    def __init__(self, mesh, material, kinematics="nonlinear", *, assembly_block=ASSEMBLY_BLOCK):
+    def __init__(self, mesh, material, kinematics="nonlinear", *, fibres=None, assembly_block=ASSEMBLY_BLOCK):
         if not isinstance(mesh, SolidMesh):
             raise TypeError(f"SolidModel: mesh must be a SolidMesh, got {type(mesh).__name__}")
         if not isinstance(material, Material):
@@ -608,6 +639,12 @@ class SolidModel:
                             f"got {type(material).__name__}")
         if kinematics not in KINEMATICS:
             raise ValueError(f"SolidModel: unknown kinematics {kinematics!r}; known: {', '.join(KINEMATICS)}")
+        if fibres is None:
+            fibres = FibreField.empty(mesh.n_elements)
+        if not isinstance(fibres, FibreField) or len(fibres.element_set) != mesh.n_elements:
+            raise TypeError(f"SolidModel: fibres must be a FibreField of the mesh's {mesh.n_elements} elements, "
+                            f"got {fibres!r}")
+        self.fibres = fibres
         if int(assembly_block) < 1:
             raise ValueError(f"SolidModel: assembly_block must be >= 1, got {assembly_block!r}")
         self.assembly_block = int(assembly_block)
@@ -662,8 +699,8 @@ class SolidModel:
         status = np.empty(self.mesh.n_elements, dtype=np.int64)
         _assemble_kernel(u, self._connectivity, self._codes, self._gp_ptr, self._dn_ptr, self._dNdX, self._wJ,
                          self._colour_ptr, self._colour_blocks, self.assembly_block, self._node_ptr, self._slot_ptr,
-                         self._slots, self.material.code, self._lam, self._mu, linear, want_tangent, f, data, energy,
-                         status)
+                         self._slots, self.material.code, self._lam, self._mu, linear, want_tangent,
+                         self.fibres.set_ptr, self.fibres.data, self.fibres.element_set, f, data, energy, status)
         bad = np.flatnonzero(status)
         if bad.size:
             raise InvertedElementsError(bad)
@@ -761,7 +798,8 @@ class SolidModel:
         stress = np.empty((n_el, 3, 3))
         status = np.empty(n_el, dtype=np.int64)
         _cell_fields_kernel(u, self._connectivity, self._codes, self._gp_ptr, self._dn_ptr, self._dNdX, self._wJ,
-                            self.material.code, self._lam, self._mu, self._linear, strain, stress, status)
+                            self.material.code, self._lam, self._mu, self._linear, self.fibres.set_ptr,
+                            self.fibres.data, self.fibres.element_set, strain, stress, status)
         bad = np.flatnonzero(status)
         if bad.size:
             raise InvertedElementsError(bad)
