@@ -75,9 +75,9 @@ def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence)
             # small relative to the first one or the residual at round-off (it cannot fall further)
             if rn <= rtol * r0 and (increments[-1] <= increment_rtol * d0 or rn <= 1e-13 * r0):
                 return residuals, increments
-            # round-off floor: very stiff terms (e.g. EA of slender beams) leave a residual that
-            # cannot fall further; accept when the increment is at round-off of the solution
-            if increments[-1] <= 1e-12 * max(float(np.linalg.norm(z[free])), 1e-300) and rn <= math.sqrt(rtol) * r0:
+            # round-off floor: very stiff terms (penalty, EA of slender beams) leave a residual that
+            # cannot fall further; accept when the increment has converged and the residual is small
+            if increments[-1] <= increment_rtol * d0 and rn <= math.sqrt(rtol) * r0:
                 return residuals, increments
             if rn > divergence * r0:
                 raise _StepFailed(f"the residual grew from {r0:.3e} to {rn:.3e} (diverging)")
@@ -115,7 +115,7 @@ def solve_load_steps(system, z0, steps, *, rtol=1e-8, increment_rtol=1e-8, max_i
     rtol, increment_rtol : float
         Convergence: ‖r_k‖ <= rtol ‖r_0‖ and ‖Δz_k‖ <= increment_rtol ‖Δz_0‖ (both relative to the
         first iteration of the step); or ‖r_k‖ <= 1e-13 ‖r_0‖; or, at a round-off floor of the
-        residual, ‖Δz_k‖ <= 1e-12 ‖z‖ with ‖r_k‖ <= sqrt(rtol) ‖r_0‖.
+        residual, ‖Δz_k‖ <= increment_rtol ‖Δz_0‖ with ‖r_k‖ <= sqrt(rtol) ‖r_0‖.
     progress : callable, optional
         ``progress(record, step_index, n_steps)`` after every converged step.
 
