@@ -632,6 +632,7 @@ def _plots(results, out):
         import matplotlib
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
+        import matplotlib.ticker
     except ImportError:
         return {}
     files = {}
@@ -660,6 +661,7 @@ def _plots(results, out):
                     ax.loglog([x[k] for k in front], [y[k] for k in front], "s", ms=6, mfc="none",
                               color=colours[integration])
             ax.set_title(f"{kind}, h_B/h_S = {ratio:g}", fontsize=9)
+            ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
             ax.grid(True, which="major", alpha=0.3)
             if i == len(kinds) - 1:
                 ax.set_xlabel("median assemble_mortar time [ms]")
