@@ -149,11 +149,13 @@ def build_scene(kind, ratio, embedding, cells=8, fibres=12, fibre_length=0.5, se
 
 # ----------------------------------------------------------------------------------- measurements
 
-def time_assembly(beams, solid, integration, n_gauss, lm="line2", repeats=5, memory=False):
+def time_assembly(beams, solid, integration, n_gauss, lm="line2", repeats=5, memory=False, warmup=True):
     """Median wall time of ``assemble_mortar`` and its stages; the operators of the last call.
 
-    One untimed call first (JIT compilation or cache loading). With ``memory``, one more call
-    under ``tracemalloc`` gives the peak of Python/NumPy allocations (bytes) during a call.
+    One untimed call first (JIT compilation or cache loading; skipped with ``warmup=False``
+    when the kernels are known to be compiled). With ``memory``, one more call
+    under ``tracemalloc`` gives the peak of Python/NumPy allocations (bytes) during a call:
+    allocated, not necessarily touched, memory (``np.empty`` buffers count in full).
 
     Returns
     -------
@@ -162,14 +164,8 @@ def time_assembly(beams, solid, integration, n_gauss, lm="line2", repeats=5, mem
         ``segments``, ``peak_bytes`` (or None).
     ops : MortarOperators
     """
-    ops = assemble_mortar(beams, solid, integration=integration, n_gauss=n_gauss, lm=lm)
-    times, stages = [], {k: [] for k in STAGES}
-    for _ in range(max(1, repeats)):
-        t0 = time.perf_counter()
-        ops = assemble_mortar(beams, solid, integration=integration, n_gauss=n_gauss, lm=lm)
-        times.append(time.perf_counter() - t0)
-        for k in STAGES:
-            stages[k].append(ops.timings.get(k, 0.0))
+    if warmup:
+        assemble_mortar(beams, solid, integration=integration, n_gauss=n_gauss, lm=lm)
     peak = None
     if memory:
         tracemalloc.start()
@@ -178,6 +174,15 @@ def time_assembly(beams, solid, integration, n_gauss, lm="line2", repeats=5, mem
             peak = tracemalloc.get_traced_memory()[1]
         finally:
             tracemalloc.stop()
+    times, stages = [], {k: [] for k in STAGES}
+    ops = None
+    for _ in range(max(1, repeats)):
+        ops = None          # at most one result alive: large scenes stay within memory
+        t0 = time.perf_counter()
+        ops = assemble_mortar(beams, solid, integration=integration, n_gauss=n_gauss, lm=lm)
+        times.append(time.perf_counter() - t0)
+        for k in STAGES:
+            stages[k].append(ops.timings.get(k, 0.0))
     record = {"time_s": statistics.median(times), "min_s": min(times),
               "stages_s": {k: statistics.median(v) for k, v in stages.items()},
               "points": ops.n_integration_points, "segments": len(ops.segments), "peak_bytes": peak}
@@ -450,7 +455,9 @@ def scaling(config, progress=None):
         fibres = max(1, int(round(target / per_fibre)))
         beams, solid = generate.fibre_cube(20, fibres, 20)
         repeats = 3 if target <= 1e6 else 1
-        rec, ops = time_assembly(beams, solid, "segment", 4, repeats=repeats, memory=config.memory)
+        # the first (smallest) size compiles; larger ones need no untimed call
+        rec, ops = time_assembly(beams, solid, "segment", 4, repeats=repeats, memory=config.memory,
+                                 warmup=not rows)
         rec.update(target=target, fibres=fibres)
         rows.append(rec)
         del beams, solid, ops
@@ -759,7 +766,8 @@ def write_report(results, out="report"):
              f"of the cube (partly outside). LM interpolation `{cfg['lm']}`.")
     L.append(f"- Cost: median of {cfg['repeats']} calls of `assemble_mortar` after one untimed call (JIT "
              "excluded), stages from `ops.timings`; peak memory: `tracemalloc` peak of one more call (NumPy "
-             "allocations; scratch buffers inside the kernels are not seen).")
+             "allocations, counted in full even where pages are never touched, e.g. the segmentation's "
+             "crossing buffer; scratch buffers inside the kernels are not seen).")
     L.append(f"- Accuracy: relative Frobenius error and worst entry (over the largest entry) of D and M against "
              f"segment-based integration with {cfg['reference_gauss']} points per segment. `auto` uses the minimal "
              "exact Gauss rule on segments where the integrand is a polynomial (straight beams in affine "
