@@ -7,7 +7,11 @@ the projection. Only the set of points differs (design.md §1):
 
 - segment-based: ``n_gauss`` points on every segment [η_a, η_b], in its owning element;
 - element-based: ``n_gauss`` points on the whole beam element, each given to the lowest-index
-  candidate element that contains it; points inside no element are not coupled.
+  candidate element that contains it; points inside no element are not coupled;
+- auto (:func:`auto_segments`): the segments of segment-based integration, found without the
+  crossing search where possible (closed form for straight beams in affine elements; a Bézier
+  certificate for curved beam elements inside one affine element, which keep the element-based
+  points), and per segment the minimal exact Gauss rule where the integrand is a polynomial.
 """
 from functools import lru_cache
 
