@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test bench venv clean
+.PHONY: demo test bench report venv clean
 
 $(STAMP): pyproject.toml
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "$(PYTHON) not found; run 'make PYTHON=python3 ...'"; exit 1; }
@@ -23,6 +23,10 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	NUMBA_NUM_THREADS=2 $(PY) -m pytest benchmarks -q -p no:randomly -p no:xdist --benchmark-only --benchmark-columns=min,median,max,rounds
+
+# accuracy-vs-time study (issue 5): report/accuracy_vs_time.md + plots; QUICK=1 for the short run
+report: $(STAMP)
+	$(PY) -m mortar1d3d.cli bench report --out report $(if $(QUICK),--quick,)
 
 clean:
 	rm -rf $(VENV) results .pytest_cache .benchmarks

@@ -1,4 +1,5 @@
-"""Command line: ``mortar1d3d run|plan scene.toml``, ``mortar1d3d demo``, ``mortar1d3d warmup``."""
+"""Command line: ``mortar1d3d run|plan scene.toml``, ``mortar1d3d demo``, ``mortar1d3d warmup``,
+``mortar1d3d bench report``."""
 import argparse
 import runpy
 import sys
@@ -44,6 +45,17 @@ def _plan(args):
     return 0
 
 
+def _bench_report(args):
+    """``mortar1d3d bench report``: the accuracy-vs-time study of issue 5 (mortar1d3d.study)."""
+    from .study import make_report
+    preset = "tiny" if args.tiny else "quick" if args.quick else "full"
+    start = time.perf_counter()
+    path = make_report(preset, args.out, progress=None if args.quiet else print)
+    if not args.quiet:
+        print(f"report written to {path} in {time.perf_counter() - start:.0f} s")
+    return 0
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(prog="mortar1d3d", description="Beams embedded in 3D solids (mortar coupling)")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -57,7 +69,19 @@ def main(argv=None):
     demo = sub.add_parser("demo", help="assemble the benchmark scene, print certificates, write VTU and a plot")
     demo.add_argument("--out", default="results/demo")
     sub.add_parser("warmup", help="compile (or load cached) kernels")
+    # -- bench report (issue 5): self-contained block
+    bench = sub.add_parser("bench", help="measured studies")
+    bench_sub = bench.add_subparsers(dest="bench_command", required=True)
+    report = bench_sub.add_parser("report", help="accuracy vs time of the integration variants: writes "
+                                  "<out>/accuracy_vs_time.md with tables and PNG plots")
+    size = report.add_mutually_exclusive_group()
+    size.add_argument("--quick", action="store_true", help="smaller study (under two minutes with a warm cache)")
+    size.add_argument("--tiny", action="store_true", help="smoke-test size (used by the test suite)")
+    report.add_argument("--out", default="report", help="output directory (default: report)")
+    report.add_argument("--quiet", action="store_true", help="no progress output")
     args, rest = parser.parse_known_args(argv)
+    if args.command == "bench":
+        return _bench_report(args)
     if args.command == "run":
         return _run(args)
     if args.command == "plan":

@@ -7,12 +7,18 @@ the projection. Only the set of points differs (design.md §1):
 
 - segment-based: ``n_gauss`` points on every segment [η_a, η_b], in its owning element;
 - element-based: ``n_gauss`` points on the whole beam element, each given to the lowest-index
-  candidate element that contains it; points inside no element are not coupled.
+  candidate element that contains it; points inside no element are not coupled;
+- auto (:func:`auto_segments`): the segments of segment-based integration, found without the
+  crossing search where possible (closed form for straight beams in affine elements; a Bézier
+  certificate for curved beam elements inside one affine element, which keep the element-based
+  points), and per segment the minimal exact Gauss rule where the integrand is a polynomial.
 """
+from functools import lru_cache
+
 import numpy as np
 from numba import prange
 
-from .._config import CHUNK, PARAMETER_TOL, njit_parallel
+from .._config import CHUNK, PARAMETER_TOL, njit, njit_parallel
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from ..geometry.beam import beam_point
@@ -26,10 +32,10 @@ POINT_INSIDE, POINT_OUTSIDE, POINT_NOT_CONVERGED, POINT_UNCOUPLED = INSIDE, OUTS
 
 
 @njit_parallel
-def _segment_points(seg_beam, seg_solid, seg_start, seg_end, gx, gw, codes, conn, points,
+def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, codes, conn, points,
                     solid_origin, solid_h, beam_code, Q, lengths, beam_origin,
                     eta, xi, weight, position, status):
-    n_gauss = gx.shape[0]
+    # segment g gets the n-point rule (n = seg_points[g+1] - seg_points[g]) stored in row n of gx, gw
     n_seg = seg_beam.shape[0]
     loose = 1e3 * PARAMETER_TOL
     for c in prange(n_chunks(n_seg, CHUNK)):
@@ -44,6 +50,7 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, gx, gw, codes, conn
             e = seg_beam[g]
             s = seg_solid[g]
             code = codes[s]
+            n_gauss = seg_points[g + 1] - seg_points[g]
             load_element(points, conn, s, code, solid_origin, X)
             s0 = beam_origin[e, 0] - solid_origin[s, 0]
             s1 = beam_origin[e, 1] - solid_origin[s, 1]
@@ -52,10 +59,10 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, gx, gw, codes, conn
             mid = 0.5 * (seg_end[g] + seg_start[g])
             solid.centre(code, x)
             for q in range(n_gauss):
-                k = g * n_gauss + q
-                eta[k] = mid + half * gx[q]
+                k = seg_points[g] + q
+                eta[k] = mid + half * gx[n_gauss, q]
                 r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q[e], lengths[e], s0, s1, s2, eta[k], H, dH)
-                weight[k] = gw[q] * half * norm3(d0, d1, d2)
+                weight[k] = gw[n_gauss, q] * half * norm3(d0, d1, d2)
                 position[k, 0] = r0 + solid_origin[s, 0]
                 position[k, 1] = r1 + solid_origin[s, 1]
                 position[k, 2] = r2 + solid_origin[s, 2]
@@ -115,16 +122,22 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
 
 
 def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):
-    """Integration points of segment-based integration (``n_gauss`` per segment)."""
-    gx, gw = gauss_legendre_arrays(n_gauss)
-    n = len(seg_beam) * n_gauss
+    """Integration points of segment-based integration.
+
+    ``n_gauss``: Gauss points per segment, an int (every segment) or an (n_segments,) int array.
+    """
+    counts = np.broadcast_to(np.asarray(n_gauss, dtype=np.int64), seg_beam.shape)
+    seg_points = np.zeros(len(seg_beam) + 1, dtype=np.int64)
+    np.cumsum(counts, out=seg_points[1:])
+    gx, gw = gauss_tables(int(counts.max()) if len(counts) else 1)
+    n = int(seg_points[-1])
     eta, weight = np.empty(n), np.empty(n)
     xi, position = np.empty((n, 3)), np.empty((n, 3))
     status = np.empty(n, dtype=np.int64)
-    _segment_points(seg_beam, seg_solid, seg_start, seg_end, gx, gw, ctx.codes, ctx.conn, ctx.points,
+    _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, ctx.codes, ctx.conn, ctx.points,
                     ctx.solid_origin, ctx.solid_h, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin,
                     eta, xi, weight, position, status)
-    return np.repeat(seg_beam, n_gauss), np.repeat(seg_solid, n_gauss), eta, xi, weight, position, status
+    return np.repeat(seg_beam, counts), np.repeat(seg_solid, counts), eta, xi, weight, position, status
 
 
 def element_points(ctx, n_gauss):
@@ -145,3 +158,330 @@ def element_points(ctx, n_gauss):
 def gauss_legendre_arrays(n_gauss):
     x, w = gauss_legendre(n_gauss)
     return np.ascontiguousarray(x), np.ascontiguousarray(w)
+
+
+@lru_cache(maxsize=None)
+def gauss_tables(n_max):
+    """Gauss-Legendre rules 1..n_max as padded tables (n_max + 1, n_max): row n holds the n-point rule."""
+    gx = np.zeros((n_max + 1, n_max))
+    gw = np.zeros((n_max + 1, n_max))
+    for n in range(1, n_max + 1):
+        gx[n, :n], gw[n, :n] = gauss_legendre(n)
+    gx.flags.writeable = False
+    gw.flags.writeable = False
+    return gx, gw
+
+
+# ------------------------------------------------------------------------------------------------
+# integration="auto": cut only the beam elements that cross faces; exact rules where polynomial
+# ------------------------------------------------------------------------------------------------
+
+#: a map counts as affine when its nonlinear part is below AFFINE_TOL times the element size
+AFFINE_TOL = 1e-12
+#: a curved beam element is certified inside an affine solid element when all its Bézier control
+#: points lie this far (parameter units) inside; far above PARAMETER_TOL, so no neighbour can
+#: claim any of its points under the ownership rule
+CERTIFY_MARGIN = 1e3 * PARAMETER_TOL
+#: degree along a straight line of the solid shape functions N(ξ(η)) when ξ(η) is affine in η,
+#: per element code (hex8 trilinear: 3, hex20 serendipity: 4, hex27 triquadratic: 6, tet4: 1, tet10: 2)
+LINE_DEGREE = np.array([3, 4, 6, 1, 2], dtype=np.int64)
+#: polynomial degree of the centreline functions per beam code (hermite, line, line3)
+BEAM_DEGREE = np.array([3, 1, 2], dtype=np.int64)
+# nodes spanning the parameter axes from node 0 (hex: 1, 3, 4; tet: 1, 2, 3) and their distance
+_AXIS_NODES = np.array([[1, 3, 4], [1, 3, 4], [1, 3, 4], [1, 2, 3], [1, 2, 3]], dtype=np.int64)
+_AXIS_SPAN = np.array([2.0, 2.0, 2.0, 1.0, 1.0])
+_REFERENCE_NODES = np.zeros((len(solid.BY_CODE), solid.MAX_NODES, 3))
+for _code, _descriptor in solid.BY_CODE.items():
+    _REFERENCE_NODES[_code, : _descriptor.n_nodes] = _descriptor.reference_nodes
+
+#: pair outcome of the auto classification
+PAIR_DONE, PAIR_NUMERIC = 0, 1
+
+
+@njit
+def affine_inverse(code, X, h, Ainv):
+    """Whether element ``code`` with local nodes ``X`` (node 0 at the origin) is affine; its inverse map.
+
+    Affine means x(ξ) = A (ξ - ξ_0) for every node to ``AFFINE_TOL · h`` (tet4 always; a hex8
+    that is a parallelepiped; quadratic elements with straight edges and centred mid-nodes).
+    On success ``Ainv`` (3, 3) holds A⁻¹, so ξ(x) = ξ_0 + A⁻¹ x exactly (no Newton needed).
+    """
+    axes = _AXIS_NODES[code]
+    span = _AXIS_SPAN[code]
+    a00 = X[axes[0], 0] / span
+    a10 = X[axes[0], 1] / span
+    a20 = X[axes[0], 2] / span
+    a01 = X[axes[1], 0] / span
+    a11 = X[axes[1], 1] / span
+    a21 = X[axes[1], 2] / span
+    a02 = X[axes[2], 0] / span
+    a12 = X[axes[2], 1] / span
+    a22 = X[axes[2], 2] / span
+    ref = _REFERENCE_NODES[code]
+    tol = AFFINE_TOL * h
+    for a in range(solid.n_nodes(code)):
+        d0 = ref[a, 0] - ref[0, 0]
+        d1 = ref[a, 1] - ref[0, 1]
+        d2 = ref[a, 2] - ref[0, 2]
+        if (abs(a00 * d0 + a01 * d1 + a02 * d2 - X[a, 0]) > tol or abs(a10 * d0 + a11 * d1 + a12 * d2 - X[a, 1]) > tol
+                or abs(a20 * d0 + a21 * d1 + a22 * d2 - X[a, 2]) > tol):
+            return False
+    c00 = a11 * a22 - a12 * a21
+    c01 = a12 * a20 - a10 * a22
+    c02 = a10 * a21 - a11 * a20
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    if not det > 0.0:      # inverted or degenerate: leave it to the general path
+        return False
+    inv = 1.0 / det
+    Ainv[0, 0], Ainv[0, 1], Ainv[0, 2] = inv * c00, inv * (a02 * a21 - a01 * a22), inv * (a01 * a12 - a02 * a11)
+    Ainv[1, 0], Ainv[1, 1], Ainv[1, 2] = inv * c01, inv * (a00 * a22 - a02 * a20), inv * (a02 * a10 - a00 * a12)
+    Ainv[2, 0], Ainv[2, 1], Ainv[2, 2] = inv * c02, inv * (a01 * a20 - a00 * a21), inv * (a00 * a11 - a01 * a10)
+    return True
+
+
+@njit
+def _to_parameters(code, Ainv, x0, x1, x2, xi):
+    """ξ = ξ_0 + A⁻¹ x for an affine element (x local to node 0)."""
+    for i in range(3):
+        xi[i] = _REFERENCE_NODES[code, 0, i] + Ainv[i, 0] * x0 + Ainv[i, 1] * x1 + Ainv[i, 2] * x2
+
+
+@njit
+def beam_is_affine(beam_code, Qe, length):
+    """Whether the centreline r(η) of one beam element is affine in η (to ``AFFINE_TOL · L``).
+
+    Hermite: r(η) - affine = (1 - η²)/8 [η (2c - L (t1 + t2)) + L (t1 - t2)] with c = r2 - r1,
+    so it is affine iff t1 = t2 = c / L. Lagrange line: always; line3: iff the middle node is the
+    chord's midpoint. Then |r'| is constant and every coupling integrand is a polynomial in an
+    affine solid element.
+    """
+    tol = AFFINE_TOL * length
+    dev = 0.0
+    if beam_code == 0:
+        for i in range(3):
+            c = Qe[2, i] - Qe[0, i]
+            dev = max(dev, abs(2.0 * c - length * (Qe[1, i] + Qe[3, i])) + length * abs(Qe[1, i] - Qe[3, i]))
+        dev *= 0.125
+    elif beam_code == 2:
+        for i in range(3):
+            dev = max(dev, abs(Qe[2, i] - 0.5 * (Qe[0, i] + Qe[1, i])))
+    return dev <= tol
+
+
+@njit
+def _control_points(beam_code, Qe, length, ctrl):
+    """Bézier control points of a beam element (local frame); their number. The curve lies in their hull."""
+    if beam_code == 0:
+        for i in range(3):
+            ctrl[0, i] = Qe[0, i]
+            ctrl[1, i] = Qe[0, i] + length / 3.0 * Qe[1, i]
+            ctrl[2, i] = Qe[2, i] - length / 3.0 * Qe[3, i]
+            ctrl[3, i] = Qe[2, i]
+        return 4
+    if beam_code == 1:
+        ctrl[0] = Qe[0]
+        ctrl[1] = Qe[1]
+        return 2
+    for i in range(3):
+        ctrl[0, i] = Qe[0, i]
+        ctrl[1, i] = 2.0 * Qe[2, i] - 0.5 * (Qe[0, i] + Qe[1, i])
+        ctrl[2, i] = Qe[1, i]
+    return 3
+
+
+@njit_parallel
+def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, beam_code, Q, lengths,
+                    beam_origin, crossing_eta, crossing_count, pair_state, beam_affine, beam_inside):
+    """Face crossings of every candidate pair where they can be had without a search.
+
+    Per beam element e and candidate solid element s (both frames local, see projection):
+
+    - affine s, affine beam: ξ(η) = α + β η is a line; its entry and exit η through the faces
+      ``n·(ξ - o) = 0`` are computed in closed form (the crossings the numeric search would find);
+    - affine s, curved beam: if every Bézier control point maps ``CERTIFY_MARGIN`` inside s, the
+      whole element is inside s (convex hull; affine maps keep it), so no pair of e has a crossing;
+    - otherwise the pair is marked ``PAIR_NUMERIC`` for the segmentation's crossing search.
+    """
+    n_beam = pair_offsets.shape[0] - 1
+    tol = PARAMETER_TOL
+    for c in prange(n_chunks(n_beam, CHUNK)):
+        X = np.empty((solid.MAX_NODES, 3))
+        H = np.empty(MAX_FUNCTIONS)
+        dH = np.empty(MAX_FUNCTIONS)
+        Ainv = np.empty((3, 3))
+        ctrl = np.empty((4, 3))
+        alpha = np.empty(3)
+        beta = np.empty(3)
+        xi = np.empty(3)
+        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
+            Qe = Q[e]
+            straight = beam_is_affine(beam_code, Qe, lengths[e])
+            beam_affine[e] = straight
+            # the line r(η) = p + q η (straight) or the control polygon (curved), beam-local frame
+            p0, p1, p2, q0, q1, q2 = beam_point(beam_code, Qe, lengths[e], 0.0, 0.0, 0.0, 0.0, H, dH)
+            n_ctrl = 0 if straight else _control_points(beam_code, Qe, lengths[e], ctrl)
+            inside = -1
+            for p in range(pair_offsets[e], pair_offsets[e + 1]):
+                s = pair_solid[p]
+                code = codes[s]
+                crossing_count[p] = 0
+                pair_state[p] = PAIR_NUMERIC
+                load_element(points, conn, s, code, solid_origin, X)
+                if not affine_inverse(code, X, solid_h[s], Ainv):
+                    continue
+                s0 = beam_origin[e, 0] - solid_origin[s, 0]
+                s1 = beam_origin[e, 1] - solid_origin[s, 1]
+                s2 = beam_origin[e, 2] - solid_origin[s, 2]
+                if not straight:
+                    certified = True
+                    for k in range(n_ctrl):
+                        _to_parameters(code, Ainv, ctrl[k, 0] + s0, ctrl[k, 1] + s1, ctrl[k, 2] + s2, xi)
+                        if solid.outside_distance(code, xi) > -CERTIFY_MARGIN:
+                            certified = False
+                            break
+                    if certified:
+                        inside = s
+                        break
+                    continue
+                pair_state[p] = PAIR_DONE
+                _to_parameters(code, Ainv, p0 + s0, p1 + s1, p2 + s2, alpha)
+                for i in range(3):
+                    beta[i] = Ainv[i, 0] * q0 + Ainv[i, 1] * q1 + Ainv[i, 2] * q2
+                # clip the line against the half-spaces n·(ξ - o) <= 0 of the faces
+                eta_in = -np.inf
+                eta_out = np.inf
+                empty = False
+                faces = solid.faces(code)
+                for f in range(faces.shape[0]):
+                    g0 = 0.0
+                    g1 = 0.0
+                    for i in range(3):
+                        g0 += faces[f, 3, i] * (alpha[i] - faces[f, 0, i])
+                        g1 += faces[f, 3, i] * beta[i]
+                    if g1 == 0.0:
+                        if g0 > 0.0:
+                            empty = True
+                    elif g1 > 0.0:
+                        eta_out = min(eta_out, -g0 / g1)
+                    else:
+                        eta_in = max(eta_in, -g0 / g1)
+                if empty:
+                    continue
+                # entry and exit are crossings when they lie on the element (inside test with the
+                # tolerance, as for a numeric crossing) and on the beam element
+                n = 0
+                for k in range(2):
+                    t = eta_in if k == 0 else eta_out
+                    if not (-1.0 - tol <= t <= 1.0 + tol):
+                        continue
+                    for i in range(3):
+                        xi[i] = alpha[i] + beta[i] * t
+                    if solid.is_inside(code, xi, tol):
+                        crossing_eta[p, n] = min(max(t, -1.0), 1.0)
+                        n += 1
+                crossing_count[p] = n
+            beam_inside[e] = inside
+            if inside >= 0:
+                for p in range(pair_offsets[e], pair_offsets[e + 1]):
+                    crossing_count[p] = 0
+                    pair_state[p] = PAIR_DONE
+
+
+@njit_parallel
+def _auto_gauss_counts(seg_beam, seg_solid, codes, conn, points, solid_origin, solid_h, beam_affine, beam_code,
+                       n_phi, n_gauss, counts, exact):
+    """Gauss points per segment: the minimal exact rule where the integrand is a polynomial, else n_gauss."""
+    n_seg = seg_beam.shape[0]
+    for c in prange(n_chunks(n_seg, CHUNK)):
+        X = np.empty((solid.MAX_NODES, 3))
+        Ainv = np.empty((3, 3))
+        for g in range(c * CHUNK, min(n_seg, (c + 1) * CHUNK)):
+            s = seg_solid[g]
+            code = codes[s]
+            counts[g] = n_gauss
+            exact[g] = False
+            if beam_affine[seg_beam[g]]:
+                load_element(points, conn, s, code, solid_origin, X)
+                if affine_inverse(code, X, solid_h[s], Ainv):
+                    degree = n_phi - 1 + max(BEAM_DEGREE[beam_code], LINE_DEGREE[code])
+                    counts[g] = degree // 2 + 1
+                    exact[g] = True
+
+
+def exact_gauss_count(beam_code, solid_code, n_phi):
+    """Gauss points that integrate Φ·H, Φ·N and Φ exactly on a straight beam in an affine element.
+
+    Degrees in η: Φ_j ``n_phi - 1``, H_k ``BEAM_DEGREE``, N_a(ξ(η)) ``LINE_DEGREE`` (ξ affine in η),
+    |r'| constant; an n-point Gauss rule is exact to degree 2n - 1.
+    """
+    degree = n_phi - 1 + max(int(BEAM_DEGREE[beam_code]), int(LINE_DEGREE[solid_code]))
+    return degree // 2 + 1
+
+
+def auto_segments(ctx, search_points, n_gauss, n_phi):
+    """Segments and Gauss counts of ``integration="auto"``.
+
+    Beam elements certified to lie inside one solid element keep one segment [-1, 1] (the points
+    of element-based integration); the others are cut at their face crossings, computed in closed
+    form for straight beams in affine elements and by the segmentation's crossing search
+    otherwise. Every segment then gets the minimal exact Gauss rule where the integrand is a
+    polynomial (straight beam, affine element), else ``n_gauss`` points.
+
+    Returns
+    -------
+    seg_beam, seg_solid, seg_start, seg_end, counts : (n_segments,) arrays
+        Beam element, owning solid element, η range and Gauss points of every segment.
+    info : dict
+        Counts for the diagnostics: face crossings, numeric pairs, beam elements left uncut.
+    """
+    from ..geometry.segmentation import _compact_index, _pair_crossings, _tile, crossings_capacity
+
+    pair_offsets, pair_solid = ctx.pair_offsets, ctx.pair_solid
+    n_beam = len(pair_offsets) - 1
+    n_pairs = len(pair_solid)
+    closed = np.empty((n_pairs, 2))
+    count = np.zeros(n_pairs, dtype=np.int64)
+    state = np.empty(n_pairs, dtype=np.int64)
+    beam_affine = np.empty(n_beam, dtype=np.bool_)
+    beam_inside = np.empty(n_beam, dtype=np.int64)
+    _auto_crossings(pair_offsets, pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h,
+                    ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, closed, count, state, beam_affine,
+                    beam_inside)
+    numeric = np.flatnonzero(state == PAIR_NUMERIC)
+    crossing_eta = closed
+    if len(numeric):
+        pair_beam = np.repeat(np.arange(n_beam), np.diff(pair_offsets))
+        found = np.empty((len(numeric), crossings_capacity(search_points)))
+        found_count = np.zeros(len(numeric), dtype=np.int64)
+        _pair_crossings(pair_beam[numeric], pair_solid[numeric], ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
+                        ctx.solid_h, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, search_points,
+                        found, found_count)
+        width = max(2, int(found_count.max()))
+        crossing_eta = np.empty((n_pairs, width))
+        crossing_eta[:, :2] = closed
+        crossing_eta[numeric, :width] = found[:, :width]
+        count[numeric] = found_count
+    # the segmentation's second stage, unchanged: sort and merge the crossings, owners by the
+    # lowest-index rule, merge neighbours with the same owner (same as segmentation.segment)
+    cumulative = np.concatenate([[0], np.cumsum(count)])
+    seg_offsets = np.concatenate([[0], np.cumsum(cumulative[pair_offsets[1:]] - cumulative[pair_offsets[:-1]] + 1)])
+    total = int(seg_offsets[-1])
+    all_solid, all_start, all_end = np.empty(total, dtype=np.int64), np.empty(total), np.empty(total)
+    seg_count = np.zeros(n_beam, dtype=np.int64)
+    _tile(pair_offsets, pair_solid, crossing_eta, count, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
+          ctx.solid_h, ctx.solid_boxes, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, seg_offsets,
+          all_solid, all_start, all_end, seg_count)
+    keep = _compact_index(seg_offsets, seg_count)
+    seg_beam = np.repeat(np.arange(n_beam), seg_count)
+    seg_solid, seg_start, seg_end = all_solid[keep], all_start[keep], all_end[keep]
+    counts = np.empty(len(seg_beam), dtype=np.int64)
+    exact = np.empty(len(seg_beam), dtype=np.bool_)
+    _auto_gauss_counts(seg_beam, seg_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h,
+                       beam_affine, ctx.beam_code, n_phi, n_gauss, counts, exact)
+    per_beam = np.bincount(seg_beam, minlength=n_beam)
+    whole = (per_beam == 1)[seg_beam] & (seg_start == -1.0) & (seg_end == 1.0)
+    info = {"face_crossings": int(count.sum()), "numeric_pairs": int(len(numeric)),
+            "certified_inside": int(np.count_nonzero(beam_inside >= 0)),
+            "beam_elements_uncut": int(np.count_nonzero(whole)),
+            "exact_rule_segments": int(np.count_nonzero(exact))}
+    return seg_beam, seg_solid, seg_start, seg_end, counts, info

@@ -24,7 +24,8 @@ from ..elements.beam import shape as beam_shape
 from ..elements.solid import dispatch as solid_types
 from ..geometry.search import beam_bounding_boxes, find_candidate_pairs, solid_bounding_boxes
 from ..geometry.segmentation import segment
-from ..integration.rules import POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, element_points, segment_points
+from ..integration.rules import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, auto_segments, element_points,
+                                 segment_points)
 from ..mesh import BeamMesh, SolidMesh
 from .sparse import gathered_block_csr, row_sources
 
@@ -33,7 +34,7 @@ SEGMENT_DTYPE = np.dtype([("beam_element", np.int64), ("solid_element", np.int64
 POINT_DTYPE = np.dtype([("beam_element", np.int64), ("solid_element", np.int64), ("eta", np.float64),
                         ("xi", np.float64, (3,)), ("weight", np.float64), ("position", np.float64, (3,)),
                         ("status", np.int64)])
-INTEGRATIONS = ("segment", "element")
+INTEGRATIONS = ("segment", "element", "auto")
 
 
 @dataclass
@@ -213,12 +214,18 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     ----------
     beams : BeamMesh
     solid : SolidMesh
-    integration : {"segment", "element"}
+    integration : {"segment", "element", "auto"}
         Segment-based: Gauss points on each piece of a beam element inside one solid element
         (exact up to quadrature). Element-based: Gauss points on the whole beam element, each
-        owned by the lowest-index solid element that contains it.
+        owned by the lowest-index solid element that contains it. Auto: segment-based results
+        at close to element-based cost: beam elements certified to lie inside one solid element
+        are not cut (their points are the element-based ones), the others are cut at their face
+        crossings (closed form for straight beams in affine elements); segments where the
+        integrand is a polynomial (straight beam in tet4 / parallelepiped hex8 / affine quadratic
+        elements) get the minimal exact Gauss rule instead of ``n_gauss``.
     n_gauss : int
-        Gauss points per segment (segment-based) or per beam element (element-based).
+        Gauss points per segment (segment-based, auto where not polynomial) or per beam element
+        (element-based).
     lm : {"line2", "line3", "line4"}
         Lagrange multiplier interpolation.
     search_points : int
@@ -254,7 +261,15 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     timings["search"] = t1 - t0
     diagnostics = {"candidate_pairs": len(ctx.pair_solid)}
 
-    if integration == "segment":
+    if integration == "auto":
+        seg_beam, seg_solid, seg_start, seg_end, counts, auto_info = auto_segments(ctx, search_points, n_gauss,
+                                                                                   lm_type.n_functions)
+        diagnostics.update(auto_info)
+        t2 = time.perf_counter()
+        timings["segmentation"] = t2 - t1
+        p_beam, p_solid, eta, xi, weight, position, status = segment_points(
+            ctx, seg_beam, seg_solid, seg_start, seg_end, counts)
+    elif integration == "segment":
         seg_beam, seg_solid, seg_start, seg_end, n_cross = segment(ctx, search_points)
         diagnostics["face_crossings"] = n_cross
         t2 = time.perf_counter()
@@ -319,7 +334,7 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     t5 = time.perf_counter()
     timings["csr"] = t5 - t4
 
-    if integration == "segment":
+    if integration in ("segment", "auto"):
         segments = np.empty(len(seg_beam), dtype=SEGMENT_DTYPE)
         segments["beam_element"], segments["solid_element"] = seg_beam, seg_solid
         segments["eta_start"], segments["eta_end"] = seg_start, seg_end
