@@ -16,7 +16,7 @@ def warmup(verbose=False):
 
     t0 = time.perf_counter()
     beams, solid = generate.fibre_cube(2, 1, 2)
-    for integration in ("segment", "element"):
+    for integration in ("segment", "element", "auto"):
         assemble_mortar(beams, solid, integration=integration, n_gauss=2)
     t1 = time.perf_counter()
     box = {"box": [[0, 0, 0], [1, 0.2, 0.2]], "cells": [2, 1, 1]}
