@@ -347,17 +347,28 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
             bad[e] = failed
 
 
+@njit
+def _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, beam_code, Q, lengths,
+           beam_origin, X, xi, trial, N, dN, H, dH):
+    """Lowest-index candidate containing r(η) to 1e-12 (sharp: the cuts land on the faces)."""
+    r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
+    return first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
+                            solid_origin, solid_h, 1e-3 * PARAMETER_TOL, X, xi, trial, N, dN, -1)
+
+
 @njit_parallel
 def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, beam_code,
-                    Q, lengths, beam_origin, out_eta, out_count):
+                    Q, lengths, beam_origin, n_samples, out_eta, out_count):
     """Cuts of each beam element where the owner (lowest-index element containing r(η)) changes.
 
     The fallback that does not rely on face intersections: the owner is sampled at
-    ``out_eta.shape[1]`` equidistant η and every change is bisected to 1e-13 in η.
+    ``n_samples`` equidistant η; every change is bisected to 1e-13 in η, and again from the
+    cut while the owner just after it still differs from the next sample's (several changes
+    between two samples, e.g. across a sliver). Pieces shorter than the sampling that start
+    and end in the same owner are not seen.
     """
     n_beam = pair_offsets.shape[0] - 1
-    n_samples = out_eta.shape[1]
-    tol = PARAMETER_TOL
+    cap = out_eta.shape[1]
     for c in prange(n_chunks(n_beam, CHUNK)):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
@@ -374,22 +385,24 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
             eta_previous = -1.0
             for k in range(n_samples):
                 eta = -1.0 + 2.0 * k / (n_samples - 1)
-                r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
-                owner = first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
-                                         points, solid_origin, solid_h, tol, X, xi, trial, N, dN, -1)
-                if k > 0 and owner != previous:
-                    lo = eta_previous
+                owner = _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
+                               beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH)
+                lo = eta_previous
+                current = previous
+                while k > 0 and current != owner and count < cap:
                     hi = eta
                     while hi - lo > 1e-13:
                         mid = 0.5 * (lo + hi)
-                        r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
-                        if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
-                                            points, solid_origin, solid_h, tol, X, xi, trial, N, dN, -1) == previous:
+                        if _owner(mid, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
+                                  beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH) == current:
                             lo = mid
                         else:
                             hi = mid
                     out_eta[e, count] = 0.5 * (lo + hi)
                     count += 1
+                    current = _owner(hi, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
+                                     solid_boxes, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH)
+                    lo = hi
                 previous = owner
                 eta_previous = eta
             out_count[e] = count
@@ -431,12 +444,13 @@ class _Beams:
     def bisection_crossings(self, ctx):
         """Owner changes found by bisection, stored as the crossings of each element's first pair."""
         n = len(self.ids)
-        cuts = np.empty((n, _BISECTION_SAMPLES))
+        cap = 4 * _BISECTION_SAMPLES
+        cuts = np.empty((n, cap))
         count = np.zeros(n, dtype=np.int64)
         _bisection_cuts(self.pair_offsets, self.pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
                         ctx.solid_h, ctx.solid_boxes, ctx.beam_code, self.Q, self.lengths, self.beam_origin,
-                        cuts, count)
-        crossing_eta = np.zeros((len(self.pair_solid), _BISECTION_SAMPLES))
+                        _BISECTION_SAMPLES, cuts, count)
+        crossing_eta = np.zeros((len(self.pair_solid), cap))
         crossing_count = np.zeros(len(self.pair_solid), dtype=np.int64)
         has_pairs = np.diff(self.pair_offsets) > 0
         first = self.pair_offsets[:-1][has_pairs]
