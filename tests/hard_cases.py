@@ -175,13 +175,15 @@ def _inside(solid, P):
     return containment(solid, P).min(axis=1) <= INSIDE_TOL
 
 
-def embedded_intervals(beams, solid, e, samples=257, bisections=45):
+def embedded_intervals(beams, solid, e, samples=257, bisections=45, extra=()):
     """Sorted disjoint η-intervals [(a, b, required), ...] of beam element e inside the solid.
 
     ``required`` is False for intervals whose centreline never gets deeper than ``DEPTH`` inside
     (tangential touches, pieces lying on the outer boundary): the library may couple them or not.
+    ``extra``: more η to sample (the checks add the midpoints of the library's pieces and gaps,
+    so that an excursion narrower than the sampling is looked at; in or out is decided here).
     """
-    eta = np.linspace(-1.0, 1.0, samples)
+    eta = np.unique(np.concatenate([np.linspace(-1.0, 1.0, samples), np.asarray(extra, float)]))
     r, _ = centreline(beams, e, eta)
     depth = containment(solid, r).min(axis=1)
     inside = depth <= INSIDE_TOL
@@ -502,7 +504,11 @@ def check_tiling(ops, case, reference=None):
             assert s["eta_start"][0] >= -1.0 and s["eta_end"][-1] <= 1.0
             assert np.all(s["eta_end"][:-1] <= s["eta_start"][1:]), f"overlap in beam element {e}: {s}"
         got = segment_union(ops, e)
-        want = embedded_intervals(beams, solid, e) if reference is None else reference[e]
+        bounds = np.array([-1.0] + [x for g in got for x in g] + [1.0])
+        if reference is None:
+            want = embedded_intervals(beams, solid, e, extra=0.5 * (bounds[1:] + bounds[:-1]))
+        else:
+            want = reference[e]
         msg = f"{case.name}: beam element {e}: segments {got}, embedded {want} (tol {tol:.1e})"
         # no segment outside the embedded set
         for a, b in got:

@@ -184,3 +184,22 @@ def test_fallback_counts_are_reported_and_zero_on_clean_scenes():
         assert ops.diagnostics[key] == 0
     element_based = hc.assemble(CASES["through_node_8_hexes"], integration="element")
     assert "segmentation_fallbacks" not in element_based.diagnostics
+
+
+def test_shallow_excursion_outside_is_cut_out():
+    """Found by ``make fuzz`` (hypothesis, test_fuzz_structured): a Hermite element in one hex8 dips
+    5.8e-6 below z = 0 for η in (0.5635, 0.5697). The library was right, the test's reference
+    (257 samples) missed the dip: it now also samples the midpoints of the library's pieces and
+    gaps. With 2 or 3 search points the library misses this dip (a known limit: an excursion
+    shallower than the 1e-6 probe tolerance and narrower than the probes' spacing)."""
+    solid = generate.box((0, 0, 0), (2, 2, 2), (1, 1, 1))
+    beams = m13.BeamMesh.hermite([[0.3251900350020279, 1.6439498507619104, 0.1],
+                                  [-0.12117005578675166, 0.0, 0.14563669706808935]],
+                                 [[0.0, -0.5963037630170713, 0.8027588817395175],
+                                  [-0.6395803128239936, 0.0, 0.7687242831132385]], [[0, 1]])
+    case = hc.Case("fuzz_shallow_dip_outside", beams, solid)
+    ops = hc.assemble(case)
+    hc.check_all(case, continuity=False)
+    (a0, b0), (a1, b1) = hc.segment_union(ops, 0)
+    assert (a0, b1) == (-1.0, pytest.approx(0.7825985390047, abs=1e-12))
+    assert b0 == pytest.approx(0.5635332154177, abs=1e-11) and a1 == pytest.approx(0.5697106282566, abs=1e-11)
