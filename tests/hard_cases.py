@@ -471,6 +471,27 @@ def assemble(case, beams=None, solid=None, **kwargs):
                                **kwargs)
 
 
+def estimated_conditioning(beams, solid, delta=1e-4):
+    """1/sin θ of the worst boundary crossing of the embedded set, from the reference alone.
+
+    At every cut of :func:`embedded_intervals` (and at beam ends lying within 1e-8 of the
+    boundary) the slope of the outside distance along η is compared with that of a crossing
+    at right angles; the ratio is the factor by which the cut moves per unit of tolerance.
+    """
+    h = element_size(solid)
+    worst = 1.0
+    for e in range(beams.n_elements):
+        nominal = beams.lengths[e] / h               # |d dist / dη| at right angles (parameter units)
+        ends = [x for a, b, _ in embedded_intervals(beams, solid, e) for x in (a, b)]
+        for eta in ends:
+            pts = np.clip([eta - delta, eta + delta], -1, 1)
+            dist = containment(solid, centreline(beams, e, pts)[0]).min(axis=1)
+            dist = np.where(np.isfinite(dist), dist, 1.0)
+            slope = abs(dist[1] - dist[0]) / max(pts[1] - pts[0], 1e-300)
+            worst = max(worst, min(nominal / max(slope, 1e-300), 1e12))
+    return worst
+
+
 def check_finite(ops):
     assert np.isfinite(ops.kappa).all()
     assert np.isfinite(ops.D.data).all() and np.isfinite(ops.M.data).all()

@@ -203,3 +203,38 @@ def test_shallow_excursion_outside_is_cut_out():
     (a0, b0), (a1, b1) = hc.segment_union(ops, 0)
     assert (a0, b1) == (-1.0, pytest.approx(0.7825985390047, abs=1e-12))
     assert b0 == pytest.approx(0.5635332154177, abs=1e-11) and a1 == pytest.approx(0.5697106282566, abs=1e-11)
+
+
+# Found by ``make fuzz`` (shrunk by hypothesis). The library was consistent with its 1e-9
+# parameter tolerance in all of them; the checks did not know the conditioning of a cut at a small
+# angle θ to the outer boundary (the coupled part extends 1e-9 h / sin θ past the face). The fuzz
+# checks now estimate 1/sin θ from the reference (hard_cases.estimated_conditioning).
+FUZZ_POINTS = [[0.0, 0.0, 0.0], [0.0, 0.0, 2.0], [0.0, 2.0, 0.0], [0.0, 2.0, 2.0], [2.0, 0.0, 0.0],
+               [2.0, 0.0, 2.0], [2.0, 2.0, 0.0], [2.0, 2.0, 2.0], [1.2465310371786178, 0.5856160847749665,
+                                                                 0.17375234308515042]]
+FUZZ_TETS = [[8, 1, 0, 4], [8, 5, 1, 4], [8, 6, 4, 2], [8, 2, 4, 0], [8, 5, 7, 1], [8, 3, 1, 7], [8, 6, 2, 7],
+             [8, 3, 7, 2], [8, 6, 7, 4], [8, 5, 4, 7], [8, 1, 2, 0], [8, 3, 2, 1]]
+FUZZ_REGRESSIONS = {
+    # from the corner (0,0,0) along an outer edge, leaving the face z = 0 (or y = 0) at θ = 6e-8:
+    # continuity (D changed by 3.9e-5 for a 1e-12 h shift), κ under renumbering (3.8e-9), tiling
+    "corner_along_edge_theta_6e-8_z": (FUZZ_POINTS, FUZZ_TETS, [[0.0, 0.0, 0.0], [0.0, 1.0, -5.960464477539063e-08]]),
+    "corner_along_edge_theta_6e-8_y": (FUZZ_POINTS, FUZZ_TETS, [[0.0, 0.0, 0.0], [1.0, 5.960464477539063e-08, 0.0]]),
+    # starting 4e-10 outside the corner of one hex8: coupled from η = -1 (inside the tolerance band)
+    "start_4e-10_outside_a_corner": (None, None, [[0.0, 0.0, -4.047359831846541e-10],
+                                                  [0.5, 0.5, 0.49999999959526403]]),
+}
+
+
+@pytest.mark.parametrize("name", list(FUZZ_REGRESSIONS))
+def test_fuzz_regression(name):
+    points, tets, ends = FUZZ_REGRESSIONS[name]
+    solid = generate.box((0, 0, 0), (2, 2, 2), (1, 1, 1)) if points is None else \
+        m13.SolidMesh(np.array(points), {"tetra": np.array(tets)})
+    beams = hc.straight(*ends)
+    conditioning = hc.estimated_conditioning(beams, solid)
+    if points is not None:
+        assert conditioning > 1e6           # the estimate sees the grazing angle
+    case = hc.Case(name, beams, solid, conditioning=4 * conditioning)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        hc.check_all(case)
