@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test bench report venv clean
+.PHONY: demo test fuzz bench report venv clean
 
 $(STAMP): pyproject.toml
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "$(PYTHON) not found; run 'make PYTHON=python3 ...'"; exit 1; }
@@ -20,6 +20,10 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q
+
+# long property-based run of tests/test_fuzz.py (make test runs its bounded, derandomized profile)
+fuzz: $(STAMP)
+	MORTAR1D3D_HYPOTHESIS=fuzz $(PY) -m pytest tests/test_fuzz.py -q -p no:randomly --hypothesis-show-statistics
 
 bench: $(STAMP)
 	NUMBA_NUM_THREADS=2 $(PY) -m pytest benchmarks -q -p no:randomly -p no:xdist --benchmark-only --benchmark-columns=min,median,max,rounds

@@ -290,36 +290,255 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
             seg_count[e] = n_seg
 
 
-def segment(ctx, search_points):
+_GAP_PROBES = 7
+
+
+@njit_parallel
+def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, pair_solid, codes, conn,
+                  points, solid_origin, solid_h, solid_boxes, beam_code, Q, lengths, beam_origin, bad):
+    """Flag beam elements whose pieces do not tile their embedded part.
+
+    Probes every segment at 1/4 and 3/4 (its midpoint chose the owner): each probe must lie in
+    the owner (to 1e-6, the integration points' tolerance). Probes every uncoupled gap at
+    ``_GAP_PROBES`` equidistant points: none may lie clearly (1e-6) inside a candidate element
+    (cheap: most probes of a gap fall outside every candidate's box). A failure means a
+    missed face crossing: the pieces would put integration points outside their element, or
+    leave an embedded part uncoupled.
+    """
+    n_beam = pair_offsets.shape[0] - 1
+    loose = 1e3 * PARAMETER_TOL
+    for c in prange(n_chunks(n_beam, CHUNK)):
+        X = np.empty((solid.MAX_NODES, 3))
+        N = np.empty(solid.MAX_NODES)
+        dN = np.empty((solid.MAX_NODES, 3))
+        H = np.empty(MAX_FUNCTIONS)
+        dH = np.empty(MAX_FUNCTIONS)
+        xi = np.empty(3)
+        trial = np.empty(3)
+        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
+            p0 = pair_offsets[e]
+            p1 = pair_offsets[e + 1]
+            base = seg_offsets[e]
+            failed = False
+            gap_start = -1.0
+            for q in range(seg_count[e] + 1):
+                last = q == seg_count[e]
+                a = 1.0 if last else seg_start[base + q]
+                if a - gap_start > PARAMETER_TOL:
+                    for k in range(1, _GAP_PROBES + 1):
+                        eta = gap_start + k * (a - gap_start) / (_GAP_PROBES + 1)
+                        r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
+                        if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
+                                            points, solid_origin, solid_h, -loose, X, xi, trial, N, dN, -1) >= 0:
+                            failed = True
+                if last or failed:
+                    break
+                b = seg_end[base + q]
+                owner = seg_solid[base + q]
+                for k in (1, 3):
+                    eta = a + 0.25 * k * (b - a)
+                    r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
+                    if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
+                                        points, solid_origin, solid_h, loose, X, xi, trial, N, dN, owner) != owner:
+                        failed = True
+                if failed:
+                    break
+                gap_start = b
+            bad[e] = failed
+
+
+@njit
+def _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, beam_code, Q, lengths,
+           beam_origin, X, xi, trial, N, dN, H, dH):
+    """Lowest-index candidate containing r(η) to 1e-12 (sharp: the cuts land on the faces)."""
+    r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
+    return first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
+                            solid_origin, solid_h, 1e-3 * PARAMETER_TOL, X, xi, trial, N, dN, -1)
+
+
+@njit_parallel
+def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, beam_code,
+                    Q, lengths, beam_origin, n_samples, out_eta, out_count):
+    """Cuts of each beam element where the owner (lowest-index element containing r(η)) changes.
+
+    The fallback that does not rely on face intersections: the owner is sampled at
+    ``n_samples`` equidistant η; every change is bisected to 1e-13 in η, and again from the
+    cut while the owner just after it still differs from the next sample's (several changes
+    between two samples, e.g. across a sliver). Pieces shorter than the sampling that start
+    and end in the same owner are not seen.
+    """
+    n_beam = pair_offsets.shape[0] - 1
+    cap = out_eta.shape[1]
+    for c in prange(n_chunks(n_beam, CHUNK)):
+        X = np.empty((solid.MAX_NODES, 3))
+        N = np.empty(solid.MAX_NODES)
+        dN = np.empty((solid.MAX_NODES, 3))
+        H = np.empty(MAX_FUNCTIONS)
+        dH = np.empty(MAX_FUNCTIONS)
+        xi = np.empty(3)
+        trial = np.empty(3)
+        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
+            p0 = pair_offsets[e]
+            p1 = pair_offsets[e + 1]
+            count = 0
+            previous = -2
+            eta_previous = -1.0
+            for k in range(n_samples):
+                eta = -1.0 + 2.0 * k / (n_samples - 1)
+                owner = _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
+                               beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH)
+                lo = eta_previous
+                current = previous
+                while k > 0 and current != owner and count < cap:
+                    hi = eta
+                    while hi - lo > 1e-13:
+                        mid = 0.5 * (lo + hi)
+                        if _owner(mid, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
+                                  beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH) == current:
+                            lo = mid
+                        else:
+                            hi = mid
+                    out_eta[e, count] = 0.5 * (lo + hi)
+                    count += 1
+                    current = _owner(hi, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
+                                     solid_boxes, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH)
+                    lo = hi
+                previous = owner
+                eta_previous = eta
+            out_count[e] = count
+
+
+#: search points of the first retry of a beam element whose pieces do not tile
+_RETRY_SEARCH_POINTS = 4
+#: owner samples along a beam element in the bisection fallback
+_BISECTION_SAMPLES = 65
+
+
+class _Beams:
+    """The kernel input of a subset of beam elements (all of them, or the ones being retried)."""
+
+    def __init__(self, ctx, elements=None):
+        if elements is None:
+            self.ids = np.arange(len(ctx.pair_offsets) - 1)
+            self.pair_offsets, self.pair_solid = ctx.pair_offsets, ctx.pair_solid
+            self.Q, self.lengths, self.beam_origin = ctx.Q, ctx.lengths, ctx.beam_origin
+        else:
+            self.ids = elements
+            counts = ctx.pair_offsets[elements + 1] - ctx.pair_offsets[elements]
+            self.pair_offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+            self.pair_solid = np.concatenate([ctx.pair_solid[ctx.pair_offsets[e]:ctx.pair_offsets[e + 1]]
+                                              for e in elements]).astype(np.int64)
+            self.Q = np.ascontiguousarray(ctx.Q[elements])
+            self.lengths = np.ascontiguousarray(ctx.lengths[elements])
+            self.beam_origin = np.ascontiguousarray(ctx.beam_origin[elements])
+
+    def crossings(self, ctx, search_points):
+        pair_beam = np.repeat(np.arange(len(self.ids)), np.diff(self.pair_offsets))
+        crossing_eta = np.empty((len(self.pair_solid), crossings_capacity(search_points)))
+        crossing_count = np.zeros(len(self.pair_solid), dtype=np.int64)
+        _pair_crossings(pair_beam, self.pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
+                        ctx.solid_h, ctx.beam_code, self.Q, self.lengths, self.beam_origin, search_points,
+                        crossing_eta, crossing_count)
+        return crossing_eta, crossing_count
+
+    def bisection_crossings(self, ctx):
+        """Owner changes found by bisection, stored as the crossings of each element's first pair."""
+        n = len(self.ids)
+        cap = 4 * _BISECTION_SAMPLES
+        cuts = np.empty((n, cap))
+        count = np.zeros(n, dtype=np.int64)
+        _bisection_cuts(self.pair_offsets, self.pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
+                        ctx.solid_h, ctx.solid_boxes, ctx.beam_code, self.Q, self.lengths, self.beam_origin,
+                        _BISECTION_SAMPLES, cuts, count)
+        crossing_eta = np.zeros((len(self.pair_solid), cap))
+        crossing_count = np.zeros(len(self.pair_solid), dtype=np.int64)
+        has_pairs = np.diff(self.pair_offsets) > 0
+        first = self.pair_offsets[:-1][has_pairs]
+        crossing_eta[first] = cuts[has_pairs]
+        crossing_count[first] = count[has_pairs]
+        return crossing_eta, crossing_count
+
+    def tile(self, ctx, crossing_eta, crossing_count):
+        """Segments from the crossings, and which beam elements fail the tiling check.
+
+        Returns (beam_element (global ids), solid_element, eta_start, eta_end, bad (per element)).
+        """
+        pair_offsets = self.pair_offsets
+        n_beam = len(self.ids)
+        # at most (crossings + 1) intervals per beam element
+        cumulative = np.concatenate([[0], np.cumsum(crossing_count)])
+        per_beam = cumulative[pair_offsets[1:]] - cumulative[pair_offsets[:-1]] + 1
+        seg_offsets = np.concatenate([[0], np.cumsum(per_beam)]).astype(np.int64)
+        total = seg_offsets[-1]
+        seg_solid = np.empty(total, dtype=np.int64)
+        seg_start = np.empty(total)
+        seg_end = np.empty(total)
+        seg_count = np.zeros(n_beam, dtype=np.int64)
+        args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.beam_code,
+                self.Q, self.lengths, self.beam_origin)
+        _tile(pair_offsets, self.pair_solid, crossing_eta, crossing_count, *args,
+              seg_offsets, seg_solid, seg_start, seg_end, seg_count)
+        bad = np.zeros(n_beam, dtype=np.bool_)
+        _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, self.pair_solid,
+                      *args, bad)
+        keep = _compact_index(seg_offsets, seg_count)
+        beam_element = np.repeat(self.ids, seg_count)
+        return beam_element, seg_solid[keep], seg_start[keep], seg_end[keep], bad
+
+
+def resegment(ctx, elements, search_points, bisection=False):
+    """Segment the beam elements ``elements`` (sorted ids) again: the fallback of :func:`segment`.
+
+    With ``4 * search_points`` search points, or (``bisection=True``) by bisection of the owner
+    along η, which does not rely on the face intersections at all. Returns (beam_element,
+    solid_element, eta_start, eta_end, bad), ``bad`` (len(elements),) from the tiling check.
+    """
+    sub = _Beams(ctx, np.asarray(elements, dtype=np.int64))
+    if bisection:
+        return sub.tile(ctx, *sub.bisection_crossings(ctx))
+    return sub.tile(ctx, *sub.crossings(ctx, min(64, _RETRY_SEARCH_POINTS * search_points)))
+
+
+def splice(segments, replacement, elements):
+    """Segments with those of beam ``elements`` replaced, ordered by beam element and η."""
+    replaced = np.isin(segments[0], elements)
+    parts = [np.concatenate([a[~replaced], b]) for a, b in zip(segments[:4], replacement[:4])]
+    order = np.lexsort((parts[2], parts[0]))
+    return tuple(a[order] for a in parts)
+
+
+def segment(ctx, search_points, diagnostics=None):
     """Segments of all beam elements: (beam_element, solid_element, eta_start, eta_end) arrays.
 
     ``ctx`` is the prepared kernel input of :mod:`mortar1d3d.mortar.assemble`. Also returns the
     number of face crossings found (a diagnostic).
+
+    Every beam element's pieces are checked (``_check_tiling``). A beam element that fails is
+    segmented again (:func:`resegment`) with ``4 * search_points`` search points, and if it
+    still fails, by bisection of its owner along η. ``diagnostics`` (a dict), if given, receives
+    the counts ``segmentation_fallbacks`` (beam elements segmented again),
+    ``segmentation_bisections`` (of those, the ones that needed the bisection) and
+    ``segmentation_unresolved`` (still failing the check afterwards).
     """
-    pair_offsets, pair_solid = ctx.pair_offsets, ctx.pair_solid
-    n_beam = len(pair_offsets) - 1
-    pair_beam = np.repeat(np.arange(n_beam), np.diff(pair_offsets))
-    cap = crossings_capacity(search_points)
-    crossing_eta = np.empty((len(pair_solid), cap))
-    crossing_count = np.zeros(len(pair_solid), dtype=np.int64)
-    _pair_crossings(pair_beam, pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-                    ctx.solid_h, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, search_points,
-                    crossing_eta, crossing_count)
-    # at most (crossings + 1) intervals per beam element
-    cumulative = np.concatenate([[0], np.cumsum(crossing_count)])
-    per_beam = cumulative[pair_offsets[1:]] - cumulative[pair_offsets[:-1]] + 1
-    seg_offsets = np.concatenate([[0], np.cumsum(per_beam)])
-    total = seg_offsets[-1]
-    seg_solid = np.empty(total, dtype=np.int64)
-    seg_start = np.empty(total)
-    seg_end = np.empty(total)
-    seg_count = np.zeros(n_beam, dtype=np.int64)
-    _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, ctx.codes, ctx.conn, ctx.points,
-          ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.beam_code, ctx.Q, ctx.lengths,
-          ctx.beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count)
-    keep = _compact_index(seg_offsets, seg_count)
-    beam_element = np.repeat(np.arange(n_beam), seg_count)
-    return beam_element, seg_solid[keep], seg_start[keep], seg_end[keep], int(crossing_count.sum())
+    everything = _Beams(ctx)
+    crossing_eta, crossing_count = everything.crossings(ctx, search_points)
+    segments = everything.tile(ctx, crossing_eta, crossing_count)
+    bad = segments[4]
+    counts = {"segmentation_fallbacks": int(bad.sum()), "segmentation_bisections": 0, "segmentation_unresolved": 0}
+    if bad.any():
+        elements = np.flatnonzero(bad)
+        retry = resegment(ctx, elements, search_points)
+        if retry[4].any():
+            elements = elements[retry[4]]
+            counts["segmentation_bisections"] = len(elements)
+            last = resegment(ctx, elements, search_points, bisection=True)
+            counts["segmentation_unresolved"] = int(last[4].sum())
+            retry = splice(retry, last, elements)
+        segments = splice(segments, retry, np.flatnonzero(bad))
+    if diagnostics is not None:
+        for key, value in counts.items():
+            diagnostics[key] = diagnostics.get(key, 0) + value
+    return (*segments[:4], int(crossing_count.sum()))
 
 
 @njit

@@ -25,6 +25,7 @@ from ..geometry.beam import beam_point
 from ..geometry.linalg import n_chunks, norm3
 from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, first_containing, load_element,
                                    polish, project_point)
+from ..geometry.segmentation import resegment, splice
 from .quadrature import gauss_legendre
 
 #: point outcome codes (as stored in ``status``)
@@ -138,6 +139,33 @@ def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):
                     ctx.solid_origin, ctx.solid_h, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin,
                     eta, xi, weight, position, status)
     return np.repeat(seg_beam, counts), np.repeat(seg_solid, counts), eta, xi, weight, position, status
+
+
+def checked_segment_points(ctx, segments, n_gauss, search_points, diagnostics):
+    """Integration points of the segments; beam elements with a point outside its owner are re-segmented.
+
+    A point of a segment that does not lie in (or does not converge in) its owning element
+    means a missed face crossing. Such beam elements are segmented again (more search points,
+    then bisection of the owner, :func:`~mortar1d3d.geometry.segmentation.resegment`) and their
+    points recomputed, so that no result is built on such a point when the fallback resolves
+    it; the counts go to ``diagnostics`` (``segmentation_fallbacks``,
+    ``segmentation_bisections``, ``segmentation_unresolved``).
+
+    Returns the (possibly new) segments and the points of :func:`segment_points`.
+    """
+    points = segment_points(ctx, *segments, n_gauss)
+    for bisection in (False, True):
+        bad = np.unique(points[0][points[6] != INSIDE])
+        if not len(bad):
+            break
+        key = "segmentation_bisections" if bisection else "segmentation_fallbacks"
+        diagnostics[key] = diagnostics.get(key, 0) + len(bad)
+        segments = splice(segments, resegment(ctx, bad, search_points, bisection), bad)
+        points = segment_points(ctx, *segments, n_gauss)
+    else:
+        left = len(np.unique(points[0][points[6] != INSIDE]))
+        diagnostics["segmentation_unresolved"] = diagnostics.get("segmentation_unresolved", 0) + left
+    return segments, points
 
 
 def element_points(ctx, n_gauss):

@@ -24,8 +24,8 @@ from ..elements.beam import shape as beam_shape
 from ..elements.solid import dispatch as solid_types
 from ..geometry.search import beam_bounding_boxes, find_candidate_pairs, solid_bounding_boxes
 from ..geometry.segmentation import segment
-from ..integration.rules import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, auto_segments, element_points,
-                                 segment_points)
+from ..integration.rules import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, auto_segments,
+                                 checked_segment_points, element_points, segment_points)
 from ..mesh import BeamMesh, SolidMesh
 from .sparse import gathered_block_csr, row_sources
 
@@ -63,7 +63,11 @@ class MortarOperators:
         ‖D q_B − M X_S‖ / ‖D q_B‖ at the reference positions: round-off for any correct
         integration, since both sides integrate Φ_j times the same point.
     diagnostics : dict
-        Counts: candidate pairs, face crossings, points not converged / outside their element.
+        Counts: candidate pairs, face crossings, points not converged / outside their element;
+        segment-based also ``segmentation_fallbacks`` (beam elements whose pieces failed the
+        tiling check and were segmented again with more search points),
+        ``segmentation_bisections`` (of those, segmented by bisection of the owner along η) and
+        ``segmentation_unresolved`` (still failing: a warning is issued).
     timings : dict
         Wall time in seconds per stage (search, segmentation, integration, assembly, csr).
     """
@@ -270,12 +274,12 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
         p_beam, p_solid, eta, xi, weight, position, status = segment_points(
             ctx, seg_beam, seg_solid, seg_start, seg_end, counts)
     elif integration == "segment":
-        seg_beam, seg_solid, seg_start, seg_end, n_cross = segment(ctx, search_points)
+        seg_beam, seg_solid, seg_start, seg_end, n_cross = segment(ctx, search_points, diagnostics)
         diagnostics["face_crossings"] = n_cross
         t2 = time.perf_counter()
         timings["segmentation"] = t2 - t1
-        p_beam, p_solid, eta, xi, weight, position, status = segment_points(
-            ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss)
+        (seg_beam, seg_solid, seg_start, seg_end), (p_beam, p_solid, eta, xi, weight, position, status) = \
+            checked_segment_points(ctx, (seg_beam, seg_solid, seg_start, seg_end), n_gauss, search_points, diagnostics)
     else:
         t2 = t1
         timings["segmentation"] = 0.0
@@ -289,6 +293,10 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     diagnostics["points_outside_element"] = outside
     if integration == "element":
         diagnostics["points_uncoupled"] = int(np.count_nonzero(p_solid < 0))
+    if diagnostics.get("segmentation_unresolved"):
+        warnings.warn(f"assemble_mortar: the segments of {diagnostics['segmentation_unresolved']} beam elements "
+                      "do not tile their embedded part even after the bisection fallback",
+                      RuntimeWarning, stacklevel=2)
     if not_converged:
         warnings.warn(f"assemble_mortar: {not_converged} integration points did not converge in their "
                       "solid element's projection and were left out", RuntimeWarning, stacklevel=2)
