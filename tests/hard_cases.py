@@ -531,17 +531,43 @@ def check_tiling(ops, case, reference=None):
         else:
             want = reference[e]
         msg = f"{case.name}: beam element {e}: segments {got}, embedded {want} (tol {tol:.1e})"
-        # no segment outside the embedded set
+        # no segment outside the embedded set, except within the library's 1e-9 tolerance band
         for a, b in got:
-            assert any(w[0] - tol <= a and b <= w[1] + tol for w in want), msg
-        # every clearly embedded interval is one segment run, with the same ends
+            if any(w[0] - tol <= a and b <= w[1] + tol for w in want):
+                continue
+            excess = _excess(a, b, want)
+            eta = np.concatenate([lo + (hi - lo) * np.linspace(0.05, 0.95, 7) for lo, hi in excess])
+            dist = containment(solid, centreline(beams, e, eta)[0]).min(axis=1)
+            band = 2 * INSIDE_TOL_LIBRARY + 64 * coordinate_round_off(beams, solid)
+            assert dist.max() <= band, msg + f": coupled {dist.max():.1e} outside"
+        # every clearly embedded interval is covered by one segment run (same ends, or the run
+        # goes on through the tolerance band checked above)
         for a, b, required in want:
             if not required:
                 continue
             match = [g for g in got if g[0] <= b and g[1] >= a]
             assert len(match) == 1, msg
-            assert abs(match[0][0] - a) <= tol and abs(match[0][1] - b) <= tol, msg
+            assert match[0][0] <= a + tol and match[0][1] >= b - tol, msg
+            assert (abs(match[0][0] - a) <= tol or any(w[1] < a for w in want) or a == -1.0
+                    or match[0][0] < a), msg
     check_owners(ops, case)
+
+
+INSIDE_TOL_LIBRARY = 1e-9
+
+
+def _excess(a, b, want):
+    """Parts of [a, b] outside the union of the ``want`` intervals."""
+    pieces, start = [], a
+    for lo, hi, _ in sorted(want):
+        if hi <= start or lo >= b:
+            continue
+        if lo > start:
+            pieces.append((start, lo))
+        start = max(start, hi)
+    if start < b:
+        pieces.append((start, b))
+    return pieces or [(a, b)]
 
 
 def check_owners(ops, case, samples=3):

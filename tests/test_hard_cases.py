@@ -238,3 +238,19 @@ def test_fuzz_regression(name):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         hc.check_all(case)
+
+
+def test_leaving_at_a_corner_and_coming_back():
+    """Found by ``make fuzz``: a beam starting at the corner (0,0,0) of a hex8 with a tangent slightly
+    outward (-0.0156 in y) leaves the solid and re-enters at η = -0.9807 (depth 3.5e-5). The face
+    Newton started only at the sample on the face and found that point again; the whole element was
+    coupled (no warning). Fix: a sample on a face also starts Newton at the roots of the cubic model
+    divided by its known root (segmentation._deflated_roots)."""
+    solid = generate.box((0, 0, 0), (2, 2, 2), (1, 1, 1))
+    beams = m13.BeamMesh.hermite([[0.0, 0.0, 0.0], [0.5, 0.5, 0.5]],
+                                 [[0.0, -0.015623093000542114, 0.9998779520346953], [0.0, 0.0, 1.0]], [[0, 1]])
+    case = hc.Case("leave_at_corner_and_return", beams, solid, conditioning=4 * hc.estimated_conditioning(beams, solid))
+    ops = hc.assemble(case)
+    (a, b), = hc.segment_union(ops, 0)
+    assert a == pytest.approx(-0.98073140081, abs=1e-9) and b == 1.0
+    hc.check_all(case)

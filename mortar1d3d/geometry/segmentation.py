@@ -81,6 +81,24 @@ def _hermite_g(g0, g1, d0, d1, t):
     return ((2 * t3 - 3 * t2 + 1) * g0 + (t3 - 2 * t2 + t) * d0 + (-2 * t3 + 3 * t2) * g1 + (t3 - t2) * d1)
 
 
+@njit
+def _deflated_roots(g1, d0, d1):
+    """Roots (two values, -1 if none) of q(t) = g(t) / t for the cubic model with g(0) = 0.
+
+    g(t) = t [(t² - 2t + 1) d0 + (3t - 2t²) g1 + (t² - t) d1] (``_hermite_g`` with g0 = 0).
+    """
+    a = d0 - 2.0 * g1 + d1
+    b = -2.0 * d0 + 3.0 * g1 - d1
+    c = d0
+    if a == 0.0:
+        return (-c / b if b != 0.0 else -1.0), -1.0
+    disc = b * b - 4.0 * a * c
+    if disc < 0.0:
+        return -1.0, -1.0
+    root = disc ** 0.5
+    return (-b - root) / (2.0 * a), (-b + root) / (2.0 * a)
+
+
 @njit_parallel
 def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h,
                     beam_code, Q, lengths, beam_origin, search_points, out_eta, out_count):
@@ -176,6 +194,25 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                         if not np.isnan(eta) and count < cap:
                             out_eta[p, count] = eta
                             count += 1
+                    # a sample on the face: the scan starts Newton there and finds that point again;
+                    # a crossing soon after it (leaving at a corner and coming back) is a root of
+                    # the cubic divided by its known root (found by make fuzz, see test_hard_cases)
+                    for end in range(2):
+                        if abs(g1 if end else g0) > PARAMETER_TOL:
+                            continue
+                        if end:
+                            r_a, r_b = _deflated_roots(g0, -d1, -d0)
+                            r_a, r_b = 1.0 - r_a, 1.0 - r_b
+                        else:
+                            r_a, r_b = _deflated_roots(g1, d0, d1)
+                        for t_start in (r_a, r_b):
+                            if not 0.0 < t_start < 1.0:
+                                continue
+                            eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s,
+                                               k, t_start, z, xi, N, dN, H, dH)
+                            if not np.isnan(eta) and count < cap:
+                                out_eta[p, count] = eta
+                                count += 1
                     if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0:
                         # close to the face without a sign change: a touch or a missed double crossing
                         eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
