@@ -17,7 +17,7 @@ The failure mode of point-wise coupling is over-constraint: one vector constrain
 integration point (here six per segment), more than the solid element can follow. In the
 literature this is shown for beam elements much shorter than solid elements; in this problem
 (penalty ε = 1e3 E, a linear truss beam) it shows for every ratio and most for h_B >= h_S: the
-model stiffens (tip deflection 11 % low at h_S = 1/16, h_B/h_S = 1 and 2), the errors are 2-4x
+model stiffens (tip deflection 11 % low at h_S = 1/16, h_B/h_S = 1 and 2), the errors are up to 4x
 those of mortar and the line load λ is rough. Mortar coupling averages the constraint against
 the multiplier functions; its displacement errors and rates hardly depend on h_B/h_S in
 [1/4, 2]. The line load λ, however, oscillates node to node for h_B/h_S <= 1/2 in every variant
