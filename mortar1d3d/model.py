@@ -354,6 +354,9 @@ class Model:
             if c["integration"] == "segment":
                 out.append(Effect("mortar.segmentation", "once", f"beam–face intersections, {c['search_points']} "
                                                                  "search points"))
+            elif c["integration"] == "auto":
+                out.append(Effect("mortar.segmentation", "once", "only beam elements that cross element faces "
+                                                                 f"({c['search_points']} search points)"))
             out.append(Effect("mortar.integration_points", "once", f"{c['integration']}-based, n_gauss={c['n_gauss']}"))
             out.append(Effect("mortar.assembly", "once", f"D, M, kappa (lm={c['lm']})"))
             if c["enforcement"] == "lagrange":
@@ -432,7 +435,7 @@ class Model:
                 g.operators = assemble_mortar(g.mesh, self.solid_mesh, integration=c["integration"],
                                               n_gauss=c["n_gauss"], lm=c["lm"], search_points=c["search_points"])
                 self.counts["mortar.search"] += 1
-                if c["integration"] == "segment":
+                if c["integration"] in ("segment", "auto"):
                     self.counts["mortar.segmentation"] += 1
                 self.counts["mortar.integration_points"] += 1
                 self.counts["mortar.assembly"] += 1

@@ -50,7 +50,8 @@ def patch_scene(constraint, integration, enforcement, element="hexahedron", kine
 
 VARIANTS = [("mortar", "segment", "penalty"), ("mortar", "element", "penalty"),
             ("mortar", "segment", "lagrange"), ("mortar", "element", "lagrange"),
-            ("gauss_point", "segment", "penalty"), ("gauss_point", "element", "penalty")]
+            ("gauss_point", "segment", "penalty"), ("gauss_point", "element", "penalty"),
+            ("mortar", "auto", "penalty")]
 
 
 @pytest.mark.parametrize("constraint, integration, enforcement", VARIANTS)

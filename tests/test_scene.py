@@ -138,6 +138,11 @@ def test_plan_lists_only_what_the_scene_declares():
     names = [e.name for e in m13.plan(Scene.from_dict(element))]
     assert "mortar.segmentation" not in names and "mortar.integration_points" in names
 
+    auto = scene_with("coupling", {"integration": "auto"})
+    effects = {e.name: e for e in m13.plan(Scene.from_dict(auto))}
+    assert "only beam elements that cross" in effects["mortar.segmentation"].detail
+    assert "auto-based" in effects["mortar.integration_points"].detail
+
     pressure = scene_with("load", [{"type": "pressure", "on": "solid:x_max", "value": 1e5}])
     names = [e.name for e in m13.plan(Scene.from_dict(pressure))]
     assert "load.pressure" in names and "load.pressure_tangent" in names
