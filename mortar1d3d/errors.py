@@ -10,3 +10,11 @@ def format_ids(ids, limit=10):
     ids = [int(i) for i in ids]
     head = ", ".join(str(i) for i in ids[:limit])
     return head + (f" (and {len(ids) - limit} more)" if len(ids) > limit else "")
+
+
+class AccuracyWarning(UserWarning):
+    """The inputs are valid but round-off will cost accuracy (e.g. a penalty far above E_solid)."""
+
+
+class CouplingWarning(UserWarning):
+    """A beam of a coupled scene is not coupled to the solid (e.g. it lies outside it)."""

@@ -10,13 +10,14 @@ Every stage that does work increments ``Model.counts[<effect>]`` with the names 
 :func:`plan` lists, so that tests can prove what ran.
 """
 import math
+import warnings
 from collections import Counter
 from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import MeshError, format_ids
+from .errors import AccuracyWarning, CouplingWarning, MeshError, format_ids
 from .generate import _helices, box as box_mesh
 from .mesh import BeamMesh, SolidMesh
 from .mortar.assemble import assemble_mortar
@@ -25,6 +26,7 @@ from .scene import BOX_FACES, Scene, SceneError
 DEFAULT_PENALTY_FACTOR = 1e3     # ε = 1e3 E_solid when the scene gives no penalty
 AUTO_DIRECT_LIMIT = 3_000        # unknowns up to which solver = "auto" factorises (measured crossover,
                                  # solvers.linear.DIRECT_MAX_DOFS: SuperLU fill grows fast in 3D)
+PENALTY_ROUNDOFF_LIMIT = 1e8     # ε / E_solid above which round-off beats the penalty error (AccuracyWarning)
 
 
 @dataclass(frozen=True)
@@ -199,6 +201,15 @@ class Model:
         self.penalty = None
         if scene.coupled:
             self.penalty = c["penalty"] if c["penalty"] is not None else DEFAULT_PENALTY_FACTOR * scene.solid["material"]["E"]
+            ratio = self.penalty / scene.solid["material"]["E"]
+            if c["enforcement"] == "penalty" and ratio > PENALTY_ROUNDOFF_LIMIT:
+                # the penalty error falls like E/ε, the round-off of the penalty terms grows like
+                # eps_mach ε/E: past ~1/sqrt(eps_mach) the result gets worse, not better
+                # (tests/test_solver_stress.py: best at 1e6 E, 2 % error at 1e12 E)
+                warnings.warn(f"coupling.penalty: {self.penalty:.3g} is {ratio:.1e} × solid.material.E; above "
+                              f"{PENALTY_ROUNDOFF_LIMIT:.0e} × E round-off of the penalty terms costs accuracy "
+                              "(about machine epsilon × penalty / E relative). Use 1e2..1e6 × E, or "
+                              "enforcement = \"lagrange\"", AccuracyWarning, stacklevel=3)
         self._check_solver()
         self.fixed_dofs, self.fixed_values, self.dirichlet_dofs = self._dirichlet()
         self.prepared = False
@@ -442,6 +453,12 @@ class Model:
                 g.coupling = Coupling(g.operators, g.mesh, self.solid_mesh, g.dof_offset, n,
                                       constraint=c["constraint"], enforcement=c["enforcement"], penalty=self.penalty)
                 self.counts["coupling.lagrange" if self.lagrange else f"coupling.{c['constraint']}_penalty"] += 1
+                coupled = np.unique(g.operators.points["beam_element"])
+                for entry, (a, b) in zip(g.entries, g.entry_elements):
+                    if not np.any((coupled >= a) & (coupled < b)):
+                        warnings.warn(f"beams[{entry}]: no part of this beam lies inside the solid, so it is not "
+                                      "coupled (check the units: a mm/m mix-up moves a beam out of the solid)",
+                                      CouplingWarning, stacklevel=3)
             if self.lagrange:
                 self.constraint_matrix = sp.vstack([g.coupling.constraint_matrix() for g in self.groups], format="csr")
                 self.n_multipliers = self.constraint_matrix.shape[0]
