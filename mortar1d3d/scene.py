@@ -23,6 +23,13 @@ SOLVERS = ("auto", "direct", "amg", "block")
 BOX_FACES = ("x_min", "x_max", "y_min", "y_max", "z_min", "z_max")
 
 
+#: every number of a scene is 0 or has a magnitude in [MIN_MAGNITUDE, MAX_MAGNITUDE]: physical data in
+#: any consistent unit system is far inside (penalties ~1e24, coordinates 1e-6..1e6), and products
+#: of a few such numbers (E r⁴, ε κ, h³ det J) stay inside the float range, so nothing overflows
+#: to inf or underflows to 0 downstream
+MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-30, 1e30
+
+
 class SceneError(ValueError):
     """Invalid scene: the message starts with the key path of the offending entry."""
 
@@ -57,9 +64,16 @@ def _table(value, path, allowed, required=()):
 def _number(value, path, *, low=None, high=None, low_open=False, high_open=False):
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         _fail(path, f"expected a number, got {_describe(value)}")
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:       # a TOML integer beyond the float range
+        _fail(path, f"expected a number of magnitude <= {MAX_MAGNITUDE:g}, got an integer with "
+                    f"{len(str(abs(value)))} digits")
     if not math.isfinite(value):
         _fail(path, f"expected a finite number, got {value}")
+    if value != 0.0 and not MIN_MAGNITUDE <= abs(value) <= MAX_MAGNITUDE:
+        _fail(path, f"expected 0 or a magnitude in [{MIN_MAGNITUDE:g}, {MAX_MAGNITUDE:g}], got {value:g} "
+                    "(products of such numbers overflow or underflow; check the units)")
     if low is not None and (value <= low if low_open else value < low):
         _fail(path, f"expected a number {'>' if low_open else '>='} {low:g}, got {value:g}")
     if high is not None and (value >= high if high_open else value > high):

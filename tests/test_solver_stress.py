@@ -116,7 +116,8 @@ def test_nearly_incompressible_neo_hooke_matches_the_homogeneous_solution():
     """ν = 0.49, 20 % stretch under a dead traction; rollers make the exact solution homogeneous,
     so every node must sit at diag(a, b, b) X with (a, b) from the two scalar equations; an
     embedded oblique fibre whose ends follow the same field carries no coupling load.
-    Measured: volume ratio J = 1.0072 (small-strain estimate (1 − 2ν) ε = 0.4 %)."""
+    Measured: a = 1.2444, b = 0.8982, volume ratio J = a b² = 1.0040 (small-strain estimate
+    (1 − 2ν) ε = 0.5 %)."""
     E, nu, P = 1.0, 0.49, 0.2
     a, b = uniaxial_neo_hooke(P, E, nu)
     F = np.diag([a, b, b])
@@ -144,17 +145,18 @@ def test_nearly_incompressible_neo_hooke_matches_the_homogeneous_solution():
     deformed = SolidMesh(X + result.solid_displacement, model.solid_mesh.cells)
     volume = SolidModel(deformed, material("neo_hooke", E, nu)).volume()
     assert volume == pytest.approx(a * b * b, rel=1e-9)
-    assert 1.0 < volume < 1.01 and a > 1.15
+    assert 1.0 < volume < 1.006 and a > 1.2
 
 
 # --------------------------------------------------------------------------------------------
 # soft solid, very stiff fibres
 # --------------------------------------------------------------------------------------------
 def test_soft_solid_with_very_stiff_fibre_keeps_the_fibre_nearly_inextensible():
-    """E_beam / E_solid = 1e6, pulled along the bar. Without the bar the block stretches by
-    F L / (E A); with it the bar takes nearly all of the load: measured bar strain 3.1e-8 against
-    the plain block's 2.5e-3 (and equal to F/EA_bar within 30 %: the load enters along the bar)."""
-    force = 0.1     # traction × area on x_max
+    """E_beam / E_solid = 1e6, pulled along the bar (bar clamped at x = 0). Measured: the plain
+    block's end moves by 0.295 (30 % strain); with the bar its strain is 1.272e-6 = F/EA_bar
+    (1.273e-6) to 0.1 %: the bar takes the whole load, and the solid moves at most 2.7e-4 (local
+    deformation at the loaded face)."""
+    force = 0.01     # traction × area on x_max
     pulled = {"load": [{"type": "traction", "on": "solid:x_max", "value": [force / 0.04, 0, 0]}]}
 
     def scene(with_bar):
@@ -168,13 +170,14 @@ def test_soft_solid_with_very_stiff_fibre_keeps_the_fibre_nearly_inextensible():
         return Scene.from_dict(data)
 
     plain = m13.solve(scene(False))
-    plain_strain = plain.solid_displacement[:, 0].max()
+    plain_strain = plain.solid_displacement[:, 0].max()    # L = 1
+    assert 0.2 < plain_strain < 0.4
     reinforced = m13.solve(scene(True))
     assert all(s.cuts == 0 for s in reinforced.steps)
     bar_strain = reinforced.beam_displacement[-1, 0] - reinforced.beam_displacement[0, 0]
     EA = 1e6 * math.pi * 0.05 ** 2
     assert 0.0 < bar_strain < 1e-4 * plain_strain, (bar_strain, plain_strain)
-    assert bar_strain == pytest.approx(force / EA, rel=0.3)
+    assert bar_strain == pytest.approx(force / EA, rel=0.01)
     # the solid follows the bar: its x-displacements stay at the bar's scale
     assert np.abs(reinforced.solid_displacement[:, 0]).max() < 1e-3 * plain_strain
 
