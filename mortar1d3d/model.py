@@ -13,6 +13,7 @@ import math
 import warnings
 from collections import Counter
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
@@ -46,6 +47,9 @@ class Effect:
 # --------------------------------------------------------------------------------------------
 def _chord_tangents(points):
     d = np.diff(points, axis=0)
+    zero = np.flatnonzero(np.linalg.norm(d, axis=1) == 0.0)
+    if zero.size:
+        raise MeshError(f"beam elements of zero length (consecutive nodes coincide): {format_ids(zero)}")
     d /= np.linalg.norm(d, axis=1)[:, None]
     t = np.empty_like(points)
     t[0], t[-1] = d[0], d[-1]
@@ -86,9 +90,41 @@ def _helix_point(h, s):
     return p, d
 
 
-def _read_beam_file(path, hermite):
+def read_mesh_file(path, where):
+    """``meshio.read(path)``; any failure becomes a SceneError that names ``where`` and the file."""
     import meshio
-    m = meshio.read(path)
+    try:
+        return meshio.read(path)
+    except SystemExit:      # meshio's XML readers call sys.exit on a malformed file
+        raise SceneError(f"{where}: cannot read mesh file {str(path)!r} (malformed {Path(path).suffix} file)") from None
+    except Exception as exc:
+        raise SceneError(f"{where}: cannot read mesh file {str(path)!r}: {type(exc).__name__}: {exc}") from None
+
+
+def check_solid_nodes(mesh, where):
+    """SceneError naming node ids if ``mesh`` has nodes no element uses (their stiffness is zero)
+    or distinct nodes at the same place (a crack: the elements on either side do not connect).
+
+    Two nodes coincide when they are closer than 1e-10 of the mesh's bounding-box diagonal.
+    """
+    used = np.zeros(mesh.n_nodes, dtype=bool)
+    used[mesh.connectivity[mesh.connectivity >= 0]] = True
+    if not used.all():
+        unused = np.flatnonzero(~used)
+        raise SceneError(f"{where}: nodes not used by any element: {format_ids(unused)} (remove them)")
+    from scipy.spatial import cKDTree
+    X = mesh.points
+    size = float(np.linalg.norm(np.ptp(X, axis=0)))
+    pairs = cKDTree(X).query_pairs(1e-10 * size, output_type="ndarray")
+    if len(pairs):
+        pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+        shown = ", ".join(f"{a} and {b}" for a, b in pairs[:5]) + (f" (and {len(pairs) - 5} more pairs)" if len(pairs) > 5 else "")
+        raise SceneError(f"{where}: duplicate nodes at the same position: {shown}; the elements on either side are "
+                         "not connected (merge the duplicates)")
+
+
+def _read_beam_file(path, hermite, where):
+    m = read_mesh_file(path, where)
     lines = [c.data for c in m.cells if c.type == "line"]
     if not lines:
         raise MeshError(f"{path}: no 'line' cells")
@@ -112,7 +148,7 @@ def build_beam_mesh(spec, path):
     try:
         if "mesh" in spec:
             mesh = spec["mesh"]
-            return mesh if isinstance(mesh, BeamMesh) else _read_beam_file(mesh, hermite)
+            return mesh if isinstance(mesh, BeamMesh) else _read_beam_file(mesh, hermite, f"{path}.mesh")
         curve, n = spec["curve"], spec["elements"]
         if "polyline" in curve:
             pts = curve["polyline"]
@@ -131,14 +167,14 @@ def build_beam_mesh(spec, path):
 def build_solid_mesh(spec):
     mesh = spec["mesh"]
     try:
-        if isinstance(mesh, SolidMesh):
-            return mesh
         if isinstance(mesh, dict):
             return box_mesh(mesh["box"][0], mesh["box"][1], mesh["cells"], mesh["element"])
-        import meshio
-        return SolidMesh.from_meshio(meshio.read(mesh))
+        if not isinstance(mesh, SolidMesh):
+            mesh = SolidMesh.from_meshio(read_mesh_file(mesh, "solid.mesh"))
     except (MeshError, OSError) as exc:
         raise SceneError(f"solid.mesh: {exc}") from None
+    check_solid_nodes(mesh, "solid.mesh")
+    return mesh
 
 
 @dataclass
