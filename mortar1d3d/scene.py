@@ -30,6 +30,11 @@ BOX_FACES = ("x_min", "x_max", "y_min", "y_max", "z_min", "z_max")
 MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-30, 1e30
 
 
+#: generated meshes stay allocatable: a fuzzed ``cells = [1e6, 1e6, 1e6]`` must not exhaust memory
+MAX_BOX_CELLS = 2_000_000
+MAX_BEAM_ELEMENTS = 1_000_000
+
+
 class SceneError(ValueError):
     """Invalid scene: the message starts with the key path of the offending entry."""
 
@@ -145,7 +150,10 @@ def _solid(value, base_dir):
             _fail("solid.mesh.box", f"expected two corners [[x0, y0, z0], [x1, y1, z1]], got {len(box)} points")
         if not (box[1] > box[0]).all():
             _fail("solid.mesh.box", "the upper corner must be greater than the lower one in x, y and z")
-        cells = [_integer(c, f"solid.mesh.cells[{i}]") for i, c in enumerate(_list(mesh["cells"], "solid.mesh.cells", 3))]
+        cells = [_integer(c, f"solid.mesh.cells[{i}]", 1, MAX_BOX_CELLS)
+                 for i, c in enumerate(_list(mesh["cells"], "solid.mesh.cells", 3))]
+        if math.prod(cells) > MAX_BOX_CELLS:
+            _fail("solid.mesh.cells", f"{cells} gives {math.prod(cells)} cells; at most {MAX_BOX_CELLS} are generated")
         element = _choice(mesh.get("element", "hexahedron"), "solid.mesh.element", tuple(SOLID_ELEMENTS))
         mesh_spec = {"box": box, "cells": cells, "element": element}
     raw = _table(value["material"], "solid.material", ("model", "E", "nu", "fibres"), required=("model", "E", "nu"))
@@ -240,7 +248,7 @@ def _beam(value, i, base_dir):
         else:
             if "elements" not in value:
                 _fail(f"{path}.elements", "missing (number of beam elements along the curve)")
-            out["elements"] = _integer(value["elements"], f"{path}.elements")
+            out["elements"] = _integer(value["elements"], f"{path}.elements", 1, MAX_BEAM_ELEMENTS)
     else:
         mesh = value["mesh"]
         if "elements" in value:
