@@ -21,9 +21,10 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(PY) -m pytest -q
 
-# long property-based run of tests/test_fuzz.py (make test runs its bounded, derandomized profile)
+# long property-based run of tests/test_fuzz.py and the fuzzed scene files of tests/test_bad_input.py
+# (make test runs their bounded, derandomized profile)
 fuzz: $(STAMP)
-	MORTAR1D3D_HYPOTHESIS=fuzz $(PY) -m pytest tests/test_fuzz.py -q -p no:randomly --hypothesis-show-statistics
+	MORTAR1D3D_HYPOTHESIS=fuzz $(PY) -m pytest tests/test_fuzz.py tests/test_bad_input.py -k "fuzz" -q -p no:randomly --hypothesis-show-statistics
 
 bench: $(STAMP)
 	NUMBA_NUM_THREADS=2 $(PY) -m pytest benchmarks -q -p no:randomly -p no:xdist --benchmark-only --benchmark-columns=min,median,max,rounds

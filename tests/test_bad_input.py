@@ -17,7 +17,7 @@ import warnings
 import meshio
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import event, given, settings
 from hypothesis import strategies as st
 
 import mortar1d3d as m13
@@ -395,11 +395,14 @@ def test_fuzzed_scene_files_fail_cleanly(tmp_path_factory, case):
             result = m13.solve(path)
         except SceneError as exc:
             assert KEY_PATH.match(str(exc)), (mutations, str(exc))
+            event(f"SceneError at {KEY_PATH.match(str(exc)).group(1)}")
             return
         except ConvergenceError as exc:       # a valid but unsolvable scene (e.g. a negated support value)
             assert "Try more load steps" in str(exc), (mutations, str(exc))
+            event("ConvergenceError")
             return
     assert np.isfinite(result.z).all(), mutations
+    event("solved")
 
 
 def test_magnitude_bound_is_documented_in_the_message(tmp_path):
