@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import mortar1d3d as m13
+from mortar1d3d.errors import CouplingWarning
 from mortar1d3d.model import Model
 from mortar1d3d.scene import Scene, SceneError
 
@@ -212,7 +213,8 @@ def test_free_rigid_body_motion_is_reported_before_solving(monkeypatch):
     # a beam outside the solid is not coupled and, unsupported, floats
     data["dirichlet"] = [{"on": "solid:x_min"}]
     data["beams"] = [{"curve": {"line": [[2, 0, 0], [3, 0, 0]]}, "elements": 2, "section": {"EA": 1, "EI": 1}}]
-    with pytest.raises(SceneError, match=r"beam 0 \(outside the solid, so not coupled\) can move freely"):
+    with pytest.raises(SceneError, match=r"beam 0 \(outside the solid, so not coupled\) can move freely"), \
+            pytest.warns(CouplingWarning, match=r"beams\[0\]: no part of this beam lies inside the solid"):
         m13.solve(Scene(**data))
 
 
@@ -277,7 +279,8 @@ def test_model_tangent_matches_finite_differences():
                   dirichlet=[{"on": "solid:x_min"}, {"on": "beam:1:start", "clamp": True}],
                   load=[{"type": "pressure", "on": "solid:z_max", "value": 0.7},
                         {"type": "moment", "on": "beam:1:end", "value": [0.0, 0.3, 0.1]}])
-    model = Model(scene).prepare()
+    with pytest.warns(CouplingWarning, match=r"beams\[1\]"):      # beam 1 lies outside on purpose
+        model = Model(scene).prepare()
     rng = np.random.default_rng(3)
     z = 0.02 * rng.standard_normal(model.n_unknowns)
     r, K = model.residual(z, 0.8)

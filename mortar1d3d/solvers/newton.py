@@ -126,7 +126,10 @@ def solve_load_steps(system, z0, steps, *, rtol=1e-8, increment_rtol=1e-8, max_i
     rtol, increment_rtol : float
         Convergence: ‖r_k‖ <= rtol ‖r_0‖ and ‖Δz_k‖ <= increment_rtol ‖Δz_0‖ (both relative to the
         first iteration of the step); or ‖r_k‖ <= 1e-13 ‖r_0‖; or, at a round-off floor of the
-        residual, ‖Δz_k‖ <= increment_rtol ‖Δz_0‖ with ‖r_k‖ <= sqrt(rtol) ‖r_0‖.
+        residual, ‖Δz_k‖ <= increment_rtol ‖Δz_0‖ with ‖r_k‖ <= sqrt(rtol) ‖r_0‖; or, when the
+        force terms are so large that their round-off exceeds these targets (penalty ≳ 1e7 E),
+        ‖r_k‖ <= ROUNDOFF_FACTOR eps_mach ‖|K| |z|‖ once the increments stop contracting
+        (‖Δz_k‖ > ‖Δz_{k-1}‖ / 2).
     progress : callable, optional
         ``progress(record, step_index, n_steps)`` after every converged step.
 
