@@ -217,27 +217,211 @@ def operator_errors(ops, reference):
     return out
 
 
-def solution_monitor(scene, D, M, kappa):
-    """Hook: monitor-point displacement of a linear solve with the coupling operators D, M, κ.
+#: the linear problem of the solution monitor (see :class:`MonitorProblem`)
+MONITOR_SOLID = {"E": 1.0, "nu": 0.3}
+MONITOR_BEAM = {"E": 1000.0, "radius": 0.02}
+MONITOR_BODY_FORCE = (0.0, 0.0, -1.0)
 
-    Issue 5 asks for the error of a solution quantity (displacement at a monitor point) from a
-    linear solve with each variant's operators. That needs the linear solid + beam model, which
-    is being built elsewhere; until it exists this hook raises and the study reports the gap
-    instead of a number.
+
+class MonitorProblem:
+    """The linear problem behind the solution monitor of one study scene.
+
+    The unit cube of the scene, small-strain linear elastic (``E = 1, ν = 0.3``), clamped on
+    ``x = 0`` and loaded by its own weight (body force ``(0, 0, -1)``): a cantilever that bends.
+    The fibres are torsion-free Hermite beams, ``E_B = 1000`` and radius 0.02 (``EA ≈ 1.26``,
+    comparable with the axial stiffness of the cube, so the coupling transfers real force),
+    tied to the solid by penalty mortar coupling with ``ε = 1e3 E`` (the library's default).
+
+    The solid and beam stiffness are assembled (through :class:`~mortar1d3d.model.Model`,
+    given the reference operators) and the clamped solid stiffness ``K_SS`` is factorised once,
+    in the constructor; :meth:`displacement` then solves the coupled problem for any operators
+    ``D, M, κ`` of the same scene with a small dense system (Notes).
 
     Parameters
     ----------
-    scene : tuple (beams, solid)
+    beams : BeamMesh (Hermite), solid : SolidMesh
+        The scene (:func:`build_scene`).
+    reference : MortarOperators
+        The study's reference operators of the scene: they choose the monitor point and are
+        the operators of the model's own coupling (:meth:`model`).
+    penalty : float, optional
+        ε; default ``DEFAULT_PENALTY_FACTOR * E`` (1e3).
+
+    Attributes
+    ----------
+    beam_node, solid_node : int
+        The monitor point: the beam node with the largest reference κ (the most coupled one)
+        and the free solid node nearest to it.
+    interface : (n_I,) int64
+        Free solid DOFs the coupling reaches (columns of M), plus the solid monitor node's.
+
+    Notes
+    -----
+    **Why penalty, not Lagrange multipliers.** With multipliers the saddle point is singular
+    whenever a variant has fewer independent integration points than LM nodes:
+    ``B = [-M, D] = P G`` with ``P`` (LM nodes × points) has rank <= the number of points, so
+    element-based integration with one point per beam element (``n_el`` points, ``n_el + 1``
+    LM nodes per fibre) has dependent constraint rows. The cheapest variants of the study are
+    exactly the ones to measure, so the monitor uses the library's default penalty
+    enforcement, which is well posed for any operators. The penalty solution depends on ε,
+    but every variant and the reference are solved with the same ε, so the error measures
+    the operators alone.
+
+    **Condensation.** With ``λ = ε κ⁻¹ (D u_B − M u_S)`` on the coupled LM rows the penalty
+    system reads ``K_SS u_S − Mᵀλ = f_S``, ``K_BB u_B + Dᵀλ = f_B``,
+    ``D u_B − M u_S − (κ/ε) λ = 0``. Eliminating ``u_S = u_0 + K_SS⁻¹ Mᵀ λ``
+    (``u_0 = K_SS⁻¹ f_S``) leaves, per variant,
+
+        [[K_BB, Dᵀ], [D, −(M F Mᵀ + κ/ε)]] [u_B; λ] = [f_B; M u_0],
+
+    with the solid's flexibility ``F = K_SS⁻¹`` restricted to the interface DOFs (computed once
+    per scene; extended if a variant's M reaches further). The system has beam DOFs + 3 × coupled
+    LM nodes unknowns, a few hundred in the study: dense. It is the same linear system that
+    :func:`mortar1d3d.model.solve` solves for the scene (tested to round-off).
+    """
+
+    def __init__(self, beams, solid, reference, penalty=None):
+        from .model import Model
+        from .solvers.linear import _factorize
+
+        self.scene = monitor_scene(beams, solid, reference, penalty)
+        model = Model(self.scene).prepare(operators=[reference])
+        self.penalty = model.penalty
+        g = model.groups[0]
+        n_S = 3 * solid.n_nodes
+        z0 = np.zeros(model.n_unknowns)
+        force = -model.residual(z0, 1.0, tangent=False)[0]        # dead load − internal forces at rest
+        _, K_SS = model.solid_physics.evaluate(np.zeros(n_S), tangent=True)
+        _, K_BB = g.physics.evaluate(np.zeros(g.mesh.n_centreline_dofs), tangent=True)
+        fixed = np.zeros(n_S, dtype=bool)
+        fixed[model.fixed_dofs[model.fixed_dofs < n_S]] = True
+        if (model.fixed_dofs >= n_S).any():
+            raise ValueError("MonitorProblem: the monitor scene fixes beam DOFs; it must fix solid DOFs only")
+        self.free_solid = np.flatnonzero(~fixed)
+        self._fixed = fixed
+        self._lu = _factorize(K_SS[self.free_solid][:, self.free_solid], symmetric_positive=True)
+        self.K_BB = K_BB.toarray()
+        self.f_B = force[g.dof_offset: g.dof_offset + g.mesh.n_centreline_dofs]
+        self.u0 = np.zeros(n_S)
+        self.u0[self.free_solid] = self._lu.solve(force[:n_S][self.free_solid])
+        # the monitor point
+        kappa_node = np.asarray(reference.kappa[: beams.n_nodes])
+        self.beam_node = int(np.argmax(kappa_node))
+        if kappa_node[self.beam_node] <= 0:
+            raise ValueError("MonitorProblem: no beam node is coupled in the reference operators")
+        free_nodes = np.flatnonzero(~fixed.reshape(-1, 3).all(axis=1))
+        dist = np.linalg.norm(solid.points[free_nodes] - beams.positions[self.beam_node], axis=1)
+        self.solid_node = int(free_nodes[np.argmin(dist)])
+        self._position = {}                                       # solid DOF -> column of F
+        self.interface = np.zeros(0, dtype=np.int64)
+        self.F = np.zeros((0, 0))
+        self._extend(np.concatenate([self._columns(reference.M), 3 * self.solid_node + np.arange(3)]))
+        self.n_solves = 0
+
+    def _columns(self, M):
+        """Free solid DOFs that ``M`` reaches (its nonzero columns)."""
+        cols = np.unique(M.tocsr().indices)
+        return cols[~self._fixed[cols]]
+
+    def _extend(self, dofs):
+        """Add solid DOFs to the interface: new columns of the flexibility ``F``."""
+        new = np.setdiff1d(np.asarray(dofs, dtype=np.int64), self.interface)
+        if new.size == 0:
+            return
+        where = np.searchsorted(self.free_solid, new)
+        E = np.zeros((len(self.free_solid), len(new)))
+        E[where, np.arange(len(new))] = 1.0
+        X = np.zeros((len(self._fixed), len(new)))
+        X[self.free_solid] = self._lu.solve(E)                      # K_SS⁻¹ e_new
+        old = self.interface
+        F = np.empty((len(old) + len(new),) * 2)
+        F[: len(old), : len(old)] = self.F
+        F[: len(old), len(old):] = X[old]
+        F[len(old):, : len(old)] = X[old].T
+        F[len(old):, len(old):] = X[new]
+        self.interface = np.concatenate([old, new])
+        self.F = 0.5 * (F + F.T)
+        self._position = {int(d): k for k, d in enumerate(self.interface)}
+
+    def model(self):
+        """A fresh :class:`~mortar1d3d.model.Model` of the monitor scene (for a full solve)."""
+        from .model import Model
+        return Model(self.scene)
+
+    def displacement(self, D, M, kappa):
+        """Displacements at the monitor point with operators ``D, M, κ`` of this scene.
+
+        Returns
+        -------
+        (6,) float64
+            ``[u_B, u_S]``: the displacement of :attr:`beam_node` and of :attr:`solid_node`.
+        """
+        kappa = np.asarray(kappa, dtype=np.float64)
+        n_B = self.K_BB.shape[0]
+        if D.shape != (3 * len(kappa), n_B) or M.shape != (3 * len(kappa), len(self._fixed)):
+            raise ValueError(f"MonitorProblem.displacement: D {D.shape}, M {M.shape} do not fit this scene "
+                             f"({3 * len(kappa)} LM rows, {n_B} beam DOFs, {len(self._fixed)} solid DOFs)")
+        rows = np.flatnonzero(np.repeat(kappa > 0.0, 3))
+        Dc = D.tocsr()[rows]
+        Mc = M.tocsr()[rows]
+        self._extend(self._columns(Mc))
+        MI = Mc[:, self.interface]                                  # fixed columns: u_S = 0 there
+        MF = np.asarray((MI @ self.F))                              # (m, n_I) dense
+        S = MI @ MF.T                                               # M F Mᵀ
+        m = len(rows)
+        A = np.empty((n_B + m, n_B + m))
+        A[:n_B, :n_B] = self.K_BB
+        A[n_B:, :n_B] = Dc.toarray()
+        A[:n_B, n_B:] = A[n_B:, :n_B].T
+        A[n_B:, n_B:] = -(S + np.diag(np.repeat(kappa, 3)[rows] / self.penalty))
+        rhs = np.concatenate([self.f_B, MI @ self.u0[self.interface]])
+        y = np.linalg.solve(A, rhs)
+        self.n_solves += 1
+        u_B, lam = y[:n_B], y[n_B:]
+        k = self._position[3 * self.solid_node]
+        u_S = self.u0[3 * self.solid_node + np.arange(3)] + MF[:, k:k + 3].T @ lam
+        return np.concatenate([u_B[6 * self.beam_node: 6 * self.beam_node + 3], u_S])
+
+
+def monitor_scene(beams, solid, reference, penalty=None):
+    """The :class:`~mortar1d3d.scene.Scene` of :class:`MonitorProblem` (coupling as ``reference``)."""
+    from .scene import Scene
+    coupling = {"integration": reference.integration, "n_gauss": int(reference.n_gauss), "lm": reference.lm,
+                "enforcement": "penalty"}
+    if penalty is not None:
+        coupling["penalty"] = float(penalty)
+    return Scene(solid={"mesh": solid, "material": {"model": "linear_elastic", **MONITOR_SOLID}},
+                 beams=[{"mesh": beams, "model": "torsion_free", "section": dict(MONITOR_BEAM)}],
+                 coupling=coupling, dirichlet=[{"on": "solid:x_min"}],
+                 load=[{"type": "body", "value": list(MONITOR_BODY_FORCE)}],
+                 analysis={"kinematics": "linear", "solver": "direct"}, name="solution monitor")
+
+
+def solution_monitor(problem, D, M, kappa):
+    """Monitor-point displacement of the linear solve with the coupling operators ``D, M, κ``.
+
+    Parameters
+    ----------
+    problem : MonitorProblem
+        The scene's linear problem (stiffness assembled and factorised once).
     D, M : scipy.sparse matrices, kappa : (n_lm,) array
-        The operators of one variant.
+        The operators of one integration variant on the problem's scene.
 
     Returns
     -------
-    (3,) float64
-        Displacement at the scene's monitor point.
+    (6,) float64
+        Displacement of the monitor beam node and of the solid node nearest to it.
     """
-    raise NotImplementedError("solution_monitor needs the linear solid/beam model (not built yet); "
-                              "the study reports operator errors only")
+    if not isinstance(problem, MonitorProblem):
+        raise TypeError(f"solution_monitor: problem must be a MonitorProblem (see MonitorProblem(beams, solid, "
+                        f"reference)), got {type(problem).__name__}")
+    return problem.displacement(D, M, kappa)
+
+
+def monitor_error(u, u_ref):
+    """Relative error ``|u − u_ref| / |u_ref|`` of the monitor displacements (Euclidean norms)."""
+    u, u_ref = np.asarray(u, dtype=np.float64), np.asarray(u_ref, dtype=np.float64)
+    return float(np.linalg.norm(u - u_ref) / np.linalg.norm(u_ref))
 
 
 # --------------------------------------------------------------- independent adaptive quadrature
