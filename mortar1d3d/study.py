@@ -40,6 +40,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
 
 from . import generate
 from .mesh import BeamMesh
@@ -223,6 +224,75 @@ MONITOR_BEAM = {"E": 1000.0, "radius": 0.02}
 MONITOR_BODY_FORCE = (0.0, 0.0, -1.0)
 
 
+class ClampedSolid:
+    """The clamped solid of the monitor problem: ``K_SS`` factorised once, flexibility on demand.
+
+    Shared by the :class:`MonitorProblem` of every scene on the same solid mesh (the study's
+    scenes of one kind differ in their fibres only), so that the factorisation and the columns
+    of the flexibility are computed once per mesh.
+
+    Parameters
+    ----------
+    K : (n_S, n_S) scipy.sparse matrix
+        Stiffness of the solid (all DOFs).
+    force : (n_S,) array
+        Load on the solid DOFs.
+    fixed : (n_S,) bool array
+        Clamped DOFs (displacement 0).
+    points : (n_nodes, 3) array
+        The mesh's nodes (to check that a problem is on the same mesh).
+
+    Attributes
+    ----------
+    u0 : (n_S,) float64
+        ``K_SS⁻¹ f_S``: the solid's displacement without the beams.
+    dofs : (n_I,) int64
+        Free DOFs whose flexibility columns are known (in the order of ``F``).
+    F : (n_I, n_I) float64
+        ``(K_SS⁻¹)`` restricted to ``dofs`` (symmetric).
+    n_columns_solved : int
+        Columns of ``K_SS⁻¹`` computed so far (the cost of this object).
+    """
+
+    def __init__(self, K, force, fixed, points):
+        from .solvers.linear import _factorize
+        self.fixed = np.asarray(fixed, dtype=bool)
+        self.points = np.asarray(points)
+        self.free = np.flatnonzero(~self.fixed)
+        self._lu = _factorize(K.tocsr()[self.free][:, self.free], symmetric_positive=True)
+        self.u0 = np.zeros(len(self.fixed))
+        self.u0[self.free] = self._lu.solve(np.asarray(force, dtype=np.float64)[self.free])
+        self.dofs = np.zeros(0, dtype=np.int64)
+        self.F = np.zeros((0, 0))
+        self._position = np.full(len(self.fixed), -1, dtype=np.int64)
+        self.n_columns_solved = 0
+
+    def flexibility(self, dofs):
+        """``F[dofs][:, dofs]`` for free ``dofs``: solves ``K_SS x = e_k`` for the columns not known yet."""
+        dofs = np.asarray(dofs, dtype=np.int64)
+        if self.fixed[dofs].any():
+            raise ValueError("ClampedSolid.flexibility: clamped DOFs have no flexibility (their displacement is 0)")
+        new = np.unique(dofs[self._position[dofs] < 0])
+        if new.size:
+            E = np.zeros((len(self.free), len(new)))
+            E[np.searchsorted(self.free, new), np.arange(len(new))] = 1.0
+            X = np.zeros((len(self.fixed), len(new)))
+            X[self.free] = self._lu.solve(E)                            # K_SS⁻¹ e_new
+            self.n_columns_solved += len(new)
+            old = self.dofs
+            F = np.empty((len(old) + len(new),) * 2)
+            F[: len(old), : len(old)] = self.F
+            F[: len(old), len(old):] = X[old]
+            F[len(old):, : len(old)] = X[old].T
+            block = X[new]
+            F[len(old):, len(old):] = 0.5 * (block + block.T)           # symmetric to round-off
+            self.dofs = np.concatenate([old, new])
+            self.F = F
+            self._position[new] = len(old) + np.arange(len(new))
+        k = self._position[dofs]
+        return self.F[np.ix_(k, k)]
+
+
 class MonitorProblem:
     """The linear problem behind the solution monitor of one study scene.
 
@@ -232,10 +302,11 @@ class MonitorProblem:
     comparable with the axial stiffness of the cube, so the coupling transfers real force),
     tied to the solid by penalty mortar coupling with ``ε = 1e3 E`` (the library's default).
 
-    The solid and beam stiffness are assembled (through :class:`~mortar1d3d.model.Model`,
-    given the reference operators) and the clamped solid stiffness ``K_SS`` is factorised once,
-    in the constructor; :meth:`displacement` then solves the coupled problem for any operators
-    ``D, M, κ`` of the same scene with a small dense system (Notes).
+    The solid and beam stiffness are assembled through :class:`~mortar1d3d.model.Model` (given
+    the reference operators, so nothing is integrated again) and the clamped solid is
+    factorised once (:class:`ClampedSolid`, shareable between scenes on the same mesh);
+    :meth:`displacement` then solves the coupled problem for any operators ``D, M, κ`` of the
+    scene with a small dense system (Notes).
 
     Parameters
     ----------
@@ -243,17 +314,21 @@ class MonitorProblem:
         The scene (:func:`build_scene`).
     reference : MortarOperators
         The study's reference operators of the scene: they choose the monitor point and are
-        the operators of the model's own coupling (:meth:`model`).
+        the operators of the model's own coupling (:attr:`scene`).
     penalty : float, optional
         ε; default ``DEFAULT_PENALTY_FACTOR * E`` (1e3).
+    clamped : ClampedSolid, optional
+        The factorised solid of another MonitorProblem on the same mesh (``.clamped``).
 
     Attributes
     ----------
+    scene : Scene
+        The problem as a scene (:func:`monitor_scene`): ``mortar1d3d.solve`` solves the same
+        system with its own operators.
     beam_node, solid_node : int
         The monitor point: the beam node with the largest reference κ (the most coupled one)
         and the free solid node nearest to it.
-    interface : (n_I,) int64
-        Free solid DOFs the coupling reaches (columns of M), plus the solid monitor node's.
+    clamped : ClampedSolid
 
     Notes
     -----
@@ -262,10 +337,10 @@ class MonitorProblem:
     ``B = [-M, D] = P G`` with ``P`` (LM nodes × points) has rank <= the number of points, so
     element-based integration with one point per beam element (``n_el`` points, ``n_el + 1``
     LM nodes per fibre) has dependent constraint rows. The cheapest variants of the study are
-    exactly the ones to measure, so the monitor uses the library's default penalty
-    enforcement, which is well posed for any operators. The penalty solution depends on ε,
-    but every variant and the reference are solved with the same ε, so the error measures
-    the operators alone.
+    among those to measure, so the monitor uses the library's default penalty enforcement,
+    which is well posed for any operators. The penalty solution depends on ε, but every
+    variant and the reference are solved with the same ε, so the error measures the
+    operators alone.
 
     **Condensation.** With ``λ = ε κ⁻¹ (D u_B − M u_S)`` on the coupled LM rows the penalty
     system reads ``K_SS u_S − Mᵀλ = f_S``, ``K_BB u_B + Dᵀλ = f_B``,
@@ -274,79 +349,78 @@ class MonitorProblem:
 
         [[K_BB, Dᵀ], [D, −(M F Mᵀ + κ/ε)]] [u_B; λ] = [f_B; M u_0],
 
-    with the solid's flexibility ``F = K_SS⁻¹`` restricted to the interface DOFs (computed once
-    per scene; extended if a variant's M reaches further). The system has beam DOFs + 3 × coupled
-    LM nodes unknowns, a few hundred in the study: dense. It is the same linear system that
-    :func:`mortar1d3d.model.solve` solves for the scene (tested to round-off).
+    with the solid's flexibility ``F = K_SS⁻¹`` restricted to the DOFs that M reaches. The
+    system has beam DOFs + 3 × coupled LM nodes unknowns, a few hundred in the study: dense.
+    It is the system that :func:`mortar1d3d.model.solve` solves for :attr:`scene` (tested to
+    round-off).
     """
 
-    def __init__(self, beams, solid, reference, penalty=None):
+    def __init__(self, beams, solid, reference, penalty=None, clamped=None):
         from .model import Model
-        from .solvers.linear import _factorize
 
         self.scene = monitor_scene(beams, solid, reference, penalty)
         model = Model(self.scene).prepare(operators=[reference])
         self.penalty = model.penalty
         g = model.groups[0]
         n_S = 3 * solid.n_nodes
-        z0 = np.zeros(model.n_unknowns)
-        force = -model.residual(z0, 1.0, tangent=False)[0]        # dead load − internal forces at rest
-        _, K_SS = model.solid_physics.evaluate(np.zeros(n_S), tangent=True)
-        _, K_BB = g.physics.evaluate(np.zeros(g.mesh.n_centreline_dofs), tangent=True)
-        fixed = np.zeros(n_S, dtype=bool)
-        fixed[model.fixed_dofs[model.fixed_dofs < n_S]] = True
         if (model.fixed_dofs >= n_S).any():
             raise ValueError("MonitorProblem: the monitor scene fixes beam DOFs; it must fix solid DOFs only")
-        self.free_solid = np.flatnonzero(~fixed)
-        self._fixed = fixed
-        self._lu = _factorize(K_SS[self.free_solid][:, self.free_solid], symmetric_positive=True)
+        z0 = np.zeros(model.n_unknowns)
+        force = -model.residual(z0, 1.0, tangent=False)[0]        # dead load − internal forces at rest
+        _, K_BB = g.physics.evaluate(np.zeros(g.mesh.n_centreline_dofs), tangent=True)
         self.K_BB = K_BB.toarray()
         self.f_B = force[g.dof_offset: g.dof_offset + g.mesh.n_centreline_dofs]
-        self.u0 = np.zeros(n_S)
-        self.u0[self.free_solid] = self._lu.solve(force[:n_S][self.free_solid])
-        # the monitor point
-        kappa_node = np.asarray(reference.kappa[: beams.n_nodes])
+        if clamped is None:
+            fixed = np.zeros(n_S, dtype=bool)
+            fixed[model.fixed_dofs] = True
+            _, K_SS = model.solid_physics.evaluate(np.zeros(n_S), tangent=True)
+            clamped = ClampedSolid(K_SS, force[:n_S], fixed, solid.points)
+        elif clamped.points.shape != solid.points.shape or not np.array_equal(clamped.points, solid.points):
+            raise ValueError("MonitorProblem: clamped belongs to another solid mesh")
+        self.clamped = clamped
+        kappa_node = np.asarray(reference.kappa[: beams.n_nodes])       # LM nodes 0..n_nodes-1 = beam nodes
         self.beam_node = int(np.argmax(kappa_node))
         if kappa_node[self.beam_node] <= 0:
             raise ValueError("MonitorProblem: no beam node is coupled in the reference operators")
-        free_nodes = np.flatnonzero(~fixed.reshape(-1, 3).all(axis=1))
+        free_nodes = np.flatnonzero(~clamped.fixed.reshape(-1, 3).all(axis=1))
         dist = np.linalg.norm(solid.points[free_nodes] - beams.positions[self.beam_node], axis=1)
         self.solid_node = int(free_nodes[np.argmin(dist)])
-        self._position = {}                                       # solid DOF -> column of F
-        self.interface = np.zeros(0, dtype=np.int64)
-        self.F = np.zeros((0, 0))
-        self._extend(np.concatenate([self._columns(reference.M), 3 * self.solid_node + np.arange(3)]))
+        self._fibre_modes = self._rigid_modes(model, g)
         self.n_solves = 0
+        self.held = True
 
-    def _columns(self, M):
-        """Free solid DOFs that ``M`` reaches (its nonzero columns)."""
-        cols = np.unique(M.tocsr().indices)
-        return cols[~self._fixed[cols]]
+    @staticmethod
+    def _rigid_modes(model, group):
+        """Per fibre (connected chain of beam elements): its local beam DOFs and an orthonormal
+        basis of its rigid-body motions (tangents rotate with it)."""
+        from scipy.sparse.csgraph import connected_components
+        mesh = group.mesh
+        adjacency = sp.coo_matrix((np.ones(mesh.n_elements), (mesh.elements[:, 0], mesh.elements[:, 1])),
+                                  shape=(mesh.n_nodes, mesh.n_nodes))
+        n_fibres, label = connected_components(adjacency, directed=False)
+        out = []
+        for f in range(n_fibres):
+            local = (6 * np.flatnonzero(label == f)[:, None] + np.arange(6)).ravel()
+            dofs = group.dof_offset + local
+            U, sv, _ = np.linalg.svd(model.rigid_body_modes(dofs)[dofs], full_matrices=False)
+            out.append((local, U[:, sv > 1e-10 * sv[0]]))
+        return out
 
-    def _extend(self, dofs):
-        """Add solid DOFs to the interface: new columns of the flexibility ``F``."""
-        new = np.setdiff1d(np.asarray(dofs, dtype=np.int64), self.interface)
-        if new.size == 0:
-            return
-        where = np.searchsorted(self.free_solid, new)
-        E = np.zeros((len(self.free_solid), len(new)))
-        E[where, np.arange(len(new))] = 1.0
-        X = np.zeros((len(self._fixed), len(new)))
-        X[self.free_solid] = self._lu.solve(E)                      # K_SS⁻¹ e_new
-        old = self.interface
-        F = np.empty((len(old) + len(new),) * 2)
-        F[: len(old), : len(old)] = self.F
-        F[: len(old), len(old):] = X[old]
-        F[len(old):, : len(old)] = X[old].T
-        F[len(old):, len(old):] = X[new]
-        self.interface = np.concatenate([old, new])
-        self.F = 0.5 * (F + F.T)
-        self._position = {int(d): k for k, d in enumerate(self.interface)}
+    def holds_beams(self, D, kappa):
+        """Whether the coupling ``D`` (rows with κ > 0) stops every rigid motion of every fibre.
 
-    def model(self):
-        """A fresh :class:`~mortar1d3d.model.Model` of the monitor scene (for a full solve)."""
-        from .model import Model
-        return Model(self.scene)
+        A fibre is held by its coupled LM rows alone (the beam stiffness does not resist rigid
+        motions): it can rotate freely about a single coupling point, e.g. a fibre with one
+        element-based integration point inside the solid. The penalty system is then singular
+        and the monitor has no answer.
+        """
+        rows = np.flatnonzero(np.repeat(np.asarray(kappa) > 0.0, 3))
+        Dc = D.tocsr()[rows]
+        for local, Q in self._fibre_modes:
+            sv = np.linalg.svd(np.asarray(Dc[:, local] @ Q), compute_uv=False)
+            if len(sv) < Q.shape[1] or sv[0] == 0.0 or sv[-1] <= 1e-8 * sv[0]:
+                return False
+        return True
 
     def displacement(self, D, M, kappa):
         """Displacements at the monitor point with operators ``D, M, κ`` of this scene.
@@ -354,32 +428,39 @@ class MonitorProblem:
         Returns
         -------
         (6,) float64
-            ``[u_B, u_S]``: the displacement of :attr:`beam_node` and of :attr:`solid_node`.
+            ``[u_B, u_S]``: the displacement of :attr:`beam_node` and of :attr:`solid_node`;
+            NaN when the coupling leaves a fibre free to move (:meth:`holds_beams`; also
+            recorded in :attr:`held`).
         """
         kappa = np.asarray(kappa, dtype=np.float64)
-        n_B = self.K_BB.shape[0]
-        if D.shape != (3 * len(kappa), n_B) or M.shape != (3 * len(kappa), len(self._fixed)):
+        n_B, n_S = self.K_BB.shape[0], len(self.clamped.fixed)
+        if D.shape != (3 * len(kappa), n_B) or M.shape != (3 * len(kappa), n_S):
             raise ValueError(f"MonitorProblem.displacement: D {D.shape}, M {M.shape} do not fit this scene "
-                             f"({3 * len(kappa)} LM rows, {n_B} beam DOFs, {len(self._fixed)} solid DOFs)")
+                             f"({3 * len(kappa)} LM rows, {n_B} beam DOFs, {n_S} solid DOFs)")
+        self.held = self.holds_beams(D, kappa)
+        if not self.held:
+            return np.full(6, np.nan)
         rows = np.flatnonzero(np.repeat(kappa > 0.0, 3))
         Dc = D.tocsr()[rows]
         Mc = M.tocsr()[rows]
-        self._extend(self._columns(Mc))
-        MI = Mc[:, self.interface]                                  # fixed columns: u_S = 0 there
-        MF = np.asarray((MI @ self.F))                              # (m, n_I) dense
-        S = MI @ MF.T                                               # M F Mᵀ
+        reached = np.unique(Mc.indices)
+        monitor = 3 * self.solid_node + np.arange(3)
+        dofs = np.union1d(reached[~self.clamped.fixed[reached]], monitor)   # clamped columns: u_S = 0
+        F = self.clamped.flexibility(dofs)
+        MI = Mc[:, dofs]
+        MF = np.asarray(MI @ F)                                     # (m, n_I)
         m = len(rows)
         A = np.empty((n_B + m, n_B + m))
         A[:n_B, :n_B] = self.K_BB
         A[n_B:, :n_B] = Dc.toarray()
         A[:n_B, n_B:] = A[n_B:, :n_B].T
-        A[n_B:, n_B:] = -(S + np.diag(np.repeat(kappa, 3)[rows] / self.penalty))
-        rhs = np.concatenate([self.f_B, MI @ self.u0[self.interface]])
+        A[n_B:, n_B:] = -(MI @ MF.T + np.diag(np.repeat(kappa, 3)[rows] / self.penalty))
+        rhs = np.concatenate([self.f_B, MI @ self.clamped.u0[dofs]])
         y = np.linalg.solve(A, rhs)
         self.n_solves += 1
         u_B, lam = y[:n_B], y[n_B:]
-        k = self._position[3 * self.solid_node]
-        u_S = self.u0[3 * self.solid_node + np.arange(3)] + MF[:, k:k + 3].T @ lam
+        k = np.searchsorted(dofs, monitor)
+        u_S = self.clamped.u0[monitor] + MF[:, k].T @ lam
         return np.concatenate([u_B[6 * self.beam_node: 6 * self.beam_node + 3], u_S])
 
 
@@ -419,7 +500,7 @@ def solution_monitor(problem, D, M, kappa):
 
 
 def monitor_error(u, u_ref):
-    """Relative error ``|u − u_ref| / |u_ref|`` of the monitor displacements (Euclidean norms)."""
+    """Relative error ``|u − u_ref| / |u_ref|`` of the monitor displacements (Euclidean norms; NaN if ``u`` is)."""
     u, u_ref = np.asarray(u, dtype=np.float64), np.asarray(u_ref, dtype=np.float64)
     return float(np.linalg.norm(u - u_ref) / np.linalg.norm(u_ref))
 
