@@ -391,7 +391,7 @@ class MonitorProblem:
         self.solid_node = int(free_nodes[np.argmin(dist)])
         self._fibre_modes = self._rigid_modes(model, g)
         self.n_solves = 0
-        self.held = True
+        self.held = True                 # whether the last solve's coupling held every fibre
 
     @staticmethod
     def _rigid_modes(model, group):
@@ -410,21 +410,34 @@ class MonitorProblem:
             out.append((local, U[:, sv > 1e-10 * sv[0]]))
         return out
 
-    def holds_beams(self, D, kappa):
-        """Whether the coupling ``D`` (rows with κ > 0) stops every rigid motion of every fibre.
+    def free_motions(self, D, kappa):
+        """Rigid motions of the fibres that the coupling ``D`` (rows with κ > 0) does not stop.
 
-        A fibre is held by its coupled LM rows alone (the beam stiffness does not resist rigid
-        motions): it can rotate freely about a single coupling point, e.g. a fibre with one
-        element-based integration point inside the solid. The penalty system is then singular
-        and the monitor has no answer.
+        Each fibre is held against rigid motion by its coupled LM rows alone (the beam stiffness
+        does not resist rigid motions). Where they tie the fibre at one point only (element-based
+        integration with a single point inside the solid), it can rotate about that point; where
+        a curved fibre is coupled through one line2 element, the two rows tie two weighted
+        centroids and it can rotate about the line through them.
+
+        Returns
+        -------
+        (n_beam_dofs, k) float64
+            Orthonormal columns spanning the free motions (k = 0 if every fibre is held).
         """
         rows = np.flatnonzero(np.repeat(np.asarray(kappa) > 0.0, 3))
         Dc = D.tocsr()[rows]
+        scale = max((np.linalg.norm(np.asarray(Dc[:, local] @ Q), 2) for local, Q in self._fibre_modes),
+                    default=0.0)
+        out = []
         for local, Q in self._fibre_modes:
-            sv = np.linalg.svd(np.asarray(Dc[:, local] @ Q), compute_uv=False)
-            if len(sv) < Q.shape[1] or sv[0] == 0.0 or sv[-1] <= 1e-8 * sv[0]:
-                return False
-        return True
+            _, sv, Vt = np.linalg.svd(np.asarray(Dc[:, local] @ Q), full_matrices=True)
+            sv = np.concatenate([sv, np.zeros(Q.shape[1] - len(sv))])
+            null = Vt[sv <= 1e-8 * scale]
+            if len(null):
+                Z = np.zeros((self.K_BB.shape[0], len(null)))
+                Z[local] = Q @ null.T
+                out.append(Z)
+        return np.hstack(out) if out else np.zeros((self.K_BB.shape[0], 0))
 
     def displacement(self, D, M, kappa):
         """Displacements at the monitor point with operators ``D, M, κ`` of this scene.
@@ -432,18 +445,22 @@ class MonitorProblem:
         Returns
         -------
         (6,) float64
-            ``[u_B, u_S]``: the displacement of :attr:`beam_node` and of :attr:`solid_node`;
-            NaN when the coupling leaves a fibre free to move (:meth:`holds_beams`; also
-            recorded in :attr:`held`).
+            ``[u_B, u_S]``: the displacement of :attr:`beam_node` and of :attr:`solid_node`.
+
+        Notes
+        -----
+        Where the coupling leaves a fibre a free rigid motion (:meth:`free_motions`) the system
+        is singular but consistent (the beams carry no load of their own): the solid's
+        displacement is unique, the fibre's only up to that motion. The solution without it is
+        returned (``Zᵀ u_B = 0`` added as constraints), and :attr:`held` is False.
         """
         kappa = np.asarray(kappa, dtype=np.float64)
         n_B, n_S = self.K_BB.shape[0], len(self.clamped.fixed)
         if D.shape != (3 * len(kappa), n_B) or M.shape != (3 * len(kappa), n_S):
             raise ValueError(f"MonitorProblem.displacement: D {D.shape}, M {M.shape} do not fit this scene "
                              f"({3 * len(kappa)} LM rows, {n_B} beam DOFs, {n_S} solid DOFs)")
-        self.held = self.holds_beams(D, kappa)
-        if not self.held:
-            return np.full(6, np.nan)
+        Z = self.free_motions(D, kappa)
+        self.held = Z.shape[1] == 0
         rows = np.flatnonzero(np.repeat(kappa > 0.0, 3))
         Dc = D.tocsr()[rows]
         Mc = M.tocsr()[rows]
@@ -453,16 +470,18 @@ class MonitorProblem:
         F = self.clamped.flexibility(dofs)
         MI = Mc[:, dofs]
         MF = np.asarray(MI @ F)                                     # (m, n_I)
-        m = len(rows)
-        A = np.empty((n_B + m, n_B + m))
+        m, k = len(rows), Z.shape[1]
+        A = np.zeros((n_B + m + k, n_B + m + k))
         A[:n_B, :n_B] = self.K_BB
-        A[n_B:, :n_B] = Dc.toarray()
-        A[:n_B, n_B:] = A[n_B:, :n_B].T
-        A[n_B:, n_B:] = -(MI @ MF.T + np.diag(np.repeat(kappa, 3)[rows] / self.penalty))
-        rhs = np.concatenate([self.f_B, MI @ self.clamped.u0[dofs]])
+        A[n_B:n_B + m, :n_B] = Dc.toarray()
+        A[:n_B, n_B:n_B + m] = A[n_B:n_B + m, :n_B].T
+        A[n_B:n_B + m, n_B:n_B + m] = -(MI @ MF.T + np.diag(np.repeat(kappa, 3)[rows] / self.penalty))
+        A[n_B + m:, :n_B] = Z.T * np.abs(self.K_BB).max()            # scaled like K_BB
+        A[:n_B, n_B + m:] = A[n_B + m:, :n_B].T
+        rhs = np.concatenate([self.f_B, MI @ self.clamped.u0[dofs], np.zeros(k)])
         y = np.linalg.solve(A, rhs)
         self.n_solves += 1
-        u_B, lam = y[:n_B], y[n_B:]
+        u_B, lam = y[:n_B], y[n_B:n_B + m]
         k = np.searchsorted(dofs, monitor)
         u_S = self.clamped.u0[monitor] + MF[:, k].T @ lam
         return np.concatenate([u_B[6 * self.beam_node: 6 * self.beam_node + 3], u_S])
@@ -657,7 +676,8 @@ def study_scene(beams, solid, config, progress=None, monitor=False, clamped=None
     With ``monitor``, every variant's operators are also solved with the scene's
     :class:`MonitorProblem` (``clamped``: a :class:`ClampedSolid` of the same mesh to reuse):
     each record gets ``u_err`` (:func:`monitor_error` against the reference operators' solution;
-    None where the variant leaves a fibre free, or without ``monitor``).
+    None without ``monitor``) and ``u_free`` (the variant left a fibre a free rigid motion,
+    :meth:`MonitorProblem.free_motions`).
 
     Returns
     -------
@@ -677,6 +697,7 @@ def study_scene(beams, solid, config, progress=None, monitor=False, clamped=None
         setup_s = time.perf_counter() - t0
         t0 = time.perf_counter()
         u_ref = solution_monitor(problem, reference.D, reference.M, reference.kappa)
+        reference_free = not problem.held
         solve_s += time.perf_counter() - t0
     records = []
     for integration in INTEGRATIONS:
@@ -685,9 +706,9 @@ def study_scene(beams, solid, config, progress=None, monitor=False, clamped=None
             rec.update(integration=integration, n_gauss=n, **operator_errors(ops, reference), u_err=None)
             if problem is not None:
                 t0 = time.perf_counter()
-                err = monitor_error(solution_monitor(problem, ops.D, ops.M, ops.kappa), u_ref)
+                rec["u_err"] = monitor_error(solution_monitor(problem, ops.D, ops.M, ops.kappa), u_ref)
+                rec["u_free"] = not problem.held
                 solve_s += time.perf_counter() - t0
-                rec["u_err"] = None if math.isnan(err) else err
             records.append(rec)
             if progress:
                 u = "" if rec["u_err"] is None else f"  u {rec['u_err']:.1e}"
@@ -695,7 +716,8 @@ def study_scene(beams, solid, config, progress=None, monitor=False, clamped=None
                          f"D {rec['D_fro']:.1e}  M {rec['M_fro']:.1e}{u}")
     if problem is not None:
         monitor_info = {"beam_node": problem.beam_node, "solid_node": problem.solid_node,
-                        "u_ref": [float(x) for x in u_ref], "setup_s": setup_s, "solve_s": solve_s,
+                        "u_ref": [float(x) for x in u_ref], "reference_free": reference_free,
+                        "setup_s": setup_s, "solve_s": solve_s,
                         "solves": problem.n_solves, "solid_columns": problem.clamped.n_columns_solved,
                         "solid_dofs": 3 * solid.n_nodes}
     self_check = operator_errors(coarser, reference)
@@ -1022,12 +1044,15 @@ def monitor_sentences(results):
     if exact:
         out.append(f"Variants with operators exact to round-off (D/M error <= 1e-12, {len(exact)} pairs) give "
                    f"displacements within {_fmt_e(max(exact))} of the reference solution.")
-    free = [(sc, r) for sc in scenes for r in sc["records"] if r["u_err"] is None]
-    if free:
+    free = [(sc, r) for sc in scenes for r in sc["records"] if r.get("u_free")]
+    ref_free = [sc for sc in scenes if sc["monitor"].get("reference_free")]
+    if free or ref_free:
         which = sorted({f"{r['integration']}-based n = {r['n_gauss']}" for _, r in free})
-        out.append(f"{len(free)} variant/scene pair(s) ({', '.join(which)}) couple some fibre at a single point "
-                   "only, so it can rotate freely about it: the linear system is singular and no displacement "
-                   "is reported (`free` in the tables).")
+        out.append(f"In {len(free)} variant/scene pair(s)" + (f" ({', '.join(which)})" if which else "")
+                   + (f" and in the reference solution of {len(ref_free)} scene(s)" if ref_free else "")
+                   + " the coupling leaves some fibre a free rigid motion (held at one point, or a curved fibre "
+                   "held through a single element, which can turn about an axis); the fibre's free motion is set "
+                   "to zero there (`*` in the tables).")
     n_all = len(results["scenes"])
     if len(scenes) < n_all:
         cost = [sc["monitor"]["setup_s"] for sc in scenes]
@@ -1222,7 +1247,9 @@ def write_report(results, out="report"):
              "largest reference κ and the free solid node nearest to it; `u err` = |u - u_ref| / |u_ref| over "
              "both nodes' displacements, u_ref from the reference operators. The solid is factorised once per "
              "mesh and condensed onto the DOFs the coupling reaches, so each variant costs one small dense "
-             "solve. `free`: the variant couples some fibre at a single point (singular system). "
+             "solve. `*`: the variant's coupling leaves some fibre a free rigid motion (a single coupling "
+             "point; or a curved fibre coupled through one line2 element, which can turn about the axis through "
+             "the two weighted centroids its two LM rows tie): the unloaded free motion is set to zero. "
              f"Measured on {mon_scope}" + ("." if cfg.get("monitor", True) else " (switched off in this run).")
              + "\n")
     L.append("## The reference\n")
@@ -1247,7 +1274,7 @@ def write_report(results, out="report"):
     L.append("Times in ms (median); stages: search / segmentation / integration points / assembly / CSR / "
              "other (certificates, point records). "
              "Errors: relative Frobenius norm (fro) and worst entry (max); `u err`: monitor displacement "
-             "error (— where the monitor did not run, `free` where a fibre is coupled at one point only).\n")
+             "error (— where the monitor did not run; `*`: a fibre had a free rigid motion, see Method).\n")
     for scene in results["scenes"]:
         L.append(f"### {scene['kind']}, h_B/h_S = {scene['ratio']:g}, {scene['embedding']}\n")
         L.append(f"{scene['beam_elements']} beam elements, {scene['solid_elements']} solid elements; embedded length "
@@ -1257,15 +1284,15 @@ def write_report(results, out="report"):
         mon = scene.get("monitor")
         if mon:
             L.append(f"Monitor: beam node {mon['beam_node']}, solid node {mon['solid_node']}; |u_ref| = "
-                     f"{np.linalg.norm(mon['u_ref']):.4g}; set-up {mon['setup_s']:.2f} s, {mon['solves']} solves "
-                     f"{mon['solve_s']:.2f} s.\n")
+                     f"{np.linalg.norm(mon['u_ref']):.4g}" + ("*" if mon.get("reference_free") else "")
+                     + f"; set-up {mon['setup_s']:.2f} s, {mon['solves']} solves {mon['solve_s']:.2f} s.\n")
         mem_head = " peak MiB |" if cfg["memory"] else ""
         L.append(f"| integration | n | points | time | stages |{mem_head} D fro | M fro | D max | M max | u err |")
         L.append("|---|---|---|---|---|" + ("---|" if cfg["memory"] else "") + "---|---|---|---|---|")
         for r in scene["records"]:
             st = " / ".join(f"{r['stages_s'][k] * 1e3:.2f}" for k in STAGES)
             mem = f" {r['peak_bytes'] / 2**20:.2f} |" if cfg["memory"] else ""
-            u = ("—" if not mon else "free" if r.get("u_err") is None else _fmt_e(r["u_err"]))
+            u = "—" if not mon or r.get("u_err") is None else _fmt_e(r["u_err"]) + ("*" if r.get("u_free") else "")
             L.append(f"| {r['integration']} | {r['n_gauss']} | {r['points']} | {r['time_s'] * 1e3:.2f} | {st} |"
                      f"{mem} {_fmt_e(r['D_fro'])} | {_fmt_e(r['M_fro'])} | {_fmt_e(r['D_max'])} | "
                      f"{_fmt_e(r['M_max'])} | {u} |")
