@@ -389,24 +389,29 @@ class MonitorProblem:
         free_nodes = np.flatnonzero(~clamped.fixed.reshape(-1, 3).all(axis=1))
         dist = np.linalg.norm(solid.points[free_nodes] - beams.positions[self.beam_node], axis=1)
         self.solid_node = int(free_nodes[np.argmin(dist)])
-        self._fibre_modes = self._rigid_modes(model, g)
+        self._fibre_modes = self._rigid_modes(g)
         self.n_solves = 0
         self.held = True                 # whether the last solve's coupling held every fibre
 
     @staticmethod
-    def _rigid_modes(model, group):
+    def _rigid_modes(group):
         """Per fibre (connected chain of beam elements): its local beam DOFs and an orthonormal
         basis of its rigid-body motions (tangents rotate with it)."""
         from scipy.sparse.csgraph import connected_components
+
+        from .solvers.linear import rigid_body_modes
         mesh = group.mesh
         adjacency = sp.coo_matrix((np.ones(mesh.n_elements), (mesh.elements[:, 0], mesh.elements[:, 1])),
                                   shape=(mesh.n_nodes, mesh.n_nodes))
         n_fibres, label = connected_components(adjacency, directed=False)
         out = []
         for f in range(n_fibres):
-            local = (6 * np.flatnonzero(label == f)[:, None] + np.arange(6)).ravel()
-            dofs = group.dof_offset + local
-            U, sv, _ = np.linalg.svd(model.rigid_body_modes(dofs)[dofs], full_matrices=False)
+            nodes = np.flatnonzero(label == f)
+            local = (6 * nodes[:, None] + np.arange(6)).ravel()
+            # triplets per node: position, tangent (the layout of the beam DOFs)
+            triplets = np.stack([mesh.positions[nodes], mesh.tangents[nodes]], axis=1).reshape(-1, 3)
+            R = rigid_body_modes(triplets, np.tile([False, True], len(nodes)))
+            U, sv, _ = np.linalg.svd(R, full_matrices=False)
             out.append((local, U[:, sv > 1e-10 * sv[0]]))
         return out
 
