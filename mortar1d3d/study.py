@@ -342,9 +342,10 @@ class MonitorProblem:
     element-based integration with one point per beam element (``n_el`` points, ``n_el + 1``
     LM nodes per fibre) has dependent constraint rows. The cheapest variants of the study are
     among those to measure, so the monitor uses the library's default penalty enforcement,
-    which is well posed for any operators. The penalty solution depends on ε, but every
-    variant and the reference are solved with the same ε, so the error measures the
-    operators alone.
+    which is well posed whatever the rank of ``B``. The penalty solution depends on ε, but
+    every variant and the reference are solved with the same ε, so the error measures the
+    operators alone. What no enforcement fixes is a fibre the coupling does not hold against
+    rigid motion at all (:meth:`free_motions`); that unloaded motion is set to zero.
 
     **Condensation.** With ``λ = ε κ⁻¹ (D u_B − M u_S)`` on the coupled LM rows the penalty
     system reads ``K_SS u_S − Mᵀλ = f_S``, ``K_BB u_B + Dᵀλ = f_B``,
