@@ -260,6 +260,9 @@ class ClampedSolid:
         Columns of ``K_SS⁻¹`` computed so far (the cost of this object).
     """
 
+    #: flexibility columns solved per call of the factorisation (bounds the dense temporaries)
+    CHUNK = 256
+
     def __init__(self, K, force, fixed, points):
         from .solvers.linear import _factorize
         self.fixed = np.asarray(fixed, dtype=bool)
@@ -280,19 +283,23 @@ class ClampedSolid:
             raise ValueError("ClampedSolid.flexibility: clamped DOFs have no flexibility (their displacement is 0)")
         new = np.unique(dofs[self._position[dofs] < 0])
         if new.size:
-            E = np.zeros((len(self.free), len(new)))
-            E[np.searchsorted(self.free, new), np.arange(len(new))] = 1.0
-            X = np.zeros((len(self.fixed), len(new)))
-            X[self.free] = self._lu.solve(E)                            # K_SS⁻¹ e_new
-            self.n_columns_solved += len(new)
             old = self.dofs
-            F = np.empty((len(old) + len(new),) * 2)
+            all_dofs = np.concatenate([old, new])
+            F = np.empty((len(all_dofs),) * 2)
             F[: len(old), : len(old)] = self.F
-            F[: len(old), len(old):] = X[old]
-            F[len(old):, : len(old)] = X[old].T
-            block = X[new]
+            where = np.searchsorted(self.free, new)
+            for start in range(0, len(new), self.CHUNK):              # bounded temporaries (n_S x CHUNK)
+                cols = slice(start, min(start + self.CHUNK, len(new)))
+                E = np.zeros((len(self.free), cols.stop - cols.start))
+                E[where[cols], np.arange(cols.stop - cols.start)] = 1.0
+                X = np.zeros((len(self.fixed), E.shape[1]))
+                X[self.free] = self._lu.solve(E)                        # K_SS⁻¹ e_new
+                F[:, len(old) + cols.start: len(old) + cols.stop] = X[all_dofs]
+            self.n_columns_solved += len(new)
+            F[len(old):, : len(old)] = F[: len(old), len(old):].T
+            block = F[len(old):, len(old):]
             F[len(old):, len(old):] = 0.5 * (block + block.T)           # symmetric to round-off
-            self.dofs = np.concatenate([old, new])
+            self.dofs = all_dofs
             self.F = F
             self._position[new] = len(old) + np.arange(len(new))
         k = self._position[dofs]

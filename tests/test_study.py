@@ -138,13 +138,24 @@ def test_monitor_fibre_held_at_one_point_is_free(monitor_case):
 
 def test_clamped_solid_flexibility_is_the_inverse_stiffness(monitor_case):
     beams, solid, reference, problem = monitor_case
+    study.solution_monitor(problem, reference.D, reference.M, reference.kappa)     # the columns M reaches
     c = problem.clamped
     dofs = c.free[[0, 5, 17, 40]]
-    K = m13.Model(problem.scene).prepare(operators=[reference]).solid_physics.evaluate(
-        np.zeros(3 * solid.n_nodes))[1].toarray()
+    K_sparse = m13.Model(problem.scene).prepare(operators=[reference]).solid_physics.evaluate(
+        np.zeros(3 * solid.n_nodes))[1]
+    K = K_sparse.toarray()
     inverse = np.linalg.inv(K[np.ix_(c.free, c.free)])
     k = np.searchsorted(c.free, dofs)
     np.testing.assert_allclose(c.flexibility(dofs), inverse[np.ix_(k, k)], rtol=1e-10, atol=1e-12 * inverse.max())
+    # columns solved in chunks, and in two calls, give the same matrix
+    fresh = study.ClampedSolid(K_sparse, np.zeros(len(c.fixed)), c.fixed, solid.points)
+    fresh.CHUNK = 3
+    fresh.flexibility(c.free[[40, 2, 9]])
+    more = c.free[[0, 5, 17, 40, 2, 9, 11, 30]]
+    k = np.searchsorted(c.free, more)
+    np.testing.assert_allclose(fresh.flexibility(more), inverse[np.ix_(k, k)], rtol=1e-10,
+                               atol=1e-12 * inverse.max())
+    assert fresh.n_columns_solved == 8
     # a second scene on the same mesh reuses the factorisation and the known columns
     beams2, solid2 = study.build_scene("straight fibres, hex8", 0.25, "partly outside", cells=3, fibres=2)
     ref2 = m13.assemble_mortar(beams2, solid2, integration="segment", n_gauss=12)
