@@ -454,10 +454,26 @@ class Model:
         return out
 
     # -- operators ------------------------------------------------------------------------------
-    def prepare(self):
-        """Assemble everything that is constant: mortar operators, coupling, dead loads; check supports."""
+    def prepare(self, operators=None):
+        """Assemble everything that is constant: mortar operators, coupling, dead loads; check supports.
+
+        Parameters
+        ----------
+        operators : sequence of MortarOperators, optional
+            Precomputed mortar operators, one per beam group (group order, see ``groups``), for
+            this scene's meshes and ``coupling.lm``: they are used instead of calling
+            :func:`~mortar1d3d.assemble_mortar` (no ``mortar.*`` counts). For callers that
+            already hold the operators, e.g. the trade-off study, which solves one scene with
+            the operators of several integration variants. Default: assemble them.
+
+        Returns
+        -------
+        self
+        """
         if self.prepared:
             return self
+        if operators is not None:
+            operators = self._check_operators(operators)
         from .physics.beam import BeamModel
         from .physics.coupling import Coupling
         from .physics.materials import material
@@ -478,14 +494,17 @@ class Model:
             g.physics = BeamModel(g.mesh, EA, EI, model=g.model)
         if sc.coupled:
             c = sc.coupling
-            for g in self.groups:
-                g.operators = assemble_mortar(g.mesh, self.solid_mesh, integration=c["integration"],
-                                              n_gauss=c["n_gauss"], lm=c["lm"], search_points=c["search_points"])
-                self.counts["mortar.search"] += 1
-                if c["integration"] in ("segment", "auto"):
-                    self.counts["mortar.segmentation"] += 1
-                self.counts["mortar.integration_points"] += 1
-                self.counts["mortar.assembly"] += 1
+            for k, g in enumerate(self.groups):
+                if operators is not None:
+                    g.operators = operators[k]
+                else:
+                    g.operators = assemble_mortar(g.mesh, self.solid_mesh, integration=c["integration"],
+                                                  n_gauss=c["n_gauss"], lm=c["lm"], search_points=c["search_points"])
+                    self.counts["mortar.search"] += 1
+                    if c["integration"] in ("segment", "auto"):
+                        self.counts["mortar.segmentation"] += 1
+                    self.counts["mortar.integration_points"] += 1
+                    self.counts["mortar.assembly"] += 1
                 g.coupling = Coupling(g.operators, g.mesh, self.solid_mesh, g.dof_offset, n,
                                       constraint=c["constraint"], enforcement=c["enforcement"], penalty=self.penalty)
                 self.counts["coupling.lagrange" if self.lagrange else f"coupling.{c['constraint']}_penalty"] += 1
@@ -510,6 +529,33 @@ class Model:
         self.check_supports()
         self.prepared = True
         return self
+
+    def _check_operators(self, operators):
+        """Validate precomputed operators against the groups' meshes and the scene's LM type."""
+        if not self.scene.coupled:
+            raise ValueError("prepare(operators=...): the scene has no coupling (it needs a solid and beams)")
+        operators = list(operators)
+        if len(operators) != len(self.groups):
+            raise ValueError(f"prepare(operators=...): expected {len(self.groups)} operator set(s), one per beam "
+                             f"group ({', '.join(g.model for g in self.groups)}), got {len(operators)}")
+        from .elements.multiplier import multiplier
+        from .mortar.assemble import lm_numbering
+        lm = self.scene.coupling["lm"]
+        for k, (g, ops) in enumerate(zip(self.groups, operators)):
+            if not all(hasattr(ops, a) for a in ("D", "M", "kappa", "lm", "n_lm")):
+                raise TypeError(f"prepare(operators=...): operators[{k}] must be MortarOperators, "
+                                f"got {type(ops).__name__}")
+            if ops.lm != lm:
+                raise ValueError(f"prepare(operators=...): operators[{k}] use lm={ops.lm!r}, the scene "
+                                 f"coupling.lm={lm!r}")
+            n_lm = lm_numbering(g.mesh, multiplier(lm))[1]
+            want_D = (3 * n_lm, g.mesh.n_centreline_dofs)
+            want_M = (3 * n_lm, 3 * self.n_solid_nodes)
+            if ops.D.shape != want_D or ops.M.shape != want_M or np.shape(ops.kappa) != (n_lm,):
+                raise ValueError(f"prepare(operators=...): operators[{k}] do not fit beam group {k} and the solid: "
+                                 f"D {ops.D.shape} (expected {want_D}), M {ops.M.shape} (expected {want_M}), "
+                                 f"kappa {np.shape(ops.kappa)} (expected ({n_lm},))")
+        return operators
 
     def _fibre_field(self, families):
         """FibreField of ``solid.material.fibres``: a family without ``inside`` reinforces every

@@ -11,11 +11,12 @@ Measures, on a set of scenes, every integration variant of :func:`assemble_morta
   Gauss count): relative Frobenius norm ``‖A - A_ref‖_F / ‖A_ref‖_F`` and worst entry
   ``max |A - A_ref| / max |A_ref|``. The reference itself is checked against an independent
   adaptive quadrature (:func:`pair_reference_check`: ``scipy.integrate.quad_vec`` over each
-  segment, own centreline formulas, own Newton projection).
-
-The third measure of the issue, the error of a solution quantity after a linear solve with each
-operator, needs the solid model: :func:`solution_monitor` is the hook and raises
-``NotImplementedError`` until that model exists; the report says so instead of showing numbers.
+  segment, own centreline formulas, own Newton projection);
+- **solution error**: the displacement at a monitor point after a linear solve with each
+  variant's operators, against the solve with the reference operators
+  (:class:`MonitorProblem`, :func:`solution_monitor`, :func:`monitor_error`): a clamped,
+  self-weighted linear elastic cube with stiff fibres, penalty-coupled; the solid is factorised
+  once per mesh (:class:`ClampedSolid`) and each variant costs one small dense solve.
 
 Also: scaling of time and memory with the number of integration points (log-log fit), cold vs
 warm start in fresh processes, and the ``"auto"`` target (segment-based accuracy at <= 1.3x the
@@ -40,6 +41,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+import scipy.sparse as sp
 
 from . import generate
 from .mesh import BeamMesh
@@ -92,6 +94,8 @@ class StudyConfig:
     scaling_points: tuple = (1e3, 1e4, 1e5, 1e6, 1e7)
     startup_cold: bool = True
     seed: int = 2024
+    monitor: bool = True               # solution monitor (MonitorProblem) on the study's scenes
+    monitor_max_solid_dofs: int = None  # ... only where the solid has at most this many DOFs (None: all)
 
 
 def preset(name):
@@ -102,7 +106,10 @@ def preset(name):
         return StudyConfig(name="quick", cells=6, fibres=6, repeats=3, reference_gauss=16, reference_pairs=3,
                            gauss={"element": (1, 2, 4, 8, 16, 32), "segment": (1, 2, 3, 4, 6, 8),
                                   "auto": (1, 2, 4, 8)},
-                           benchmark_repeats=3, scaling_points=(1e3, 1e4, 1e5), startup_cold=False)
+                           benchmark_repeats=3, scaling_points=(1e3, 1e4, 1e5), startup_cold=False,
+                           # monitor on the hex8 scenes only (1029 solid DOFs, < 0.1 s set-up); the hex27 and
+                           # tet10 solids (6591 DOFs) measured 6-8 s CPU set-up per scene, over the 2-minute budget
+                           monitor_max_solid_dofs=2000)
     if name == "tiny":
         return StudyConfig(name="tiny", cells=3, fibres=2, kinds=("straight fibres, hex8", "curved fibres, tet10"),
                            ratios=(1.0,), repeats=1, memory=False, reference_gauss=12, reference_pairs=2,
@@ -217,27 +224,324 @@ def operator_errors(ops, reference):
     return out
 
 
-def solution_monitor(scene, D, M, kappa):
-    """Hook: monitor-point displacement of a linear solve with the coupling operators D, M, κ.
+#: the linear problem of the solution monitor (see :class:`MonitorProblem`)
+MONITOR_SOLID = {"E": 1.0, "nu": 0.3}
+MONITOR_BEAM = {"E": 1000.0, "radius": 0.02}
+MONITOR_BODY_FORCE = (0.0, 0.0, -1.0)
 
-    Issue 5 asks for the error of a solution quantity (displacement at a monitor point) from a
-    linear solve with each variant's operators. That needs the linear solid + beam model, which
-    is being built elsewhere; until it exists this hook raises and the study reports the gap
-    instead of a number.
+
+class ClampedSolid:
+    """The clamped solid of the monitor problem: ``K_SS`` factorised once, flexibility on demand.
+
+    Shared by the :class:`MonitorProblem` of every scene on the same solid mesh (the study's
+    scenes of one kind differ in their fibres only), so that the factorisation and the columns
+    of the flexibility are computed once per mesh.
 
     Parameters
     ----------
-    scene : tuple (beams, solid)
+    K : (n_S, n_S) scipy.sparse matrix
+        Stiffness of the solid (all DOFs).
+    force : (n_S,) array
+        Load on the solid DOFs.
+    fixed : (n_S,) bool array
+        Clamped DOFs (displacement 0).
+    points : (n_nodes, 3) array
+        The mesh's nodes (to check that a problem is on the same mesh).
+
+    Attributes
+    ----------
+    u0 : (n_S,) float64
+        ``K_SS⁻¹ f_S``: the solid's displacement without the beams.
+    dofs : (n_I,) int64
+        Free DOFs whose flexibility columns are known (in the order of ``F``).
+    F : (n_I, n_I) float64
+        ``(K_SS⁻¹)`` restricted to ``dofs`` (symmetric).
+    n_columns_solved : int
+        Columns of ``K_SS⁻¹`` computed so far (the cost of this object).
+    """
+
+    #: flexibility columns solved per call of the factorisation (bounds the dense temporaries)
+    CHUNK = 256
+
+    def __init__(self, K, force, fixed, points):
+        from .solvers.linear import _factorize
+        self.fixed = np.asarray(fixed, dtype=bool)
+        self.points = np.asarray(points)
+        self.free = np.flatnonzero(~self.fixed)
+        self._lu = _factorize(K.tocsr()[self.free][:, self.free], symmetric_positive=True)
+        self.u0 = np.zeros(len(self.fixed))
+        self.u0[self.free] = self._lu.solve(np.asarray(force, dtype=np.float64)[self.free])
+        self.dofs = np.zeros(0, dtype=np.int64)
+        self.F = np.zeros((0, 0))
+        self._position = np.full(len(self.fixed), -1, dtype=np.int64)
+        self.n_columns_solved = 0
+
+    def flexibility(self, dofs):
+        """``F[dofs][:, dofs]`` for free ``dofs``: solves ``K_SS x = e_k`` for the columns not known yet."""
+        dofs = np.asarray(dofs, dtype=np.int64)
+        if self.fixed[dofs].any():
+            raise ValueError("ClampedSolid.flexibility: clamped DOFs have no flexibility (their displacement is 0)")
+        new = np.unique(dofs[self._position[dofs] < 0])
+        if new.size:
+            old = self.dofs
+            all_dofs = np.concatenate([old, new])
+            F = np.empty((len(all_dofs),) * 2)
+            F[: len(old), : len(old)] = self.F
+            where = np.searchsorted(self.free, new)
+            for start in range(0, len(new), self.CHUNK):              # bounded temporaries (n_S x CHUNK)
+                cols = slice(start, min(start + self.CHUNK, len(new)))
+                E = np.zeros((len(self.free), cols.stop - cols.start))
+                E[where[cols], np.arange(cols.stop - cols.start)] = 1.0
+                X = np.zeros((len(self.fixed), E.shape[1]))
+                X[self.free] = self._lu.solve(E)                        # K_SS⁻¹ e_new
+                F[:, len(old) + cols.start: len(old) + cols.stop] = X[all_dofs]
+            self.n_columns_solved += len(new)
+            F[len(old):, : len(old)] = F[: len(old), len(old):].T
+            block = F[len(old):, len(old):]
+            F[len(old):, len(old):] = 0.5 * (block + block.T)           # symmetric to round-off
+            self.dofs = all_dofs
+            self.F = F
+            self._position[new] = len(old) + np.arange(len(new))
+        k = self._position[dofs]
+        return self.F[np.ix_(k, k)]
+
+
+class MonitorProblem:
+    """The linear problem behind the solution monitor of one study scene.
+
+    The unit cube of the scene, small-strain linear elastic (``E = 1, ν = 0.3``), clamped on
+    ``x = 0`` and loaded by its own weight (body force ``(0, 0, -1)``): a cantilever that bends.
+    The fibres are torsion-free Hermite beams, ``E_B = 1000`` and radius 0.02 (``EA ≈ 1.26``,
+    comparable with the axial stiffness of the cube, so the coupling transfers real force),
+    tied to the solid by penalty mortar coupling with ``ε = 1e3 E`` (the library's default).
+
+    The solid and beam stiffness are assembled through :class:`~mortar1d3d.model.Model` (given
+    the reference operators, so nothing is integrated again) and the clamped solid is
+    factorised once (:class:`ClampedSolid`, shareable between scenes on the same mesh);
+    :meth:`displacement` then solves the coupled problem for any operators ``D, M, κ`` of the
+    scene with a small dense system (Notes).
+
+    Parameters
+    ----------
+    beams : BeamMesh (Hermite), solid : SolidMesh
+        The scene (:func:`build_scene`).
+    reference : MortarOperators
+        The study's reference operators of the scene: they choose the monitor point and are
+        the operators of the model's own coupling (:attr:`scene`).
+    penalty : float, optional
+        ε; default ``DEFAULT_PENALTY_FACTOR * E`` (1e3).
+    clamped : ClampedSolid, optional
+        The factorised solid of another MonitorProblem on the same mesh (``.clamped``).
+
+    Attributes
+    ----------
+    scene : Scene
+        The problem as a scene (:func:`monitor_scene`): ``mortar1d3d.solve`` solves the same
+        system with its own operators.
+    beam_node, solid_node : int
+        The monitor point: the beam node with the largest reference κ (the most coupled one)
+        and the free solid node nearest to it.
+    clamped : ClampedSolid
+
+    Notes
+    -----
+    **Why penalty, not Lagrange multipliers.** With multipliers the saddle point is singular
+    whenever a variant has fewer independent integration points than LM nodes:
+    ``B = [-M, D] = P G`` with ``P`` (LM nodes × points) has rank <= the number of points, so
+    element-based integration with one point per beam element (``n_el`` points, ``n_el + 1``
+    LM nodes per fibre) has dependent constraint rows. The cheapest variants of the study are
+    among those to measure, so the monitor uses the library's default penalty enforcement,
+    which is well posed whatever the rank of ``B``. The penalty solution depends on ε, but
+    every variant and the reference are solved with the same ε, so the error measures the
+    operators alone. What no enforcement fixes is a fibre the coupling does not hold against
+    rigid motion at all (:meth:`free_motions`); that unloaded motion is set to zero.
+
+    **Condensation.** With ``λ = ε κ⁻¹ (D u_B − M u_S)`` on the coupled LM rows the penalty
+    system reads ``K_SS u_S − Mᵀλ = f_S``, ``K_BB u_B + Dᵀλ = f_B``,
+    ``D u_B − M u_S − (κ/ε) λ = 0``. Eliminating ``u_S = u_0 + K_SS⁻¹ Mᵀ λ``
+    (``u_0 = K_SS⁻¹ f_S``) leaves, per variant,
+
+        [[K_BB, Dᵀ], [D, −(M F Mᵀ + κ/ε)]] [u_B; λ] = [f_B; M u_0],
+
+    with the solid's flexibility ``F = K_SS⁻¹`` restricted to the DOFs that M reaches. The
+    system has beam DOFs + 3 × coupled LM nodes unknowns, a few hundred in the study: dense.
+    It is the system that :func:`mortar1d3d.model.solve` solves for :attr:`scene` (tested to
+    round-off).
+    """
+
+    def __init__(self, beams, solid, reference, penalty=None, clamped=None):
+        from .model import Model
+
+        self.scene = monitor_scene(beams, solid, reference, penalty)
+        model = Model(self.scene).prepare(operators=[reference])
+        self.penalty = model.penalty
+        g = model.groups[0]
+        n_S = 3 * solid.n_nodes
+        if (model.fixed_dofs >= n_S).any():
+            raise ValueError("MonitorProblem: the monitor scene fixes beam DOFs; it must fix solid DOFs only")
+        z0 = np.zeros(model.n_unknowns)
+        force = -model.residual(z0, 1.0, tangent=False)[0]        # dead load − internal forces at rest
+        _, K_BB = g.physics.evaluate(np.zeros(g.mesh.n_centreline_dofs), tangent=True)
+        self.K_BB = K_BB.toarray()
+        self.f_B = force[g.dof_offset: g.dof_offset + g.mesh.n_centreline_dofs]
+        if clamped is None:
+            fixed = np.zeros(n_S, dtype=bool)
+            fixed[model.fixed_dofs] = True
+            _, K_SS = model.solid_physics.evaluate(np.zeros(n_S), tangent=True)
+            clamped = ClampedSolid(K_SS, force[:n_S], fixed, solid.points)
+        elif clamped.points.shape != solid.points.shape or not np.array_equal(clamped.points, solid.points):
+            raise ValueError("MonitorProblem: clamped belongs to another solid mesh")
+        self.clamped = clamped
+        kappa_node = np.asarray(reference.kappa[: beams.n_nodes])       # LM nodes 0..n_nodes-1 = beam nodes
+        self.beam_node = int(np.argmax(kappa_node))
+        if kappa_node[self.beam_node] <= 0:
+            raise ValueError("MonitorProblem: no beam node is coupled in the reference operators")
+        free_nodes = np.flatnonzero(~clamped.fixed.reshape(-1, 3).all(axis=1))
+        dist = np.linalg.norm(solid.points[free_nodes] - beams.positions[self.beam_node], axis=1)
+        self.solid_node = int(free_nodes[np.argmin(dist)])
+        self._fibre_modes = self._rigid_modes(g)
+        self.n_solves = 0
+        self.held = True                 # whether the last solve's coupling held every fibre
+
+    @staticmethod
+    def _rigid_modes(group):
+        """Per fibre (connected chain of beam elements): its local beam DOFs and an orthonormal
+        basis of its rigid-body motions (tangents rotate with it)."""
+        from scipy.sparse.csgraph import connected_components
+
+        from .solvers.linear import rigid_body_modes
+        mesh = group.mesh
+        adjacency = sp.coo_matrix((np.ones(mesh.n_elements), (mesh.elements[:, 0], mesh.elements[:, 1])),
+                                  shape=(mesh.n_nodes, mesh.n_nodes))
+        n_fibres, label = connected_components(adjacency, directed=False)
+        out = []
+        for f in range(n_fibres):
+            nodes = np.flatnonzero(label == f)
+            local = (6 * nodes[:, None] + np.arange(6)).ravel()
+            # triplets per node: position, tangent (the layout of the beam DOFs)
+            triplets = np.stack([mesh.positions[nodes], mesh.tangents[nodes]], axis=1).reshape(-1, 3)
+            R = rigid_body_modes(triplets, np.tile([False, True], len(nodes)))
+            U, sv, _ = np.linalg.svd(R, full_matrices=False)
+            out.append((local, U[:, sv > 1e-10 * sv[0]]))
+        return out
+
+    def free_motions(self, D, kappa):
+        """Rigid motions of the fibres that the coupling ``D`` (rows with κ > 0) does not stop.
+
+        Each fibre is held against rigid motion by its coupled LM rows alone (the beam stiffness
+        does not resist rigid motions). Where they tie the fibre at one point only (element-based
+        integration with a single point inside the solid), it can rotate about that point; where
+        a curved fibre is coupled through one line2 element, the two rows tie two weighted
+        centroids and it can rotate about the line through them.
+
+        Returns
+        -------
+        (n_beam_dofs, k) float64
+            Orthonormal columns spanning the free motions (k = 0 if every fibre is held).
+        """
+        rows = np.flatnonzero(np.repeat(np.asarray(kappa) > 0.0, 3))
+        Dc = D.tocsr()[rows]
+        scale = max((np.linalg.norm(np.asarray(Dc[:, local] @ Q), 2) for local, Q in self._fibre_modes),
+                    default=0.0)
+        out = []
+        for local, Q in self._fibre_modes:
+            X = np.asarray(Dc[:, local] @ Q)
+            _, sv, Vt = np.linalg.svd(X, full_matrices=X.shape[0] < X.shape[1])     # all of Vt, U thin
+            sv = np.concatenate([sv, np.zeros(Q.shape[1] - len(sv))])
+            null = Vt[sv <= 1e-8 * scale]
+            if len(null):
+                Z = np.zeros((self.K_BB.shape[0], len(null)))
+                Z[local] = Q @ null.T
+                out.append(Z)
+        return np.hstack(out) if out else np.zeros((self.K_BB.shape[0], 0))
+
+    def displacement(self, D, M, kappa):
+        """Displacements at the monitor point with operators ``D, M, κ`` of this scene.
+
+        Returns
+        -------
+        (6,) float64
+            ``[u_B, u_S]``: the displacement of :attr:`beam_node` and of :attr:`solid_node`.
+
+        Notes
+        -----
+        Where the coupling leaves a fibre a free rigid motion (:meth:`free_motions`) the system
+        is singular but consistent (the beams carry no load of their own): the solid's
+        displacement is unique, the fibre's only up to that motion. The solution without it is
+        returned (``Zᵀ u_B = 0`` added as constraints), and :attr:`held` is False.
+        """
+        kappa = np.asarray(kappa, dtype=np.float64)
+        n_B, n_S = self.K_BB.shape[0], len(self.clamped.fixed)
+        if D.shape != (3 * len(kappa), n_B) or M.shape != (3 * len(kappa), n_S):
+            raise ValueError(f"MonitorProblem.displacement: D {D.shape}, M {M.shape} do not fit this scene "
+                             f"({3 * len(kappa)} LM rows, {n_B} beam DOFs, {n_S} solid DOFs)")
+        Z = self.free_motions(D, kappa)
+        self.held = Z.shape[1] == 0
+        rows = np.flatnonzero(np.repeat(kappa > 0.0, 3))
+        Dc = D.tocsr()[rows]
+        Mc = M.tocsr()[rows]
+        reached = np.unique(Mc.indices)
+        monitor = 3 * self.solid_node + np.arange(3)
+        dofs = np.union1d(reached[~self.clamped.fixed[reached]], monitor)   # clamped columns: u_S = 0
+        F = self.clamped.flexibility(dofs)
+        MI = Mc[:, dofs]
+        MF = np.asarray(MI @ F)                                     # (m, n_I)
+        m, k = len(rows), Z.shape[1]
+        A = np.zeros((n_B + m + k, n_B + m + k))
+        A[:n_B, :n_B] = self.K_BB
+        A[n_B:n_B + m, :n_B] = Dc.toarray()
+        A[:n_B, n_B:n_B + m] = A[n_B:n_B + m, :n_B].T
+        A[n_B:n_B + m, n_B:n_B + m] = -(MI @ MF.T + np.diag(np.repeat(kappa, 3)[rows] / self.penalty))
+        A[n_B + m:, :n_B] = Z.T * np.abs(self.K_BB).max()            # scaled like K_BB
+        A[:n_B, n_B + m:] = A[n_B + m:, :n_B].T
+        rhs = np.concatenate([self.f_B, MI @ self.clamped.u0[dofs], np.zeros(k)])
+        y = np.linalg.solve(A, rhs)
+        self.n_solves += 1
+        u_B, lam = y[:n_B], y[n_B:n_B + m]
+        k = np.searchsorted(dofs, monitor)
+        u_S = self.clamped.u0[monitor] + MF[:, k].T @ lam
+        return np.concatenate([u_B[6 * self.beam_node: 6 * self.beam_node + 3], u_S])
+
+
+def monitor_scene(beams, solid, reference, penalty=None):
+    """The :class:`~mortar1d3d.scene.Scene` of :class:`MonitorProblem` (coupling as ``reference``)."""
+    from .scene import Scene
+    coupling = {"integration": reference.integration, "n_gauss": int(reference.n_gauss), "lm": reference.lm,
+                "enforcement": "penalty"}
+    if penalty is not None:
+        coupling["penalty"] = float(penalty)
+    return Scene(solid={"mesh": solid, "material": {"model": "linear_elastic", **MONITOR_SOLID}},
+                 beams=[{"mesh": beams, "model": "torsion_free", "section": dict(MONITOR_BEAM)}],
+                 coupling=coupling, dirichlet=[{"on": "solid:x_min"}],
+                 load=[{"type": "body", "value": list(MONITOR_BODY_FORCE)}],
+                 analysis={"kinematics": "linear", "solver": "direct"}, name="solution monitor")
+
+
+def solution_monitor(problem, D, M, kappa):
+    """Monitor-point displacement of the linear solve with the coupling operators ``D, M, κ``.
+
+    Parameters
+    ----------
+    problem : MonitorProblem
+        The scene's linear problem (stiffness assembled and factorised once).
     D, M : scipy.sparse matrices, kappa : (n_lm,) array
-        The operators of one variant.
+        The operators of one integration variant on the problem's scene.
 
     Returns
     -------
-    (3,) float64
-        Displacement at the scene's monitor point.
+    (6,) float64
+        Displacement of the monitor beam node and of the solid node nearest to it.
     """
-    raise NotImplementedError("solution_monitor needs the linear solid/beam model (not built yet); "
-                              "the study reports operator errors only")
+    if not isinstance(problem, MonitorProblem):
+        raise TypeError(f"solution_monitor: problem must be a MonitorProblem (see MonitorProblem(beams, solid, "
+                        f"reference)), got {type(problem).__name__}")
+    return problem.displacement(D, M, kappa)
+
+
+def monitor_error(u, u_ref):
+    """Relative error ``|u − u_ref| / |u_ref|`` of the monitor displacements (Euclidean norms; NaN if ``u`` is)."""
+    u, u_ref = np.asarray(u, dtype=np.float64), np.asarray(u_ref, dtype=np.float64)
+    return float(np.linalg.norm(u - u_ref) / np.linalg.norm(u_ref))
 
 
 # --------------------------------------------------------------- independent adaptive quadrature
@@ -382,25 +686,63 @@ def _set_threads(threads):
     return default
 
 
-def study_scene(beams, solid, config, progress=None):
-    """All variants of ``config`` on one scene: list of records (timing + errors vs the reference)."""
+def study_scene(beams, solid, config, progress=None, monitor=False, clamped=None):
+    """All variants of ``config`` on one scene: list of records (timing + errors vs the reference).
+
+    With ``monitor``, every variant's operators are also solved with the scene's
+    :class:`MonitorProblem` (``clamped``: a :class:`ClampedSolid` of the same mesh to reuse):
+    each record gets ``u_err`` (:func:`monitor_error` against the reference operators' solution;
+    None without ``monitor``) and ``u_free`` (the variant left a fibre a free rigid motion,
+    :meth:`MonitorProblem.free_motions`).
+
+    Returns
+    -------
+    records : list of dict
+    info : dict
+        Reference and scene sizes; ``monitor``: the monitor point, reference displacement and
+        the monitor's cost (``setup_s``, ``solve_s``: wall time of the set-up and of all the
+        solves), or None.
+    problem : MonitorProblem or None
+    """
     reference = assemble_mortar(beams, solid, integration="segment", n_gauss=config.reference_gauss, lm=config.lm)
     coarser = assemble_mortar(beams, solid, integration="segment", n_gauss=config.reference_gauss - 4, lm=config.lm)
+    problem, u_ref, solve_s, monitor_info = None, None, 0.0, None
+    if monitor:
+        t0 = time.perf_counter()
+        problem = MonitorProblem(beams, solid, reference, clamped=clamped)
+        setup_s = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        u_ref = solution_monitor(problem, reference.D, reference.M, reference.kappa)
+        reference_free = not problem.held
+        solve_s += time.perf_counter() - t0
     records = []
     for integration in INTEGRATIONS:
         for n in config.gauss.get(integration, ()):
             rec, ops = time_assembly(beams, solid, integration, n, config.lm, config.repeats, config.memory)
-            rec.update(integration=integration, n_gauss=n, **operator_errors(ops, reference))
+            rec.update(integration=integration, n_gauss=n, **operator_errors(ops, reference), u_err=None)
+            if problem is not None:
+                t0 = time.perf_counter()
+                rec["u_err"] = monitor_error(solution_monitor(problem, ops.D, ops.M, ops.kappa), u_ref)
+                rec["u_free"] = not problem.held
+                solve_s += time.perf_counter() - t0
             records.append(rec)
             if progress:
+                u = "" if rec["u_err"] is None else f"  u {rec['u_err']:.1e}"
                 progress(f"    {integration:8s} n={n:2d}: {rec['time_s'] * 1e3:8.2f} ms  "
-                         f"D {rec['D_fro']:.1e}  M {rec['M_fro']:.1e}")
+                         f"D {rec['D_fro']:.1e}  M {rec['M_fro']:.1e}{u}")
+    if problem is not None:
+        monitor_info = {"beam_node": problem.beam_node, "solid_node": problem.solid_node,
+                        "u_ref": [float(x) for x in u_ref], "reference_free": reference_free,
+                        "setup_s": setup_s, "solve_s": solve_s,
+                        "solves": problem.n_solves, "solid_columns": problem.clamped.n_columns_solved,
+                        "solid_dofs": 3 * solid.n_nodes}
     self_check = operator_errors(coarser, reference)
     return records, {"reference_gauss": config.reference_gauss,
                      "reference_vs_coarser": max(self_check["D_fro"], self_check["M_fro"]),
                      "points": reference.n_integration_points, "segments": len(reference.segments),
                      "beam_elements": beams.n_elements, "solid_elements": solid.n_elements,
-                     "embedded_length": reference.embedded_length, "beam_length": reference.beam_length}
+                     "embedded_length": reference.embedded_length, "beam_length": reference.beam_length,
+                     "monitor": monitor_info}, problem
 
 
 def reference_checks(config, progress=None):
@@ -534,12 +876,20 @@ def run_study(config, progress=print):
                  f"{len(config.embeddings)} embeddings, {config.threads} thread(s)")
         scenes = []
         for kind in config.kinds:
+            clamped = None      # one factorised solid per kind: the scenes of a kind share the mesh
             for ratio in config.ratios:
                 for embedding in config.embeddings:
                     progress(f"  {kind}, h_B/h_S = {ratio:g}, {embedding}")
                     beams, solid = build_scene(kind, ratio, embedding, config.cells, config.fibres,
                                                config.fibre_length, config.seed)
-                    records, info = study_scene(beams, solid, config)
+                    monitor = config.monitor and (config.monitor_max_solid_dofs is None
+                                                  or 3 * solid.n_nodes <= config.monitor_max_solid_dofs)
+                    records, info, problem = study_scene(beams, solid, config, monitor=monitor, clamped=clamped)
+                    if problem is not None:
+                        clamped = problem.clamped
+                        m = info["monitor"]
+                        progress(f"    monitor: set-up {m['setup_s']:.2f} s, {m['solves']} solves "
+                                 f"{m['solve_s']:.2f} s")
                     scenes.append({"kind": kind, "ratio": ratio, "embedding": embedding, **info,
                                    "records": records})
         progress("reference rule against adaptive quadrature")
@@ -554,7 +904,7 @@ def run_study(config, progress=print):
     finally:
         numba.set_num_threads(default)
     return {"config": asdict(config), "scenes": scenes, "reference_checks": checks, "auto_target": target,
-            "scaling": scale, "startup": start, "solution_error": None,
+            "scaling": scale, "startup": start,
             "machine": _machine(threads_used), "study_s": time.perf_counter() - t_start}
 
 
@@ -581,12 +931,17 @@ def _err(rec):
     return max(rec["D_fro"], rec["M_fro"])
 
 
-def _cheapest(records, integration, threshold):
-    """Record with the fewest Gauss points of one integration whose D and M errors are <= threshold (or None).
+def _u_err(rec):
+    return rec.get("u_err")
+
+
+def _cheapest(records, integration, threshold, error=_err):
+    """Record with the fewest Gauss points of one integration whose error (default: of D and M)
+    is <= threshold (or None).
 
     Fewest points rather than least time: the error of a rule does not depend on the machine load.
     """
-    ok = [r for r in records if r["integration"] == integration and _err(r) <= threshold]
+    ok = [r for r in records if r["integration"] == integration and error(r) is not None and error(r) <= threshold]
     return min(ok, key=lambda r: r["n_gauss"]) if ok else None
 
 
@@ -634,6 +989,7 @@ def sentences(results):
                        f"{len(ratios)} scene/n pairs)" + (", with the exact rule at any n" if "straight" in label else
                                                          ", with the same points (no affine elements to exploit)")
                        + ".")
+    out += monitor_sentences(results)
     t = results["auto_target"]
     verdict = "meets" if t["auto_over_element"] <= 1.3 else "misses"
     out.append(f"On the benchmark scene fibre_cube{tuple(t['scene'])} with n_gauss = 4, \"auto\" takes "
@@ -656,6 +1012,73 @@ def sentences(results):
     else:
         out.append(f"A fresh process with a filled kernel cache imports and assembles a tiny scene in "
                    f"{st['warm']['in_process_s']:.2f} s (cold start: run the full report).")
+    return out
+
+
+def monitor_sentences(results):
+    """Sentences on the solution monitor: how the displacement error follows the D/M error."""
+    cfg = results["config"]
+    scenes = [sc for sc in results["scenes"] if sc.get("monitor")]
+    if not scenes:
+        return ["The solution monitor did not run on any scene of this study (see Method)."]
+    out = []
+    label = {"element": "element-based integration", "segment": "segment-based", "auto": "auto"}
+    for kind in cfg["kinds"]:
+        sel = [sc for sc in scenes if sc["kind"] == kind]
+        if not sel:
+            continue
+        scene = next((sc for sc in sel if sc["ratio"] == 1.0), sel[0])
+        threshold = cfg["thresholds"][0]
+        parts = []
+        for integration in INTEGRATIONS:
+            recs = [r for r in scene["records"] if r["integration"] == integration and r["u_err"] is not None]
+            if not recs:
+                continue
+            best = _cheapest(scene["records"], integration, threshold, _u_err)
+            if best is None:
+                worst = min(recs, key=_u_err)
+                parts.append(f"{label[integration]} does not reach it (best {_fmt_e(worst['u_err'])} with "
+                             f"n = {worst['n_gauss']})")
+            else:
+                parts.append(f"{label[integration]} needs n = {best['n_gauss']} (D/M error there "
+                             f"{_fmt_e(_err(best))})")
+        out.append(f"To reach a monitor displacement error of {threshold:.0e} on {kind} (h_B/h_S = "
+                   f"{scene['ratio']:g}, {scene['embedding']}), " + "; ".join(parts) + ".")
+    pairs = [(r["u_err"], _err(r)) for sc in scenes for r in sc["records"] if r["u_err"] is not None
+             and _err(r) > 1e-12]
+    if pairs:
+        ratios = [u / e for u, e in pairs]
+        below = sum(x <= 1.0 for x in ratios)
+        u_log, e_log = np.log10([u for u, _ in pairs]), np.log10([e for _, e in pairs])
+        slope = float(np.polyfit(e_log, u_log, 1)[0]) if len(pairs) > 2 and np.ptp(e_log) > 0 else None
+        text = (f"Where the operators are inexact (D/M error > 1e-12: {len(pairs)} variant/scene pairs on "
+                f"{len(scenes)} scenes), the monitor displacement error is a median {statistics.median(ratios):.2g}x "
+                f"the D/M error (range {min(ratios):.2g}-{max(ratios):.2g}x); it is below the D/M error in {below} "
+                f"of the {len(pairs)} pairs")
+        if slope is not None:
+            text += (f", and a log-log fit over all pairs gives u err ~ (D/M error)^{slope:.2f} "
+                     "(1 would mean: proportional)")
+        out.append(text + ".")
+    exact = [r["u_err"] for sc in scenes for r in sc["records"] if r["u_err"] is not None and _err(r) <= 1e-12]
+    if exact:
+        out.append(f"Variants with operators exact to round-off (D/M error <= 1e-12, {len(exact)} pairs) give "
+                   f"displacements within {_fmt_e(max(exact))} of the reference solution.")
+    free = [(sc, r) for sc in scenes for r in sc["records"] if r.get("u_free")]
+    ref_free = [sc for sc in scenes if sc["monitor"].get("reference_free")]
+    if free or ref_free:
+        which = sorted({f"{r['integration']}-based n = {r['n_gauss']}" for _, r in free})
+        out.append(f"In {len(free)} variant/scene pair(s)" + (f" ({', '.join(which)})" if which else "")
+                   + (f" and in the reference solution of {len(ref_free)} scene(s)" if ref_free else "")
+                   + " the coupling leaves some fibre a free rigid motion (held at one point, or a curved fibre "
+                   "held through a single element, which can turn about an axis); the fibre's free motion is set "
+                   "to zero there (`*` in the tables).")
+    n_all = len(results["scenes"])
+    if len(scenes) < n_all:
+        cost = [sc["monitor"]["setup_s"] for sc in scenes]
+        out.append(f"The monitor ran on {len(scenes)} of {n_all} scenes (solids with at most "
+                   f"{cfg['monitor_max_solid_dofs']} DOFs; its set-up took {min(cost):.2f}-{max(cost):.2f} s per "
+                   "scene there, the larger solids cost a factorisation and a flexibility column per coupled "
+                   "solid DOF each).")
     return out
 
 
@@ -706,6 +1129,40 @@ def _plots(results, out):
     files["pareto"] = "pareto.png"
     fig.savefig(out / files["pareto"], dpi=110)
     plt.close(fig)
+
+    monitored = [sc for sc in results["scenes"] if sc.get("monitor")]
+    if monitored:
+        mkinds = [k for k in kinds if any(sc["kind"] == k for sc in monitored)]
+        fig, axes = plt.subplots(len(mkinds), len(ratios), figsize=(4.2 * len(ratios), 3.4 * len(mkinds)),
+                                 squeeze=False, sharey=True)
+        for i, kind in enumerate(mkinds):
+            for j, ratio in enumerate(ratios):
+                ax = axes[i, j]
+                for scene in monitored:
+                    if scene["kind"] != kind or scene["ratio"] != ratio:
+                        continue
+                    style = "-" if scene["embedding"] == "embedded" else "--"
+                    for integration in INTEGRATIONS:
+                        recs = [r for r in scene["records"] if r["integration"] == integration
+                                and r["u_err"] is not None]
+                        if recs:
+                            ax.loglog([r["time_s"] * 1e3 for r in recs], [max(r["u_err"], floor) for r in recs],
+                                      style, marker="o", ms=3, color=colours[integration],
+                                      label=f"{integration}, {scene['embedding']}")
+                ax.set_title(f"{kind}, h_B/h_S = {ratio:g}", fontsize=9)
+                ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+                ax.grid(True, which="major", alpha=0.3)
+                if i == len(mkinds) - 1:
+                    ax.set_xlabel("median assemble_mortar time [ms]")
+                if j == 0:
+                    ax.set_ylabel("monitor displacement error")
+        axes[0, 0].legend(fontsize=7)
+        fig.suptitle("Solution error vs assembly time per variant: |u - u_ref| / |u_ref| at the monitor point\n"
+                     "(solid: embedded, dashed: partly outside; errors < 1e-17 drawn at 1e-17)", fontsize=9)
+        fig.tight_layout()
+        files["monitor"] = "monitor.png"
+        fig.savefig(out / files["monitor"], dpi=110)
+        plt.close(fig)
 
     # stage breakdown on the benchmark scene
     t = results["auto_target"]
@@ -797,10 +1254,23 @@ def write_report(results, out="report"):
              f"segment-based integration with {cfg['reference_gauss']} points per segment. `auto` uses the minimal "
              "exact Gauss rule on segments where the integrand is a polynomial (straight beams in affine "
              "elements), so its error there does not depend on n.")
-    L.append("- Solution error (displacement at a monitor point after a linear solve with each variant's "
-             "operators): **not measured yet** — it needs the linear solid/beam model. The hook is "
-             "`mortar1d3d.study.solution_monitor(scene, D, M, kappa)`, which raises `NotImplementedError` "
-             "until that model exists.\n")
+    mon_scope = ("every scene" if cfg.get("monitor_max_solid_dofs") is None else
+                 f"the scenes whose solid has at most {cfg['monitor_max_solid_dofs']} DOFs")
+    L.append("- Solution error (`u err`): a linear solve with each variant's operators "
+             "(`mortar1d3d.study.MonitorProblem`): the cube, small-strain linear elastic (E = 1, ν = 0.3), "
+             "clamped on x = 0 and bent by its own weight (body force (0, 0, -1)); the fibres torsion-free "
+             "Hermite beams with E = 1000 and radius 0.02 (EA ≈ 1.26, as stiff axially as the cube, so the "
+             "coupling carries real force), tied by penalty mortar coupling (ε = 1e3 E, the library default; "
+             "with Lagrange multipliers the saddle point is singular for variants with fewer integration "
+             "points than LM nodes, e.g. element-based n = 1). The monitor point is the beam node with the "
+             "largest reference κ and the free solid node nearest to it; `u err` = |u - u_ref| / |u_ref| over "
+             "both nodes' displacements, u_ref from the reference operators. The solid is factorised once per "
+             "mesh and condensed onto the DOFs the coupling reaches, so each variant costs one small dense "
+             "solve. `*`: the variant's coupling leaves some fibre a free rigid motion (a single coupling "
+             "point; or a curved fibre coupled through one line2 element, which can turn about the axis through "
+             "the two weighted centroids its two LM rows tie): the unloaded free motion is set to zero. "
+             f"Measured on {mon_scope}" + ("." if cfg.get("monitor", True) else " (switched off in this run).")
+             + "\n")
     L.append("## The reference\n")
     L.append("Segment-based integration with the reference Gauss count, compared entry by entry with an "
              "independent adaptive quadrature (`scipy.integrate.quad_vec`, relative tolerance 1e-13, own "
@@ -817,25 +1287,34 @@ def write_report(results, out="report"):
              "segment by `ref vs n-4` in the tables below (an estimate of its own error).\n")
     if "pareto" in files:
         L.append(f"![error vs time]({files['pareto']})\n")
+    if "monitor" in files:
+        L.append(f"![solution error vs time]({files['monitor']})\n")
     L.append("## Tables\n")
     L.append("Times in ms (median); stages: search / segmentation / integration points / assembly / CSR / "
              "other (certificates, point records). "
-             "Errors: relative Frobenius norm (fro) and worst entry (max).\n")
+             "Errors: relative Frobenius norm (fro) and worst entry (max); `u err`: monitor displacement "
+             "error (— where the monitor did not run; `*`: a fibre had a free rigid motion, see Method).\n")
     for scene in results["scenes"]:
         L.append(f"### {scene['kind']}, h_B/h_S = {scene['ratio']:g}, {scene['embedding']}\n")
         L.append(f"{scene['beam_elements']} beam elements, {scene['solid_elements']} solid elements; embedded length "
                  f"{scene['embedded_length']:.4f} of {scene['beam_length']:.4f}; reference: "
                  f"{scene['points']} points on {scene['segments']} segments; ref vs n-4: "
                  f"{_fmt_e(scene['reference_vs_coarser'])}.\n")
+        mon = scene.get("monitor")
+        if mon:
+            L.append(f"Monitor: beam node {mon['beam_node']}, solid node {mon['solid_node']}; |u_ref| = "
+                     f"{np.linalg.norm(mon['u_ref']):.4g}" + ("*" if mon.get("reference_free") else "")
+                     + f"; set-up {mon['setup_s']:.2f} s, {mon['solves']} solves {mon['solve_s']:.2f} s.\n")
         mem_head = " peak MiB |" if cfg["memory"] else ""
-        L.append(f"| integration | n | points | time | stages |{mem_head} D fro | M fro | D max | M max |")
-        L.append("|---|---|---|---|---|" + ("---|" if cfg["memory"] else "") + "---|---|---|---|")
+        L.append(f"| integration | n | points | time | stages |{mem_head} D fro | M fro | D max | M max | u err |")
+        L.append("|---|---|---|---|---|" + ("---|" if cfg["memory"] else "") + "---|---|---|---|---|")
         for r in scene["records"]:
             st = " / ".join(f"{r['stages_s'][k] * 1e3:.2f}" for k in STAGES)
             mem = f" {r['peak_bytes'] / 2**20:.2f} |" if cfg["memory"] else ""
+            u = "—" if not mon or r.get("u_err") is None else _fmt_e(r["u_err"]) + ("*" if r.get("u_free") else "")
             L.append(f"| {r['integration']} | {r['n_gauss']} | {r['points']} | {r['time_s'] * 1e3:.2f} | {st} |"
                      f"{mem} {_fmt_e(r['D_fro'])} | {_fmt_e(r['M_fro'])} | {_fmt_e(r['D_max'])} | "
-                     f"{_fmt_e(r['M_max'])} |")
+                     f"{_fmt_e(r['M_max'])} | {u} |")
         L.append("")
     t = results["auto_target"]
     L.append(f"## \"auto\" on the benchmark scene fibre_cube{tuple(t['scene'])}\n")
