@@ -673,7 +673,7 @@ class Model:
         size = size if size > 0 else 1.0
         R = np.zeros((n // 3, 3, 6))
         P = (X - centre) / size
-        P[is_tangent] = X[is_tangent]
+        P[is_tangent] = X[is_tangent] / size     # a tangent turns with the body: ω × t, same scale
         for k in range(3):
             e = np.zeros(3)
             e[k] = 1.0

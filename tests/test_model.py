@@ -351,3 +351,29 @@ def test_cli_run_writes_a_paraview_series(tmp_path):
     quiet = subprocess.run([sys.executable, "-m", "mortar1d3d.cli", "run", str(example), "--out",
                             str(tmp_path / "q"), "--quiet"], capture_output=True, text=True, check=True)
     assert quiet.stdout == ""
+
+
+def test_rigid_body_modes_are_in_the_kernel_of_the_reference_tangent():
+    """Solid + curved Hermite beam + penalty coupling: K(0) R = 0 for the six modes, tangent rows included.
+
+    The tangent DOFs must turn with the same scale as the positions (ω × t), otherwise the
+    rotation columns are not rigid motions of the beam and the support check and the AMG near
+    null space would be fed wrong vectors.
+    """
+    scene = Scene(solid={"mesh": {"box": [[0, 0, 0], [2.0, 0.6, 0.6]], "cells": [3, 1, 1]},
+                         "material": {"model": "saint_venant_kirchhoff", "E": 10.0, "nu": 0.3}},
+                  beams=[{"curve": {"helix": {"centre": [0.2, 0.3, 0.3], "axis": [1, 0, 0], "radius": 0.15,
+                                              "length": 1.6, "turns": 0.8}},
+                          "elements": 4, "section": {"EA": 3.0, "EI": 0.2}}],
+                  coupling={"penalty": 50.0},
+                  dirichlet=[{"on": "solid:x_min"}])
+    model = Model(scene).prepare()
+    R = model.rigid_body_modes()
+    _, K = model.internal(np.zeros(model.n_displacement_dofs))
+    scale = abs(K).max() * np.abs(R).max()
+    for k in range(6):
+        assert np.abs(K @ R[:, k]).max() < 1e-12 * scale, k
+    # the beam's rotation columns are not trivially zero on the tangent rows
+    first = model.groups[0].dof_offset
+    tangent_rows = np.concatenate([first + 6 * i + np.arange(3, 6) for i in range(model.groups[0].mesh.n_nodes)])
+    assert np.abs(R[tangent_rows, 3:]).max() > 0.1 * np.abs(R[:, 3:]).max()
