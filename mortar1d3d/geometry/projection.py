@@ -16,6 +16,8 @@ INSIDE, OUTSIDE, NOT_CONVERGED = 0, 1, 2
 
 _MAX_PARAMETER = 1e3      # |ξ| beyond this: the point is far outside; stop early
 _BACKTRACKS = 8
+#: |x(ξ) - p| below this times h is round-off of the map itself (a few ulps of local coordinates)
+_ROUND_OFF = 4 * 2.220446049250313e-16
 
 
 @njit
@@ -121,7 +123,7 @@ def in_box(box, x0, x1, x2):
 
 
 @njit
-def polish(code, X, p0, p1, p2, xi, trial, N, dN):
+def polish(code, X, p0, p1, p2, h, xi, trial, N, dN):
     """One more Newton step on a converged projection, kept if it lowers |x(ξ) - p|.
 
     The convergence test (1e-12 h) decides *whether* a point is found; integration points get
@@ -130,6 +132,8 @@ def polish(code, X, p0, p1, p2, xi, trial, N, dN):
     """
     x0, x1, x2 = map_point(code, X, xi, N)
     r0, r1, r2 = p0 - x0, p1 - x1, p2 - x2
+    if norm3(r0, r1, r2) <= _ROUND_OFF * h:
+        return      # already at round-off (affine elements after one Newton step): nothing to gain
     j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, dN)
     det, d0, d1, d2 = solve3(j00, j01, j02, j10, j11, j12, j20, j21, j22, r0, r1, r2)
     if det == 0.0:

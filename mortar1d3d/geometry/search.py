@@ -155,24 +155,27 @@ def _overlap(a, b):
 
 
 @njit
-def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, found, out):
-    """Sorted unique solid elements overlapping ``box``.
-
-    ``found`` is a work buffer, grown (and returned) when too small; the ids are written into
-    ``out`` when it has room. Returns (count, found).
-    """
-    lo = np.empty(3, dtype=np.int64)
-    hi = np.empty(3, dtype=np.int64)
+def _cell_total(box, cell_offsets, lower, inv_cell, dims, lo, hi):
+    """Number of (cell, solid) entries in the cells ``box`` covers: a bound on its candidates."""
     if not _cell_range(box, lower, inv_cell, dims, lo, hi):
-        return 0, found
+        return 0
     total = 0
     for i in range(lo[0], hi[0] + 1):
         for j in range(lo[1], hi[1] + 1):
             for k in range(lo[2], hi[2] + 1):
                 c = (i * dims[1] + j) * dims[2] + k
                 total += cell_offsets[c + 1] - cell_offsets[c]
-    if total > found.shape[0]:
-        found = np.empty(2 * total, dtype=np.int64)
+    return total
+
+
+@njit
+def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, lo, hi, out):
+    """Sorted unique solid elements overlapping ``box``, written to the front of ``out``.
+
+    ``out`` must hold :func:`_cell_total` entries (it is the work space too). Returns the count.
+    """
+    if not _cell_range(box, lower, inv_cell, dims, lo, hi):
+        return 0
     n = 0
     for i in range(lo[0], hi[0] + 1):
         for j in range(lo[1], hi[1] + 1):
@@ -181,35 +184,43 @@ def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, di
                 for q in range(cell_offsets[c], cell_offsets[c + 1]):
                     s = cell_ids[q]
                     if _overlap(box, solid_boxes[s]):
-                        found[n] = s
+                        out[n] = s
                         n += 1
-    found[:n].sort()
+    out[:n].sort()
     m = 0
     for q in range(n):
-        if q == 0 or found[q] != found[q - 1]:
-            if out.shape[0] > 0:
-                out[m] = found[q]
+        if q == 0 or out[q] != out[m - 1]:
+            out[m] = out[q]
             m += 1
-    return m, found
+    return m
 
 
 @njit_parallel
 def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims):
+    # one pass of overlap tests: each beam element gets room for every entry of the cells it
+    # covers (a cheap bound), finds its sorted unique candidates in place, then the lists are packed
     n_beam = beam_boxes.shape[0]
-    counts = np.zeros(n_beam + 1, dtype=np.int64)
-    empty = np.empty(0, dtype=np.int64)
+    bound = np.zeros(n_beam + 1, dtype=np.int64)
     for c in prange(n_chunks(n_beam, CHUNK)):
-        found = np.empty(64, dtype=np.int64)
+        lo = np.empty(3, dtype=np.int64)
+        hi = np.empty(3, dtype=np.int64)
         for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
-            counts[e + 1], found = _candidates_of(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower,
-                                                  inv_cell, dims, found, empty)
+            bound[e + 1] = _cell_total(beam_boxes[e], cell_offsets, lower, inv_cell, dims, lo, hi)
+    room = np.cumsum(bound)
+    work = np.empty(room[-1], dtype=np.int64)
+    counts = np.zeros(n_beam + 1, dtype=np.int64)
+    for c in prange(n_chunks(n_beam, CHUNK)):
+        lo = np.empty(3, dtype=np.int64)
+        hi = np.empty(3, dtype=np.int64)
+        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
+            counts[e + 1] = _candidates_of(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims,
+                                           lo, hi, work[room[e]:room[e + 1]])
     offsets = np.cumsum(counts)
     solids = np.empty(offsets[-1], dtype=np.int64)
     for c in prange(n_chunks(n_beam, CHUNK)):
-        found = np.empty(64, dtype=np.int64)
         for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
-            _, found = _candidates_of(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims,
-                                      found, solids[offsets[e]:offsets[e + 1]])
+            for q in range(counts[e + 1]):
+                solids[offsets[e] + q] = work[room[e] + q]
     return offsets, solids
 
 

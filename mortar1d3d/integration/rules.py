@@ -75,7 +75,7 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
                         solid.centre(code, x)
                         xi[k] = x
                         continue
-                polish(code, X, r0, r1, r2, x, trial, N, dN)
+                polish(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN)
                 xi[k] = x
                 # a segment lies in its element: a point clearly outside means a missed
                 # crossing; it is reported, not hidden
@@ -116,7 +116,7 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
                     # X still holds the owner's nodes (it was the last element tested)
                     polish(codes[s], X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
                            r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
-                           r2 + (beam_origin[e, 2] - solid_origin[s, 2]), x, trial, N, dN)
+                           r2 + (beam_origin[e, 2] - solid_origin[s, 2]), solid_h[s], x, trial, N, dN)
                     owner[k] = s
                     status[k] = POINT_INSIDE
                     xi[k] = x
