@@ -253,12 +253,13 @@ class AuxiliarySpacePreconditioner:
         self.A = A
         self.shape = A.shape
         self.A_beam_rows = A[self.beam].tocsr()                 # rows of the beam DOFs
-        self.A_beam_cols = A[:, self.beam].tocsr()
-        A_sb = A[self.solid][:, self.beam]
-        A_bb = A[self.beam][:, self.beam].tocsc()
+        self.A_beam_cols = self.A_beam_rows.T.tocsr()            # A is symmetric
+        A_solid_rows = A[self.solid].tocsr()
+        A_sb = A_solid_rows[:, self.beam]
+        A_bb = self.A_beam_rows[:, self.beam].tocsc()
         # Eᵀ A E with E = [I; P], without forming E
         cross = (A_sb @ P).tocsr()
-        self.auxiliary = (A[self.solid][:, self.solid] + cross + cross.T + P.T @ (A_bb @ P)).tocsr()
+        self.auxiliary = (A_solid_rows[:, self.solid] + cross + cross.T + P.T @ (A_bb @ P)).tocsr()
         self.prolongation = P
         self._restriction = P.T.tocsr()
         null = None if near_nullspace is None else np.asarray(near_nullspace, dtype=np.float64)
