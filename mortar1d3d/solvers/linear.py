@@ -146,7 +146,7 @@ def _block_size(n, block_size):
     return block_size
 
 
-def build_amg(A, near_nullspace=None, *, block_size=None):
+def build_amg(A, near_nullspace=None, *, block_size=None, weighting="diagonal"):
     """Smoothed-aggregation AMG hierarchy for an SPD elasticity-like matrix.
 
     Parameters
@@ -159,6 +159,10 @@ def build_amg(A, near_nullspace=None, *, block_size=None):
         Aggregate by DOF triplets (BSR with 3x3 blocks) when 3: right when DOFs ``3i..3i+2``
         belong to one node, i.e. Dirichlet conditions fix whole nodes. Default: 3 if ``n`` is a
         multiple of 3, else 1.
+    weighting : {"diagonal", "local"}
+        Damping of the Jacobi-smoothed prolongation (pyamg's ``weighting``): ``"diagonal"``
+        estimates the spectral radius of ``D⁻¹A`` with a few Arnoldi/Lanczos steps, ``"local"``
+        bounds it row by row (no eigenvalue estimate, a slightly more damped prolongation).
 
     Returns
     -------
@@ -184,7 +188,7 @@ def build_amg(A, near_nullspace=None, *, block_size=None):
     matrix = A.tobsr(blocksize=(bs, bs)) if bs > 1 else A
     return pyamg.smoothed_aggregation_solver(
         matrix, B=B, symmetry="hermitian", strength=("symmetric", {"theta": 0.0}),
-        smooth=("jacobi", {"omega": 4.0 / 3.0}), max_coarse=500, coarse_solver="splu")
+        smooth=("jacobi", {"omega": 4.0 / 3.0, "weighting": weighting}), max_coarse=500, coarse_solver="splu")
 
 
 class AuxiliarySpacePreconditioner:
@@ -268,7 +272,9 @@ class AuxiliarySpacePreconditioner:
         null = None if near_nullspace is None else np.asarray(near_nullspace, dtype=np.float64)
         if null is not None and null.shape[0] != n_s:
             raise ValueError(f"near_nullspace must have one row per solid DOF ({n_s}), got {null.shape}")
-        self.amg = build_amg(self.auxiliary, null, block_size=block_size)
+        # "local" weighting: the spectral-radius estimate of the default took up to a third of the AMG
+        # setup of fibre_cube(40) (CPU 14-18 s against 12.4 s, loaded machine), same 33 CG iterations
+        self.amg = build_amg(self.auxiliary, null, block_size=block_size, weighting="local")
         self._cycle = self.amg.aspreconditioner(cycle="V")
         self._beam_lu = _factorize(A_bb, symmetric_positive=True)
         self.setup_time = time.perf_counter() - start
