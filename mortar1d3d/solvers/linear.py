@@ -236,7 +236,7 @@ class AuxiliarySpacePreconditioner:
     the order of the beam stiffness, not of ε. One application is the symmetric multiplicative
     Schwarz sweep beam → auxiliary → beam (symmetric and positive definite, so CG applies).
     Measured on ``fibre_cube(n, 1000, 20)`` at ε = 1e3 E, rtol 1e-8 (benchmarks/penalty_solve.py):
-    14, 19, 33 CG iterations for n = 10, 20, 40, against 608-783 for AMG on ``A`` (n = 10, 20).
+    14, 20, 33 CG iterations for n = 10, 20, 40, against 608-783 for AMG on ``A`` (n = 10, 20).
     The additive variant (both corrections from the same residual) saves one product with ``A``
     per application but needed 16/24 iterations against 14/19 (n = 10/20). At a small penalty
     (ε ~ 10 E) plain AMG is the better choice (medium test problem: 19 against 28 iterations),
