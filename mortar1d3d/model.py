@@ -448,9 +448,14 @@ class Model:
         else:
             out.append(Effect("solver.linear", "once", "one linear solve, no Newton loop"))
         method = self.linear_solver_method()
-        detail = {"direct": "sparse LU (scipy)", "amg": "CG + smoothed aggregation AMG (rigid-body modes)",
+        amg = ("CG + auxiliary-space preconditioner (AMG on the solid carrying its beams, beam blocks "
+               "factorised)" if self._auxiliary_space() else "CG + smoothed aggregation AMG (rigid-body modes)")
+        detail = {"direct": "sparse LU (scipy)", "amg": amg,
                   "block": "MINRES + block preconditioner (AMG solid block, Schur from kappa)"}[method]
         out.append(Effect(f"linear_solver.{method}", every, detail))
+        if method == "amg" and self._auxiliary_space():
+            out.append(Effect("linear_solver.follow_operator", "once", "beam DOFs following the solid "
+                                                                        "(prolongation of the auxiliary space)"))
         return out
 
     # -- operators ------------------------------------------------------------------------------
@@ -778,6 +783,28 @@ class Model:
         self.last_residual = r
         return r, (K.tocsr() if tangent else None)
 
+    def _auxiliary_space(self):
+        """True when the AMG path uses the auxiliary-space preconditioner: beams penalty-coupled
+        to a solid (plain AMG on the penalty system needs hundreds of iterations at ε = 1e3 E)."""
+        return self.solid_mesh is not None and bool(self.groups) and self.scene.coupled and not self.lagrange
+
+    def _follow_split(self):
+        """``solid``, ``beam`` (positions among the free DOFs) and the prolongation ``P`` (free
+        beam DOFs × free solid DOFs) of :func:`~mortar1d3d.physics.coupling.follow_operator`;
+        built once, since the coupling operators are constant."""
+        if getattr(self, "_follow", None) is None:
+            from .physics.coupling import follow_operator
+            nS = 3 * self.n_solid_nodes
+            free = self.free[self.free < self.n_displacement_dofs]
+            blocks = [follow_operator(g.operators, g.mesh) for g in self.groups]
+            P = sp.vstack(blocks, format="csr")           # groups are contiguous after the solid
+            solid = np.flatnonzero(free < nS)
+            beam = np.flatnonzero(free >= nS)
+            P = P[free[beam] - nS][:, free[solid]].tocsr()
+            self._follow = dict(solid=solid, beam=beam, prolongation=P)
+            self.counts["linear_solver.follow_operator"] += 1
+        return self._follow
+
     def solve_linear(self, A, b, x0=None):
         """Solve a reduced (Dirichlet DOFs removed) linear system of this model."""
         from .solvers.linear import solve_linear, solve_saddle
@@ -789,7 +816,11 @@ class Model:
         block = 3 if np.isin(triplets, (0, 3)).all() else 1
         if not self.lagrange:
             R = self.rigid_body_modes()[free] if method == "amg" else None
-            x, info = solve_linear(A, b, method=method, near_nullspace=R, block_size=block if method == "amg" else None)
+            extra = {}
+            if method == "amg" and self._auxiliary_space():
+                extra = dict(method="aux", **self._follow_split())
+            x, info = solve_linear(A, b, **{"method": method, **extra}, near_nullspace=R,
+                                   block_size=block if method == "amg" else None)
             self.last_linear_info = info
             return x
         n = self.n_displacement_dofs

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from mortar1d3d.solvers.linear import LinearSolverError, rigid_body_modes, solve_linear, solve_saddle
+from mortar1d3d.solvers.linear import (AuxiliarySpacePreconditioner, LinearSolverError, rigid_body_modes,
+                                       solve_linear, solve_saddle)
 from mortar1d3d.solvers.linear import _minres
 _HEX8_CORNERS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
                           [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], dtype=float)
@@ -244,6 +245,73 @@ def test_minres_kernel_matches_dense_solve():
     assert _rel(x, np.linalg.solve(A, b)) < 1e-9
 
 
+# ----------------------------------------------------------------------------- auxiliary space
+
+def follow_prolongation(prob):
+    """P = D⁻¹M for the synthetic coupling (D = κ I at the beam nodes), free rows and columns."""
+    n_beam = len(prob["beam_points"])
+    kappa3 = np.repeat(prob["kappa"][:n_beam], 3)
+    P = sp.diags(1.0 / kappa3) @ prob["M"][:3 * n_beam]
+    solid_columns = prob["free"][prob["solid"]]
+    beam_rows = prob["free"][prob["beam"]] - prob["n_s"]
+    return P.tocsr()[beam_rows][:, solid_columns]
+
+
+@pytest.mark.parametrize("factor", [1e3, 1e4])
+def test_auxiliary_space_robust_at_large_penalty(medium, factor):
+    """ε = 1e3 E (the default penalty factor) and 1e4 E: plain AMG degrades, the auxiliary space does not."""
+    A = penalty_matrix(medium, factor)                 # E = 1
+    P = follow_prolongation(medium)
+    x_direct, _ = solve_linear(A, medium["b"], "direct")
+    x, info = solve_linear(A, medium["b"], "aux", near_nullspace=medium["R"], solid=medium["solid"],
+                           beam=medium["beam"], prolongation=P)
+    assert info["method"] == "aux" and info["converged"] and info["residual"] <= 1e-10
+    assert _rel(x, x_direct) < 1e-8
+    assert info["iterations"] <= 24                    # measured 18 (ε = 1e3) and 18 (ε = 1e4)
+    _, plain = solve_linear(A, medium["b"], "amg", near_nullspace=medium["R"], maxiter=2000)
+    assert plain["iterations"] >= 4 * info["iterations"]      # measured 103 (ε = 1e3), 319 (ε = 1e4)
+
+
+def test_auxiliary_space_matrix_is_the_galerkin_product(small):
+    A = penalty_matrix(small, 1e3)
+    P = follow_prolongation(small)
+    pre = AuxiliarySpacePreconditioner(A, small["solid"], small["beam"], P, small["R"][small["solid"]])
+    n = A.shape[0]
+    E = sp.lil_matrix((n, len(small["solid"])))
+    E[small["solid"], np.arange(len(small["solid"]))] = 1.0
+    E[small["beam"]] = P
+    E = E.tocsr()
+    expected = (E.T @ A @ E).toarray()
+    assert np.abs(pre.auxiliary.toarray() - expected).max() <= 1e-12 * np.abs(expected).max()
+    # P = D⁻¹M ties the beam exactly to the solid: the penalty adds nothing to a following motion
+    K_aux = (E.T @ small["K"] @ E).toarray()
+    assert np.abs(expected - K_aux).max() <= 1e-10 * np.abs(expected).max()
+    # the preconditioner is symmetric positive definite (CG needs it)
+    rng = np.random.default_rng(0)
+    X = rng.standard_normal((n, 6))
+    Y = np.column_stack([pre.matvec(v) for v in X.T])
+    G = X.T @ Y
+    assert np.abs(G - G.T).max() <= 1e-9 * np.abs(G).max()
+    assert np.linalg.eigvalsh(0.5 * (G + G.T)).min() > 0
+
+
+def test_auxiliary_space_argument_errors(small):
+    A = penalty_matrix(small, 1e3)
+    P = follow_prolongation(small)
+    with pytest.raises(ValueError, match="needs solid, beam and prolongation"):
+        solve_linear(A, small["b"], "aux")
+    with pytest.raises(ValueError, match="prolongation must be .* shape"):
+        AuxiliarySpacePreconditioner(A, small["solid"], small["beam"], P.T)
+    with pytest.raises(ValueError, match="partition"):
+        AuxiliarySpacePreconditioner(A, small["solid"], small["solid"], P)
+    # a prebuilt one implies the method, auto picks it above the direct limit only
+    pre = AuxiliarySpacePreconditioner(A, small["solid"], small["beam"], P, small["R"][small["solid"]])
+    _, info = solve_linear(A, small["b"], preconditioner=pre)
+    assert info["method"] == "aux" and info["converged"]
+    _, info = solve_linear(A, small["b"], solid=small["solid"], beam=small["beam"], prolongation=P)
+    assert info["method"] == "direct"
+
+
 # ----------------------------------------------------------------------------- saddle points
 
 def _constraint_rhs(prob):
@@ -304,3 +372,59 @@ def test_saddle_singular_raises(small):
     B[:, small["beam"]] = 0
     with pytest.raises(LinearSolverError, match="singular"):
         solve_saddle(small["K"], B.tocsr(), small["kappa"], small["b"], np.zeros(B.shape[0]), "direct")
+
+
+# ----------------------------------------------------------------------------- scenes
+
+def _fibre_scene(solver, n=8, fibres=40, elements=6):
+    import mortar1d3d as m13
+    beams, solid = m13.generate.fibre_cube(n, fibres, elements)
+    return m13.Scene(solid={"mesh": solid, "material": {"model": "linear_elastic", "E": 1e9, "nu": 0.3}},
+                     beams=[{"mesh": beams, "section": {"E": 2e11, "radius": 0.01}}],
+                     dirichlet=[{"on": "solid:x_min"}],
+                     load=[{"type": "traction", "on": "solid:x_max", "value": [0, 0, -1e6]}],
+                     analysis={"kinematics": "linear", "solver": solver})
+
+
+def test_scene_amg_uses_auxiliary_space_at_default_penalty():
+    """Hermite fibres at the default penalty ε = 1e3 E: solver "amg" runs the auxiliary space."""
+    import mortar1d3d as m13
+    scene = _fibre_scene("amg")
+    planned = {e.name for e in m13.plan(scene)}
+    assert "linear_solver.follow_operator" in planned
+    result = m13.solve(scene)
+    info = result.model.last_linear_info
+    assert info["method"] == "aux" and info["converged"]
+    assert result.model.penalty == 1e3 * 1e9
+    assert info["amg_levels"] >= 2
+    assert info["iterations"] <= 30                    # measured 22; plain AMG on the same matrix: 306
+    assert result.counts["linear_solver.amg"] == 1 and result.counts["linear_solver.follow_operator"] == 1
+    assert set(result.counts) <= planned
+    direct = m13.solve(_fibre_scene("direct"))
+    assert "linear_solver.follow_operator" not in direct.counts
+    assert _rel(result.z, direct.z) < 1e-8
+    # beams following the solid: P maps a rigid motion of the solid to that of the beams
+    from mortar1d3d.physics.coupling import follow_operator
+    model = result.model
+    g = model.groups[0]
+    P = follow_operator(g.operators, g.mesh)
+    nS = 3 * model.n_solid_nodes
+    R = model.rigid_body_modes()                       # the unit cube: positions scaled by 1
+    follow, expected = P @ R[:nS], R[nS:]
+    # exact for translations everywhere ...
+    np.testing.assert_allclose(follow[:, :3], expected[:, :3], atol=1e-12)
+    # ... and for rotations at interior nodes of straight, uniformly divided fibres; at the ends
+    # the half-width LM weight shifts the average by a third of an element
+    # (positions), and at nodes whose neighbours are interior too (tangents: chord derivatives)
+    E = g.mesh.elements
+    nodes = np.arange(g.mesh.n_nodes)
+    interior = np.isin(nodes, E[:, 0]) & np.isin(nodes, E[:, 1])
+    inner = interior.copy()
+    inner[E[~interior[E[:, 0]], 1]] = False
+    inner[E[~interior[E[:, 1]], 0]] = False
+    positions = (6 * np.flatnonzero(interior)[:, None] + np.arange(3)).ravel()
+    tangents = (6 * np.flatnonzero(inner)[:, None] + 3 + np.arange(3)).ravel()
+    assert len(tangents) == 3 * 40 * 3                 # 40 fibres of 6 elements: 3 such nodes each
+    for rows in (positions, tangents):
+        np.testing.assert_allclose(follow[rows, 3:], expected[rows, 3:], atol=1e-12)
+    assert np.abs(follow[:, 3:] - expected[:, 3:]).max() > 1e-3

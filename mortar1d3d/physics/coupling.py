@@ -70,6 +70,63 @@ def _lm_projection(p_beam, eta, weight, lm_index, n_phi, rows, cols, vals):
             k += 1
 
 
+def follow_operator(ops, beams):
+    """Beam centreline DOFs that follow a given solid displacement: ``d_B ≈ P d_S``.
+
+    The prolongation of the auxiliary-space preconditioner of the penalty system
+    (:class:`mortar1d3d.solvers.linear.AuxiliarySpacePreconditioner`): a beam moved by ``P d_S``
+    has almost no gap ``D d_B − M d_S``, so the stiff penalty term barely sees it.
+
+    Parameters
+    ----------
+    ops : MortarOperators
+        ``D`` (3 n_lm, n_B) and ``M`` (3 n_lm, 3 n_solid_nodes), in 3×3 identity blocks.
+    beams : BeamMesh
+        The beams of ``ops``; LM nodes ``0..n_nodes-1`` are the beam nodes (``lm_numbering``).
+
+    Returns
+    -------
+    P : (n_B, 3 n_solid_nodes) scipy.sparse.csr_matrix
+        In the beam mesh's own centreline DOF numbering (``[r, t]`` per Hermite node, ``r`` per
+        Lagrange node).
+
+    Notes
+    -----
+    Positions: ``r_k = κ_k⁻¹ (M d_S)_k``, the solid displacement averaged with the LM weight
+    ``Φ_k`` of beam node k, i.e. ``D⁻¹M`` with ``D`` lumped (its row sums over the position
+    columns are ``κ_k``). Tangents (Hermite): the mean over the node's elements of the chord
+    derivative ``(r_b − r_a) / |X_b − X_a|``. Both reproduce a linear solid field exactly at
+    interior nodes of straight, uniformly divided beams; at beam ends the half-width LM weight
+    shifts the average by a third of an element. The lumped form keeps ``P`` as sparse as ``M``
+    (one row per coupled node). The exact ``D⁻¹M`` (per-beam inverse, tangents as above) was
+    measured on ``fibre_cube(n, 1000, 20)`` at ε = 1e3 E: 13/20 CG iterations (n = 10/20)
+    against 14/19 lumped, with twice the nonzeros in the auxiliary matrix. Beam nodes that no
+    integration point touched (κ = 0) do not follow (zero rows); neither do interior nodes of
+    Lagrange ``line3`` elements, which have no LM node.
+    """
+    n_nodes = beams.n_nodes
+    kappa = np.asarray(ops.kappa[:n_nodes], dtype=np.float64)
+    scale = np.divide(1.0, kappa, out=np.zeros_like(kappa), where=kappa > 0)
+    M = ops.M.tocsr()[0:3 * n_nodes:3, 0::3]                 # scalar rows/columns (3×3 identity blocks)
+    positions = (sp.diags(scale) @ M).tocsr()
+    if beams.element_type.name != "hermite":
+        return _expand3(positions)
+    X = beams.positions
+    a, b = beams.elements[:, 0], beams.elements[:, 1]
+    inverse_length = 1.0 / np.linalg.norm(X[b] - X[a], axis=1)
+    adjacent = np.bincount(beams.elements.ravel(), minlength=n_nodes).astype(np.float64)
+    rows = np.concatenate([a, a, b, b])
+    cols = np.concatenate([b, a, b, a])
+    vals = np.concatenate([inverse_length, -inverse_length, inverse_length, -inverse_length])
+    chord = sp.csr_matrix((vals / adjacent[rows], (rows, cols)), shape=(n_nodes, n_nodes))
+    tangents = (chord @ positions).tocsr()
+    # interleave to the Hermite layout: node k holds [r_k, t_k]
+    order = np.empty(2 * n_nodes, dtype=np.int64)
+    order[0::2] = np.arange(n_nodes)
+    order[1::2] = n_nodes + np.arange(n_nodes)
+    return _expand3(sp.vstack([positions, tangents], format="csr")[order])
+
+
 def _expand3(A):
     """Scalar operator → 3×3 identity blocks (scalar row/column c becomes 3c..3c+2)."""
     return sp.kron(A, sp.identity(3, format="csr"), format="csr")
