@@ -283,8 +283,10 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                                     solid_origin, solid_h, tol, X, xi, trial, N, dN, -1)
             # a sliver between two crossings closer than _SLIVER is a tangential touch of a face
             # (a double root, resolved only to ~sqrt(eps)): it joins a neighbour that contains it,
-            # or is dropped when both neighbours are uncoupled (touching the solid from outside);
-            # a sliver at η = ±1 keeps its owner
+            # or is dropped when both neighbours are uncoupled (touching the solid from outside).
+            # The end η = ±1 of the beam element is no crossing: a sliver there is embedded length
+            # (found by make fuzz: an element ending 1.2e-7 inside a face), so a run of slivers
+            # reaching an end takes the end sliver's own owner as its neighbour on that side
             iv = 0
             while iv < n_pts - 1:
                 if cuts[iv + 1] - cuts[iv] >= _SLIVER:
@@ -293,18 +295,13 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                 last = iv       # run of consecutive slivers iv..last, judged by its neighbours
                 while last + 1 < n_pts - 1 and cuts[last + 2] - cuts[last + 1] < _SLIVER:
                     last += 1
-                before = owners[iv - 1] if iv > 0 else -1
-                after = owners[last + 1] if last + 1 < n_pts - 1 else -1
-                # between two crossings (not at a beam element end, which is not a crossing): a
-                # sliver there with both neighbours uncoupled is a touch from outside; at an end
-                # it is embedded length (found by make fuzz: an element ending 1.2e-7 inside a face)
-                between = iv > 0 and last + 1 < n_pts - 1
+                before = owners[iv - 1] if iv > 0 else owners[0]
+                after = owners[last + 1] if last + 1 < n_pts - 1 else owners[n_pts - 2]
                 for k in range(iv, last + 1):
                     if owners[k] < 0 or owners[k] == before or owners[k] == after:
                         continue
                     if before < 0 and after < 0:
-                        if between:
-                            owners[k] = -1
+                        owners[k] = -1
                         continue
                     mid = 0.5 * (cuts[k] + cuts[k + 1])
                     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
