@@ -295,7 +295,7 @@ GRAZING_TETS = [[9, 8, 0, 2], [9, 8, 2, 3], [9, 8, 5, 4], [9, 8, 4, 0], [9, 8, 7
 def test_grazing_entry_from_outside():
     """Found by ``make fuzz`` (test_fuzz_delaunay_tets): a Hermite element starts 4.9e-8 outside the
     face y = 0 with its tangent in that face, y(η) ≈ -4.9e-8 + 0.13 (1 + η)², and enters the solid
-    at η = -0.99938561. The library coupled [-1, ...] (a part 1.3e-7 outside, length 3.4e-4 too much).
+    at η = -0.99938561. The library coupled [-1, ...] (up to 1.3e-7 outside in ξ; 3.0e-4 of length too much).
     Root cause (not the oracle: y(-1) < 0 is outside the box): the face Newton started next to the
     tangency, where its Jacobian [-r', J a, J b] is nearly singular; the step overshot the crossing
     ~40 times and the line search gave up after 8 halvings (it needs 10), so the crossing was never
