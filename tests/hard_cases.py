@@ -592,7 +592,12 @@ def check_owners(ops, case, samples=3):
 def check_certificates(ops, case):
     beams, solid = case.beams, case.solid
     h = element_size(solid)
-    assert ops.constraint_residual < 1e-12
+    # the library's ‖D q_B - M X_S‖ / ‖D q_B‖ is round-off, except when the coupled part lies near the
+    # coordinate origin (‖D q_B‖ → 0 while ξ still carries round-off of h; found by make fuzz: a touch
+    # at the corner (0,0,0), 6e-8): judged against κ h there
+    scale = np.linalg.norm(ops.D @ beams.centreline_dofs())
+    assert ops.constraint_residual * scale <= 1e-12 * max(scale, h * np.linalg.norm(ops.kappa)), \
+        (case.name, ops.constraint_residual, scale)
     # translation-free form: |D q_B - M X_S| per LM node, relative to κ h (the offset would hide errors)
     r = (ops.D @ beams.centreline_dofs() - ops.M @ solid.points.ravel()).reshape(-1, 3)
     bound = (1e-12 + 64 * coordinate_round_off(beams, solid)) * h * max(ops.kappa.max(), 1e-300)

@@ -234,6 +234,17 @@ def _insertion_sort(a, n):
         a[j + 1] = v
 
 
+@njit
+def _deep_end(eta, owner, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, beam_code,
+              Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH):
+    """``owner`` if the beam element's end r(η) (η = ±1) lies inside it by more than the tolerance, else -1."""
+    if owner < 0:
+        return -1
+    r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
+    return first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
+                            solid_origin, solid_h, -PARAMETER_TOL, X, xi, trial, N, dN, owner)
+
+
 @njit_parallel
 def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, points, solid_origin,
           solid_h, solid_boxes, beam_code, Q, lengths, beam_origin, seg_offsets, seg_solid,
@@ -283,7 +294,12 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                                     solid_origin, solid_h, tol, X, xi, trial, N, dN, -1)
             # a sliver between two crossings closer than _SLIVER is a tangential touch of a face
             # (a double root, resolved only to ~sqrt(eps)): it joins a neighbour that contains it,
-            # or is dropped when both neighbours are uncoupled (touching the solid from outside)
+            # or is dropped when both neighbours are uncoupled (touching the solid from outside).
+            # The end η = ±1 of the beam element is no crossing: a sliver there whose end lies
+            # clearly (beyond the tolerance) inside its owner is embedded length (found by make
+            # fuzz: an element ending 1.2e-7 inside a face), so a run of slivers reaching such an
+            # end takes the end sliver's owner as its neighbour on that side. An end within the
+            # tolerance band (a beam leaving the solid at a corner) is a touch like any other.
             iv = 0
             while iv < n_pts - 1:
                 if cuts[iv + 1] - cuts[iv] >= _SLIVER:
@@ -292,8 +308,15 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                 last = iv       # run of consecutive slivers iv..last, judged by its neighbours
                 while last + 1 < n_pts - 1 and cuts[last + 2] - cuts[last + 1] < _SLIVER:
                     last += 1
-                before = owners[iv - 1] if iv > 0 else -1
-                after = owners[last + 1] if last + 1 < n_pts - 1 else -1
+                before = owners[iv - 1] if iv > 0 else _deep_end(-1.0, owners[0], e, pair_solid, p0, p1, codes,
+                                                                   conn, points, solid_origin, solid_h, solid_boxes,
+                                                                   beam_code, Q, lengths, beam_origin, X, xi, trial,
+                                                                   N, dN, H, dH)
+                after = owners[last + 1] if last + 1 < n_pts - 1 else _deep_end(1.0, owners[n_pts - 2], e, pair_solid,
+                                                                                p0, p1, codes, conn, points,
+                                                                                solid_origin, solid_h, solid_boxes,
+                                                                                beam_code, Q, lengths, beam_origin,
+                                                                                X, xi, trial, N, dN, H, dH)
                 for k in range(iv, last + 1):
                     if owners[k] < 0 or owners[k] == before or owners[k] == after:
                         continue
