@@ -1066,8 +1066,12 @@ def monitor_sentences(results):
     free = [(sc, r) for sc in scenes for r in sc["records"] if r.get("u_free")]
     ref_free = [sc for sc in scenes if sc["monitor"].get("reference_free")]
     if free or ref_free:
-        which = sorted({f"{r['integration']}-based n = {r['n_gauss']}" for _, r in free})
-        out.append(f"In {len(free)} variant/scene pair(s)" + (f" ({', '.join(which)})" if which else "")
+        counts = {}
+        for _, r in free:
+            counts.setdefault(r["integration"], set()).add(int(r["n_gauss"]))
+        which = [f"{name}-based n ∈ {{{', '.join(str(n) for n in sorted(ns))}}}" for name, ns in sorted(counts.items())]
+        out.append(f"In {len(free)} variant/scene pair(s) on "
+                   f"{len({id(sc) for sc, _ in free})} scene(s)" + (f" ({'; '.join(which)})" if which else "")
                    + (f" and in the reference solution of {len(ref_free)} scene(s)" if ref_free else "")
                    + " the coupling leaves some fibre a free rigid motion (held at one point, or a curved fibre "
                    "held through a single element, which can turn about an axis); the fibre's free motion is set "
