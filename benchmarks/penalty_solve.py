@@ -16,13 +16,17 @@ shared machine are only comparable at the same load.
 """
 import argparse
 import os
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-import mortar1d3d as m13
-from mortar1d3d.model import Model
-from mortar1d3d.solvers.linear import solve_linear
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # measure this checkout's package
+
+import mortar1d3d as m13  # noqa: E402
+from mortar1d3d.model import Model  # noqa: E402
+from mortar1d3d.solvers.linear import solve_linear  # noqa: E402
 
 
 def system(n, penalty_factor):

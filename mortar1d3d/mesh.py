@@ -198,6 +198,15 @@ def hermite_lengths(positions, tangents, elements, rtol=1e-14, max_iterations=50
     return L
 
 
+def zero_length_elements(positions, elements):
+    """Ids of beam elements whose end nodes (columns 0 and 1) coincide: chord <= 1e-14 of the
+    coordinates' scale (extent or magnitude, so that an offset of 1e6 does not hide it)."""
+    positions = np.asarray(positions, dtype=np.float64)
+    chord = np.linalg.norm(positions[elements[:, 1]] - positions[elements[:, 0]], axis=1)
+    scale = np.ptp(positions, axis=0).max() if len(positions) > 1 else 0.0
+    return np.flatnonzero(chord <= 1e-14 * max(scale, np.abs(positions).max(), 1e-300))
+
+
 class BeamMesh:
     """Beam centrelines: cubic Hermite (positions + unit tangents) or Lagrange ``line``/``line3``.
 
@@ -222,9 +231,7 @@ class BeamMesh:
                                          f"beam elements ({self.element_type.name})")
         if len(self.elements) == 0:
             raise MeshError("beam mesh has no elements")
-        chord = np.linalg.norm(self.positions[self.elements[:, 1]] - self.positions[self.elements[:, 0]], axis=1)
-        scale = np.ptp(self.positions, axis=0).max() if len(self.positions) > 1 else 0.0
-        short = np.flatnonzero(chord <= 1e-14 * max(scale, np.abs(self.positions).max(), 1e-300))
+        short = zero_length_elements(self.positions, self.elements)
         if short.size:
             raise MeshError(f"zero-length beam elements: {format_ids(short)}")
         if self.element_type.name == "hermite":

@@ -20,7 +20,7 @@ import scipy.sparse as sp
 
 from .errors import AccuracyWarning, CouplingWarning, MeshError, format_ids
 from .generate import _helices, box as box_mesh
-from .mesh import BeamMesh, SolidMesh
+from .mesh import BeamMesh, SolidMesh, zero_length_elements
 from .mortar.assemble import assemble_mortar
 from .scene import BOX_FACES, Scene, SceneError
 
@@ -46,10 +46,11 @@ class Effect:
 # beam meshes from curve specifications
 # --------------------------------------------------------------------------------------------
 def _chord_tangents(points):
-    d = np.diff(points, axis=0)
-    zero = np.flatnonzero(np.linalg.norm(d, axis=1) == 0.0)
+    n = len(points)
+    zero = zero_length_elements(points, np.column_stack([np.arange(n - 1), np.arange(1, n)]))
     if zero.size:
         raise MeshError(f"beam elements of zero length (consecutive nodes coincide): {format_ids(zero)}")
+    d = np.diff(points, axis=0)
     d /= np.linalg.norm(d, axis=1)[:, None]
     t = np.empty_like(points)
     t[0], t[-1] = d[0], d[-1]
@@ -249,6 +250,7 @@ class Model:
         self._check_solver()
         self.fixed_dofs, self.fixed_values, self.dirichlet_dofs = self._dirichlet()
         self.prepared = False
+        self._follow = None          # auxiliary-space split, built on first use (_follow_split)
 
     # -- sets -----------------------------------------------------------------------------------
     def _beam_nodes(self, entry, which, path):
@@ -792,7 +794,7 @@ class Model:
         """``solid``, ``beam`` (positions among the free DOFs) and the prolongation ``P`` (free
         beam DOFs × free solid DOFs) of :func:`~mortar1d3d.physics.coupling.follow_operator`;
         built once, since the coupling operators are constant."""
-        if getattr(self, "_follow", None) is None:
+        if self._follow is None:
             from .physics.coupling import follow_operator
             nS = 3 * self.n_solid_nodes
             free = self.free[self.free < self.n_displacement_dofs]
@@ -815,12 +817,12 @@ class Model:
         triplets = np.bincount(free // 3, minlength=self.n_unknowns // 3 + 1)
         block = 3 if np.isin(triplets, (0, 3)).all() else 1
         if not self.lagrange:
-            R = self.rigid_body_modes()[free] if method == "amg" else None
-            extra = {}
-            if method == "amg" and self._auxiliary_space():
-                extra = dict(method="aux", **self._follow_split())
-            x, info = solve_linear(A, b, **{"method": method, **extra}, near_nullspace=R,
-                                   block_size=block if method == "amg" else None)
+            options = dict(method=method)
+            if method == "amg":
+                options.update(near_nullspace=self.rigid_body_modes()[free], block_size=block)
+                if self._auxiliary_space():
+                    options.update(method="aux", **self._follow_split())
+            x, info = solve_linear(A, b, **options)
             self.last_linear_info = info
             return x
         n = self.n_displacement_dofs

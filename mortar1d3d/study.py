@@ -441,11 +441,10 @@ class MonitorProblem:
         """
         rows = np.flatnonzero(np.repeat(np.asarray(kappa) > 0.0, 3))
         Dc = D.tocsr()[rows]
-        scale = max((np.linalg.norm(np.asarray(Dc[:, local] @ Q), 2) for local, Q in self._fibre_modes),
-                    default=0.0)
+        held = [np.asarray(Dc[:, local] @ Q) for local, Q in self._fibre_modes]   # the coupling seen by each mode
+        scale = max((np.linalg.norm(X, 2) for X in held), default=0.0)
         out = []
-        for local, Q in self._fibre_modes:
-            X = np.asarray(Dc[:, local] @ Q)
+        for (local, Q), X in zip(self._fibre_modes, held):
             _, sv, Vt = np.linalg.svd(X, full_matrices=X.shape[0] < X.shape[1])     # all of Vt, U thin
             sv = np.concatenate([sv, np.zeros(Q.shape[1] - len(sv))])
             null = Vt[sv <= 1e-8 * scale]
@@ -945,6 +944,24 @@ def _cheapest(records, integration, threshold, error=_err):
     return min(ok, key=lambda r: r["n_gauss"]) if ok else None
 
 
+#: how the sentences name the integrations
+_LABEL = {"element": "element-based integration", "segment": "segment-based", "auto": "auto"}
+
+
+def _headline_scene(scenes, kind):
+    """The scene of ``kind`` the threshold sentences quote: h_B/h_S = 1 if there is one (or None)."""
+    sel = [s for s in scenes if s["kind"] == kind]
+    return next((s for s in sel if s["ratio"] == 1.0), sel[0] if sel else None)
+
+
+def _reach(records, integration, threshold, error):
+    """(cheapest record of ``integration`` with ``error`` <= threshold or None, its most accurate record)."""
+    recs = [r for r in records if r["integration"] == integration and error(r) is not None]
+    if not recs:
+        return None, None
+    return _cheapest(records, integration, threshold, error), min(recs, key=error)
+
+
 def _fmt_e(x):
     return "0" if x == 0 else f"{x:.1e}"
 
@@ -954,23 +971,22 @@ def sentences(results):
     out = []
     cfg = results["config"]
     for kind in cfg["kinds"]:
+        scene = _headline_scene(results["scenes"], kind)
+        if scene is None:
+            continue
         for threshold in cfg["thresholds"]:
-            sel = [s for s in results["scenes"] if s["kind"] == kind and s["ratio"] == 1.0]
-            if not sel:
-                sel = [s for s in results["scenes"] if s["kind"] == kind]
-            scene = sel[0]
             parts = []
             for integration in INTEGRATIONS:
-                best = _cheapest(scene["records"], integration, threshold)
-                label = {"element": "element-based integration", "segment": "segment-based",
-                         "auto": "auto"}[integration]
+                best, closest = _reach(scene["records"], integration, threshold, _err)
+                if closest is None:
+                    continue
                 if best is None:
-                    worst = min((r for r in scene["records"] if r["integration"] == integration), key=_err)
-                    parts.append(f"{label} does not reach it with up to {max(cfg['gauss'][integration])} points "
-                                 f"per {'beam element' if integration == 'element' else 'segment'} "
-                                 f"(best {_fmt_e(_err(worst))} with n = {worst['n_gauss']})")
+                    parts.append(f"{_LABEL[integration]} does not reach it with up to "
+                                 f"{max(cfg['gauss'][integration])} points per "
+                                 f"{'beam element' if integration == 'element' else 'segment'} "
+                                 f"(best {_fmt_e(_err(closest))} with n = {closest['n_gauss']})")
                 else:
-                    parts.append(f"{label} needs n = {best['n_gauss']} ({best['points']} points, "
+                    parts.append(f"{_LABEL[integration]} needs n = {best['n_gauss']} ({best['points']} points, "
                                  f"{best['time_s'] * 1e3:.2f} ms)")
             out.append(f"To reach a D/M error of {threshold:.0e} on {kind} (h_B/h_S = {scene['ratio']:g}, "
                        f"{scene['embedding']}), " + "; ".join(parts) + ".")
@@ -1022,25 +1038,21 @@ def monitor_sentences(results):
     if not scenes:
         return ["The solution monitor did not run on any scene of this study (see Method)."]
     out = []
-    label = {"element": "element-based integration", "segment": "segment-based", "auto": "auto"}
+    threshold = cfg["thresholds"][0]
     for kind in cfg["kinds"]:
-        sel = [sc for sc in scenes if sc["kind"] == kind]
-        if not sel:
+        scene = _headline_scene(scenes, kind)
+        if scene is None:
             continue
-        scene = next((sc for sc in sel if sc["ratio"] == 1.0), sel[0])
-        threshold = cfg["thresholds"][0]
         parts = []
         for integration in INTEGRATIONS:
-            recs = [r for r in scene["records"] if r["integration"] == integration and r["u_err"] is not None]
-            if not recs:
+            best, closest = _reach(scene["records"], integration, threshold, _u_err)
+            if closest is None:
                 continue
-            best = _cheapest(scene["records"], integration, threshold, _u_err)
             if best is None:
-                worst = min(recs, key=_u_err)
-                parts.append(f"{label[integration]} does not reach it (best {_fmt_e(worst['u_err'])} with "
-                             f"n = {worst['n_gauss']})")
+                parts.append(f"{_LABEL[integration]} does not reach it (best {_fmt_e(closest['u_err'])} with "
+                             f"n = {closest['n_gauss']})")
             else:
-                parts.append(f"{label[integration]} needs n = {best['n_gauss']} (D/M error there "
+                parts.append(f"{_LABEL[integration]} needs n = {best['n_gauss']} (D/M error there "
                              f"{_fmt_e(_err(best))})")
         out.append(f"To reach a monitor displacement error of {threshold:.0e} on {kind} (h_B/h_S = "
                    f"{scene['ratio']:g}, {scene['embedding']}), " + "; ".join(parts) + ".")
@@ -1086,6 +1098,51 @@ def monitor_sentences(results):
     return out
 
 
+def _error_time_grid(plt, matplotlib, scenes, kinds, ratios, error, ylabel, floor, pareto=False):
+    """One log-log panel per (kind, ratio): ``error`` of each record against its median time, a
+    curve per integration and embedding (records without the error are left out); ``pareto``
+    marks the Pareto-optimal points."""
+    colours = {"element": "tab:blue", "segment": "tab:orange", "auto": "tab:green"}
+    fig, axes = plt.subplots(len(kinds), len(ratios), figsize=(4.2 * len(ratios), 3.4 * len(kinds)),
+                             squeeze=False, sharey=True)
+    for i, kind in enumerate(kinds):
+        for j, ratio in enumerate(ratios):
+            ax = axes[i, j]
+            for scene in scenes:
+                if scene["kind"] != kind or scene["ratio"] != ratio:
+                    continue
+                style = "-" if scene["embedding"] == "embedded" else "--"
+                for integration in INTEGRATIONS:
+                    recs = [r for r in scene["records"] if r["integration"] == integration and error(r) is not None]
+                    if not recs:
+                        continue
+                    x = [r["time_s"] * 1e3 for r in recs]
+                    y = [max(error(r), floor) for r in recs]
+                    ax.loglog(x, y, style, marker="o", ms=3, color=colours[integration],
+                              label=f"{integration}, {scene['embedding']}")
+                    if pareto:
+                        front = _pareto(x, y)
+                        ax.loglog([x[k] for k in front], [y[k] for k in front], "s", ms=6, mfc="none",
+                                  color=colours[integration])
+            ax.set_title(f"{kind}, h_B/h_S = {ratio:g}", fontsize=9)
+            ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+            ax.grid(True, which="major", alpha=0.3)
+            if i == len(kinds) - 1:
+                ax.set_xlabel("median assemble_mortar time [ms]")
+            if j == 0:
+                ax.set_ylabel(ylabel)
+    axes[0, 0].legend(fontsize=7)
+    return fig
+
+
+def _save(plt, fig, out, name):
+    """Lay out, write ``out/name`` as PNG, close; returns ``name``."""
+    fig.tight_layout()
+    fig.savefig(out / name, dpi=110)
+    plt.close(fig)
+    return name
+
+
 def _plots(results, out):
     try:
         import matplotlib
@@ -1097,76 +1154,21 @@ def _plots(results, out):
     files = {}
     cfg = results["config"]
     kinds, ratios = cfg["kinds"], cfg["ratios"]
-    colours = {"element": "tab:blue", "segment": "tab:orange", "auto": "tab:green"}
     floor = 1e-17
-    fig, axes = plt.subplots(len(kinds), len(ratios), figsize=(4.2 * len(ratios), 3.4 * len(kinds)),
-                             squeeze=False, sharey=True)
-    for i, kind in enumerate(kinds):
-        for j, ratio in enumerate(ratios):
-            ax = axes[i, j]
-            for scene in results["scenes"]:
-                if scene["kind"] != kind or scene["ratio"] != ratio:
-                    continue
-                style = "-" if scene["embedding"] == "embedded" else "--"
-                for integration in INTEGRATIONS:
-                    recs = [r for r in scene["records"] if r["integration"] == integration]
-                    if not recs:
-                        continue
-                    x = [r["time_s"] * 1e3 for r in recs]
-                    y = [max(_err(r), floor) for r in recs]
-                    ax.loglog(x, y, style, marker="o", ms=3, color=colours[integration],
-                              label=f"{integration}, {scene['embedding']}")
-                    front = _pareto(x, y)
-                    ax.loglog([x[k] for k in front], [y[k] for k in front], "s", ms=6, mfc="none",
-                              color=colours[integration])
-            ax.set_title(f"{kind}, h_B/h_S = {ratio:g}", fontsize=9)
-            ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-            ax.grid(True, which="major", alpha=0.3)
-            if i == len(kinds) - 1:
-                ax.set_xlabel("median assemble_mortar time [ms]")
-            if j == 0:
-                ax.set_ylabel("max(rel. Frobenius error of D, M)")
-    axes[0, 0].legend(fontsize=7)
+    fig = _error_time_grid(plt, matplotlib, results["scenes"], kinds, ratios, _err,
+                           "max(rel. Frobenius error of D, M)", floor, pareto=True)
     fig.suptitle("Error vs time per variant\n(squares: Pareto-optimal; solid: embedded, dashed: partly outside; "
                  "errors < 1e-17 drawn at 1e-17)", fontsize=9)
-    fig.tight_layout()
-    files["pareto"] = "pareto.png"
-    fig.savefig(out / files["pareto"], dpi=110)
-    plt.close(fig)
+    files["pareto"] = _save(plt, fig, out, "pareto.png")
 
     monitored = [sc for sc in results["scenes"] if sc.get("monitor")]
     if monitored:
         mkinds = [k for k in kinds if any(sc["kind"] == k for sc in monitored)]
-        fig, axes = plt.subplots(len(mkinds), len(ratios), figsize=(4.2 * len(ratios), 3.4 * len(mkinds)),
-                                 squeeze=False, sharey=True)
-        for i, kind in enumerate(mkinds):
-            for j, ratio in enumerate(ratios):
-                ax = axes[i, j]
-                for scene in monitored:
-                    if scene["kind"] != kind or scene["ratio"] != ratio:
-                        continue
-                    style = "-" if scene["embedding"] == "embedded" else "--"
-                    for integration in INTEGRATIONS:
-                        recs = [r for r in scene["records"] if r["integration"] == integration
-                                and r["u_err"] is not None]
-                        if recs:
-                            ax.loglog([r["time_s"] * 1e3 for r in recs], [max(r["u_err"], floor) for r in recs],
-                                      style, marker="o", ms=3, color=colours[integration],
-                                      label=f"{integration}, {scene['embedding']}")
-                ax.set_title(f"{kind}, h_B/h_S = {ratio:g}", fontsize=9)
-                ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-                ax.grid(True, which="major", alpha=0.3)
-                if i == len(mkinds) - 1:
-                    ax.set_xlabel("median assemble_mortar time [ms]")
-                if j == 0:
-                    ax.set_ylabel("monitor displacement error")
-        axes[0, 0].legend(fontsize=7)
+        fig = _error_time_grid(plt, matplotlib, monitored, mkinds, ratios, _u_err, "monitor displacement error",
+                               floor)
         fig.suptitle("Solution error vs assembly time per variant: |u - u_ref| / |u_ref| at the monitor point\n"
                      "(solid: embedded, dashed: partly outside; errors < 1e-17 drawn at 1e-17)", fontsize=9)
-        fig.tight_layout()
-        files["monitor"] = "monitor.png"
-        fig.savefig(out / files["monitor"], dpi=110)
-        plt.close(fig)
+        files["monitor"] = _save(plt, fig, out, "monitor.png")
 
     # stage breakdown on the benchmark scene
     t = results["auto_target"]
@@ -1179,10 +1181,7 @@ def _plots(results, out):
     ax.set_ylabel("median time [ms]")
     ax.set_title(f"Stages of assemble_mortar, fibre_cube{tuple(t['scene'])}, n_gauss = 4", fontsize=10)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    files["stages"] = "stages.png"
-    fig.savefig(out / files["stages"], dpi=110)
-    plt.close(fig)
+    files["stages"] = _save(plt, fig, out, "stages.png")
 
     rows = results["scaling"]["rows"]
     fig, ax = plt.subplots(1, 2 if cfg["memory"] else 1, figsize=(10 if cfg["memory"] else 5.5, 3.8), squeeze=False)
@@ -1208,10 +1207,7 @@ def _plots(results, out):
         ax[0, 1].legend(fontsize=8)
         ax[0, 1].grid(True, which="major", alpha=0.3)
     fig.suptitle("Scaling of segment-based assembly (fibre_cube(20, F, 20), n_gauss = 4)", fontsize=10)
-    fig.tight_layout()
-    files["scaling"] = "scaling.png"
-    fig.savefig(out / files["scaling"], dpi=110)
-    plt.close(fig)
+    files["scaling"] = _save(plt, fig, out, "scaling.png")
     return files
 
 

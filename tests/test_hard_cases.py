@@ -282,11 +282,12 @@ def test_end_piece_shorter_than_a_sliver_is_coupled():
     hc.check_all(case)
 
 
+# corners of the box [0, 2]³ in the order test_fuzz.delaunay_tets lists them
+_BOX = [[0.0, 0.0, 0.0], [0.0, 0.0, 2.0], [0.0, 2.0, 0.0], [0.0, 2.0, 2.0], [2.0, 0.0, 0.0], [2.0, 0.0, 2.0],
+        [2.0, 2.0, 0.0], [2.0, 2.0, 2.0]]
 # Delaunay tets of the box corners and two interior points (test_fuzz.delaunay_tets, as found)
-GRAZING_POINTS = [[0.0, 0.0, 0.0], [0.0, 0.0, 2.0], [0.0, 2.0, 0.0], [0.0, 2.0, 2.0], [2.0, 0.0, 0.0],
-                  [2.0, 0.0, 2.0], [2.0, 2.0, 0.0], [2.0, 2.0, 2.0],
-                  [0.3314263649845593, 0.9987001523922068, 1.1826970437220434],
-                  [0.15164021506950018, 0.36626695223942063, 1.770779841328665]]
+GRAZING_POINTS = _BOX + [[0.3314263649845593, 0.9987001523922068, 1.1826970437220434],
+                         [0.15164021506950018, 0.36626695223942063, 1.770779841328665]]
 GRAZING_TETS = [[9, 8, 0, 2], [9, 8, 2, 3], [9, 8, 5, 4], [9, 8, 4, 0], [9, 8, 7, 5], [9, 8, 3, 7], [8, 2, 4, 0],
                 [8, 6, 4, 2], [8, 3, 7, 2], [8, 6, 2, 7], [8, 5, 4, 7], [8, 6, 7, 4], [9, 5, 1, 4], [9, 1, 0, 4],
                 [9, 3, 2, 1], [9, 1, 2, 0], [9, 3, 1, 7], [9, 5, 7, 1]]
@@ -328,8 +329,6 @@ def test_grazing_entry_from_outside():
 # ‖D q_B - M X_S‖ / ‖D q_B‖ was 6e-8 although ‖D q_B - M X_S‖ = 1.8e-25 (round-off of κ h): that
 # check now judges it against κ h (hard_cases.check_certificates). An end sliver now counts only if
 # the beam end lies inside its owner beyond the tolerance: these touches couple nothing.
-_BOX = [[0.0, 0.0, 0.0], [0.0, 0.0, 2.0], [0.0, 2.0, 0.0], [0.0, 2.0, 2.0], [2.0, 0.0, 0.0], [2.0, 0.0, 2.0],
-        [2.0, 2.0, 0.0], [2.0, 2.0, 2.0]]
 CORNER_TOUCHES = {
     "in_face_x0_certificate": (
         [[1.4107812689860288, 0.3132315774151695, 1.7947189735223272]],

@@ -87,9 +87,11 @@ def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence)
             # with a very large penalty (or EA) the round-off of the force terms themselves, about
             # eps_mach |K| |z|, can exceed every relative target: accept once the residual is at
             # that floor and the increments no longer contract (they are round-off of the solve too)
-            floor = ROUNDOFF_FACTOR * np.finfo(float).eps * float(np.linalg.norm((abs(K) @ np.abs(z))[free]))
-            if rn <= floor and len(increments) >= 2 and increments[-1] > 0.5 * increments[-2]:
-                return residuals, increments
+            # (|K| is a copy of the tangent: formed only once the increments have stopped contracting)
+            if len(increments) >= 2 and increments[-1] > 0.5 * increments[-2]:
+                floor = ROUNDOFF_FACTOR * np.finfo(float).eps * float(np.linalg.norm((abs(K) @ np.abs(z))[free]))
+                if rn <= floor:
+                    return residuals, increments
             if rn > divergence * r0:
                 raise _StepFailed(f"the residual grew from {r0:.3e} to {rn:.3e} (diverging)")
         if k == max_iterations:
