@@ -515,7 +515,7 @@ class Model:
                 g.coupling = Coupling(g.operators, g.mesh, self.solid_mesh, g.dof_offset, n,
                                       constraint=c["constraint"], enforcement=c["enforcement"], penalty=self.penalty)
                 self.counts["coupling.lagrange" if self.lagrange else f"coupling.{c['constraint']}_penalty"] += 1
-                coupled = np.unique(g.operators.points["beam_element"])
+                coupled = np.unique(g.operators.point_fields["beam_element"])
                 for entry, (a, b) in zip(g.entries, g.entry_elements):
                     if not np.any((coupled >= a) & (coupled < b)):
                         warnings.warn(f"beams[{entry}]: no part of this beam lies inside the solid, so it is not "
@@ -645,7 +645,7 @@ class Model:
         bodies = []
         solid_body = [np.arange(3 * self.n_solid_nodes)] if self.solid_mesh is not None else []
         for g in self.groups:
-            coupled_elements = (np.unique(g.operators.points["beam_element"]) if g.operators is not None
+            coupled_elements = (np.unique(g.operators.point_fields["beam_element"]) if g.operators is not None
                                 else np.zeros(0, np.int64))
             for k, entry in enumerate(g.entries):
                 a, b = g.entry_elements[k]

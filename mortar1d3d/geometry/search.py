@@ -11,7 +11,9 @@ from numba import prange
 
 from .._config import CHUNK, PARAMETER_TOL, njit, njit_parallel
 from .linalg import n_chunks
-from ..elements.solid.dispatch import BY_CODE, MAX_NODES, N_NODES
+from ..elements.solid.dispatch import CONTROL_MATRIX, MAX_NODES, N_NODES, control_points
+
+MAX_CONTROL = CONTROL_MATRIX.shape[1]
 
 
 def solid_bounding_boxes(solid, padding=PARAMETER_TOL):
@@ -19,27 +21,33 @@ def solid_bounding_boxes(solid, padding=PARAMETER_TOL):
 
     Returns the boxes and the element sizes h (box diagonals before padding).
     """
-    table = np.zeros((len(BY_CODE), MAX_NODES, MAX_NODES))
-    for code, d in BY_CODE.items():
-        table[code, : d.bounding_matrix.shape[0], : d.n_nodes] = d.bounding_matrix
-    n_control = np.array([BY_CODE[c].bounding_matrix.shape[0] for c in range(len(BY_CODE))])
     boxes = np.empty((solid.n_elements, 2, 3))
     size = np.empty(solid.n_elements)
-    _solid_boxes(solid.points, solid.connectivity, solid.element_codes, table, n_control, N_NODES,
-                 padding, boxes, size)
+    _solid_boxes(solid.points, solid.connectivity, solid.element_codes, padding, boxes, size)
     return boxes, size
 
 
-def beam_bounding_boxes(beams, padding=PARAMETER_TOL, coefficients=None):
-    """(n_elements, 2, 3) padded boxes of the beam elements, and their sizes.
+def beam_bounding_boxes(beams, padding=PARAMETER_TOL):
+    """(n_elements, 2, 3) padded boxes of the beam elements, and their sizes."""
+    return beam_frames(beams, padding)[2:]
 
-    ``coefficients``: ``beams.coefficients()`` if the caller has them already.
+
+def beam_frames(beams, padding=PARAMETER_TOL):
+    """What the kernels need of the beam elements, in one pass.
+
+    Returns ``Q`` (m, 4, 3): the coefficients of ``r(η) = Σ H_k q_k`` relative to the element's
+    origin (its first node; tangents unchanged, unused rows zero), ``origin`` (m, 3), and the
+    padded boxes (m, 2, 3) and sizes (m,) of :func:`beam_bounding_boxes`.
     """
-    boxes = np.empty((beams.n_elements, 2, 3))
-    size = np.empty(beams.n_elements)
-    Q = beams.coefficients() if coefficients is None else coefficients
-    _beam_boxes(Q, beams.lengths, beams.element_type.code, padding, boxes, size)
-    return boxes, size
+    m = beams.n_elements
+    Q = np.empty((m, 4, 3))
+    origin = np.empty((m, 3))
+    boxes = np.empty((m, 2, 3))
+    size = np.empty(m)
+    tangents = beams.tangents if beams.tangents is not None else np.zeros((0, 3))
+    _beam_frames(beams.positions, tangents, beams.elements, beams.lengths, beams.element_type.code, padding,
+                 Q, origin, boxes, size)
+    return Q, origin, boxes, size
 
 
 @njit
@@ -59,43 +67,59 @@ def _finish_box(box, padding):
 
 
 @njit_parallel
-def _solid_boxes(points, conn, codes, table, n_control, n_nodes, padding, boxes, size):
-    for s in prange(conn.shape[0]):
-        code = codes[s]
-        for i in range(3):
-            boxes[s, 0, i] = np.inf
-            boxes[s, 1, i] = -np.inf
-        for c in range(n_control[code]):
+def _solid_boxes(points, conn, codes, padding, boxes, size):
+    for c in prange(n_chunks(conn.shape[0], CHUNK)):
+        X = np.empty((MAX_NODES, 3))
+        C = np.empty((MAX_CONTROL, 3))
+        for s in range(c * CHUNK, min(conn.shape[0], (c + 1) * CHUNK)):
+            code = codes[s]
+            for a in range(N_NODES[code]):
+                for i in range(3):
+                    X[a, i] = points[conn[s, a], i]
+            n = control_points(code, X, C)
             for i in range(3):
-                v = 0.0
-                for a in range(n_nodes[code]):
-                    w = table[code, c, a]
-                    if w != 0.0:
-                        v += w * points[conn[s, a], i]
-                boxes[s, 0, i] = min(boxes[s, 0, i], v)
-                boxes[s, 1, i] = max(boxes[s, 1, i], v)
-        size[s] = _finish_box(boxes[s], padding)
+                lo = hi = C[0, i]
+                for k in range(1, n):
+                    lo = min(lo, C[k, i])
+                    hi = max(hi, C[k, i])
+                boxes[s, 0, i] = lo
+                boxes[s, 1, i] = hi
+            size[s] = _finish_box(boxes[s], padding)
 
 
 @njit_parallel
-def _beam_boxes(Q, lengths, code, padding, boxes, size):
-    # control points of the Bezier form: Hermite r1, r1 + L/3 t1, r2 - L/3 t2, r2;
-    # line3 r1, 2 r_mid - (r1 + r2)/2, r2; line r1, r2
-    for e in prange(Q.shape[0]):
+def _beam_frames(positions, tangents, elements, lengths, code, padding, Q, origin, boxes, size):
+    # Hermite: q = (r1, t1, r2, t2); Lagrange: the nodes. Bézier control points for the box:
+    # Hermite r1, r1 + L/3 t1, r2 - L/3 t2, r2; line3 r1, 2 r_mid - (r1 + r2)/2, r2; line r1, r2
+    for e in prange(elements.shape[0]):
+        n0 = elements[e, 0]
+        n1 = elements[e, 1]
         for i in range(3):
+            o = positions[n0, i]
+            origin[e, i] = o
+            Q[e, 0, i] = 0.0
             if code == 0:
-                c0 = Q[e, 0, i]
-                c1 = Q[e, 0, i] + lengths[e] / 3.0 * Q[e, 1, i]
-                c2 = Q[e, 2, i] - lengths[e] / 3.0 * Q[e, 3, i]
-                c3 = Q[e, 2, i]
+                Q[e, 1, i] = tangents[n0, i]
+                Q[e, 2, i] = positions[n1, i] - o
+                Q[e, 3, i] = tangents[n1, i]
+                c0 = o
+                c1 = o + lengths[e] / 3.0 * tangents[n0, i]
+                c2 = positions[n1, i] - lengths[e] / 3.0 * tangents[n1, i]
+                c3 = positions[n1, i]
             elif code == 2:
-                c0 = Q[e, 0, i]
-                c1 = 2.0 * Q[e, 2, i] - 0.5 * (Q[e, 0, i] + Q[e, 1, i])
+                Q[e, 1, i] = positions[n1, i] - o
+                Q[e, 2, i] = positions[elements[e, 2], i] - o
+                Q[e, 3, i] = 0.0
+                c0 = o
+                c1 = 2.0 * positions[elements[e, 2], i] - 0.5 * (o + positions[n1, i])
                 c2 = c1
-                c3 = Q[e, 1, i]
+                c3 = positions[n1, i]
             else:
-                c0 = c1 = c2 = Q[e, 0, i]
-                c3 = Q[e, 1, i]
+                Q[e, 1, i] = positions[n1, i] - o
+                Q[e, 2, i] = 0.0
+                Q[e, 3, i] = 0.0
+                c0 = c1 = c2 = o
+                c3 = positions[n1, i]
             boxes[e, 0, i] = min(min(c0, c1), min(c2, c3))
             boxes[e, 1, i] = max(max(c0, c1), max(c2, c3))
         size[e] = _finish_box(boxes[e], padding)

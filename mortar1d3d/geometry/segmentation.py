@@ -33,6 +33,7 @@ from .projection import CONVERGED, first_containing, jacobian, load_element, pro
 _NEAR_FACE = 0.1     # min |g| of the cubic model below this fraction of its variation: try a touch there
 _SCAN = 8            # points per sample interval at which the cubic model of g is scanned
 _SLIVER = 1e-6       # intervals shorter than this (in η) between crossings: tangential touches
+_REACH_MARGIN = 1e-6  # faces whose box misses a beam element's box by more than this (relative): no crossing
 
 
 @njit
@@ -99,13 +100,49 @@ def _deflated_roots(g1, d0, d1):
     return (-b - root) / (2.0 * a), (-b + root) / (2.0 * a)
 
 
+@njit
+def _faces_in_reach(code, X, h, box, origin, C, reach):
+    """Which faces of an element (local nodes ``X``) a beam element's box (global) reaches; False if none.
+
+    A crossing lies on a face and on the beam element, hence in the hull of the face's control
+    points and in the beam's box: a face whose control-point box misses the beam's box has no
+    crossing. The boxes are compared with a margin (``_REACH_MARGIN`` of both sizes plus
+    round-off of the coordinates) far above the tolerances with which crossings are accepted,
+    so skipping such faces changes no result. No face in reach: the beam element lies entirely
+    inside or entirely outside the element.
+    """
+    n_ctrl = solid.control_points(code, X, C)
+    big = 0.0
+    size = 0.0
+    for i in range(3):
+        big = max(big, abs(origin[i]), abs(box[0, i]), abs(box[1, i]))
+        size += (box[1, i] - box[0, i]) ** 2
+    pad = _REACH_MARGIN * (h + size ** 0.5) + 16 * 2.220446049250313e-16 * big
+    any_face = False
+    for f in range(solid.faces(code).shape[0]):
+        reach[f] = True
+        for i in range(3):
+            lo = hi = C[solid.FACE_CONTROL[code, f, 0], i]
+            for k in range(1, solid.N_FACE_CONTROL[code, f]):
+                v = C[solid.FACE_CONTROL[code, f, k], i]
+                lo = min(lo, v)
+                hi = max(hi, v)
+            if hi < box[0, i] - origin[i] - pad or lo > box[1, i] - origin[i] + pad:
+                reach[f] = False
+                break
+        any_face = any_face or reach[f]
+    return any_face
+
+
 @njit_parallel
 def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h,
-                    beam_code, Q, lengths, beam_origin, search_points, out_eta, out_count):
+                    beam_code, Q, lengths, beam_origin, beam_boxes, search_points, out_eta, out_count, no_face):
     n_pairs = pair_beam.shape[0]
     S = search_points
     cap = out_eta.shape[1]
     for c in prange(n_chunks(n_pairs, CHUNK)):
+        C = np.empty((solid.CONTROL_MATRIX.shape[1], 3))
+        reach = np.empty(solid.MAX_FACES, dtype=np.bool_)
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
@@ -128,6 +165,10 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
             h = solid_h[s]
             Qe = Q[e]
             load_element(points, conn, s, code, solid_origin, X)
+            no_face[p] = not _faces_in_reach(code, X, h, beam_boxes[e], solid_origin[s], C, reach)
+            if no_face[p]:
+                out_count[p] = 0
+                continue
             s0 = beam_origin[e, 0] - solid_origin[s, 0]
             s1 = beam_origin[e, 1] - solid_origin[s, 1]
             s2 = beam_origin[e, 2] - solid_origin[s, 2]
@@ -150,6 +191,8 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
             faces = solid.faces(code)
             count = 0
             for f in range(faces.shape[0]):
+                if not reach[f]:
+                    continue
                 face = faces[f]
                 for k in range(S):
                     g[k] = (face[3, 0] * (xi_s[k, 0] - face[0, 0]) + face[3, 1] * (xi_s[k, 1] - face[0, 1])
@@ -355,7 +398,7 @@ _GAP_PROBES = 7
 
 @njit_parallel
 def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, pair_solid, codes, conn,
-                  points, solid_origin, solid_h, solid_boxes, beam_code, Q, lengths, beam_origin, bad):
+                  points, solid_origin, solid_h, solid_boxes, beam_code, Q, lengths, beam_origin, certain, bad):
     """Flag beam elements whose pieces do not tile their embedded part.
 
     Probes every segment at 1/4 and 3/4 (its midpoint chose the owner): each probe must lie in
@@ -364,6 +407,10 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
     (cheap: most probes of a gap fall outside every candidate's box). A failure means a
     missed face crossing: the pieces would put integration points outside their element, or
     leave an embedded part uncoupled.
+
+    Not probed: beam elements that reach no face of any candidate (``certain``) and lie in one
+    element as a single piece [-1, 1]: without a crossing, the element containing the midpoint
+    contains all of it.
     """
     n_beam = pair_offsets.shape[0] - 1
     loose = 1e3 * PARAMETER_TOL
@@ -379,6 +426,9 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
             p0 = pair_offsets[e]
             p1 = pair_offsets[e + 1]
             base = seg_offsets[e]
+            if certain[e] and seg_count[e] == 1 and seg_start[base] == -1.0 and seg_end[base] == 1.0:
+                bad[e] = False
+                continue
             failed = False
             gap_start = -1.0
             for q in range(seg_count[e] + 1):
@@ -482,6 +532,7 @@ class _Beams:
             self.ids = np.arange(len(ctx.pair_offsets) - 1)
             self.pair_offsets, self.pair_solid = ctx.pair_offsets, ctx.pair_solid
             self.Q, self.lengths, self.beam_origin = ctx.Q, ctx.lengths, ctx.beam_origin
+            self.beam_boxes = ctx.beam_boxes
         else:
             self.ids = elements
             counts = ctx.pair_offsets[elements + 1] - ctx.pair_offsets[elements]
@@ -491,14 +542,20 @@ class _Beams:
             self.Q = np.ascontiguousarray(ctx.Q[elements])
             self.lengths = np.ascontiguousarray(ctx.lengths[elements])
             self.beam_origin = np.ascontiguousarray(ctx.beam_origin[elements])
+            self.beam_boxes = np.ascontiguousarray(ctx.beam_boxes[elements])
+        # beam elements that reach no face of any candidate (set by ``crossings``)
+        self.certain = np.zeros(len(self.ids), dtype=np.bool_)
 
     def crossings(self, ctx, search_points):
         pair_beam = np.repeat(np.arange(len(self.ids)), np.diff(self.pair_offsets))
         crossing_eta = np.empty((len(self.pair_solid), crossings_capacity(search_points)))
         crossing_count = np.zeros(len(self.pair_solid), dtype=np.int64)
+        no_face = np.empty(len(self.pair_solid), dtype=np.bool_)
         _pair_crossings(pair_beam, self.pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-                        ctx.solid_h, ctx.beam_code, self.Q, self.lengths, self.beam_origin, search_points,
-                        crossing_eta, crossing_count)
+                        ctx.solid_h, ctx.beam_code, self.Q, self.lengths, self.beam_origin, self.beam_boxes,
+                        search_points, crossing_eta, crossing_count, no_face)
+        reaching = np.concatenate([[0], np.cumsum(~no_face)])
+        self.certain = reaching[self.pair_offsets[1:]] == reaching[self.pair_offsets[:-1]]
         return crossing_eta, crossing_count
 
     def bisection_crossings(self, ctx):
@@ -540,7 +597,7 @@ class _Beams:
               seg_offsets, seg_solid, seg_start, seg_end, seg_count)
         bad = np.zeros(n_beam, dtype=np.bool_)
         _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, self.pair_solid,
-                      *args, bad)
+                      *args, self.certain, bad)
         keep = _compact_index(seg_offsets, seg_count)
         beam_element = np.repeat(self.ids, seg_count)
         return beam_element, seg_solid[keep], seg_start[keep], seg_end[keep], bad

@@ -482,8 +482,8 @@ def auto_segments(ctx, search_points, n_gauss, n_phi):
         found = np.empty((len(numeric), crossings_capacity(search_points)))
         found_count = np.zeros(len(numeric), dtype=np.int64)
         _pair_crossings(pair_beam[numeric], pair_solid[numeric], ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-                        ctx.solid_h, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, search_points,
-                        found, found_count)
+                        ctx.solid_h, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, ctx.beam_boxes, search_points,
+                        found, found_count, np.empty(len(numeric), dtype=np.bool_))
         width = max(2, int(found_count.max()))
         crossing_eta = np.empty((n_pairs, width))
         crossing_eta[:, :2] = closed

@@ -22,12 +22,12 @@ from ..elements.beam import MAX_FUNCTIONS
 from ..elements.beam import n_functions as beam_n_functions
 from ..elements.beam import shape as beam_shape
 from ..elements.solid import dispatch as solid_types
-from ..geometry.search import beam_bounding_boxes, find_candidate_pairs, solid_bounding_boxes
+from ..geometry.search import beam_frames, find_candidate_pairs, solid_bounding_boxes
 from ..geometry.segmentation import segment
 from ..integration.rules import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, auto_segments,
                                  checked_segment_points, element_points, segment_points)
 from ..mesh import BeamMesh, SolidMesh
-from .sparse import gathered_block_csr, row_sources
+from .sparse import gathered_block_csr, relative_residual, row_sources
 
 SEGMENT_DTYPE = np.dtype([("beam_element", np.int64), ("solid_element", np.int64),
                           ("eta_start", np.float64), ("eta_end", np.float64)])
@@ -52,7 +52,8 @@ class MortarOperators:
         element. Element-based: one row per (beam element, solid element) group of points,
         spanning the η of its first and last point.
     points : structured array (POINT_DTYPE)
-        The integration points that were assembled (η, ξ, weight incl. |r0'|, position).
+        The integration points that were assembled (η, ξ, weight incl. |r0'|, position); built
+        on first access from ``point_fields`` (its columns as separate arrays).
     n_integration_points : int
     embedded_length : float
         Σκ, the beam length that is coupled (certificate: compare with the beam length inside
@@ -76,7 +77,7 @@ class MortarOperators:
     M: object
     kappa: np.ndarray
     segments: np.ndarray
-    points: np.ndarray
+    point_fields: dict
     n_lm: int
     integration: str
     n_gauss: int
@@ -87,9 +88,21 @@ class MortarOperators:
     diagnostics: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
 
+    def __post_init__(self):
+        self._points = None
+
+    @property
+    def points(self):
+        if self._points is None:
+            table = np.empty(len(self.point_fields["eta"]), dtype=POINT_DTYPE)
+            for name, values in self.point_fields.items():
+                table[name] = values
+            self._points = table
+        return self._points
+
     @property
     def n_integration_points(self):
-        return len(self.points)
+        return len(self.point_fields["eta"])
 
     @property
     def coupled_lm_nodes(self):
@@ -113,11 +126,7 @@ class KernelInput:
         self.conn = solid.connectivity
         self.solid_origin = np.ascontiguousarray(solid.points[solid.connectivity[:, 0]])
         self.solid_boxes, self.solid_h = solid_bounding_boxes(solid)
-        Q = beams.coefficients()
-        self.beam_boxes, _ = beam_bounding_boxes(beams, coefficients=Q)
-        self.beam_origin = np.ascontiguousarray(Q[:, 0])
-        position = np.array([1, 0, 1, 0]) if beams.element_type.name == "hermite" else np.array([1, 1, 1, 0])
-        self.Q = np.ascontiguousarray(Q - position[None, :, None] * self.beam_origin[:, None, :])
+        self.Q, self.beam_origin, self.beam_boxes, _ = beam_frames(beams)
         self.lengths = beams.lengths
         self.beam_code = beams.element_type.code
         self.pair_offsets, self.pair_solid = find_candidate_pairs(self.beam_boxes, self.solid_boxes)
@@ -125,7 +134,8 @@ class KernelInput:
 
 @njit_parallel
 def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
-                     codes, m_offsets, D_local, M_local, kappa_local):
+                     codes, conn, beam_cols, m_offsets, D_local, M_local, kappa_local, d_cols, m_cols):
+    """Local D, M and κ of every group of points, and the global columns of their entries."""
     n_groups = group_start.shape[0] - 1
     nH = beam_n_functions(beam_code)
     for c in prange(n_chunks(n_groups, CHUNK)):
@@ -158,24 +168,11 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
                 kappa_local[g, j] = kg[j]
                 for k in range(nH):
                     D_local[g, j * nH + k] = Dg[j, k]
+                    d_cols[(g * n_phi + j) * nH + k] = beam_cols[e, k]
                 base = m_offsets[g] + j * nN
                 for a in range(nN):
                     M_local[base + a] = Mg[j, a]
-
-
-@njit_parallel
-def _group_columns(group_start, p_beam, p_solid, n_phi, nH, beam_cols, codes, conn, m_offsets, d_cols, m_cols):
-    """Global columns of every local entry (same layout as the local matrices)."""
-    for g in prange(group_start.shape[0] - 1):
-        e = p_beam[group_start[g]]
-        s = p_solid[group_start[g]]
-        nN = solid_types.n_nodes(codes[s])
-        for j in range(n_phi):
-            for k in range(nH):
-                d_cols[g * n_phi * nH + j * nH + k] = beam_cols[e, k]
-            base = m_offsets[g] + j * nN
-            for a in range(nN):
-                m_cols[base + a] = conn[s, a]
+                    m_cols[base + a] = conn[s, a]
 
 
 @njit
@@ -320,13 +317,11 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     D_local = np.empty((n_groups, n_phi * nH))
     M_local = np.empty(m_offsets[-1])
     kappa_local = np.empty((n_groups, n_phi))
-    _group_operators(group_start, p_beam, p_solid, eta, xi, weight, ctx.beam_code, ctx.lengths,
-                     n_phi, ctx.codes, m_offsets, D_local, M_local, kappa_local)
-    lm_index, n_lm = lm_numbering(beams, lm_type)
     d_cols = np.empty(D_local.size, dtype=np.int64)
     m_cols = np.empty(M_local.size, dtype=np.int64)
-    _group_columns(group_start, p_beam, p_solid, n_phi, nH, beams.function_columns(), ctx.codes, ctx.conn,
-                   m_offsets, d_cols, m_cols)
+    _group_operators(group_start, p_beam, p_solid, eta, xi, weight, ctx.beam_code, ctx.lengths, n_phi, ctx.codes,
+                     ctx.conn, beams.function_columns(), m_offsets, D_local, M_local, kappa_local, d_cols, m_cols)
+    lm_index, n_lm = lm_numbering(beams, lm_type)
     # groups are ordered by beam element: the groups of element e are beam_groups[e]:beam_groups[e+1]
     beam_groups = np.searchsorted(p_beam[group_start[:-1]], np.arange(beams.n_elements + 1)).astype(np.int64)
     src_offsets, src = row_sources(lm_index, n_phi, n_lm)
@@ -352,17 +347,11 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
         segments["solid_element"] = g_solid
         segments["eta_start"] = eta[group_start[:-1]]
         segments["eta_end"] = eta[group_start[1:] - 1]
-    points = np.empty(len(p_beam), dtype=POINT_DTYPE)
-    for name, values in (("beam_element", p_beam), ("solid_element", p_solid), ("eta", eta), ("xi", xi),
-                         ("weight", weight), ("position", position), ("status", status)):
-        points[name] = values
-
-    DqB = D @ beams.centreline_dofs()
-    MXS = M @ solid.points.ravel()
-    scale = np.linalg.norm(DqB)
-    residual = float(np.linalg.norm(DqB - MXS) / scale) if scale > 0 else 0.0
+    point_fields = {"beam_element": p_beam, "solid_element": p_solid, "eta": eta, "xi": xi, "weight": weight,
+                    "position": position, "status": status}
+    residual = relative_residual(D, beams.centreline_dofs(), M, solid.points.ravel())
     timings["total"] = time.perf_counter() - t0
-    return MortarOperators(D=D, M=M, kappa=kappa, segments=segments, points=points, n_lm=n_lm,
+    return MortarOperators(D=D, M=M, kappa=kappa, segments=segments, point_fields=point_fields, n_lm=n_lm,
                            integration=integration, n_gauss=n_gauss, lm=lm_type.name,
                            embedded_length=float(kappa.sum()), beam_length=beams.length,
                            constraint_residual=residual, diagnostics=diagnostics, timings=timings)

@@ -9,7 +9,8 @@ import numpy as np
 import scipy.sparse as sp
 from numba import prange
 
-from .._config import njit, njit_parallel
+from .._config import CHUNK, njit, njit_parallel
+from ..geometry.linalg import n_chunks
 
 
 @njit_parallel
@@ -127,3 +128,37 @@ def _finish(start, ucols, uvals, unique, n_rows, n_cols, block):
     matrix = sp.csr_matrix((data, indices, indptr), shape=(block * n_rows, block * n_cols))
     matrix.has_sorted_indices = True
     return matrix
+
+
+@njit_parallel
+def _residual_squares(d_ptr, d_idx, d_val, q, m_ptr, m_idx, m_val, x, partial):
+    # per chunk of rows: Σ (D q - M x)_r² and Σ (D q)_r²; chunks summed in order by the caller,
+    # so the result does not depend on the number of threads
+    n_rows = d_ptr.shape[0] - 1
+    for c in prange(n_chunks(n_rows, CHUNK)):
+        diff = 0.0
+        ref = 0.0
+        for r in range(c * CHUNK, min(n_rows, (c + 1) * CHUNK)):
+            a = 0.0
+            for t in range(d_ptr[r], d_ptr[r + 1]):
+                a += d_val[t] * q[d_idx[t]]
+            b = 0.0
+            for t in range(m_ptr[r], m_ptr[r + 1]):
+                b += m_val[t] * x[m_idx[t]]
+            diff += (a - b) ** 2
+            ref += a * a
+        partial[c, 0] = diff
+        partial[c, 1] = ref
+
+
+def relative_residual(D, q, M, x):
+    """‖D q − M x‖ / ‖D q‖ (0 if D q = 0), in one parallel pass over the rows.
+
+    Not ``np.linalg.norm`` of scipy products: its BLAS call wakes OpenBLAS's thread pool, which
+    then competes with Numba's threads for the cores (two threads ran slower than one).
+    """
+    partial = np.empty((n_chunks(D.shape[0], CHUNK), 2))
+    _residual_squares(D.indptr, D.indices, D.data, np.ascontiguousarray(q, dtype=np.float64), M.indptr, M.indices,
+                      M.data, np.ascontiguousarray(x, dtype=np.float64), partial)
+    diff, ref = partial.sum(axis=0) if len(partial) else (0.0, 0.0)
+    return float(np.sqrt(diff / ref)) if ref > 0 else 0.0

@@ -191,8 +191,8 @@ class Coupling:
     # -- operators ----------------------------------------------------------------------------
     @staticmethod
     def _gauss_point_operator(ops, beams, solid, beam_offset, n_dofs):
-        p = ops.points
-        n_pts = len(p)
+        p = ops.point_fields
+        n_pts = ops.n_integration_points
         nnz = n_pts * (MAX_FUNCTIONS + solid_types.MAX_NODES)
         rows, cols, vals = np.empty(nnz, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
         k = _point_operator(np.ascontiguousarray(p["beam_element"]), np.ascontiguousarray(p["solid_element"]),
@@ -210,12 +210,12 @@ class Coupling:
     def _projection(ops, beams):
         lm = multiplier_type(ops.lm)
         lm_index, n_lm = lm_numbering(beams, lm)
-        p = ops.points
-        n = len(p) * lm.n_functions
+        p = ops.point_fields
+        n = ops.n_integration_points * lm.n_functions
         rows, cols, vals = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
         _lm_projection(np.ascontiguousarray(p["beam_element"]), np.ascontiguousarray(p["eta"]),
                        np.ascontiguousarray(p["weight"]), lm_index, lm.n_functions, rows, cols, vals)
-        return sp.csr_matrix((vals, (rows, cols)), shape=(n_lm, len(p)))
+        return sp.csr_matrix((vals, (rows, cols)), shape=(n_lm, ops.n_integration_points))
 
     # -- evaluation ---------------------------------------------------------------------------
     @property

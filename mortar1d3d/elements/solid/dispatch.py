@@ -24,6 +24,37 @@ N_NODES = np.array([BY_CODE[c].n_nodes for c in range(len(BY_CODE))], dtype=np.i
 FAMILY = np.array([HEX if BY_CODE[c].family == "hex" else TET for c in range(len(BY_CODE))], dtype=np.int64)
 
 
+def _control_tables():
+    """Per code: the bounding matrix (control points from nodes) and the control points of each face.
+
+    The control points of a face are the rows of ``bounding_matrix`` that combine only nodes lying
+    on that face (for Bernstein control points these are exactly the face's own control points,
+    whose hull contains the face). Derived from the descriptors, so a new element type needs no
+    entry here.
+    """
+    n_codes = len(BY_CODE)
+    n_ctrl = np.array([BY_CODE[c].bounding_matrix.shape[0] for c in range(n_codes)], dtype=np.int64)
+    matrix = np.zeros((n_codes, n_ctrl.max(), MAX_NODES))
+    identity = np.zeros(n_codes, dtype=np.bool_)
+    face_ctrl = np.zeros((n_codes, MAX_FACES, n_ctrl.max()), dtype=np.int64)
+    face_count = np.zeros((n_codes, MAX_FACES), dtype=np.int64)
+    for c, d in BY_CODE.items():
+        T = d.bounding_matrix
+        matrix[c, : T.shape[0], : d.n_nodes] = T
+        identity[c] = T.shape == (d.n_nodes, d.n_nodes) and np.array_equal(T, np.eye(d.n_nodes))
+        for f, (origin, _a, _b, normal) in enumerate(d.faces):
+            on_face = (d.reference_nodes - origin) @ normal == 0.0
+            rows = [k for k in range(T.shape[0]) if np.all(on_face[T[k] != 0.0])]
+            face_count[c, f] = len(rows)
+            face_ctrl[c, f, : len(rows)] = rows
+    return n_ctrl, matrix, identity, face_ctrl, face_count
+
+
+#: per code: number of control points, bounding matrix, whether it is the identity (linear
+#: elements: the control points are the nodes), control points of each face and their number
+N_CONTROL, CONTROL_MATRIX, CONTROL_IS_NODES, FACE_CONTROL, N_FACE_CONTROL = _control_tables()
+
+
 def solid_element(name):
     """Descriptor of the solid element type called ``name`` (meshio name)."""
     try:
@@ -96,3 +127,27 @@ def centre(code, xi):
         xi[0] = xi[1] = xi[2] = 0.0
     else:
         xi[0] = xi[1] = xi[2] = 0.25
+
+
+@njit
+def control_points(code, X, C):
+    """Write the control points of an element with nodes ``X`` into ``C``; return their number.
+
+    The element (and each face, with the points ``FACE_CONTROL[code, f]``) lies in their convex
+    hull: nodes for linear elements, Bernstein control points for quadratic ones.
+    """
+    n = N_CONTROL[code]
+    if CONTROL_IS_NODES[code]:
+        for a in range(n):
+            C[a, 0], C[a, 1], C[a, 2] = X[a, 0], X[a, 1], X[a, 2]
+        return n
+    for k in range(n):
+        v0 = v1 = v2 = 0.0
+        for a in range(N_NODES[code]):
+            w = CONTROL_MATRIX[code, k, a]
+            if w != 0.0:
+                v0 += w * X[a, 0]
+                v1 += w * X[a, 1]
+                v2 += w * X[a, 2]
+        C[k, 0], C[k, 1], C[k, 2] = v0, v1, v2
+    return n
