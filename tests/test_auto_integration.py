@@ -12,7 +12,7 @@ import scipy.sparse.linalg as spla
 
 import mortar1d3d as m13
 from mortar1d3d import generate
-from mortar1d3d.integration.rules import affine_inverse, beam_is_affine, exact_gauss_count
+from mortar1d3d.integration.rules import AFFINE_TOL, affine_inverse, beam_is_affine, exact_gauss_count
 
 ROUND_OFF = 1e-13
 
@@ -168,13 +168,13 @@ def test_affine_inverse_maps_nodes_to_their_reference_coordinates(element):
     solid = sheared(generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1), element))
     X, h, code = _local_nodes(solid, 0)
     Ainv = np.empty((3, 3))
-    assert affine_inverse(code, X, h, Ainv)
+    assert affine_inverse(code, X, h, AFFINE_TOL, Ainv)
     reference = solid.blocks[0][0].reference_nodes
     np.testing.assert_allclose(reference[0] + X @ Ainv.T, reference, atol=1e-13)
     # a node moved by 1e-6 h makes the element non-affine (tet4 has no node that can do that)
     if element != "tetra":
         X[-1, 1] += 1e-6 * h
-        assert not affine_inverse(code, X, h, Ainv)
+        assert not affine_inverse(code, X, h, AFFINE_TOL, Ainv)
 
 
 def test_beam_affinity():

@@ -5,9 +5,12 @@ origin (its first node), so that round-off is relative to the element size h, no
 distance from the global origin (design.md §2: tolerances relative to the element size).
 All buffers come from the caller; nothing here allocates.
 """
-from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit
+import numpy as np
+from numba import prange
+
+from .._config import CHUNK, NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit, njit_parallel
 from ..elements.solid import dispatch as solid
-from .linalg import norm3, solve3
+from .linalg import n_chunks, norm3, solve3
 
 CONVERGED = 0
 FAILED = 1
@@ -146,13 +149,15 @@ def polish(code, X, p0, p1, p2, h, xi, trial, N, dN):
 
 @njit
 def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points, solid_origin,
-           solid_h, tol, X, xi, trial, N, dN, only):
+                     solid_h, inverse, tol, X, xi, trial, N, dN, only):
     """Lowest-index candidate of beam element ``e`` containing the point r (beam-local frame).
 
     Candidates are ``pair_solid[p0:p1]`` (ascending); returns -1 if none contains the point.
     With ``only`` >= 0, tests just that element. On success ``xi`` holds the point's ξ.
     This is the ownership rule of both integrations (design.md §1-§2): a point on a face,
-    edge or node shared by several elements belongs to the lowest-index one.
+    edge or node shared by several elements belongs to the lowest-index one. Elements with an
+    inverse map (``inverse``, :func:`affine_maps`) are located with it; for the others a
+    Newton projection runs and ``X`` is left holding the nodes of the last element tested.
     """
     for p in range(p0, p1):
         s = pair_solid[p]
@@ -161,10 +166,97 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
         if not in_box(solid_boxes[s], r0 + beam_origin[e, 0], r1 + beam_origin[e, 1], r2 + beam_origin[e, 2]):
             continue
         code = codes[s]
+        x0 = r0 + (beam_origin[e, 0] - solid_origin[s, 0])
+        x1 = r1 + (beam_origin[e, 1] - solid_origin[s, 1])
+        x2 = r2 + (beam_origin[e, 2] - solid_origin[s, 2])
+        if is_affine(inverse, s):
+            affine_parameters(code, inverse[s], x0, x1, x2, xi)
+            if solid.is_inside(code, xi, tol):
+                return s
+            continue
         load_element(points, conn, s, code, solid_origin, X)
-        if locate(code, X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
-                  r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
-                  r2 + (beam_origin[e, 2] - solid_origin[s, 2]),
-                  solid_h[s], tol, xi, trial, N, dN) == INSIDE:
+        if locate(code, X, x0, x1, x2, solid_h[s], tol, xi, trial, N, dN) == INSIDE:
             return s
     return -1
+
+
+# nodes spanning the parameter axes from node 0 (hex: 1, 3, 4; tet: 1, 2, 3) and their distance
+_AXIS_NODES = np.array([[1, 3, 4], [1, 3, 4], [1, 3, 4], [1, 2, 3], [1, 2, 3]], dtype=np.int64)
+_AXIS_SPAN = np.array([2.0, 2.0, 2.0, 1.0, 1.0])
+_REFERENCE_NODES = np.zeros((len(solid.BY_CODE), solid.MAX_NODES, 3))
+for _code, _descriptor in solid.BY_CODE.items():
+    _REFERENCE_NODES[_code, : _descriptor.n_nodes] = _descriptor.reference_nodes
+
+#: elements whose map is affine to this (relative) accuracy are located with their inverse map,
+#: without Newton: exact to round-off, as a polished Newton projection would be
+EXACT_AFFINE_TOL = 64 * 2.220446049250313e-16
+
+
+@njit
+def affine_inverse(code, X, h, rel_tol, Ainv):
+    """Whether element ``code`` with local nodes ``X`` (node 0 at the origin) is affine; its inverse map.
+
+    Affine means x(ξ) = A (ξ - ξ_0) for every node to ``rel_tol · h`` (tet4 always; a hex8
+    that is a parallelepiped; quadratic elements with straight edges and centred mid-nodes).
+    On success ``Ainv`` (3, 3) holds A⁻¹, so ξ(x) = ξ_0 + A⁻¹ x exactly (no Newton needed).
+    """
+    axes = _AXIS_NODES[code]
+    span = _AXIS_SPAN[code]
+    a00 = X[axes[0], 0] / span
+    a10 = X[axes[0], 1] / span
+    a20 = X[axes[0], 2] / span
+    a01 = X[axes[1], 0] / span
+    a11 = X[axes[1], 1] / span
+    a21 = X[axes[1], 2] / span
+    a02 = X[axes[2], 0] / span
+    a12 = X[axes[2], 1] / span
+    a22 = X[axes[2], 2] / span
+    ref = _REFERENCE_NODES[code]
+    tol = rel_tol * h
+    for a in range(solid.n_nodes(code)):
+        d0 = ref[a, 0] - ref[0, 0]
+        d1 = ref[a, 1] - ref[0, 1]
+        d2 = ref[a, 2] - ref[0, 2]
+        if (abs(a00 * d0 + a01 * d1 + a02 * d2 - X[a, 0]) > tol or abs(a10 * d0 + a11 * d1 + a12 * d2 - X[a, 1]) > tol
+                or abs(a20 * d0 + a21 * d1 + a22 * d2 - X[a, 2]) > tol):
+            return False
+    c00 = a11 * a22 - a12 * a21
+    c01 = a12 * a20 - a10 * a22
+    c02 = a10 * a21 - a11 * a20
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    if not det > 0.0:      # inverted or degenerate: leave it to the general path
+        return False
+    inv = 1.0 / det
+    Ainv[0, 0], Ainv[0, 1], Ainv[0, 2] = inv * c00, inv * (a02 * a21 - a01 * a22), inv * (a01 * a12 - a02 * a11)
+    Ainv[1, 0], Ainv[1, 1], Ainv[1, 2] = inv * c01, inv * (a00 * a22 - a02 * a20), inv * (a02 * a10 - a00 * a12)
+    Ainv[2, 0], Ainv[2, 1], Ainv[2, 2] = inv * c02, inv * (a01 * a20 - a00 * a21), inv * (a00 * a11 - a01 * a10)
+    return True
+
+
+@njit
+def affine_parameters(code, Ainv, x0, x1, x2, xi):
+    """ξ = ξ_0 + A⁻¹ x for an affine element (x local to node 0)."""
+    for i in range(3):
+        xi[i] = _REFERENCE_NODES[code, 0, i] + Ainv[i, 0] * x0 + Ainv[i, 1] * x1 + Ainv[i, 2] * x2
+
+
+@njit_parallel
+def affine_maps(points, conn, codes, solid_origin, solid_h, inverse):
+    """Inverse maps ``inverse[s]`` (3, 3) of the elements that are affine to round-off; NaN for the others.
+
+    A point x (local to node 0) of such an element has ``ξ = ξ_0 + inverse[s] x`` exactly
+    (:func:`affine_parameters`): every tet4, and hex8 that are parallelepipeds (structured
+    grids), need no Newton iteration.
+    """
+    n = conn.shape[0]
+    for c in prange(n_chunks(n, CHUNK)):
+        X = np.empty((solid.MAX_NODES, 3))
+        for s in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            load_element(points, conn, s, codes[s], solid_origin, X)
+            if not affine_inverse(codes[s], X, solid_h[s], EXACT_AFFINE_TOL, inverse[s]):
+                inverse[s, :, :] = np.nan
+
+
+@njit
+def is_affine(inverse, s):
+    return not np.isnan(inverse[s, 0, 0])

@@ -28,7 +28,8 @@ from .beam import beam_point
 from .intersection import face_coordinates, intersect_face
 from .linalg import n_chunks
 from .linalg import solve3
-from .projection import CONVERGED, first_containing, jacobian, load_element, project_point
+from .projection import (CONVERGED, affine_parameters, first_containing, is_affine, jacobian, load_element,
+                         project_point)
 
 _NEAR_FACE = 0.1     # min |g| of the cubic model below this fraction of its variation: try a touch there
 _SCAN = 8            # points per sample interval at which the cubic model of g is scanned
@@ -135,7 +136,7 @@ def _faces_in_reach(code, X, h, box, origin, C, reach):
 
 
 @njit_parallel
-def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h,
+def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, inverse,
                     beam_code, Q, lengths, beam_origin, beam_boxes, search_points, out_eta, out_count, no_face):
     n_pairs = pair_beam.shape[0]
     S = search_points
@@ -174,9 +175,17 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
             s2 = beam_origin[e, 2] - solid_origin[s, 2]
             # samples along the beam element: ξ(η) and dξ/dη = J⁻¹ r'(η) (warm-started Newton)
             solid.centre(code, xi)
+            affine = is_affine(inverse, s)
             for k in range(S):
                 eta_s[k] = -1.0 + 2.0 * k / (S - 1)
                 r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Qe, lengths[e], s0, s1, s2, eta_s[k], H, dH)
+                if affine:
+                    # ξ(η) and dξ/dη = A⁻¹ r' directly
+                    ok[k] = True
+                    affine_parameters(code, inverse[s], r0, r1, r2, xi_s[k])
+                    for i in range(3):
+                        dxi_s[k, i] = inverse[s, i, 0] * d0 + inverse[s, i, 1] * d1 + inverse[s, i, 2] * d2
+                    continue
                 start[:] = xi
                 ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
                 if ok[k]:
@@ -278,19 +287,19 @@ def _insertion_sort(a, n):
 
 
 @njit
-def _deep_end(eta, owner, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, beam_code,
-              Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH):
+def _deep_end(eta, owner, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, inverse,
+              beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH):
     """``owner`` if the beam element's end r(η) (η = ±1) lies inside it by more than the tolerance, else -1."""
     if owner < 0:
         return -1
     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
     return first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
-                            solid_origin, solid_h, -PARAMETER_TOL, X, xi, trial, N, dN, owner)
+                            solid_origin, solid_h, inverse, -PARAMETER_TOL, X, xi, trial, N, dN, owner)
 
 
 @njit_parallel
 def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, points, solid_origin,
-          solid_h, solid_boxes, beam_code, Q, lengths, beam_origin, seg_offsets, seg_solid,
+          solid_h, solid_boxes, inverse, beam_code, Q, lengths, beam_origin, seg_offsets, seg_solid,
           seg_start, seg_end, seg_count):
     n_beam = pair_offsets.shape[0] - 1
     tol = PARAMETER_TOL
@@ -334,7 +343,7 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                 mid = 0.5 * (cuts[iv] + cuts[iv + 1])
                 r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
                 owners[iv] = first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
-                                    solid_origin, solid_h, tol, X, xi, trial, N, dN, -1)
+                                    solid_origin, solid_h, inverse, tol, X, xi, trial, N, dN, -1)
             # a sliver between two crossings closer than _SLIVER is a tangential touch of a face
             # (a double root, resolved only to ~sqrt(eps)): it joins a neighbour that contains it,
             # or is dropped when both neighbours are uncoupled (touching the solid from outside).
@@ -352,12 +361,12 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                 while last + 1 < n_pts - 1 and cuts[last + 2] - cuts[last + 1] < _SLIVER:
                     last += 1
                 before = owners[iv - 1] if iv > 0 else _deep_end(-1.0, owners[0], e, pair_solid, p0, p1, codes,
-                                                                   conn, points, solid_origin, solid_h, solid_boxes,
+                                                                   conn, points, solid_origin, solid_h, solid_boxes, inverse,
                                                                    beam_code, Q, lengths, beam_origin, X, xi, trial,
                                                                    N, dN, H, dH)
                 after = owners[last + 1] if last + 1 < n_pts - 1 else _deep_end(1.0, owners[n_pts - 2], e, pair_solid,
                                                                                 p0, p1, codes, conn, points,
-                                                                                solid_origin, solid_h, solid_boxes,
+                                                                                solid_origin, solid_h, solid_boxes, inverse,
                                                                                 beam_code, Q, lengths, beam_origin,
                                                                                 X, xi, trial, N, dN, H, dH)
                 for k in range(iv, last + 1):
@@ -370,7 +379,7 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
                     for neighbour in (before, after):
                         if neighbour >= 0 and first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes,
-                                                     codes, conn, points, solid_origin, solid_h, tol, X, xi, trial,
+                                                     codes, conn, points, solid_origin, solid_h, inverse, tol, X, xi, trial,
                                                      N, dN, neighbour) == neighbour:
                             owners[k] = neighbour
                             break
@@ -398,7 +407,8 @@ _GAP_PROBES = 7
 
 @njit_parallel
 def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, pair_solid, codes, conn,
-                  points, solid_origin, solid_h, solid_boxes, beam_code, Q, lengths, beam_origin, certain, bad):
+                  points, solid_origin, solid_h, solid_boxes, inverse, beam_code, Q, lengths, beam_origin, certain,
+                  bad):
     """Flag beam elements whose pieces do not tile their embedded part.
 
     Probes every segment at 1/4 and 3/4 (its midpoint chose the owner): each probe must lie in
@@ -439,7 +449,7 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
                         eta = gap_start + k * (a - gap_start) / (_GAP_PROBES + 1)
                         r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
                         if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
-                                            points, solid_origin, solid_h, -loose, X, xi, trial, N, dN, -1) >= 0:
+                                            points, solid_origin, solid_h, inverse, -loose, X, xi, trial, N, dN, -1) >= 0:
                             failed = True
                 if last or failed:
                     break
@@ -449,7 +459,7 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
                     eta = a + 0.25 * k * (b - a)
                     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
                     if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
-                                        points, solid_origin, solid_h, loose, X, xi, trial, N, dN, owner) != owner:
+                                        points, solid_origin, solid_h, inverse, loose, X, xi, trial, N, dN, owner) != owner:
                         failed = True
                 if failed:
                     break
@@ -458,17 +468,17 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
 
 
 @njit
-def _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, beam_code, Q, lengths,
-           beam_origin, X, xi, trial, N, dN, H, dH):
+def _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, inverse, beam_code, Q,
+           lengths, beam_origin, X, xi, trial, N, dN, H, dH):
     """Lowest-index candidate containing r(η) to 1e-12 (sharp: the cuts land on the faces)."""
     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
     return first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
-                            solid_origin, solid_h, 1e-3 * PARAMETER_TOL, X, xi, trial, N, dN, -1)
+                            solid_origin, solid_h, inverse, 1e-3 * PARAMETER_TOL, X, xi, trial, N, dN, -1)
 
 
 @njit_parallel
-def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, beam_code,
-                    Q, lengths, beam_origin, n_samples, out_eta, out_count):
+def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, inverse,
+                    beam_code, Q, lengths, beam_origin, n_samples, out_eta, out_count):
     """Cuts of each beam element where the owner (lowest-index element containing r(η)) changes.
 
     The fallback that does not rely on face intersections: the owner is sampled at
@@ -496,7 +506,7 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
             for k in range(n_samples):
                 eta = -1.0 + 2.0 * k / (n_samples - 1)
                 owner = _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
-                               beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH)
+                               inverse, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH)
                 lo = eta_previous
                 current = previous
                 while k > 0 and current != owner and count < cap:
@@ -504,14 +514,15 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                     while hi - lo > 1e-13:
                         mid = 0.5 * (lo + hi)
                         if _owner(mid, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
-                                  beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH) == current:
+                                  inverse, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH) == current:
                             lo = mid
                         else:
                             hi = mid
                     out_eta[e, count] = 0.5 * (lo + hi)
                     count += 1
                     current = _owner(hi, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
-                                     solid_boxes, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH)
+                                     solid_boxes, inverse, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN,
+                                     H, dH)
                     lo = hi
                 previous = owner
                 eta_previous = eta
@@ -552,8 +563,8 @@ class _Beams:
         crossing_count = np.zeros(len(self.pair_solid), dtype=np.int64)
         no_face = np.empty(len(self.pair_solid), dtype=np.bool_)
         _pair_crossings(pair_beam, self.pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-                        ctx.solid_h, ctx.beam_code, self.Q, self.lengths, self.beam_origin, self.beam_boxes,
-                        search_points, crossing_eta, crossing_count, no_face)
+                        ctx.solid_h, ctx.inverse, ctx.beam_code, self.Q, self.lengths, self.beam_origin,
+                        self.beam_boxes, search_points, crossing_eta, crossing_count, no_face)
         reaching = np.concatenate([[0], np.cumsum(~no_face)])
         self.certain = reaching[self.pair_offsets[1:]] == reaching[self.pair_offsets[:-1]]
         return crossing_eta, crossing_count
@@ -565,8 +576,8 @@ class _Beams:
         cuts = np.empty((n, cap))
         count = np.zeros(n, dtype=np.int64)
         _bisection_cuts(self.pair_offsets, self.pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-                        ctx.solid_h, ctx.solid_boxes, ctx.beam_code, self.Q, self.lengths, self.beam_origin,
-                        _BISECTION_SAMPLES, cuts, count)
+                        ctx.solid_h, ctx.solid_boxes, ctx.inverse, ctx.beam_code, self.Q, self.lengths,
+                        self.beam_origin, _BISECTION_SAMPLES, cuts, count)
         crossing_eta = np.zeros((len(self.pair_solid), cap))
         crossing_count = np.zeros(len(self.pair_solid), dtype=np.int64)
         has_pairs = np.diff(self.pair_offsets) > 0
@@ -591,8 +602,8 @@ class _Beams:
         seg_start = np.empty(total)
         seg_end = np.empty(total)
         seg_count = np.zeros(n_beam, dtype=np.int64)
-        args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.beam_code,
-                self.Q, self.lengths, self.beam_origin)
+        args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.inverse,
+                ctx.beam_code, self.Q, self.lengths, self.beam_origin)
         _tile(pair_offsets, self.pair_solid, crossing_eta, crossing_count, *args,
               seg_offsets, seg_solid, seg_start, seg_end, seg_count)
         bad = np.zeros(n_beam, dtype=np.bool_)

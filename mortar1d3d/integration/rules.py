@@ -23,8 +23,8 @@ from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from ..geometry.beam import beam_point
 from ..geometry.linalg import n_chunks, norm3
-from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, first_containing, load_element,
-                                   polish, project_point)
+from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse, affine_parameters,
+                                   first_containing, is_affine, load_element, polish, project_point)
 from ..geometry.segmentation import resegment, splice
 from .quadrature import gauss_legendre
 
@@ -34,7 +34,7 @@ POINT_INSIDE, POINT_OUTSIDE, POINT_NOT_CONVERGED, POINT_UNCOUPLED = INSIDE, OUTS
 
 @njit_parallel
 def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, codes, conn, points,
-                    solid_origin, solid_h, beam_code, Q, lengths, beam_origin,
+                    solid_origin, solid_h, inverse, beam_code, Q, lengths, beam_origin,
                     eta, xi, weight, position, status):
     # segment g gets the n-point rule (n = seg_points[g+1] - seg_points[g]) stored in row n of gx, gw
     n_seg = seg_beam.shape[0]
@@ -52,7 +52,9 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
             s = seg_solid[g]
             code = codes[s]
             n_gauss = seg_points[g + 1] - seg_points[g]
-            load_element(points, conn, s, code, solid_origin, X)
+            affine = is_affine(inverse, s)
+            if not affine:
+                load_element(points, conn, s, code, solid_origin, X)
             s0 = beam_origin[e, 0] - solid_origin[s, 0]
             s1 = beam_origin[e, 1] - solid_origin[s, 1]
             s2 = beam_origin[e, 2] - solid_origin[s, 2]
@@ -67,6 +69,11 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
                 position[k, 0] = r0 + solid_origin[s, 0]
                 position[k, 1] = r1 + solid_origin[s, 1]
                 position[k, 2] = r2 + solid_origin[s, 2]
+                if affine:
+                    affine_parameters(code, inverse[s], r0, r1, r2, x)
+                    xi[k] = x
+                    status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
+                    continue
                 # warm start from the previous point of the segment; retry from the centre
                 if project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) != CONVERGED:
                     solid.centre(code, x)
@@ -84,7 +91,7 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
 
 @njit_parallel
 def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid_origin, solid_h,
-                    solid_boxes, beam_code, Q, lengths, beam_origin,
+                    solid_boxes, inverse, beam_code, Q, lengths, beam_origin,
                     owner, eta, xi, weight, position, status):
     n_gauss = gx.shape[0]
     n_beam = pair_offsets.shape[0] - 1
@@ -110,13 +117,14 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
                 status[k] = POINT_UNCOUPLED
                 # the lowest-index candidate element containing the point owns it
                 s = first_containing(r0, r1, r2, e, pair_solid, pair_offsets[e], pair_offsets[e + 1], beam_origin,
-                                     solid_boxes, codes, conn, points, solid_origin, solid_h, tol, X, x, trial, N,
-                                     dN, -1)
+                                     solid_boxes, codes, conn, points, solid_origin, solid_h, inverse, tol, X, x,
+                                     trial, N, dN, -1)
                 if s >= 0:
-                    # X still holds the owner's nodes (it was the last element tested)
-                    polish(codes[s], X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
-                           r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
-                           r2 + (beam_origin[e, 2] - solid_origin[s, 2]), solid_h[s], x, trial, N, dN)
+                    if not is_affine(inverse, s):
+                        # X still holds the owner's nodes (it was the last element tested)
+                        polish(codes[s], X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
+                               r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
+                               r2 + (beam_origin[e, 2] - solid_origin[s, 2]), solid_h[s], x, trial, N, dN)
                     owner[k] = s
                     status[k] = POINT_INSIDE
                     xi[k] = x
@@ -136,7 +144,7 @@ def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):
     xi, position = np.empty((n, 3)), np.empty((n, 3))
     status = np.empty(n, dtype=np.int64)
     _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, ctx.codes, ctx.conn, ctx.points,
-                    ctx.solid_origin, ctx.solid_h, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin,
+                    ctx.solid_origin, ctx.solid_h, ctx.inverse, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin,
                     eta, xi, weight, position, status)
     return np.repeat(seg_beam, counts), np.repeat(seg_solid, counts), eta, xi, weight, position, status
 
@@ -178,7 +186,7 @@ def element_points(ctx, n_gauss):
     xi, position = np.zeros((n, 3)), np.empty((n, 3))
     status = np.empty(n, dtype=np.int64)
     _element_points(ctx.pair_offsets, ctx.pair_solid, gx, gw, ctx.codes, ctx.conn, ctx.points,
-                    ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.beam_code, ctx.Q, ctx.lengths,
+                    ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.inverse, ctx.beam_code, ctx.Q, ctx.lengths,
                     ctx.beam_origin, owner, eta, xi, weight, position, status)
     return np.repeat(np.arange(n_beam), n_gauss), owner, eta, xi, weight, position, status
 
@@ -215,63 +223,8 @@ CERTIFY_MARGIN = 1e3 * PARAMETER_TOL
 LINE_DEGREE = np.array([3, 4, 6, 1, 2], dtype=np.int64)
 #: polynomial degree of the centreline functions per beam code (hermite, line, line3)
 BEAM_DEGREE = np.array([3, 1, 2], dtype=np.int64)
-# nodes spanning the parameter axes from node 0 (hex: 1, 3, 4; tet: 1, 2, 3) and their distance
-_AXIS_NODES = np.array([[1, 3, 4], [1, 3, 4], [1, 3, 4], [1, 2, 3], [1, 2, 3]], dtype=np.int64)
-_AXIS_SPAN = np.array([2.0, 2.0, 2.0, 1.0, 1.0])
-_REFERENCE_NODES = np.zeros((len(solid.BY_CODE), solid.MAX_NODES, 3))
-for _code, _descriptor in solid.BY_CODE.items():
-    _REFERENCE_NODES[_code, : _descriptor.n_nodes] = _descriptor.reference_nodes
-
 #: pair outcome of the auto classification
 PAIR_DONE, PAIR_NUMERIC = 0, 1
-
-
-@njit
-def affine_inverse(code, X, h, Ainv):
-    """Whether element ``code`` with local nodes ``X`` (node 0 at the origin) is affine; its inverse map.
-
-    Affine means x(ξ) = A (ξ - ξ_0) for every node to ``AFFINE_TOL · h`` (tet4 always; a hex8
-    that is a parallelepiped; quadratic elements with straight edges and centred mid-nodes).
-    On success ``Ainv`` (3, 3) holds A⁻¹, so ξ(x) = ξ_0 + A⁻¹ x exactly (no Newton needed).
-    """
-    axes = _AXIS_NODES[code]
-    span = _AXIS_SPAN[code]
-    a00 = X[axes[0], 0] / span
-    a10 = X[axes[0], 1] / span
-    a20 = X[axes[0], 2] / span
-    a01 = X[axes[1], 0] / span
-    a11 = X[axes[1], 1] / span
-    a21 = X[axes[1], 2] / span
-    a02 = X[axes[2], 0] / span
-    a12 = X[axes[2], 1] / span
-    a22 = X[axes[2], 2] / span
-    ref = _REFERENCE_NODES[code]
-    tol = AFFINE_TOL * h
-    for a in range(solid.n_nodes(code)):
-        d0 = ref[a, 0] - ref[0, 0]
-        d1 = ref[a, 1] - ref[0, 1]
-        d2 = ref[a, 2] - ref[0, 2]
-        if (abs(a00 * d0 + a01 * d1 + a02 * d2 - X[a, 0]) > tol or abs(a10 * d0 + a11 * d1 + a12 * d2 - X[a, 1]) > tol
-                or abs(a20 * d0 + a21 * d1 + a22 * d2 - X[a, 2]) > tol):
-            return False
-    c00 = a11 * a22 - a12 * a21
-    c01 = a12 * a20 - a10 * a22
-    c02 = a10 * a21 - a11 * a20
-    det = a00 * c00 + a01 * c01 + a02 * c02
-    if not det > 0.0:      # inverted or degenerate: leave it to the general path
-        return False
-    inv = 1.0 / det
-    Ainv[0, 0], Ainv[0, 1], Ainv[0, 2] = inv * c00, inv * (a02 * a21 - a01 * a22), inv * (a01 * a12 - a02 * a11)
-    Ainv[1, 0], Ainv[1, 1], Ainv[1, 2] = inv * c01, inv * (a00 * a22 - a02 * a20), inv * (a02 * a10 - a00 * a12)
-    Ainv[2, 0], Ainv[2, 1], Ainv[2, 2] = inv * c02, inv * (a01 * a20 - a00 * a21), inv * (a00 * a11 - a01 * a10)
-    return True
-
-
-@njit
-def _to_parameters(code, Ainv, x0, x1, x2, xi):
-    """ξ = ξ_0 + A⁻¹ x for an affine element (x local to node 0)."""
-    for i in range(3):
-        xi[i] = _REFERENCE_NODES[code, 0, i] + Ainv[i, 0] * x0 + Ainv[i, 1] * x1 + Ainv[i, 2] * x2
 
 
 @njit
@@ -355,7 +308,7 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                 crossing_count[p] = 0
                 pair_state[p] = PAIR_NUMERIC
                 load_element(points, conn, s, code, solid_origin, X)
-                if not affine_inverse(code, X, solid_h[s], Ainv):
+                if not affine_inverse(code, X, solid_h[s], AFFINE_TOL, Ainv):
                     continue
                 s0 = beam_origin[e, 0] - solid_origin[s, 0]
                 s1 = beam_origin[e, 1] - solid_origin[s, 1]
@@ -363,7 +316,7 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                 if not straight:
                     certified = True
                     for k in range(n_ctrl):
-                        _to_parameters(code, Ainv, ctrl[k, 0] + s0, ctrl[k, 1] + s1, ctrl[k, 2] + s2, xi)
+                        affine_parameters(code, Ainv, ctrl[k, 0] + s0, ctrl[k, 1] + s1, ctrl[k, 2] + s2, xi)
                         if solid.outside_distance(code, xi) > -CERTIFY_MARGIN:
                             certified = False
                             break
@@ -372,7 +325,7 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                         break
                     continue
                 pair_state[p] = PAIR_DONE
-                _to_parameters(code, Ainv, p0 + s0, p1 + s1, p2 + s2, alpha)
+                affine_parameters(code, Ainv, p0 + s0, p1 + s1, p2 + s2, alpha)
                 for i in range(3):
                     beta[i] = Ainv[i, 0] * q0 + Ainv[i, 1] * q1 + Ainv[i, 2] * q2
                 # clip the line against the half-spaces n·(ξ - o) <= 0 of the faces
@@ -430,7 +383,7 @@ def _auto_gauss_counts(seg_beam, seg_solid, codes, conn, points, solid_origin, s
             exact[g] = False
             if beam_affine[seg_beam[g]]:
                 load_element(points, conn, s, code, solid_origin, X)
-                if affine_inverse(code, X, solid_h[s], Ainv):
+                if affine_inverse(code, X, solid_h[s], AFFINE_TOL, Ainv):
                     degree = n_phi - 1 + max(BEAM_DEGREE[beam_code], LINE_DEGREE[code])
                     counts[g] = degree // 2 + 1
                     exact[g] = True
@@ -482,7 +435,8 @@ def auto_segments(ctx, search_points, n_gauss, n_phi):
         found = np.empty((len(numeric), crossings_capacity(search_points)))
         found_count = np.zeros(len(numeric), dtype=np.int64)
         _pair_crossings(pair_beam[numeric], pair_solid[numeric], ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-                        ctx.solid_h, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, ctx.beam_boxes, search_points,
+                        ctx.solid_h, ctx.inverse, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, ctx.beam_boxes,
+                        search_points,
                         found, found_count, np.empty(len(numeric), dtype=np.bool_))
         width = max(2, int(found_count.max()))
         crossing_eta = np.empty((n_pairs, width))
@@ -497,7 +451,7 @@ def auto_segments(ctx, search_points, n_gauss, n_phi):
     all_solid, all_start, all_end = np.empty(total, dtype=np.int64), np.empty(total), np.empty(total)
     seg_count = np.zeros(n_beam, dtype=np.int64)
     _tile(pair_offsets, pair_solid, crossing_eta, count, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-          ctx.solid_h, ctx.solid_boxes, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, seg_offsets,
+          ctx.solid_h, ctx.solid_boxes, ctx.inverse, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, seg_offsets,
           all_solid, all_start, all_end, seg_count)
     keep = _compact_index(seg_offsets, seg_count)
     seg_beam = np.repeat(np.arange(n_beam), seg_count)
