@@ -82,13 +82,23 @@ def warm_jit():
 _SCENES = {}
 
 
+#: interior nodes of the distorted variant move by up to this fraction of the cell size
+#: (``generate.distort``, seed 1): no hex8 is a parallelepiped any more, so every location is a
+#: Newton projection (the structured scene's elements are located with their inverse map)
+DISTORTION = 0.1
+
+
 @pytest.fixture(scope="session")
 def scene():
-    """``scene(curved)`` -> (beams, solid) of fibre_cube(*SCENE), built once per session."""
-    def get(curved):
-        if curved not in _SCENES:
-            _SCENES[curved] = m13.generate.fibre_cube(*SCENE, curved=curved)
-        return _SCENES[curved]
+    """``scene(curved, distorted=False)`` -> (beams, solid) of fibre_cube(*SCENE), built once per session."""
+    def get(curved, distorted=False):
+        key = (curved, distorted)
+        if key not in _SCENES:
+            beams, solid = m13.generate.fibre_cube(*SCENE, curved=curved)
+            if distorted:
+                solid = m13.generate.distort(solid, DISTORTION, seed=1)
+            _SCENES[key] = beams, solid
+        return _SCENES[key]
     return get
 
 

@@ -2,7 +2,9 @@
 
 Scene ``generate.fibre_cube(20, 1000, 20)`` (8000 hex8, 1000 fibres of 20 Hermite elements),
 ``n_gauss = 4``; element-based and segment-based integration on straight fibres, segment-based
-on curved (helical) fibres; each with 1 Numba thread and with 2 threads. The timed call is the
+on curved (helical) fibres, and both on straight fibres in the cube with its interior nodes
+moved (``conftest.DISTORTION``: no element affine, every location a Newton projection); each
+with 1 Numba thread and with 2 threads. The timed call is the
 whole ``assemble_mortar`` (search, segmentation, integration points, local operators, CSR,
 certificate); JIT compilation is excluded by the session fixture ``warm_jit`` (tiny scene
 first) plus one untimed warm-up round on the benchmark scene.
@@ -22,10 +24,12 @@ from conftest import N_GAUSS, SCENE, TARGETS, available_cpus
 ROUNDS = 10
 WARMUP_ROUNDS = 1
 
-VARIANTS = [  # (variant name, integration, curved)
-    ("element-based, straight", "element", False),
-    ("segment-based, straight", "segment", False),
-    ("segment-based, curved", "segment", True),
+VARIANTS = [  # (variant name, integration, curved, distorted solid)
+    ("element-based, straight", "element", False, False),
+    ("segment-based, straight", "segment", False, False),
+    ("segment-based, curved", "segment", True, False),
+    ("element-based, distorted hex8", "element", False, True),
+    ("segment-based, distorted hex8", "segment", False, True),
 ]
 
 
@@ -42,10 +46,11 @@ def threads(request):
     numba.set_num_threads(default)
 
 
-@pytest.mark.parametrize("variant,integration,curved", VARIANTS,
-                         ids=[f"{i}-{'curved' if c else 'straight'}" for _, i, c in VARIANTS])
-def test_assemble_mortar(benchmark, warm_jit, scene, threads, bench_results, variant, integration, curved):
-    beams, solid = scene(curved)
+@pytest.mark.parametrize("variant,integration,curved,distorted", VARIANTS,
+                         ids=[f"{i}-{'curved' if c else 'straight'}{'-distorted' if d else ''}"
+                              for _, i, c, d in VARIANTS])
+def test_assemble_mortar(benchmark, warm_jit, scene, threads, bench_results, variant, integration, curved, distorted):
+    beams, solid = scene(curved, distorted)
     assert numba.get_num_threads() == threads
     records = []  # (wall time, n points, timings) of every call, warm-up rounds first
 
@@ -68,7 +73,7 @@ def test_assemble_mortar(benchmark, warm_jit, scene, threads, bench_results, var
     target = TARGETS[f"{integration}_gp_per_s_per_core"]
 
     record = {
-        "integration": integration, "curved": curved, "threads": threads, "n_gauss": N_GAUSS,
+        "integration": integration, "curved": curved, "distorted": distorted, "threads": threads, "n_gauss": N_GAUSS,
         "scene": list(SCENE), "n_integration_points": n_points, "rounds": len(timed),
         "median_s": median, "min_s": best,
         "gp_per_s": gp_per_s, "gp_per_s_per_core": gp_per_s / threads,

@@ -1,6 +1,6 @@
 """Standalone throughput of assemble_mortar outside pytest (best and median of repeated calls).
 
-    .venv/bin/python benchmarks/throughput.py [--repeats 9] [--threads 1 2]
+    .venv/bin/python benchmarks/throughput.py [--repeats 9] [--threads 1 2] [--distort 0.1]
 
 Same scene as the pytest-benchmark harness (fibre_cube(20, 1000, 20), n_gauss=4, straight
 fibres). Thread counts are interleaved so that both see the same machine state; the per-stage
@@ -24,8 +24,13 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeats", type=int, default=9)
     parser.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--distort", type=float, default=0.0, metavar="A",
+                        help="move the cube's interior nodes by up to A cells (generate.distort, seed 1): "
+                             "no element affine, every location a Newton projection")
     args = parser.parse_args(argv)
     beams, solid = m13.generate.fibre_cube(20, 1000, 20)
+    if args.distort:
+        solid = m13.generate.distort(solid, args.distort, seed=1)
     m13.warmup()
     print(f"threading layer {numba.threading_layer()}, NUMBA_NUM_THREADS {numba.config.NUMBA_NUM_THREADS}")
     for integration in ("element", "segment"):

@@ -1,0 +1,155 @@
+"""The engine's shortcuts give the results of the general path.
+
+- Affine elements (every tet4, parallelepiped hex8, straight-edged quadratic elements) are
+  located with their exact inverse map instead of Newton: the same points, segments and
+  operators as the Newton path on a mesh perturbed just enough to leave the affine class.
+- The crossing search skips faces whose control-point box misses the beam element's box: the
+  control points of each face must contain the face (checked on curved faces of every type).
+"""
+import numpy as np
+import pytest
+
+import mortar1d3d as m13
+from mortar1d3d import generate
+from mortar1d3d.elements.solid.dispatch import (CONTROL_MATRIX, FACE_CONTROL, N_FACE_CONTROL, SOLID_ELEMENTS,
+                                                SOLID_MODULES, control_points)
+from mortar1d3d.geometry.projection import affine_maps
+from mortar1d3d.mortar.assemble import KernelInput
+
+SOLID_TYPES = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
+
+# a shear and stretch: maps the unit-cube grid onto parallelepipeds (every element stays affine)
+SHEAR = np.array([[1.0, 0.2, 0.1], [0.05, 0.9, 0.15], [0.0, 0.1, 1.1]])
+SHIFT = np.array([0.3, -0.2, 0.1])
+
+
+def sheared(solid, wobble=0.0, seed=4):
+    """``solid`` mapped by SHEAR, SHIFT; ``wobble`` > 0 moves every node randomly by wobble · h."""
+    points = solid.points @ SHEAR.T + SHIFT
+    if wobble:
+        points = points + wobble * 0.5 * np.random.default_rng(seed).uniform(-1, 1, points.shape)
+    return m13.SolidMesh(points, solid.cells)
+
+
+def sheared_beams(seed=2):
+    """Random helix pieces inside the unit cube, mapped like the solid (so they stay inside it)."""
+    beams = generate.random_curved_beams(3, 8, seed=seed)
+    tangents = beams.tangents @ SHEAR.T
+    tangents /= np.linalg.norm(tangents, axis=1)[:, None]
+    return m13.BeamMesh.hermite(beams.positions @ SHEAR.T + SHIFT, tangents, beams.elements)
+
+
+def inverse_maps(solid):
+    ctx = KernelInput(generate.random_curved_beams(1, 2, seed=1), solid)
+    return ctx.inverse
+
+
+@pytest.mark.parametrize("element", SOLID_TYPES)
+def test_affine_maps_are_found_exactly_for_parallelepipeds(element):
+    box = generate.box((0, 0, 0), (1, 1, 1), (2, 2, 2), element)
+    solid = sheared(box)
+    inverse = inverse_maps(solid)
+    assert np.isfinite(inverse).all()
+    # ξ = ξ_0 + A⁻¹ (x - x_0) takes every node to its reference coordinates
+    reference = SOLID_ELEMENTS[element].reference_nodes
+    n = len(reference)
+    for s in range(solid.n_elements):
+        X = solid.points[solid.connectivity[s, :n]]
+        np.testing.assert_allclose(reference[0] + (X - X[0]) @ inverse[s].T, reference, rtol=0, atol=1e-14)
+    # a perturbation far below any tolerance of the method, but above round-off: Newton path
+    # (a tet4 stays affine whatever its nodes)
+    wobbled = np.isnan(inverse_maps(sheared(box, wobble=1e-11))[:, 0, 0])
+    assert (~wobbled).all() if element == "tetra" else wobbled.all()
+
+
+def test_affine_maps_kernel_leaves_curved_elements_to_newton():
+    solid = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (3, 3, 3), "hexahedron"), 0.15, seed=1)
+    inverse = np.empty((solid.n_elements, 3, 3))
+    ctx = KernelInput(generate.random_curved_beams(1, 2, seed=1), solid)
+    affine_maps(ctx.points, ctx.conn, ctx.codes, ctx.solid_origin, ctx.solid_h, inverse)
+    flagged = ~np.isnan(inverse[:, 0, 0])
+    # only the centre cell has all its nodes moved; the corner cells touch the fixed boundary
+    # on three sides but still have a moved node, so none is a parallelepiped
+    assert not flagged.any()
+
+
+def newton_parameters(element, X, x, xi):
+    """ξ with x(ξ) = x by Newton in numpy (the element module's shape functions), from ``xi``."""
+    module = SOLID_MODULES[element]
+    n = len(X)
+    N, dN = np.empty(n), np.empty((n, 3))
+    for _ in range(30):
+        module.shape(xi, N)
+        module.deriv(xi, dN)
+        xi = xi + np.linalg.solve(X.T @ dN, x - N @ X)
+    return xi
+
+
+@pytest.mark.parametrize("integration", ["segment", "element"])
+@pytest.mark.parametrize("element", SOLID_TYPES)
+def test_affine_location_gives_the_points_of_a_newton_projection(element, integration):
+    solid = sheared(generate.box((0, 0, 0), (1, 1, 1), (2, 2, 2), element))
+    ops = m13.assemble_mortar(sheared_beams(), solid, integration=integration, n_gauss=3)
+    n = SOLID_ELEMENTS[element].n_nodes
+    for p in ops.points:
+        X = solid.points[solid.connectivity[p["solid_element"], :n]]
+        np.testing.assert_allclose(p["xi"], newton_parameters(element, X, p["position"], p["xi"] * 0.9), atol=1e-13)
+    assert ops.constraint_residual < 1e-14
+
+
+@pytest.mark.parametrize("integration", ["segment", "element"])
+@pytest.mark.parametrize("element", [e for e in SOLID_TYPES if e != "tetra"])   # a tet4 is always affine
+def test_affine_location_gives_the_newton_operators(element, integration):
+    box = generate.box((0, 0, 0), (1, 1, 1), (2, 2, 2), element)
+    beams = sheared_beams()
+    exact = m13.assemble_mortar(beams, sheared(box), integration=integration, n_gauss=4, lm="line3")
+    newton = m13.assemble_mortar(beams, sheared(box, wobble=1e-11), integration=integration, n_gauss=4, lm="line3")
+    assert exact.n_integration_points == newton.n_integration_points > 0
+    np.testing.assert_array_equal(exact.segments["solid_element"], newton.segments["solid_element"])
+    np.testing.assert_allclose(exact.segments["eta_start"], newton.segments["eta_start"], rtol=0, atol=1e-8)
+    np.testing.assert_allclose(exact.points["xi"], newton.points["xi"], rtol=0, atol=1e-9)
+    for name in ("D", "M"):
+        a, b = getattr(exact, name), getattr(newton, name)
+        assert abs(a - b).max() <= 1e-9 * abs(b).max()
+    np.testing.assert_allclose(exact.kappa, newton.kappa, rtol=1e-9)
+    # both are exact to round-off in their own geometry
+    assert exact.constraint_residual < 1e-14 and newton.constraint_residual < 1e-14
+
+
+@pytest.mark.parametrize("element", SOLID_TYPES)
+def test_face_control_points_contain_the_face(element):
+    """The hull of ``FACE_CONTROL`` points holds every point of the (curved) face."""
+    solid = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (2, 2, 2), element), 0.2, seed=7)
+    descriptor = SOLID_ELEMENTS[element]
+    code, n = descriptor.code, descriptor.n_nodes
+    module = SOLID_MODULES[element]
+    u = np.linspace(0.0, 1.0, 9)
+    C = np.empty((CONTROL_MATRIX.shape[1], 3))
+    N = np.empty(n)
+    checked = 0
+    for s in range(solid.n_elements):
+        X = solid.points[solid.connectivity[s, :n]]
+        control_points(code, np.ascontiguousarray(X), C)
+        for f, (origin, a, b, _normal) in enumerate(descriptor.faces):
+            ctrl = C[FACE_CONTROL[code, f, : N_FACE_CONTROL[code, f]]]
+            lo, hi = ctrl.min(axis=0), ctrl.max(axis=0)
+            for i in u:
+                for j in u:
+                    if descriptor.family == "hex":
+                        xi = origin + (2 * i - 1) * a + (2 * j - 1) * b
+                    elif i + j <= 1.0:
+                        xi = origin + i * a + j * b
+                    else:
+                        continue
+                    module.shape(xi, N)
+                    x = N @ X
+                    assert np.all(x >= lo - 1e-14) and np.all(x <= hi + 1e-14), (element, s, f, xi)
+                    checked += 1
+    assert checked > 0
+
+
+def test_face_control_points_of_linear_faces_are_its_corner_nodes():
+    for element in ("hexahedron", "tetra"):
+        d = SOLID_ELEMENTS[element]
+        for f, nodes in enumerate(d.face_nodes):
+            assert sorted(FACE_CONTROL[d.code, f, : N_FACE_CONTROL[d.code, f]]) == sorted(nodes)
