@@ -153,3 +153,19 @@ def test_face_control_points_of_linear_faces_are_its_corner_nodes():
         d = SOLID_ELEMENTS[element]
         for f, nodes in enumerate(d.face_nodes):
             assert sorted(FACE_CONTROL[d.code, f, : N_FACE_CONTROL[d.code, f]]) == sorted(nodes)
+
+
+@pytest.mark.parametrize("element", ["hexahedron", "tetra10"])
+def test_crossing_table_overflow_is_searched_again(monkeypatch, element):
+    """Pairs whose crossings do not fit the first, small table get the same crossings on a second pass."""
+    from mortar1d3d.geometry import segmentation
+
+    solid = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (3, 3, 3), element), 0.15, seed=3)
+    beams = generate.random_curved_beams(3, 6, seed=5)
+    reference = m13.assemble_mortar(beams, solid, integration="segment", n_gauss=3)
+    assert reference.diagnostics["face_crossings"] > 10
+    monkeypatch.setattr(segmentation, "_FIRST_CAPACITY", 1)     # nearly every crossing pair overflows
+    again = m13.assemble_mortar(beams, solid, integration="segment", n_gauss=3)
+    assert again.diagnostics["face_crossings"] == reference.diagnostics["face_crossings"]
+    np.testing.assert_array_equal(again.segments, reference.segments)
+    assert abs(again.M - reference.M).max() == 0.0 and abs(again.D - reference.D).max() == 0.0

@@ -248,16 +248,31 @@ def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell
     return offsets, solids
 
 
+@njit
+def _grid_extent(boxes, lower, upper, sizes):
+    """Bounds of all boxes and the largest extent of each (one pass)."""
+    lower[:] = np.inf
+    upper[:] = -np.inf
+    for s in range(boxes.shape[0]):
+        size = 0.0
+        for i in range(3):
+            lower[i] = min(lower[i], boxes[s, 0, i])
+            upper[i] = max(upper[i], boxes[s, 1, i])
+            size = max(size, boxes[s, 1, i] - boxes[s, 0, i])
+        sizes[s] = size
+
+
 def find_candidate_pairs(beam_boxes, solid_boxes):
     """Candidate pairs as CSR over beam elements: ``offsets`` (n_beam + 1,), ``solids`` (n_pairs,).
 
     The solid elements of each beam element are sorted ascending (the ownership rules rely on
     it). Exactly the pairs whose boxes overlap are returned (tests compare with brute force).
     """
-    lower = solid_boxes[:, 0].min(axis=0)
-    upper = solid_boxes[:, 1].max(axis=0)
+    lower = np.empty(3)
+    upper = np.empty(3)
+    sizes = np.empty(len(solid_boxes))
+    _grid_extent(solid_boxes, lower, upper, sizes)
     extent = np.maximum(upper - lower, 1e-300)
-    sizes = (solid_boxes[:, 1] - solid_boxes[:, 0]).max(axis=1)
     cell = max(float(np.median(sizes)), float(extent.max()) / 256.0)
     # keep the grid at most a few cells per element
     while np.prod(np.ceil(extent / cell)) > 8 * len(solid_boxes) + 64:

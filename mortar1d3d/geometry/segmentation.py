@@ -51,6 +51,55 @@ def crossings_capacity(search_points):
     return 4 * search_points * solid.MAX_FACES
 
 
+#: crossings stored per pair on the first pass; pairs with more (a beam element weaving in and
+#: out of one element, or one crossing found from several starts) are searched again with room
+#: for ``crossings_capacity``. Keeps the table small: most of it is never written, but every
+#: page of it would be touched (and faulted in) row by row.
+_FIRST_CAPACITY = 16
+
+
+@njit
+def _record(eta, out_eta, p, count, overflow):
+    """Store a crossing (NaN: none) in row p; flag the pair when its row is full."""
+    if np.isnan(eta):
+        return count
+    if count < out_eta.shape[1]:
+        out_eta[p, count] = eta
+        return count + 1
+    overflow[p] = True
+    return count
+
+
+def pair_crossings(ctx, pair_beam, pair_solid, Q, lengths, beam_origin, beam_boxes, search_points):
+    """Face crossings of the candidate pairs (pair_beam indexes ``Q``, ``lengths``, ...).
+
+    Returns ``crossing_eta`` (n_pairs, width), ``crossing_count`` (n_pairs,) and ``no_face``
+    (n_pairs,): the pairs whose beam element reaches no face of the solid element.
+    """
+    n = len(pair_solid)
+    args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.inverse, ctx.beam_code, Q, lengths,
+            beam_origin, beam_boxes, search_points)
+    full = crossings_capacity(search_points)
+    crossing_eta = np.empty((n, min(_FIRST_CAPACITY, full)))
+    crossing_count = np.zeros(n, dtype=np.int64)
+    no_face = np.empty(n, dtype=np.bool_)
+    overflow = np.empty(n, dtype=np.bool_)
+    _pair_crossings(pair_beam, pair_solid, *args, crossing_eta, crossing_count, no_face, overflow)
+    again = np.flatnonzero(overflow)
+    if len(again) and crossing_eta.shape[1] < full:
+        more_eta = np.empty((len(again), full))
+        more_count = np.zeros(len(again), dtype=np.int64)
+        _pair_crossings(pair_beam[again], pair_solid[again], *args, more_eta, more_count,
+                        np.empty(len(again), dtype=np.bool_), np.empty(len(again), dtype=np.bool_))
+        width = int(more_count.max())
+        wide = np.empty((n, max(width, crossing_eta.shape[1])))
+        wide[:, : crossing_eta.shape[1]] = crossing_eta
+        wide[again, :width] = more_eta[:, :width]
+        crossing_eta = wide
+        crossing_count[again] = more_count
+    return crossing_eta, crossing_count, no_face
+
+
 @njit
 def _try_crossing(code, X, h, beam_code, Qe, length, s0, s1, s2, face, eta0, xs0, xs1, xs2,
                   z, xi, N, dN, H, dH):
@@ -137,10 +186,10 @@ def _faces_in_reach(code, X, h, box, origin, C, reach):
 
 @njit_parallel
 def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, inverse,
-                    beam_code, Q, lengths, beam_origin, beam_boxes, search_points, out_eta, out_count, no_face):
+                    beam_code, Q, lengths, beam_origin, beam_boxes, search_points, out_eta, out_count, no_face,
+                    overflow):
     n_pairs = pair_beam.shape[0]
     S = search_points
-    cap = out_eta.shape[1]
     for c in prange(n_chunks(n_pairs, CHUNK)):
         C = np.empty((solid.CONTROL_MATRIX.shape[1], 3))
         reach = np.empty(solid.MAX_FACES, dtype=np.bool_)
@@ -166,6 +215,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
             h = solid_h[s]
             Qe = Q[e]
             load_element(points, conn, s, code, solid_origin, X)
+            overflow[p] = False
             no_face[p] = not _faces_in_reach(code, X, h, beam_boxes[e], solid_origin[s], C, reach)
             if no_face[p]:
                 out_count[p] = 0
@@ -213,9 +263,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                         _face_centre(code, face, start)
                         eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s[k],
                                             start[0], start[1], start[2], z, xi, N, dN, H, dH)
-                        if not np.isnan(eta) and count < cap:
-                            out_eta[p, count] = eta
-                            count += 1
+                        count = _record(eta, out_eta, p, count, overflow)
                 for k in range(S - 1):
                     if not (ok[k] and ok[k + 1]):
                         continue
@@ -243,9 +291,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                             continue
                         eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
                                            t_start, z, xi, N, dN, H, dH)
-                        if not np.isnan(eta) and count < cap:
-                            out_eta[p, count] = eta
-                            count += 1
+                        count = _record(eta, out_eta, p, count, overflow)
                     # a sample on the face: the scan starts Newton there and finds that point again;
                     # a crossing soon after it (leaving at a corner and coming back) is a root of
                     # the cubic divided by its known root (found by make fuzz, see test_hard_cases)
@@ -262,16 +308,12 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                                 continue
                             eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s,
                                                k, t_start, z, xi, N, dN, H, dH)
-                            if not np.isnan(eta) and count < cap:
-                                out_eta[p, count] = eta
-                                count += 1
+                            count = _record(eta, out_eta, p, count, overflow)
                     if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0:
                         # close to the face without a sign change: a touch or a missed double crossing
                         eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
                                            best_t, z, xi, N, dN, H, dH)
-                        if not np.isnan(eta) and count < cap:
-                            out_eta[p, count] = eta
-                            count += 1
+                        count = _record(eta, out_eta, p, count, overflow)
             out_count[p] = count
 
 
@@ -559,12 +601,8 @@ class _Beams:
 
     def crossings(self, ctx, search_points):
         pair_beam = np.repeat(np.arange(len(self.ids)), np.diff(self.pair_offsets))
-        crossing_eta = np.empty((len(self.pair_solid), crossings_capacity(search_points)))
-        crossing_count = np.zeros(len(self.pair_solid), dtype=np.int64)
-        no_face = np.empty(len(self.pair_solid), dtype=np.bool_)
-        _pair_crossings(pair_beam, self.pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-                        ctx.solid_h, ctx.inverse, ctx.beam_code, self.Q, self.lengths, self.beam_origin,
-                        self.beam_boxes, search_points, crossing_eta, crossing_count, no_face)
+        crossing_eta, crossing_count, no_face = pair_crossings(ctx, pair_beam, self.pair_solid, self.Q, self.lengths,
+                                                               self.beam_origin, self.beam_boxes, search_points)
         reaching = np.concatenate([[0], np.cumsum(~no_face)])
         self.certain = reaching[self.pair_offsets[1:]] == reaching[self.pair_offsets[:-1]]
         return crossing_eta, crossing_count

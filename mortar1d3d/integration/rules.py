@@ -415,7 +415,7 @@ def auto_segments(ctx, search_points, n_gauss, n_phi):
     info : dict
         Counts for the diagnostics: face crossings, numeric pairs, beam elements left uncut.
     """
-    from ..geometry.segmentation import _compact_index, _pair_crossings, _tile, crossings_capacity
+    from ..geometry.segmentation import _compact_index, _tile, pair_crossings
 
     pair_offsets, pair_solid = ctx.pair_offsets, ctx.pair_solid
     n_beam = len(pair_offsets) - 1
@@ -432,12 +432,8 @@ def auto_segments(ctx, search_points, n_gauss, n_phi):
     crossing_eta = closed
     if len(numeric):
         pair_beam = np.repeat(np.arange(n_beam), np.diff(pair_offsets))
-        found = np.empty((len(numeric), crossings_capacity(search_points)))
-        found_count = np.zeros(len(numeric), dtype=np.int64)
-        _pair_crossings(pair_beam[numeric], pair_solid[numeric], ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-                        ctx.solid_h, ctx.inverse, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, ctx.beam_boxes,
-                        search_points,
-                        found, found_count, np.empty(len(numeric), dtype=np.bool_))
+        found, found_count, _ = pair_crossings(ctx, pair_beam[numeric], pair_solid[numeric], ctx.Q, ctx.lengths,
+                                               ctx.beam_origin, ctx.beam_boxes, search_points)
         width = max(2, int(found_count.max()))
         crossing_eta = np.empty((n_pairs, width))
         crossing_eta[:, :2] = closed

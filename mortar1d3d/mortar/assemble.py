@@ -179,6 +179,36 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
 
 
 @njit
+def _groups(p_beam, p_solid, codes, n_phi, n_beam):
+    """Groups of points: runs with the same (beam element, solid element).
+
+    Returns ``group_start`` (n_groups + 1), the offsets of each group's local M entries
+    (``n_phi`` rows of the owner's nodes) and ``beam_groups`` (n_beam + 1): points come ordered
+    by beam element, so the groups of element e are ``beam_groups[e]:beam_groups[e + 1]``.
+    """
+    n = p_beam.shape[0]
+    count = 0
+    for q in range(n):
+        if q == 0 or p_beam[q] != p_beam[q - 1] or p_solid[q] != p_solid[q - 1]:
+            count += 1
+    group_start = np.empty(count + 1, dtype=np.int64)
+    m_offsets = np.empty(count + 1, dtype=np.int64)
+    beam_groups = np.zeros(n_beam + 1, dtype=np.int64)
+    m_offsets[0] = 0
+    g = 0
+    for q in range(n):
+        if q == 0 or p_beam[q] != p_beam[q - 1] or p_solid[q] != p_solid[q - 1]:
+            group_start[g] = q
+            m_offsets[g + 1] = m_offsets[g] + n_phi * solid_types.N_NODES[codes[p_solid[q]]]
+            beam_groups[p_beam[q] + 1] += 1
+            g += 1
+    group_start[count] = n
+    for e in range(n_beam):
+        beam_groups[e + 1] += beam_groups[e]
+    return group_start, m_offsets, beam_groups
+
+
+@njit
 def _kappa(src_offsets, src, n_phi, beam_groups, kappa_local, kappa):
     for r in range(src_offsets.shape[0] - 1):
         v = 0.0
@@ -308,15 +338,11 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
         p_beam, p_solid, eta, xi, weight, position, status = (
             a[keep] for a in (p_beam, p_solid, eta, xi, weight, position, status))
 
-    # groups: runs of points with the same (beam element, solid element)
-    change = np.flatnonzero((p_beam[1:] != p_beam[:-1]) | (p_solid[1:] != p_solid[:-1])) + 1
-    group_start = np.concatenate([[0], change, [len(p_beam)]]).astype(np.int64) if len(p_beam) else np.zeros(1, np.int64)
-    n_groups = len(group_start) - 1
     n_phi = lm_type.n_functions
     nH = beam_n_functions.py_func(ctx.beam_code)
+    group_start, m_offsets, beam_groups = _groups(p_beam, p_solid, ctx.codes, n_phi, beams.n_elements)
+    n_groups = len(group_start) - 1
     g_solid = p_solid[group_start[:-1]]
-    m_sizes = n_phi * solid_types.N_NODES[ctx.codes[g_solid]]
-    m_offsets = np.concatenate([[0], np.cumsum(m_sizes)]).astype(np.int64)
     D_local = np.empty((n_groups, n_phi * nH))
     M_local = np.empty(m_offsets[-1])
     kappa_local = np.empty((n_groups, n_phi))
@@ -325,8 +351,6 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     _group_operators(group_start, p_beam, p_solid, eta, xi, weight, ctx.beam_code, ctx.lengths, n_phi, ctx.codes,
                      ctx.conn, beams.function_columns(), m_offsets, D_local, M_local, kappa_local, d_cols, m_cols)
     lm_index, n_lm = lm_numbering(beams, lm_type)
-    # groups are ordered by beam element: the groups of element e are beam_groups[e]:beam_groups[e+1]
-    beam_groups = np.searchsorted(p_beam[group_start[:-1]], np.arange(beams.n_elements + 1)).astype(np.int64)
     src_offsets, src = row_sources(lm_index, n_phi, n_lm)
     kappa = np.empty(n_lm)
     _kappa(src_offsets, src, n_phi, beam_groups, kappa_local, kappa)
