@@ -324,7 +324,10 @@ class BeamMesh:
     def centreline_dofs(self):
         """Reference centreline DOF vector q_B (design.md §2 layout)."""
         if self.tangents is not None:
-            return np.hstack([self.positions, self.tangents]).ravel()
+            q = np.empty((self.n_nodes, 6))
+            q[:, :3] = self.positions
+            q[:, 3:] = self.tangents
+            return q.ravel()
         return self.positions.ravel().copy()
 
     def coefficients(self, elements=None):

@@ -6,6 +6,7 @@ solid element (``descriptor.bounding_matrix``) contains the element. Solid boxes
 a uniform grid; each beam box visits only the grid cells it covers, so the cost is
 O(n_beam + n_solid) for meshes of comparable element sizes, not O(n_beam · n_solid).
 """
+import numba
 import numpy as np
 from numba import prange
 
@@ -143,30 +144,47 @@ def _cell_range(box, lower, inv_cell, dims, lo, hi):
     return True
 
 
-@njit
-def _bin_solids(solid_boxes, lower, inv_cell, dims):
-    """CSR (offsets, ids) of the solid elements whose box covers each grid cell."""
+@njit_parallel
+def _bin_solids(solid_boxes, lower, inv_cell, dims, n_parts):
+    """CSR (offsets, ids) of the solid elements whose box covers each grid cell, ids ascending.
+
+    A counting sort in ``n_parts`` contiguous parts of the elements (one histogram each, in
+    parallel); parts are laid out in order within each cell, so the result does not depend on
+    ``n_parts``.
+    """
     n_cells = dims[0] * dims[1] * dims[2]
-    counts = np.zeros(n_cells + 1, dtype=np.int64)
-    lo = np.empty(3, dtype=np.int64)
-    hi = np.empty(3, dtype=np.int64)
-    for s in range(solid_boxes.shape[0]):
-        if _cell_range(solid_boxes[s], lower, inv_cell, dims, lo, hi):
-            for i in range(lo[0], hi[0] + 1):
-                for j in range(lo[1], hi[1] + 1):
-                    for k in range(lo[2], hi[2] + 1):
-                        counts[(i * dims[1] + j) * dims[2] + k + 1] += 1
-    offsets = np.cumsum(counts)
-    fill = offsets[:-1].copy()
-    ids = np.empty(offsets[-1], dtype=np.int64)
-    for s in range(solid_boxes.shape[0]):
-        if _cell_range(solid_boxes[s], lower, inv_cell, dims, lo, hi):
-            for i in range(lo[0], hi[0] + 1):
-                for j in range(lo[1], hi[1] + 1):
-                    for k in range(lo[2], hi[2] + 1):
-                        c = (i * dims[1] + j) * dims[2] + k
-                        ids[fill[c]] = s
-                        fill[c] += 1
+    n_solid = solid_boxes.shape[0]
+    counts = np.zeros((n_parts, n_cells), dtype=np.int64)
+    for part in prange(n_parts):
+        lo = np.empty(3, dtype=np.int64)
+        hi = np.empty(3, dtype=np.int64)
+        for s in range(part * n_solid // n_parts, (part + 1) * n_solid // n_parts):
+            if _cell_range(solid_boxes[s], lower, inv_cell, dims, lo, hi):
+                for i in range(lo[0], hi[0] + 1):
+                    for j in range(lo[1], hi[1] + 1):
+                        for k in range(lo[2], hi[2] + 1):
+                            counts[part, (i * dims[1] + j) * dims[2] + k] += 1
+    offsets = np.empty(n_cells + 1, dtype=np.int64)
+    total = 0
+    for c in range(n_cells):           # counts become each part's first slot in cell c
+        offsets[c] = total
+        for part in range(n_parts):
+            n = counts[part, c]
+            counts[part, c] = total
+            total += n
+    offsets[n_cells] = total
+    ids = np.empty(total, dtype=np.int64)
+    for part in prange(n_parts):
+        lo = np.empty(3, dtype=np.int64)
+        hi = np.empty(3, dtype=np.int64)
+        for s in range(part * n_solid // n_parts, (part + 1) * n_solid // n_parts):
+            if _cell_range(solid_boxes[s], lower, inv_cell, dims, lo, hi):
+                for i in range(lo[0], hi[0] + 1):
+                    for j in range(lo[1], hi[1] + 1):
+                        for k in range(lo[2], hi[2] + 1):
+                            c = (i * dims[1] + j) * dims[2] + k
+                            ids[counts[part, c]] = s
+                            counts[part, c] += 1
     return offsets, ids
 
 
@@ -278,5 +296,6 @@ def find_candidate_pairs(beam_boxes, solid_boxes):
     while np.prod(np.ceil(extent / cell)) > 8 * len(solid_boxes) + 64:
         cell *= 1.25
     dims = np.maximum(np.ceil(extent / cell).astype(np.int64), 1)
-    offsets_c, ids = _bin_solids(solid_boxes, lower, 1.0 / cell, dims)
+    # one part per thread, at most 4 (each part holds a count per grid cell)
+    offsets_c, ids = _bin_solids(solid_boxes, lower, 1.0 / cell, dims, min(4, numba.get_num_threads()))
     return _find_pairs(beam_boxes, solid_boxes, offsets_c, ids, lower, 1.0 / cell, dims)

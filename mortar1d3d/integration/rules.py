@@ -92,7 +92,7 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
 @njit_parallel
 def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid_origin, solid_h,
                     solid_boxes, inverse, beam_code, Q, lengths, beam_origin,
-                    owner, eta, xi, weight, position, status):
+                    beam, owner, eta, xi, weight, position, status):
     n_gauss = gx.shape[0]
     n_beam = pair_offsets.shape[0] - 1
     tol = PARAMETER_TOL
@@ -107,6 +107,7 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
         for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
             for q in range(n_gauss):
                 k = e * n_gauss + q
+                beam[k] = e
                 eta[k] = gx[q]
                 r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, gx[q], H, dH)
                 weight[k] = gw[q] * norm3(d0, d1, d2)
@@ -181,14 +182,15 @@ def element_points(ctx, n_gauss):
     gx, gw = gauss_legendre_arrays(n_gauss)
     n_beam = len(ctx.pair_offsets) - 1
     n = n_beam * n_gauss
+    beam = np.empty(n, dtype=np.int64)
     owner = np.empty(n, dtype=np.int64)
     eta, weight = np.empty(n), np.empty(n)
     xi, position = np.zeros((n, 3)), np.empty((n, 3))
     status = np.empty(n, dtype=np.int64)
     _element_points(ctx.pair_offsets, ctx.pair_solid, gx, gw, ctx.codes, ctx.conn, ctx.points,
                     ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.inverse, ctx.beam_code, ctx.Q, ctx.lengths,
-                    ctx.beam_origin, owner, eta, xi, weight, position, status)
-    return np.repeat(np.arange(n_beam), n_gauss), owner, eta, xi, weight, position, status
+                    ctx.beam_origin, beam, owner, eta, xi, weight, position, status)
+    return beam, owner, eta, xi, weight, position, status
 
 
 def gauss_legendre_arrays(n_gauss):

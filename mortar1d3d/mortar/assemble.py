@@ -179,6 +179,20 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
 
 
 @njit
+def _status_counts(status, p_solid):
+    """Points not converged, outside their segment's element, and not owned by any element."""
+    not_converged = outside = uncoupled = 0
+    for q in range(status.shape[0]):
+        if status[q] == POINT_NOT_CONVERGED:
+            not_converged += 1
+        elif status[q] == POINT_OUTSIDE:
+            outside += 1
+        if p_solid[q] < 0:
+            uncoupled += 1
+    return not_converged, outside, uncoupled
+
+
+@njit
 def _groups(p_beam, p_solid, codes, n_phi, n_beam):
     """Groups of points: runs with the same (beam element, solid element).
 
@@ -208,9 +222,9 @@ def _groups(p_beam, p_solid, codes, n_phi, n_beam):
     return group_start, m_offsets, beam_groups
 
 
-@njit
+@njit_parallel
 def _kappa(src_offsets, src, n_phi, beam_groups, kappa_local, kappa):
-    for r in range(src_offsets.shape[0] - 1):
+    for r in prange(src_offsets.shape[0] - 1):
         v = 0.0
         for t in range(src_offsets[r], src_offsets[r + 1]):
             e = src[t] // n_phi
@@ -317,12 +331,11 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     t3 = time.perf_counter()
     timings["integration_points"] = t3 - t2
 
-    not_converged = int(np.count_nonzero(status == POINT_NOT_CONVERGED))
-    outside = int(np.count_nonzero(status == POINT_OUTSIDE))
+    not_converged, outside, uncoupled = _status_counts(status, p_solid)
     diagnostics["points_not_converged"] = not_converged
     diagnostics["points_outside_element"] = outside
     if integration == "element":
-        diagnostics["points_uncoupled"] = int(np.count_nonzero(p_solid < 0))
+        diagnostics["points_uncoupled"] = uncoupled
     if diagnostics.get("segmentation_unresolved"):
         warnings.warn(f"assemble_mortar: the segments of {diagnostics['segmentation_unresolved']} beam elements "
                       "do not tile their embedded part even after the bisection fallback",
@@ -333,8 +346,8 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     if outside:
         warnings.warn(f"assemble_mortar: {outside} integration points of segments lie outside their "
                       "solid element (a missed face crossing?)", RuntimeWarning, stacklevel=2)
-    keep = (status == POINT_INSIDE) | (status == POINT_OUTSIDE)
-    if not keep.all():
+    if not_converged or uncoupled:
+        keep = (status == POINT_INSIDE) | (status == POINT_OUTSIDE)
         p_beam, p_solid, eta, xi, weight, position, status = (
             a[keep] for a in (p_beam, p_solid, eta, xi, weight, position, status))
 
