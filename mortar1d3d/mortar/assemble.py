@@ -137,8 +137,8 @@ class KernelInput:
 
 @njit_parallel
 def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
-                     codes, conn, beam_cols, m_offsets, D_local, M_local, kappa_local, d_cols, m_cols):
-    """Local D, M and κ of every group of points, and the global columns of their entries."""
+                     codes, m_offsets, D_local, M_local, kappa_local):
+    """Local D, M and κ of every group of points."""
     n_groups = group_start.shape[0] - 1
     nH = beam_n_functions(beam_code)
     for c in prange(n_chunks(n_groups, CHUNK)):
@@ -171,11 +171,9 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
                 kappa_local[g, j] = kg[j]
                 for k in range(nH):
                     D_local[g, j * nH + k] = Dg[j, k]
-                    d_cols[(g * n_phi + j) * nH + k] = beam_cols[e, k]
                 base = m_offsets[g] + j * nN
                 for a in range(nN):
                     M_local[base + a] = Mg[j, a]
-                    m_cols[base + a] = conn[s, a]
 
 
 @njit
@@ -359,21 +357,21 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     D_local = np.empty((n_groups, n_phi * nH))
     M_local = np.empty(m_offsets[-1])
     kappa_local = np.empty((n_groups, n_phi))
-    d_cols = np.empty(D_local.size, dtype=np.int64)
-    m_cols = np.empty(M_local.size, dtype=np.int64)
     _group_operators(group_start, p_beam, p_solid, eta, xi, weight, ctx.beam_code, ctx.lengths, n_phi, ctx.codes,
-                     ctx.conn, beams.function_columns(), m_offsets, D_local, M_local, kappa_local, d_cols, m_cols)
+                     m_offsets, D_local, M_local, kappa_local)
     lm_index, n_lm = lm_numbering(beams, lm_type)
     src_offsets, src = row_sources(lm_index, n_phi, n_lm)
     kappa = np.empty(n_lm)
     _kappa(src_offsets, src, n_phi, beam_groups, kappa_local, kappa)
     t4 = time.perf_counter()
     timings["assembly"] = t4 - t3
+    # D: group g's columns are its beam element's coefficient columns; M: its solid element's nodes
+    g_beam = p_beam[group_start[:-1]]
     D = gathered_block_csr(src_offsets, src, n_phi, beam_groups, np.arange(n_groups, dtype=np.int64) * (n_phi * nH),
-                           np.full(n_groups, nH, dtype=np.int64), d_cols, D_local.ravel(),
+                           np.full(n_groups, nH, dtype=np.int64), beams.function_columns(), g_beam, D_local.ravel(),
                            (n_lm, beams.n_centreline_dofs // 3))
     M = gathered_block_csr(src_offsets, src, n_phi, beam_groups, m_offsets[:-1],
-                           solid_types.N_NODES[ctx.codes[g_solid]], m_cols, M_local, (n_lm, solid.n_nodes))
+                           solid_types.N_NODES[ctx.codes[g_solid]], ctx.conn, g_solid, M_local, (n_lm, solid.n_nodes))
     t5 = time.perf_counter()
     timings["csr"] = t5 - t4
 
@@ -383,7 +381,7 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
         segments["eta_start"], segments["eta_end"] = seg_start, seg_end
     else:
         segments = np.empty(n_groups, dtype=SEGMENT_DTYPE)
-        segments["beam_element"] = p_beam[group_start[:-1]]
+        segments["beam_element"] = g_beam
         segments["solid_element"] = g_solid
         segments["eta_start"] = eta[group_start[:-1]]
         segments["eta_end"] = eta[group_start[1:] - 1]

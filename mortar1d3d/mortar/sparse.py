@@ -3,32 +3,17 @@
 Each LM row gathers its entries from the local matrices of the (beam element, solid element)
 groups that touch it, in a fixed order (beam elements ascending, groups, columns), sorts them by
 column and sums duplicates. Rows are independent (parallel) and the summation order does not
-depend on the number of threads, so neither do the resulting bits.
+depend on the number of threads, so neither do the resulting bits. A first pass counts each
+row's distinct columns; the second writes the expanded CSR arrays directly (no intermediate
+copy of the gathered entries: less memory to fault in).
 """
+import numba
 import numpy as np
 import scipy.sparse as sp
 from numba import prange
 
 from .._config import CHUNK, njit, njit_parallel
 from ..geometry.linalg import n_chunks
-
-
-@njit_parallel
-def _expand(start, ucols, uvals, unique, block, indptr, indices, data):
-    n_rows = unique.shape[0]
-    prefix = np.zeros(n_rows + 1, dtype=np.int64)
-    for r in range(n_rows):
-        prefix[r + 1] = prefix[r] + unique[r]
-    for r in range(n_rows):
-        for i in range(block):
-            indptr[block * r + i + 1] = block * prefix[r] + (i + 1) * unique[r]
-    for r in prange(n_rows):
-        u = unique[r]
-        for i in range(block):
-            out = block * prefix[r] + i * u
-            for t in range(u):
-                indices[out + t] = block * ucols[start[r] + t] + i
-                data[out + t] = uvals[start[r] + t]
 
 
 @njit
@@ -51,80 +36,105 @@ def row_sources(lm_index, n_phi, n_rows):
 
 
 @njit_parallel
-def _gather_bounds(src_offsets, src, n_phi, beam_groups, width, bound):
-    for r in prange(src_offsets.shape[0] - 1):
-        total = 0
-        for t in range(src_offsets[r], src_offsets[r + 1]):
-            e = src[t] // n_phi
-            for g in range(beam_groups[e], beam_groups[e + 1]):
-                total += width[g]
-        bound[r] = total
+def _count_unique(src_offsets, src, n_phi, beam_groups, width, col_table, col_row, n_cols, n_parts, unique, bound):
+    """Distinct columns (``unique``) and gathered entries (``bound``) of every row.
+
+    Rows are split into ``n_parts`` contiguous parts, each with a marker array over the
+    columns (the last row that saw a column): counting costs one visit per entry, no sort.
+    """
+    n_rows = src_offsets.shape[0] - 1
+    for part in prange(n_parts):
+        marker = np.full(n_cols, -1, dtype=np.int64)
+        for r in range(part * n_rows // n_parts, (part + 1) * n_rows // n_parts):
+            u = 0
+            n = 0
+            for t in range(src_offsets[r], src_offsets[r + 1]):
+                e = src[t] // n_phi
+                for g in range(beam_groups[e], beam_groups[e + 1]):
+                    row = col_row[g]
+                    for q in range(width[g]):
+                        c = col_table[row, q]
+                        if marker[c] != r:
+                            marker[c] = r
+                            u += 1
+                    n += width[g]
+            unique[r] = u
+            bound[r] = n
 
 
 @njit_parallel
-def _gather_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, cols, vals, start, ucols, uvals,
-                 unique):
-    for r in prange(src_offsets.shape[0] - 1):
-        a = start[r]
-        n = 0
-        # gather in a fixed order (beam elements ascending, groups, columns): deterministic sums
-        for t in range(src_offsets[r], src_offsets[r + 1]):
-            e = src[t] // n_phi
-            j = src[t] % n_phi
-            for g in range(beam_groups[e], beam_groups[e + 1]):
-                base = entry_start[g] + j * width[g]
-                for q in range(width[g]):
-                    ucols[a + n] = cols[base + q]
-                    uvals[a + n] = vals[base + q]
-                    n += 1
-        for i in range(a + 1, a + n):       # stable insertion sort by column (short rows)
-            c = ucols[i]
-            v = uvals[i]
-            k = i - 1
-            while k >= a and ucols[k] > c:
-                ucols[k + 1] = ucols[k]
-                uvals[k + 1] = uvals[k]
-                k -= 1
-            ucols[k + 1] = c
-            uvals[k + 1] = v
-        m = 0
-        for t in range(a, a + n):
-            if m > 0 and ucols[a + m - 1] == ucols[t]:
-                uvals[a + m - 1] += uvals[t]
-            else:
-                ucols[a + m] = ucols[t]
-                uvals[a + m] = uvals[t]
-                m += 1
-        unique[r] = m
+def _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row, vals, first,
+               max_bound, block, indices, data):
+    """Gather, sort and sum each row, and write its ``block`` expanded copies."""
+    n_rows = src_offsets.shape[0] - 1
+    for ch in prange(n_chunks(n_rows, CHUNK)):
+        cols = np.empty(max_bound, dtype=np.int64)
+        vs = np.empty(max_bound)
+        for r in range(ch * CHUNK, min(n_rows, (ch + 1) * CHUNK)):
+            # gather in a fixed order (beam elements ascending, groups, columns): deterministic sums
+            n = 0
+            for t in range(src_offsets[r], src_offsets[r + 1]):
+                e = src[t] // n_phi
+                j = src[t] % n_phi
+                for g in range(beam_groups[e], beam_groups[e + 1]):
+                    base = entry_start[g] + j * width[g]
+                    row = col_row[g]
+                    for q in range(width[g]):
+                        cols[n] = col_table[row, q]
+                        vs[n] = vals[base + q]
+                        n += 1
+            for i in range(1, n):                # stable insertion sort by column (short rows)
+                c = cols[i]
+                v = vs[i]
+                k = i - 1
+                while k >= 0 and cols[k] > c:
+                    cols[k + 1] = cols[k]
+                    vs[k + 1] = vs[k]
+                    k -= 1
+                cols[k + 1] = c
+                vs[k + 1] = v
+            m = 0
+            for t in range(n):
+                if m > 0 and cols[m - 1] == cols[t]:
+                    vs[m - 1] += vs[t]
+                else:
+                    cols[m] = cols[t]
+                    vs[m] = vs[t]
+                    m += 1
+            for i in range(block):
+                out = block * first[r] + i * m
+                for t in range(m):
+                    indices[out + t] = block * cols[t] + i
+                    data[out + t] = vs[t]
 
 
-def gathered_block_csr(src_offsets, src, n_phi, beam_groups, entry_start, width, cols, vals, shape, block=3):
+def gathered_block_csr(src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row, vals, shape,
+                       block=3):
     """Block CSR of per-group local matrices, gathered row by row (parallel, deterministic).
 
     Group g of beam element e (groups of e are ``beam_groups[e]:beam_groups[e+1]``) holds, for
-    each local multiplier function j, ``width[g]`` entries at ``entry_start[g] + j*width[g]``
-    with global columns ``cols`` and values ``vals``; row ``r`` receives the entries of the
-    (e, j) listed in ``src[src_offsets[r]:src_offsets[r+1]]`` (as ``e*n_phi + j``).
+    each local multiplier function j, ``width[g]`` values at ``entry_start[g] + j*width[g]`` of
+    ``vals``, in the columns ``col_table[col_row[g], :width[g]]``; row ``r`` receives the entries
+    of the (e, j) listed in ``src[src_offsets[r]:src_offsets[r+1]]`` (as ``e*n_phi + j``).
+    Every entry stands for a ``block`` x ``block`` identity block.
     """
     n_rows, n_cols = shape
-    bound = np.empty(n_rows, dtype=np.int64)
-    _gather_bounds(src_offsets, src, n_phi, beam_groups, width, bound)
-    start = np.concatenate([np.zeros(1, np.int64), np.cumsum(bound)])
-    ucols = np.empty(start[-1], dtype=np.int64)
-    uvals = np.empty(start[-1])
     unique = np.empty(n_rows, dtype=np.int64)
-    _gather_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, cols, vals, start, ucols, uvals, unique)
-    return _finish(start, ucols, uvals, unique, n_rows, n_cols, block)
-
-
-def _finish(start, ucols, uvals, unique, n_rows, n_cols, block):
-    nnz = int(unique.sum()) * block
+    bound = np.empty(n_rows, dtype=np.int64)
+    _count_unique(src_offsets, src, n_phi, beam_groups, width, col_table, col_row, n_cols,
+                  max(1, min(n_rows, numba.get_num_threads())), unique, bound)
+    first = np.zeros(n_rows + 1, dtype=np.int64)
+    np.cumsum(unique, out=first[1:])
+    nnz = int(first[-1]) * block
     big = max(nnz, block * max(n_rows, n_cols)) >= np.iinfo(np.int32).max
     index_type = np.int64 if big else np.int32   # what scipy would convert to anyway
-    indptr = np.zeros(block * n_rows + 1, dtype=index_type)
+    indptr = np.empty(block * n_rows + 1, dtype=index_type)
+    indptr[0] = 0
+    indptr[1:] = (block * first[:-1, None] + np.arange(1, block + 1)[None, :] * unique[:, None]).ravel()
     indices = np.empty(nnz, dtype=index_type)
     data = np.empty(nnz)
-    _expand(start, ucols, uvals, unique, block, indptr, indices, data)
+    _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row, vals, first,
+               max(1, int(bound.max())) if n_rows else 1, block, indices, data)
     matrix = sp.csr_matrix((data, indices, indptr), shape=(block * n_rows, block * n_cols))
     matrix.has_sorted_indices = True
     return matrix
