@@ -19,6 +19,7 @@ import numba
 import pytest
 
 import mortar1d3d as m13
+from control import control_speedup
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
@@ -37,8 +38,8 @@ TARGETS = {
 }
 
 #: filled by the benchmark modules: {"assembly": {variant: {threads: record}},
-#: "startup": {"cold"|"warm": record}, "memory": record}
-RESULTS = {"assembly": {}, "startup": {}, "memory": None}
+#: "startup": {"cold"|"warm": record}, "memory": record, "speedup": {variant: record}}
+RESULTS = {"assembly": {}, "startup": {}, "memory": None, "speedup": {}}
 _LOAD = {}
 
 
@@ -54,6 +55,8 @@ def pytest_sessionstart(session):
         _LOAD["start"] = os.getloadavg()
     except OSError:
         pass
+    if numba.config.NUMBA_NUM_THREADS >= 2 and available_cpus() >= 2:
+        RESULTS["control_speedup"] = {"start": control_speedup()}
 
 
 @pytest.fixture(scope="session")
@@ -124,9 +127,12 @@ def _assembly_rows():
         gp1 = one["gp_per_s"] if one else None
         gp2 = two["gp_per_s"] if two else None
         speedup = gp2 / gp1 if gp1 and gp2 else None
+        paired = RESULTS.get("speedup", {}).get(variant, {})
         rows.append(dict(variant=variant, n_points=rec["n_integration_points"], gp1=gp1, target=target,
                          gp2=gp2, speedup=speedup, median1=one["median_s"] if one else None,
-                         median2=two["median_s"] if two else None))
+                         median2=two["median_s"] if two else None,
+                         paired=paired.get("paired_speedup_median"), control=paired.get("control_speedup_median"),
+                         faults=rec.get("page_faults_per_call_median")))
     return rows
 
 
@@ -148,6 +154,8 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
         _LOAD["end"] = os.getloadavg()
     except OSError:
         pass
+    if "control_speedup" in RESULTS:
+        RESULTS["control_speedup"]["end"] = control_speedup()
     tr = terminalreporter
     lines = []
     load = " -> ".join("/".join(f"{x:.2f}" for x in _LOAD[k]) for k in ("start", "end") if k in _LOAD)
@@ -158,15 +166,28 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
     if rows:
         lines.append("")
         lines.append(f"{'assembly (GP/s = points / median)':<34}{'points':>8}  {'1 thread':>9}  "
-                     f"{'target/core':>11}      {'2 threads':>9}  {'speed-up':>8}  {'target':>6}")
+                     f"{'target/core':>11}      {'2 threads':>9}  {'speed-up':>8}  {'paired':>6}  "
+                     f"{'target':>6}      {'control':>7}  {'faults/call':>11}")
         for r in rows:
             sp = "-" if r["speedup"] is None else f"{r['speedup']:.2f}x"
+            paired = "-" if r["paired"] is None else f"{r['paired']:.2f}x"
+            control = "-" if r["control"] is None else f"{r['control']:.2f}x"
             lines.append(
                 f"{r['variant']:<34}{r['n_points']:>8}  {_fmt_rate(r['gp1']):>9}  "
                 f"{'>= ' + format(r['target'], '.1e'):>11} {_mark(r['gp1'], r['target']):>4}  "
-                f"{_fmt_rate(r['gp2']):>9}  {sp:>8}  "
+                f"{_fmt_rate(r['gp2']):>9}  {sp:>8}  {paired:>6}  "
                 f"{'>= ' + format(TARGETS['speedup_2_threads'], '.1f') + 'x':>6} "
-                f"{_mark(r['speedup'], TARGETS['speedup_2_threads'])}")
+                f"{_mark(r['paired'] if r['paired'] is not None else r['speedup'], TARGETS['speedup_2_threads']):>4}"
+                f"  {control:>7}  {'-' if r['faults'] is None else format(r['faults'], '.0f'):>11}")
+        lines.append("speed-up: ratio of the medians above; paired: median of per-round 1/2-thread ratios "
+                     "(test_thread_speedup), judged against the target; control: the same rounds' pure-compute loop;")
+        lines.append("faults/call: minor page faults per 1-thread call (memory fresh from the OS; "
+                     "GLIBC_TUNABLES=glibc.malloc.hugetlb=1 removes most, see benchmarks/README.md)")
+    control = RESULTS.get("control_speedup")
+    if control:
+        lines.append(f"control (benchmarks/control.py, pure compute, 1 -> 2 threads): speed-up "
+                     f"{control['start']:.2f}x at the start, {control.get('end', float('nan')):.2f}x at the end "
+                     "(what the machine gave two threads)")
     startup = RESULTS["startup"]
     if startup:
         lines.append("")
@@ -212,6 +233,8 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
         "assembly": {v: {str(t): rec for t, rec in d.items()} for v, d in RESULTS["assembly"].items()},
         "startup": RESULTS["startup"],
         "memory": RESULTS["memory"],
+        "control_speedup": RESULTS.get("control_speedup"),
+        "paired_speedup": RESULTS.get("speedup"),
         "exitstatus": int(exitstatus),
         "argv": sys.argv[1:],
     }

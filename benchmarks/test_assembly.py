@@ -12,6 +12,7 @@ first) plus one untimed warm-up round on the benchmark scene.
 Figures in ``extra_info``: integration points, Gauss points per second (points / median
 round time) in total and per thread, and the median per-stage ``ops.timings`` over the rounds.
 """
+import resource
 import statistics
 import time
 
@@ -55,9 +56,12 @@ def test_assemble_mortar(benchmark, warm_jit, scene, threads, bench_results, var
     records = []  # (wall time, n points, timings) of every call, warm-up rounds first
 
     def run():
+        faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
         t = time.perf_counter()
         ops = m13.assemble_mortar(beams, solid, integration=integration, n_gauss=N_GAUSS)
-        records.append((time.perf_counter() - t, ops.n_integration_points, ops.timings, ops.diagnostics))
+        t = time.perf_counter() - t
+        faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - faults
+        records.append((t, ops.n_integration_points, ops.timings, ops.diagnostics, faults))
 
     benchmark.group = "assemble_mortar, fibre_cube(%d, %d, %d)" % SCENE
     benchmark.pedantic(run, rounds=ROUNDS, warmup_rounds=WARMUP_ROUNDS, iterations=1)
@@ -81,6 +85,52 @@ def test_assemble_mortar(benchmark, warm_jit, scene, threads, bench_results, var
         "target_gp_per_s_per_core": target,
         "timings_median_s": stages,
         "diagnostics": {k: int(v) for k, v in timed[-1][3].items()},
+        # memory the call got fresh from the OS (each round's result is dropped, so glibc may
+        # return the memory and the next call faults it in again: see benchmarks/README.md)
+        "page_faults_per_call_median": float(statistics.median(r[4] for r in timed)),
     }
     benchmark.extra_info.update(record)
     bench_results["assembly"].setdefault(variant, {})[threads] = record
+
+
+@pytest.mark.parametrize("variant,integration,curved,distorted", VARIANTS,
+                         ids=[f"{i}-{'curved' if c else 'straight'}{'-distorted' if d else ''}"
+                              for _, i, c, d in VARIANTS])
+def test_thread_speedup(benchmark, warm_jit, scene, bench_results, variant, integration, curved, distorted):
+    """Paired rounds: the call with 1 thread, the call with 2 threads, the control with 1 and 2.
+
+    A machine whose speed drifts within minutes (shared or virtual cores) makes the ratio of two
+    medians taken a minute apart meaningless; the ratio within one round is not, and the control
+    (benchmarks/control.py) says what the machine gave two threads in that round. The benchmark
+    time of this test is that of a whole round (not a figure of interest).
+    """
+    if numba.config.NUMBA_NUM_THREADS < 2 or available_cpus() < 2:
+        pytest.skip("needs 2 threads and 2 CPUs")
+    from control import control_times
+
+    beams, solid = scene(curved, distorted)
+    default = numba.get_num_threads()
+    pairs, controls = [], []
+
+    def one_round():
+        times = {}
+        for nt in (1, 2):
+            numba.set_num_threads(nt)
+            t = time.perf_counter()
+            m13.assemble_mortar(beams, solid, integration=integration, n_gauss=N_GAUSS)
+            times[nt] = time.perf_counter() - t
+        numba.set_num_threads(default)
+        pairs.append(times[1] / times[2])
+        control = control_times()
+        controls.append(control[1] / control[2])
+
+    benchmark.group = "paired 1 -> 2 thread rounds, fibre_cube(%d, %d, %d)" % SCENE
+    try:
+        benchmark.pedantic(one_round, rounds=ROUNDS, warmup_rounds=WARMUP_ROUNDS, iterations=1)
+    finally:
+        numba.set_num_threads(default)
+    pairs, controls = pairs[-ROUNDS:], controls[-ROUNDS:]
+    record = {"paired_speedup_median": statistics.median(pairs), "paired_speedups": pairs,
+              "control_speedup_median": statistics.median(controls), "control_speedups": controls}
+    benchmark.extra_info.update(record)
+    bench_results.setdefault("speedup", {})[variant] = record
