@@ -13,7 +13,7 @@ import mortar1d3d as m13
 from mortar1d3d import generate
 from mortar1d3d.elements.solid.dispatch import (CONTROL_MATRIX, FACE_CONTROL, N_FACE_CONTROL, SOLID_ELEMENTS,
                                                 SOLID_MODULES, control_points)
-from mortar1d3d.geometry.projection import affine_maps
+from mortar1d3d.geometry.projection import linear_maps
 from mortar1d3d.mortar.assemble import KernelInput
 
 SOLID_TYPES = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
@@ -48,29 +48,45 @@ def inverse_maps(solid):
 def test_affine_maps_are_found_exactly_for_parallelepipeds(element):
     box = generate.box((0, 0, 0), (1, 1, 1), (2, 2, 2), element)
     solid = sheared(box)
-    inverse = inverse_maps(solid)
-    assert np.isfinite(inverse).all()
-    # ξ = ξ_0 + A⁻¹ (x - x_0) takes every node to its reference coordinates
-    reference = SOLID_ELEMENTS[element].reference_nodes
+    table = inverse_maps(solid)
+    assert (table[:, 4, 0] == 1.0).all()
+    # ξ = ξ_c + L (x - x_c) takes every node to its reference coordinates
+    descriptor = SOLID_ELEMENTS[element]
+    reference = descriptor.reference_nodes
     n = len(reference)
     for s in range(solid.n_elements):
         X = solid.points[solid.connectivity[s, :n]]
-        np.testing.assert_allclose(reference[0] + (X - X[0]) @ inverse[s].T, reference, rtol=0, atol=1e-14)
+        xi = descriptor.centre + (X - X[0] - table[s, 3]) @ table[s, :3].T
+        np.testing.assert_allclose(xi, reference, rtol=0, atol=1e-14)
     # a perturbation far below any tolerance of the method, but above round-off: Newton path
     # (a tet4 stays affine whatever its nodes)
-    wobbled = np.isnan(inverse_maps(sheared(box, wobble=1e-11))[:, 0, 0])
-    assert (~wobbled).all() if element == "tetra" else wobbled.all()
+    exact = inverse_maps(sheared(box, wobble=1e-11))[:, 4, 0] == 1.0
+    assert exact.all() if element == "tetra" else not exact.any()
 
 
-def test_affine_maps_kernel_leaves_curved_elements_to_newton():
-    solid = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (3, 3, 3), "hexahedron"), 0.15, seed=1)
-    inverse = np.empty((solid.n_elements, 3, 3))
+@pytest.mark.parametrize("element", SOLID_TYPES)
+def test_curved_elements_get_their_centre_linearisation(element):
+    """Distorted elements are left to Newton, which starts from ξ_c + J(ξ_c)⁻¹ (x - x(ξ_c))."""
+    solid = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (3, 3, 3), element), 0.15, seed=1)
     ctx = KernelInput(generate.random_curved_beams(1, 2, seed=1), solid)
-    affine_maps(ctx.points, ctx.conn, ctx.codes, ctx.solid_origin, ctx.solid_h, inverse)
-    flagged = ~np.isnan(inverse[:, 0, 0])
-    # only the centre cell has all its nodes moved; the corner cells touch the fixed boundary
-    # on three sides but still have a moved node, so none is a parallelepiped
-    assert not flagged.any()
+    table = np.empty((solid.n_elements, 5, 3))
+    linear_maps(ctx.points, ctx.conn, ctx.codes, ctx.solid_origin, ctx.solid_h, table)
+    np.testing.assert_array_equal(table, ctx.inverse)
+    descriptor = SOLID_ELEMENTS[element]
+    module = SOLID_MODULES[element]
+    n = descriptor.n_nodes
+    N, dN = np.empty(n), np.empty((n, 3))
+    module.shape(descriptor.centre, N)
+    module.deriv(descriptor.centre, dN)
+    moved = 0
+    for s in range(solid.n_elements):
+        X = solid.points[solid.connectivity[s, :n]] - solid.points[solid.connectivity[s, 0]]
+        np.testing.assert_allclose(table[s, 3], N @ X, atol=1e-15)
+        inverse = np.linalg.inv(X.T @ dN)
+        np.testing.assert_allclose(table[s, :3], inverse, rtol=1e-12, atol=1e-12 * abs(inverse).max())
+        moved += table[s, 4, 0] == 0.0
+    # a tet4 is affine whatever its nodes; the other types: every element has a moved node
+    assert moved == (0 if element == "tetra" else solid.n_elements)
 
 
 def newton_parameters(element, X, x, xi):

@@ -155,9 +155,10 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
     Candidates are ``pair_solid[p0:p1]`` (ascending); returns -1 if none contains the point.
     With ``only`` >= 0, tests just that element. On success ``xi`` holds the point's ξ.
     This is the ownership rule of both integrations (design.md §1-§2): a point on a face,
-    edge or node shared by several elements belongs to the lowest-index one. Elements with an
-    inverse map (``inverse``, :func:`affine_maps`) are located with it; for the others a
-    Newton projection runs and ``X`` is left holding the nodes of the last element tested.
+    edge or node shared by several elements belongs to the lowest-index one. Affine elements
+    are located with their inverse map (``inverse``, :func:`linear_maps`); for the others a
+    Newton projection runs from the linearised estimate and ``X`` is left holding the nodes of
+    the last element tested.
     """
     for p in range(p0, p1):
         s = pair_solid[p]
@@ -170,12 +171,19 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
         x1 = r1 + (beam_origin[e, 1] - solid_origin[s, 1])
         x2 = r2 + (beam_origin[e, 2] - solid_origin[s, 2])
         if is_affine(inverse, s):
-            affine_parameters(code, inverse[s], x0, x1, x2, xi)
+            linear_parameters(code, inverse, s, x0, x1, x2, xi)
             if solid.is_inside(code, xi, tol):
                 return s
             continue
         load_element(points, conn, s, code, solid_origin, X)
-        if locate(code, X, x0, x1, x2, solid_h[s], tol, xi, trial, N, dN) == INSIDE:
+        # Newton from the linearised estimate; from the centre if there is none or it fails
+        if linear_parameters(code, inverse, s, x0, x1, x2, xi):
+            converged = project_point(code, X, x0, x1, x2, solid_h[s], xi, trial, N, dN) == CONVERGED
+            if not converged:
+                converged = locate(code, X, x0, x1, x2, solid_h[s], tol, xi, trial, N, dN) != NOT_CONVERGED
+        else:
+            converged = locate(code, X, x0, x1, x2, solid_h[s], tol, xi, trial, N, dN) != NOT_CONVERGED
+        if converged and solid.is_inside(code, xi, tol):
             return s
     return -1
 
@@ -241,22 +249,76 @@ def affine_parameters(code, Ainv, x0, x1, x2, xi):
 
 
 @njit_parallel
-def affine_maps(points, conn, codes, solid_origin, solid_h, inverse):
-    """Inverse maps ``inverse[s]`` (3, 3) of the elements that are affine to round-off; NaN for the others.
+def linear_maps(points, conn, codes, solid_origin, solid_h, table):
+    """The inverse of every element's map linearised at its parameter centre, for locating points.
 
-    A point x (local to node 0) of such an element has ``ξ = ξ_0 + inverse[s] x`` exactly
-    (:func:`affine_parameters`): every tet4, and hex8 that are parallelepipeds (structured
-    grids), need no Newton iteration.
+    ``table[s]`` (5, 3): rows 0-2 the inverse L of the Jacobian at the centre ξ_c, row 3 the
+    position x_c = x(ξ_c) (local to node 0), row 4 ``[kind, 0, 0]``: kind 1 for elements affine to
+    round-off (every tet4, parallelepiped hex8, straight-edged quadratic elements; L is then
+    the exact inverse map and ``ξ = ξ_c + L (x - x_c)`` needs no Newton), 0 for the others (a
+    Newton start close to the answer), NaN where the Jacobian at the centre is singular.
     """
     n = conn.shape[0]
     for c in prange(n_chunks(n, CHUNK)):
         X = np.empty((solid.MAX_NODES, 3))
+        N = np.empty(solid.MAX_NODES)
+        dN = np.empty((solid.MAX_NODES, 3))
+        xc = np.empty(3)
         for s in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            load_element(points, conn, s, codes[s], solid_origin, X)
-            if not affine_inverse(codes[s], X, solid_h[s], EXACT_AFFINE_TOL, inverse[s]):
-                inverse[s, :, :] = np.nan
+            code = codes[s]
+            load_element(points, conn, s, code, solid_origin, X)
+            solid.centre(code, xc)
+            table[s, 3, 0], table[s, 3, 1], table[s, 3, 2] = map_point(code, X, xc, N)
+            table[s, 4, 1] = table[s, 4, 2] = 0.0
+            if affine_inverse(code, X, solid_h[s], EXACT_AFFINE_TOL, table[s, :3]):
+                table[s, 4, 0] = 1.0
+                continue
+            j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xc, dN)
+            det = j00 * (j11 * j22 - j12 * j21) - j01 * (j10 * j22 - j12 * j20) + j02 * (j10 * j21 - j11 * j20)
+            if not det > 0.0:
+                table[s, :, :] = np.nan
+                continue
+            inv = 1.0 / det
+            table[s, 0, 0] = inv * (j11 * j22 - j12 * j21)
+            table[s, 0, 1] = inv * (j02 * j21 - j01 * j22)
+            table[s, 0, 2] = inv * (j01 * j12 - j02 * j11)
+            table[s, 1, 0] = inv * (j12 * j20 - j10 * j22)
+            table[s, 1, 1] = inv * (j00 * j22 - j02 * j20)
+            table[s, 1, 2] = inv * (j02 * j10 - j00 * j12)
+            table[s, 2, 0] = inv * (j10 * j21 - j11 * j20)
+            table[s, 2, 1] = inv * (j01 * j20 - j00 * j21)
+            table[s, 2, 2] = inv * (j00 * j11 - j01 * j10)
+            table[s, 4, 0] = 0.0
 
 
 @njit
-def is_affine(inverse, s):
-    return not np.isnan(inverse[s, 0, 0])
+def is_affine(table, s):
+    """Whether element s is located exactly by its linear map (see :func:`linear_maps`)."""
+    return table[s, 4, 0] == 1.0
+
+
+#: a linearised start farther out than this (max norm, parameter units) is not used: Newton
+#: starts at the centre instead
+_START_LIMIT = 4.0
+
+
+@njit
+def linear_parameters(code, table, s, x0, x1, x2, xi):
+    """ξ = ξ_c + L (x - x_c) of element s (x local to node 0): exact where affine, else a start.
+
+    Returns False (``xi`` unchanged) where the element has no linearisation or the estimate
+    lies beyond ``_START_LIMIT``.
+    """
+    if not table[s, 4, 0] >= 0.0:
+        return False
+    d0 = x0 - table[s, 3, 0]
+    d1 = x1 - table[s, 3, 1]
+    d2 = x2 - table[s, 3, 2]
+    c = 0.0 if solid.FAMILY[code] == solid.HEX else 0.25
+    y0 = c + table[s, 0, 0] * d0 + table[s, 0, 1] * d1 + table[s, 0, 2] * d2
+    y1 = c + table[s, 1, 0] * d0 + table[s, 1, 1] * d1 + table[s, 1, 2] * d2
+    y2 = c + table[s, 2, 0] * d0 + table[s, 2, 1] * d1 + table[s, 2, 2] * d2
+    if table[s, 4, 0] == 0.0 and max(abs(y0), abs(y1), abs(y2)) > _START_LIMIT:
+        return False
+    xi[0], xi[1], xi[2] = y0, y1, y2
+    return True

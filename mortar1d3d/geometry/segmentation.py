@@ -28,7 +28,7 @@ from .beam import beam_point
 from .intersection import face_coordinates, intersect_face
 from .linalg import n_chunks
 from .linalg import solve3
-from .projection import (CONVERGED, affine_parameters, first_containing, is_affine, jacobian, load_element,
+from .projection import (CONVERGED, first_containing, is_affine, jacobian, linear_parameters, load_element,
                          project_point)
 
 _NEAR_FACE = 0.1     # min |g| of the cubic model below this fraction of its variation: try a touch there
@@ -232,10 +232,12 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                 if affine:
                     # ξ(η) and dξ/dη = A⁻¹ r' directly
                     ok[k] = True
-                    affine_parameters(code, inverse[s], r0, r1, r2, xi_s[k])
+                    linear_parameters(code, inverse, s, r0, r1, r2, xi_s[k])
                     for i in range(3):
                         dxi_s[k, i] = inverse[s, i, 0] * d0 + inverse[s, i, 1] * d1 + inverse[s, i, 2] * d2
                     continue
+                if k == 0:
+                    linear_parameters(code, inverse, s, r0, r1, r2, xi)    # else: from the centre
                 start[:] = xi
                 ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
                 if ok[k]:

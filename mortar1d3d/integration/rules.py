@@ -24,7 +24,8 @@ from ..elements.solid import dispatch as solid
 from ..geometry.beam import beam_point
 from ..geometry.linalg import n_chunks, norm3
 from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse, affine_parameters,
-                                   first_containing, is_affine, load_element, polish, project_point)
+                                   first_containing, is_affine, linear_parameters, load_element, polish,
+                                   project_point)
 from ..geometry.segmentation import resegment, splice
 from .quadrature import gauss_legendre
 
@@ -70,11 +71,14 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
                 position[k, 1] = r1 + solid_origin[s, 1]
                 position[k, 2] = r2 + solid_origin[s, 2]
                 if affine:
-                    affine_parameters(code, inverse[s], r0, r1, r2, x)
+                    linear_parameters(code, inverse, s, r0, r1, r2, x)
                     xi[k] = x
                     status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
                     continue
-                # warm start from the previous point of the segment; retry from the centre
+                # warm start from the previous point of the segment (the first from the
+                # linearised estimate); retry from the centre
+                if q == 0:
+                    linear_parameters(code, inverse, s, r0, r1, r2, x)
                 if project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) != CONVERGED:
                     solid.centre(code, x)
                     if project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) != CONVERGED:

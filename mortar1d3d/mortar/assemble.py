@@ -22,7 +22,7 @@ from ..elements.beam import MAX_FUNCTIONS
 from ..elements.beam import n_functions as beam_n_functions
 from ..elements.beam import shape as beam_shape
 from ..elements.solid import dispatch as solid_types
-from ..geometry.projection import affine_maps
+from ..geometry.projection import linear_maps
 from ..geometry.search import beam_frames, find_candidate_pairs, solid_bounding_boxes
 from ..geometry.segmentation import segment
 from ..integration.rules import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, auto_segments,
@@ -127,8 +127,9 @@ class KernelInput:
         self.conn = solid.connectivity
         self.solid_origin = np.ascontiguousarray(solid.points[solid.connectivity[:, 0]])
         self.solid_boxes, self.solid_h = solid_bounding_boxes(solid)
-        self.inverse = np.empty((solid.n_elements, 3, 3))
-        affine_maps(self.points, self.conn, self.codes, self.solid_origin, self.solid_h, self.inverse)
+        # per element: inverse of the map linearised at the centre (exact for affine elements)
+        self.inverse = np.empty((solid.n_elements, 5, 3))
+        linear_maps(self.points, self.conn, self.codes, self.solid_origin, self.solid_h, self.inverse)
         self.Q, self.beam_origin, self.beam_boxes, _ = beam_frames(beams)
         self.lengths = beams.lengths
         self.beam_code = beams.element_type.code
