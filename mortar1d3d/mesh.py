@@ -6,6 +6,7 @@ import warnings
 
 import numpy as np
 
+from ._config import njit
 from .elements.beam import BEAM_ELEMENTS, beam_element
 from .elements.beam import hermite as _hermite
 from .elements.solid.dispatch import MAX_NODES, N_NODES, SOLID_ELEMENTS, SOLID_MODULES, solid_element
@@ -324,10 +325,9 @@ class BeamMesh:
     def centreline_dofs(self):
         """Reference centreline DOF vector q_B (design.md §2 layout)."""
         if self.tangents is not None:
-            q = np.empty((self.n_nodes, 6))
-            q[:, :3] = self.positions
-            q[:, 3:] = self.tangents
-            return q.ravel()
+            q = np.empty(6 * self.n_nodes)
+            _interleave(self.positions, self.tangents, q)
+            return q
         return self.positions.ravel().copy()
 
     def coefficients(self, elements=None):
@@ -349,10 +349,9 @@ class BeamMesh:
     def function_columns(self):
         """(m, 4) scalar column index c of every coefficient (DOFs 3c..3c+2); -1 where unused."""
         et = self.element_type
-        cols = np.full((self.n_elements, 4), -1, dtype=np.int64)
-        per_node = et.dofs_per_node // 3
-        for k in range(et.n_functions):
-            cols[:, k] = per_node * self.elements[:, et.function_node[k]] + et.function_offset[k] // 3
+        cols = np.empty((self.n_elements, 4), dtype=np.int64)
+        _function_columns(self.elements, et.dofs_per_node // 3, np.array(et.function_node, dtype=np.int64),
+                          np.array(et.function_offset, dtype=np.int64) // 3, cols)
         return cols
 
     def _lagrange_lengths(self):
@@ -382,6 +381,24 @@ class BeamMesh:
     def __repr__(self):
         return (f"BeamMesh({self.element_type.name}: {self.n_nodes} nodes, {self.n_elements} elements, "
                 f"length {self.length:.6g})")
+
+
+@njit
+def _interleave(positions, tangents, q):
+    """q = [r_0, t_0, r_1, t_1, ...] (6 per node)."""
+    for a in range(positions.shape[0]):
+        for i in range(3):
+            q[6 * a + i] = positions[a, i]
+            q[6 * a + 3 + i] = tangents[a, i]
+
+
+@njit
+def _function_columns(elements, per_node, function_node, function_column, cols):
+    for e in range(elements.shape[0]):
+        for k in range(4):
+            cols[e, k] = -1
+        for k in range(function_node.shape[0]):
+            cols[e, k] = per_node * elements[e, function_node[k]] + function_column[k]
 
 
 __all__ = ["SolidMesh", "BeamMesh", "MeshError", "hermite_lengths", "BEAM_ELEMENTS"]

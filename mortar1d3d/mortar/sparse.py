@@ -108,6 +108,15 @@ def _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_tab
                     data[out + t] = vs[t]
 
 
+@njit
+def _block_indptr(first, unique, block, indptr):
+    """Row pointers of the expanded matrix: block row r has ``block`` rows of ``unique[r]`` entries."""
+    indptr[0] = 0
+    for r in range(unique.shape[0]):
+        for i in range(block):
+            indptr[block * r + i + 1] = block * first[r] + (i + 1) * unique[r]
+
+
 def gathered_block_csr(src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row, vals, shape,
                        block=3):
     """Block CSR of per-group local matrices, gathered row by row (parallel, deterministic).
@@ -129,8 +138,7 @@ def gathered_block_csr(src_offsets, src, n_phi, beam_groups, entry_start, width,
     big = max(nnz, block * max(n_rows, n_cols)) >= np.iinfo(np.int32).max
     index_type = np.int64 if big else np.int32   # what scipy would convert to anyway
     indptr = np.empty(block * n_rows + 1, dtype=index_type)
-    indptr[0] = 0
-    indptr[1:] = (block * first[:-1, None] + np.arange(1, block + 1)[None, :] * unique[:, None]).ravel()
+    _block_indptr(first, unique, block, indptr)
     indices = np.empty(nnz, dtype=index_type)
     data = np.empty(nnz)
     _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row, vals, first,
