@@ -5,8 +5,9 @@ Inputs are checked here, once; kernels downstream assume valid data.
 import warnings
 
 import numpy as np
+from numba import prange
 
-from ._config import njit
+from ._config import njit, njit_parallel
 from .elements.beam import BEAM_ELEMENTS, beam_element
 from .elements.beam import hermite as _hermite
 from .elements.solid.dispatch import MAX_NODES, N_NODES, SOLID_ELEMENTS, SOLID_MODULES, solid_element
@@ -383,10 +384,10 @@ class BeamMesh:
                 f"length {self.length:.6g})")
 
 
-@njit
+@njit_parallel
 def _interleave(positions, tangents, q):
     """q = [r_0, t_0, r_1, t_1, ...] (6 per node)."""
-    for a in range(positions.shape[0]):
+    for a in prange(positions.shape[0]):
         for i in range(3):
             q[6 * a + i] = positions[a, i]
             q[6 * a + 3 + i] = tangents[a, i]

@@ -22,10 +22,16 @@ def solid_bounding_boxes(solid, padding=PARAMETER_TOL):
 
     Returns the boxes and the element sizes h (box diagonals before padding).
     """
+    return solid_frames(solid, padding)[:2]
+
+
+def solid_frames(solid, padding=PARAMETER_TOL):
+    """:func:`solid_bounding_boxes` and each element's origin (its first node), in one pass."""
     boxes = np.empty((solid.n_elements, 2, 3))
     size = np.empty(solid.n_elements)
-    _solid_boxes(solid.points, solid.connectivity, solid.element_codes, padding, boxes, size)
-    return boxes, size
+    origin = np.empty((solid.n_elements, 3))
+    _solid_boxes(solid.points, solid.connectivity, solid.element_codes, padding, boxes, size, origin)
+    return boxes, size, origin
 
 
 def beam_bounding_boxes(beams, padding=PARAMETER_TOL):
@@ -68,7 +74,7 @@ def _finish_box(box, padding):
 
 
 @njit_parallel
-def _solid_boxes(points, conn, codes, padding, boxes, size):
+def _solid_boxes(points, conn, codes, padding, boxes, size, origin):
     for c in prange(n_chunks(conn.shape[0], CHUNK)):
         X = np.empty((MAX_NODES, 3))
         C = np.empty((MAX_CONTROL, 3))
@@ -77,6 +83,7 @@ def _solid_boxes(points, conn, codes, padding, boxes, size):
             for a in range(N_NODES[code]):
                 for i in range(3):
                     X[a, i] = points[conn[s, a], i]
+            origin[s, 0], origin[s, 1], origin[s, 2] = X[0, 0], X[0, 1], X[0, 2]
             n = control_points(code, X, C)
             for i in range(3):
                 lo = hi = C[0, i]

@@ -23,7 +23,7 @@ from ..elements.beam import n_functions as beam_n_functions
 from ..elements.beam import shape as beam_shape
 from ..elements.solid import dispatch as solid_types
 from ..geometry.projection import linear_maps
-from ..geometry.search import beam_frames, find_candidate_pairs, solid_bounding_boxes
+from ..geometry.search import beam_frames, find_candidate_pairs, solid_frames
 from ..geometry.segmentation import segment
 from ..integration.rules import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, auto_segments,
                                  checked_segment_points, element_points, segment_points)
@@ -125,8 +125,7 @@ class KernelInput:
         self.points = solid.points
         self.codes = solid.element_codes
         self.conn = solid.connectivity
-        self.solid_origin = np.ascontiguousarray(solid.points[solid.connectivity[:, 0]])
-        self.solid_boxes, self.solid_h = solid_bounding_boxes(solid)
+        self.solid_boxes, self.solid_h, self.solid_origin = solid_frames(solid)
         # per element: inverse of the map linearised at the centre (exact for affine elements)
         self.inverse = np.empty((solid.n_elements, 5, 3))
         linear_maps(self.points, self.conn, self.codes, self.solid_origin, self.solid_h, self.inverse)
