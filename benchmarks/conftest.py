@@ -56,7 +56,8 @@ def pytest_sessionstart(session):
     except OSError:
         pass
     if numba.config.NUMBA_NUM_THREADS >= 2 and available_cpus() >= 2:
-        RESULTS["control_speedup"] = {"start": control_speedup()}
+        ratio, single = control_speedup()
+        RESULTS["control_speedup"] = {"start": ratio, "start_1thread_s": single}
 
 
 @pytest.fixture(scope="session")
@@ -155,7 +156,8 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
     except OSError:
         pass
     if "control_speedup" in RESULTS:
-        RESULTS["control_speedup"]["end"] = control_speedup()
+        ratio, single = control_speedup()
+        RESULTS["control_speedup"].update(end=ratio, end_1thread_s=single)
     tr = terminalreporter
     lines = []
     load = " -> ".join("/".join(f"{x:.2f}" for x in _LOAD[k]) for k in ("start", "end") if k in _LOAD)
@@ -187,7 +189,10 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
     if control:
         lines.append(f"control (benchmarks/control.py, pure compute, 1 -> 2 threads): speed-up "
                      f"{control['start']:.2f}x at the start, {control.get('end', float('nan')):.2f}x at the end "
-                     "(what the machine gave two threads)")
+                     "(what the machine gave two threads);")
+        lines.append(f"  its 1-thread time {control['start_1thread_s'] * 1e3:.0f} ms at the start, "
+                     f"{control.get('end_1thread_s', float('nan')) * 1e3:.0f} ms at the end "
+                     "(how fast one core was: about 255 ms on this project's VM when undisturbed)")
     startup = RESULTS["startup"]
     if startup:
         lines.append("")
