@@ -11,6 +11,7 @@ import numpy as np
 from numba import prange
 
 from .._config import CHUNK, PARAMETER_TOL, njit, njit_parallel
+from .._memory import carve
 from .linalg import n_chunks
 from ..elements.solid.dispatch import CONTROL_MATRIX, MAX_NODES, N_NODES, control_points
 
@@ -47,10 +48,8 @@ def beam_frames(beams, padding=PARAMETER_TOL):
     padded boxes (m, 2, 3) and sizes (m,) of :func:`beam_bounding_boxes`.
     """
     m = beams.n_elements
-    Q = np.empty((m, 4, 3))
-    origin = np.empty((m, 3))
-    boxes = np.empty((m, 2, 3))
-    size = np.empty(m)
+    Q, origin, boxes, size = carve(((m, 4, 3), np.float64), ((m, 3), np.float64), ((m, 2, 3), np.float64),
+                                   (m, np.float64))
     tangents = beams.tangents if beams.tangents is not None else np.zeros((0, 3))
     _beam_frames(beams.positions, tangents, beams.elements, beams.lengths, beams.element_type.code, padding,
                  Q, origin, boxes, size)

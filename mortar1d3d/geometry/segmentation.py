@@ -22,6 +22,7 @@ import numpy as np
 from numba import prange
 
 from .._config import CHUNK, PARAMETER_TOL, njit, njit_parallel
+from .._memory import carve
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from .beam import beam_point
@@ -80,10 +81,9 @@ def pair_crossings(ctx, pair_beam, pair_solid, Q, lengths, beam_origin, beam_box
     args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.inverse, ctx.beam_code, Q, lengths,
             beam_origin, beam_boxes, search_points)
     full = crossings_capacity(search_points)
-    crossing_eta = np.empty((n, min(_FIRST_CAPACITY, full)))
-    crossing_count = np.zeros(n, dtype=np.int64)
-    no_face = np.empty(n, dtype=np.bool_)
-    overflow = np.empty(n, dtype=np.bool_)
+    crossing_eta, crossing_count, no_face, overflow = carve(((n, min(_FIRST_CAPACITY, full)), np.float64),
+                                                            (n, np.int64), (n, np.bool_), (n, np.bool_))
+    crossing_count[:] = 0
     _pair_crossings(pair_beam, pair_solid, *args, crossing_eta, crossing_count, no_face, overflow)
     again = np.flatnonzero(overflow)
     if len(again) and crossing_eta.shape[1] < full:

@@ -19,6 +19,7 @@ import numpy as np
 from numba import prange
 
 from .._config import CHUNK, PARAMETER_TOL, njit, njit_parallel
+from .._memory import carve
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from ..geometry.beam import beam_point
@@ -145,9 +146,8 @@ def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):
     np.cumsum(counts, out=seg_points[1:])
     gx, gw = gauss_tables(int(counts.max()) if len(counts) else 1)
     n = int(seg_points[-1])
-    eta, weight = np.empty(n), np.empty(n)
-    xi, position = np.empty((n, 3)), np.empty((n, 3))
-    status = np.empty(n, dtype=np.int64)
+    eta, weight, xi, position, status = carve((n, np.float64), (n, np.float64), ((n, 3), np.float64),
+                                              ((n, 3), np.float64), (n, np.int64))
     _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, ctx.codes, ctx.conn, ctx.points,
                     ctx.solid_origin, ctx.solid_h, ctx.inverse, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin,
                     eta, xi, weight, position, status)
@@ -186,11 +186,10 @@ def element_points(ctx, n_gauss):
     gx, gw = gauss_legendre_arrays(n_gauss)
     n_beam = len(ctx.pair_offsets) - 1
     n = n_beam * n_gauss
-    beam = np.empty(n, dtype=np.int64)
-    owner = np.empty(n, dtype=np.int64)
-    eta, weight = np.empty(n), np.empty(n)
-    xi, position = np.zeros((n, 3)), np.empty((n, 3))
-    status = np.empty(n, dtype=np.int64)
+    beam, owner, eta, weight, xi, position, status = carve(
+        (n, np.int64), (n, np.int64), (n, np.float64), (n, np.float64), ((n, 3), np.float64), ((n, 3), np.float64),
+        (n, np.int64))
+    xi[:] = 0.0                 # points no element owns keep ξ = 0
     _element_points(ctx.pair_offsets, ctx.pair_solid, gx, gw, ctx.codes, ctx.conn, ctx.points,
                     ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.inverse, ctx.beam_code, ctx.Q, ctx.lengths,
                     ctx.beam_origin, beam, owner, eta, xi, weight, position, status)

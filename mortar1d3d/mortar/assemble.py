@@ -15,6 +15,7 @@ import numpy as np
 from numba import prange
 
 from .._config import CHUNK, njit, njit_parallel
+from .._memory import carve
 from ..geometry.linalg import n_chunks
 from ..elements.multiplier import multiplier as multiplier_type
 from ..elements.multiplier import shape as lm_shape
@@ -354,9 +355,8 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     group_start, m_offsets, beam_groups = _groups(p_beam, p_solid, ctx.codes, n_phi, beams.n_elements)
     n_groups = len(group_start) - 1
     g_solid = p_solid[group_start[:-1]]
-    D_local = np.empty((n_groups, n_phi * nH))
-    M_local = np.empty(m_offsets[-1])
-    kappa_local = np.empty((n_groups, n_phi))
+    D_local, M_local, kappa_local = carve(((n_groups, n_phi * nH), np.float64), (m_offsets[-1], np.float64),
+                                          ((n_groups, n_phi), np.float64))
     _group_operators(group_start, p_beam, p_solid, eta, xi, weight, ctx.beam_code, ctx.lengths, n_phi, ctx.codes,
                      m_offsets, D_local, M_local, kappa_local)
     lm_index, n_lm = lm_numbering(beams, lm_type)

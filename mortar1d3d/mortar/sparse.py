@@ -13,6 +13,7 @@ import scipy.sparse as sp
 from numba import prange
 
 from .._config import CHUNK, njit, njit_parallel
+from .._memory import carve
 from ..geometry.linalg import n_chunks
 
 
@@ -137,10 +138,8 @@ def gathered_block_csr(src_offsets, src, n_phi, beam_groups, entry_start, width,
     nnz = int(first[-1]) * block
     big = max(nnz, block * max(n_rows, n_cols)) >= np.iinfo(np.int32).max
     index_type = np.int64 if big else np.int32   # what scipy would convert to anyway
-    indptr = np.empty(block * n_rows + 1, dtype=index_type)
+    indptr, indices, data = carve((block * n_rows + 1, index_type), (nnz, index_type), (nnz, np.float64))
     _block_indptr(first, unique, block, indptr)
-    indices = np.empty(nnz, dtype=index_type)
-    data = np.empty(nnz)
     _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row, vals, first,
                max(1, int(bound.max())) if n_rows else 1, block, indices, data)
     matrix = sp.csr_matrix((data, indices, indptr), shape=(block * n_rows, block * n_cols))
