@@ -41,7 +41,7 @@ def sheared_beams(seed=2):
 
 def inverse_maps(solid):
     ctx = KernelInput(generate.random_curved_beams(1, 2, seed=1), solid)
-    return ctx.inverse
+    return ctx.linear
 
 
 @pytest.mark.parametrize("element", SOLID_TYPES)
@@ -71,7 +71,7 @@ def test_curved_elements_get_their_centre_linearisation(element):
     ctx = KernelInput(generate.random_curved_beams(1, 2, seed=1), solid)
     table = np.empty((solid.n_elements, 5, 3))
     linear_maps(ctx.points, ctx.conn, ctx.codes, ctx.solid_origin, ctx.solid_h, table)
-    np.testing.assert_array_equal(table, ctx.inverse)
+    np.testing.assert_array_equal(table, ctx.linear)
     descriptor = SOLID_ELEMENTS[element]
     module = SOLID_MODULES[element]
     n = descriptor.n_nodes
@@ -171,6 +171,25 @@ def test_face_control_points_of_linear_faces_are_its_corner_nodes():
             assert sorted(FACE_CONTROL[d.code, f, : N_FACE_CONTROL[d.code, f]]) == sorted(nodes)
 
 
+def test_pairs_out_of_reach_are_the_pairs_whose_beam_box_misses_every_face_box():
+    """The count in the diagnostics, against numpy boxes of the hex8 faces (corner nodes)."""
+    beams, solid = generate.fibre_cube(4, 30, 6)
+    ops = m13.assemble_mortar(beams, solid, integration="segment", n_gauss=2)
+    ctx = KernelInput(beams, solid)
+    pair_beam = np.repeat(np.arange(beams.n_elements), np.diff(ctx.pair_offsets))
+    X = solid.points[solid.connectivity[ctx.pair_solid, :8]]
+    box = ctx.beam_boxes[pair_beam]
+    margin = 1e-6 * (ctx.solid_h[ctx.pair_solid] + np.linalg.norm(box[:, 1] - box[:, 0], axis=1))[:, None]
+    reached = np.zeros(len(pair_beam), dtype=bool)
+    for nodes in SOLID_ELEMENTS["hexahedron"].face_nodes:
+        face = X[:, list(nodes)]
+        reached |= np.all((face.max(axis=1) >= box[:, 0] - margin) & (face.min(axis=1) <= box[:, 1] + margin), axis=1)
+    assert ops.diagnostics["pairs_out_of_reach"] == np.count_nonzero(~reached)
+    assert 0 < ops.diagnostics["pairs_out_of_reach"] < ops.diagnostics["candidate_pairs"]
+    whole = np.logical_and.reduceat(~reached, ctx.pair_offsets[:-1])
+    assert ops.diagnostics["beam_elements_out_of_reach"] == np.count_nonzero(whole)
+
+
 @pytest.mark.parametrize("element", ["hexahedron", "tetra10"])
 def test_crossing_table_overflow_is_searched_again(monkeypatch, element):
     """Pairs whose crossings do not fit the first, small table get the same crossings on a second pass."""
@@ -181,6 +200,11 @@ def test_crossing_table_overflow_is_searched_again(monkeypatch, element):
     reference = m13.assemble_mortar(beams, solid, integration="segment", n_gauss=3)
     assert reference.diagnostics["face_crossings"] > 10
     monkeypatch.setattr(segmentation, "_FIRST_CAPACITY", 1)     # nearly every crossing pair overflows
+    ctx = KernelInput(beams, solid)
+    pair_beam = np.repeat(np.arange(beams.n_elements), np.diff(ctx.pair_offsets))
+    crossing_eta, crossing_count, _ = segmentation.pair_crossings(ctx, pair_beam, ctx.pair_solid, ctx.Q, ctx.lengths,
+                                                                  ctx.beam_origin, ctx.beam_boxes, 6)
+    assert crossing_count.max() > 1 and crossing_eta.shape[1] == crossing_count.max()   # the second pass ran
     again = m13.assemble_mortar(beams, solid, integration="segment", n_gauss=3)
     assert again.diagnostics["face_crossings"] == reference.diagnostics["face_crossings"]
     np.testing.assert_array_equal(again.segments, reference.segments)

@@ -19,6 +19,22 @@ def solve3(a00, a01, a02, a10, a11, a12, a20, a21, a22, b0, b1, b2):
 
 
 @njit
+def inverse3(a00, a01, a02, a10, a11, a12, a20, a21, a22, out):
+    """Write the inverse of A into ``out`` (3, 3) by cofactors; return det A (``out`` untouched unless > 0)."""
+    c00 = a11 * a22 - a12 * a21
+    c01 = a12 * a20 - a10 * a22
+    c02 = a10 * a21 - a11 * a20
+    det = a00 * c00 + a01 * c01 + a02 * c02
+    if not det > 0.0:
+        return det
+    inv = 1.0 / det
+    out[0, 0], out[0, 1], out[0, 2] = inv * c00, inv * (a02 * a21 - a01 * a22), inv * (a01 * a12 - a02 * a11)
+    out[1, 0], out[1, 1], out[1, 2] = inv * c01, inv * (a00 * a22 - a02 * a20), inv * (a02 * a10 - a00 * a12)
+    out[2, 0], out[2, 1], out[2, 2] = inv * c02, inv * (a01 * a20 - a00 * a21), inv * (a00 * a11 - a01 * a10)
+    return det
+
+
+@njit
 def norm3(a, b, c):
     return (a * a + b * b + c * c) ** 0.5
 

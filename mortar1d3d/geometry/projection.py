@@ -10,7 +10,7 @@ from numba import prange
 
 from .._config import CHUNK, NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit, njit_parallel
 from ..elements.solid import dispatch as solid
-from .linalg import n_chunks, norm3, solve3
+from .linalg import inverse3, n_chunks, norm3, solve3
 
 CONVERGED = 0
 FAILED = 1
@@ -149,16 +149,16 @@ def polish(code, X, p0, p1, p2, h, xi, trial, N, dN):
 
 @njit
 def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points, solid_origin,
-                     solid_h, inverse, tol, X, xi, trial, N, dN, only):
+                     solid_h, linear, tol, X, xi, trial, N, dN, only):
     """Lowest-index candidate of beam element ``e`` containing the point r (beam-local frame).
 
     Candidates are ``pair_solid[p0:p1]`` (ascending); returns -1 if none contains the point.
     With ``only`` >= 0, tests just that element. On success ``xi`` holds the point's ξ.
     This is the ownership rule of both integrations (design.md §1-§2): a point on a face,
     edge or node shared by several elements belongs to the lowest-index one. Affine elements
-    are located with their inverse map (``inverse``, :func:`linear_maps`); for the others a
-    Newton projection runs from the linearised estimate and ``X`` is left holding the nodes of
-    the last element tested.
+    are located with their inverse map (``linear``, :func:`linear_maps`); for the others a
+    Newton projection runs from the linearised estimate (from the centre if there is none or it
+    fails) and ``X`` is left holding the nodes of the last element tested.
     """
     for p in range(p0, p1):
         s = pair_solid[p]
@@ -170,20 +170,15 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
         x0 = r0 + (beam_origin[e, 0] - solid_origin[s, 0])
         x1 = r1 + (beam_origin[e, 1] - solid_origin[s, 1])
         x2 = r2 + (beam_origin[e, 2] - solid_origin[s, 2])
-        if is_affine(inverse, s):
-            linear_parameters(code, inverse, s, x0, x1, x2, xi)
-            if solid.is_inside(code, xi, tol):
-                return s
-            continue
-        load_element(points, conn, s, code, solid_origin, X)
-        # Newton from the linearised estimate; from the centre if there is none or it fails
-        if linear_parameters(code, inverse, s, x0, x1, x2, xi):
-            converged = project_point(code, X, x0, x1, x2, solid_h[s], xi, trial, N, dN) == CONVERGED
-            if not converged:
-                converged = locate(code, X, x0, x1, x2, solid_h[s], tol, xi, trial, N, dN) != NOT_CONVERGED
+        if is_affine(linear, s):
+            linear_parameters(code, linear, s, x0, x1, x2, xi)
         else:
-            converged = locate(code, X, x0, x1, x2, solid_h[s], tol, xi, trial, N, dN) != NOT_CONVERGED
-        if converged and solid.is_inside(code, xi, tol):
+            load_element(points, conn, s, code, solid_origin, X)
+            if not (linear_parameters(code, linear, s, x0, x1, x2, xi)
+                    and project_point(code, X, x0, x1, x2, solid_h[s], xi, trial, N, dN) == CONVERGED):
+                if locate(code, X, x0, x1, x2, solid_h[s], tol, xi, trial, N, dN) == NOT_CONVERGED:
+                    continue
+        if solid.is_inside(code, xi, tol):
             return s
     return -1
 
@@ -228,17 +223,8 @@ def affine_inverse(code, X, h, rel_tol, Ainv):
         if (abs(a00 * d0 + a01 * d1 + a02 * d2 - X[a, 0]) > tol or abs(a10 * d0 + a11 * d1 + a12 * d2 - X[a, 1]) > tol
                 or abs(a20 * d0 + a21 * d1 + a22 * d2 - X[a, 2]) > tol):
             return False
-    c00 = a11 * a22 - a12 * a21
-    c01 = a12 * a20 - a10 * a22
-    c02 = a10 * a21 - a11 * a20
-    det = a00 * c00 + a01 * c01 + a02 * c02
-    if not det > 0.0:      # inverted or degenerate: leave it to the general path
-        return False
-    inv = 1.0 / det
-    Ainv[0, 0], Ainv[0, 1], Ainv[0, 2] = inv * c00, inv * (a02 * a21 - a01 * a22), inv * (a01 * a12 - a02 * a11)
-    Ainv[1, 0], Ainv[1, 1], Ainv[1, 2] = inv * c01, inv * (a00 * a22 - a02 * a20), inv * (a02 * a10 - a00 * a12)
-    Ainv[2, 0], Ainv[2, 1], Ainv[2, 2] = inv * c02, inv * (a01 * a20 - a00 * a21), inv * (a00 * a11 - a01 * a10)
-    return True
+    # inverted or degenerate: leave it to the general path
+    return inverse3(a00, a01, a02, a10, a11, a12, a20, a21, a22, Ainv) > 0.0
 
 
 @njit
@@ -274,21 +260,10 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table):
                 table[s, 4, 0] = 1.0
                 continue
             j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xc, dN)
-            det = j00 * (j11 * j22 - j12 * j21) - j01 * (j10 * j22 - j12 * j20) + j02 * (j10 * j21 - j11 * j20)
-            if not det > 0.0:
+            if inverse3(j00, j01, j02, j10, j11, j12, j20, j21, j22, table[s, :3]) > 0.0:
+                table[s, 4, 0] = 0.0
+            else:
                 table[s, :, :] = np.nan
-                continue
-            inv = 1.0 / det
-            table[s, 0, 0] = inv * (j11 * j22 - j12 * j21)
-            table[s, 0, 1] = inv * (j02 * j21 - j01 * j22)
-            table[s, 0, 2] = inv * (j01 * j12 - j02 * j11)
-            table[s, 1, 0] = inv * (j12 * j20 - j10 * j22)
-            table[s, 1, 1] = inv * (j00 * j22 - j02 * j20)
-            table[s, 1, 2] = inv * (j02 * j10 - j00 * j12)
-            table[s, 2, 0] = inv * (j10 * j21 - j11 * j20)
-            table[s, 2, 1] = inv * (j01 * j20 - j00 * j21)
-            table[s, 2, 2] = inv * (j00 * j11 - j01 * j10)
-            table[s, 4, 0] = 0.0
 
 
 @njit

@@ -150,6 +150,26 @@ def _cell_range(box, lower, inv_cell, dims, lo, hi):
     return True
 
 
+@njit
+def _bin_part(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, ids):
+    """One pass over the elements of ``part``: count them per cell (``ids`` empty) or place them.
+
+    When placing, ``counts[part, c]`` holds the part's next slot in cell c.
+    """
+    n_solid = solid_boxes.shape[0]
+    lo = np.empty(3, dtype=np.int64)
+    hi = np.empty(3, dtype=np.int64)
+    for s in range(part * n_solid // n_parts, (part + 1) * n_solid // n_parts):
+        if _cell_range(solid_boxes[s], lower, inv_cell, dims, lo, hi):
+            for i in range(lo[0], hi[0] + 1):
+                for j in range(lo[1], hi[1] + 1):
+                    for k in range(lo[2], hi[2] + 1):
+                        c = (i * dims[1] + j) * dims[2] + k
+                        if ids.shape[0]:
+                            ids[counts[part, c]] = s
+                        counts[part, c] += 1
+
+
 @njit_parallel
 def _bin_solids(solid_boxes, lower, inv_cell, dims, n_parts):
     """CSR (offsets, ids) of the solid elements whose box covers each grid cell, ids ascending.
@@ -159,17 +179,9 @@ def _bin_solids(solid_boxes, lower, inv_cell, dims, n_parts):
     ``n_parts``.
     """
     n_cells = dims[0] * dims[1] * dims[2]
-    n_solid = solid_boxes.shape[0]
     counts = np.zeros((n_parts, n_cells), dtype=np.int64)
     for part in prange(n_parts):
-        lo = np.empty(3, dtype=np.int64)
-        hi = np.empty(3, dtype=np.int64)
-        for s in range(part * n_solid // n_parts, (part + 1) * n_solid // n_parts):
-            if _cell_range(solid_boxes[s], lower, inv_cell, dims, lo, hi):
-                for i in range(lo[0], hi[0] + 1):
-                    for j in range(lo[1], hi[1] + 1):
-                        for k in range(lo[2], hi[2] + 1):
-                            counts[part, (i * dims[1] + j) * dims[2] + k] += 1
+        _bin_part(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, np.empty(0, dtype=np.int64))
     offsets = np.empty(n_cells + 1, dtype=np.int64)
     total = 0
     for c in range(n_cells):           # counts become each part's first slot in cell c
@@ -181,16 +193,7 @@ def _bin_solids(solid_boxes, lower, inv_cell, dims, n_parts):
     offsets[n_cells] = total
     ids = np.empty(total, dtype=np.int64)
     for part in prange(n_parts):
-        lo = np.empty(3, dtype=np.int64)
-        hi = np.empty(3, dtype=np.int64)
-        for s in range(part * n_solid // n_parts, (part + 1) * n_solid // n_parts):
-            if _cell_range(solid_boxes[s], lower, inv_cell, dims, lo, hi):
-                for i in range(lo[0], hi[0] + 1):
-                    for j in range(lo[1], hi[1] + 1):
-                        for k in range(lo[2], hi[2] + 1):
-                            c = (i * dims[1] + j) * dims[2] + k
-                            ids[counts[part, c]] = s
-                            counts[part, c] += 1
+        _bin_part(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, ids)
     return offsets, ids
 
 

@@ -48,7 +48,7 @@ def _face_centre(code, face, xi):
 
 @njit
 def crossings_capacity(search_points):
-    """Most crossings one pair reports (further ones are dropped and counted by the caller)."""
+    """Most crossings one pair reports (in the second pass of :func:`pair_crossings`; further ones are dropped)."""
     return 4 * search_points * solid.MAX_FACES
 
 
@@ -78,7 +78,7 @@ def pair_crossings(ctx, pair_beam, pair_solid, Q, lengths, beam_origin, beam_box
     (n_pairs,): the pairs whose beam element reaches no face of the solid element.
     """
     n = len(pair_solid)
-    args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.inverse, ctx.beam_code, Q, lengths,
+    args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.linear, ctx.beam_code, Q, lengths,
             beam_origin, beam_boxes, search_points)
     full = crossings_capacity(search_points)
     crossing_eta, crossing_count, no_face, overflow = carve(((n, min(_FIRST_CAPACITY, full)), np.float64),
@@ -185,7 +185,7 @@ def _faces_in_reach(code, X, h, box, origin, C, reach):
 
 
 @njit_parallel
-def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, inverse,
+def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear,
                     beam_code, Q, lengths, beam_origin, beam_boxes, search_points, out_eta, out_count, no_face,
                     overflow):
     n_pairs = pair_beam.shape[0]
@@ -225,19 +225,19 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
             s2 = beam_origin[e, 2] - solid_origin[s, 2]
             # samples along the beam element: ξ(η) and dξ/dη = J⁻¹ r'(η) (warm-started Newton)
             solid.centre(code, xi)
-            affine = is_affine(inverse, s)
+            affine = is_affine(linear, s)
             for k in range(S):
                 eta_s[k] = -1.0 + 2.0 * k / (S - 1)
                 r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Qe, lengths[e], s0, s1, s2, eta_s[k], H, dH)
                 if affine:
                     # ξ(η) and dξ/dη = A⁻¹ r' directly
                     ok[k] = True
-                    linear_parameters(code, inverse, s, r0, r1, r2, xi_s[k])
+                    linear_parameters(code, linear, s, r0, r1, r2, xi_s[k])
                     for i in range(3):
-                        dxi_s[k, i] = inverse[s, i, 0] * d0 + inverse[s, i, 1] * d1 + inverse[s, i, 2] * d2
+                        dxi_s[k, i] = linear[s, i, 0] * d0 + linear[s, i, 1] * d1 + linear[s, i, 2] * d2
                     continue
                 if k == 0:
-                    linear_parameters(code, inverse, s, r0, r1, r2, xi)    # else: from the centre
+                    linear_parameters(code, linear, s, r0, r1, r2, xi)    # else: from the centre
                 start[:] = xi
                 ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
                 if ok[k]:
@@ -331,19 +331,19 @@ def _insertion_sort(a, n):
 
 
 @njit
-def _deep_end(eta, owner, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, inverse,
+def _deep_end(eta, owner, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, linear,
               beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH):
     """``owner`` if the beam element's end r(η) (η = ±1) lies inside it by more than the tolerance, else -1."""
     if owner < 0:
         return -1
     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
     return first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
-                            solid_origin, solid_h, inverse, -PARAMETER_TOL, X, xi, trial, N, dN, owner)
+                            solid_origin, solid_h, linear, -PARAMETER_TOL, X, xi, trial, N, dN, owner)
 
 
 @njit_parallel
 def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, points, solid_origin,
-          solid_h, solid_boxes, inverse, beam_code, Q, lengths, beam_origin, seg_offsets, seg_solid,
+          solid_h, solid_boxes, linear, beam_code, Q, lengths, beam_origin, seg_offsets, seg_solid,
           seg_start, seg_end, seg_count):
     n_beam = pair_offsets.shape[0] - 1
     tol = PARAMETER_TOL
@@ -386,8 +386,8 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
             for iv in range(n_pts - 1):
                 mid = 0.5 * (cuts[iv] + cuts[iv + 1])
                 r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
-                owners[iv] = first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
-                                    solid_origin, solid_h, inverse, tol, X, xi, trial, N, dN, -1)
+                owners[iv] = first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
+                                              points, solid_origin, solid_h, linear, tol, X, xi, trial, N, dN, -1)
             # a sliver between two crossings closer than _SLIVER is a tangential touch of a face
             # (a double root, resolved only to ~sqrt(eps)): it joins a neighbour that contains it,
             # or is dropped when both neighbours are uncoupled (touching the solid from outside).
@@ -405,14 +405,15 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                 while last + 1 < n_pts - 1 and cuts[last + 2] - cuts[last + 1] < _SLIVER:
                     last += 1
                 before = owners[iv - 1] if iv > 0 else _deep_end(-1.0, owners[0], e, pair_solid, p0, p1, codes,
-                                                                   conn, points, solid_origin, solid_h, solid_boxes, inverse,
-                                                                   beam_code, Q, lengths, beam_origin, X, xi, trial,
-                                                                   N, dN, H, dH)
+                                                                   conn, points, solid_origin, solid_h, solid_boxes,
+                                                                   linear, beam_code, Q, lengths, beam_origin, X, xi,
+                                                                   trial, N, dN, H, dH)
                 after = owners[last + 1] if last + 1 < n_pts - 1 else _deep_end(1.0, owners[n_pts - 2], e, pair_solid,
                                                                                 p0, p1, codes, conn, points,
-                                                                                solid_origin, solid_h, solid_boxes, inverse,
-                                                                                beam_code, Q, lengths, beam_origin,
-                                                                                X, xi, trial, N, dN, H, dH)
+                                                                                solid_origin, solid_h, solid_boxes,
+                                                                                linear, beam_code, Q, lengths,
+                                                                                beam_origin, X, xi, trial, N, dN, H,
+                                                                                dH)
                 for k in range(iv, last + 1):
                     if owners[k] < 0 or owners[k] == before or owners[k] == after:
                         continue
@@ -422,9 +423,10 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                     mid = 0.5 * (cuts[k] + cuts[k + 1])
                     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
                     for neighbour in (before, after):
-                        if neighbour >= 0 and first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes,
-                                                     codes, conn, points, solid_origin, solid_h, inverse, tol, X, xi, trial,
-                                                     N, dN, neighbour) == neighbour:
+                        if neighbour >= 0 and first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin,
+                                                               solid_boxes, codes, conn, points, solid_origin, solid_h,
+                                                               linear, tol, X, xi, trial, N, dN,
+                                                               neighbour) == neighbour:
                             owners[k] = neighbour
                             break
                 iv = last + 1
@@ -451,7 +453,7 @@ _GAP_PROBES = 7
 
 @njit_parallel
 def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, pair_solid, codes, conn,
-                  points, solid_origin, solid_h, solid_boxes, inverse, beam_code, Q, lengths, beam_origin, certain,
+                  points, solid_origin, solid_h, solid_boxes, linear, beam_code, Q, lengths, beam_origin, certain,
                   bad):
     """Flag beam elements whose pieces do not tile their embedded part.
 
@@ -493,7 +495,8 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
                         eta = gap_start + k * (a - gap_start) / (_GAP_PROBES + 1)
                         r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
                         if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
-                                            points, solid_origin, solid_h, inverse, -loose, X, xi, trial, N, dN, -1) >= 0:
+                                            points, solid_origin, solid_h, linear, -loose, X, xi, trial, N, dN,
+                                            -1) >= 0:
                             failed = True
                 if last or failed:
                     break
@@ -503,7 +506,8 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
                     eta = a + 0.25 * k * (b - a)
                     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
                     if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
-                                        points, solid_origin, solid_h, inverse, loose, X, xi, trial, N, dN, owner) != owner:
+                                        points, solid_origin, solid_h, linear, loose, X, xi, trial, N, dN,
+                                        owner) != owner:
                         failed = True
                 if failed:
                     break
@@ -512,16 +516,16 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
 
 
 @njit
-def _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, inverse, beam_code, Q,
+def _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, linear, beam_code, Q,
            lengths, beam_origin, X, xi, trial, N, dN, H, dH):
     """Lowest-index candidate containing r(η) to 1e-12 (sharp: the cuts land on the faces)."""
     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
     return first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
-                            solid_origin, solid_h, inverse, 1e-3 * PARAMETER_TOL, X, xi, trial, N, dN, -1)
+                            solid_origin, solid_h, linear, 1e-3 * PARAMETER_TOL, X, xi, trial, N, dN, -1)
 
 
 @njit_parallel
-def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, inverse,
+def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, linear,
                     beam_code, Q, lengths, beam_origin, n_samples, out_eta, out_count):
     """Cuts of each beam element where the owner (lowest-index element containing r(η)) changes.
 
@@ -550,7 +554,7 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
             for k in range(n_samples):
                 eta = -1.0 + 2.0 * k / (n_samples - 1)
                 owner = _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
-                               inverse, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH)
+                               linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH)
                 lo = eta_previous
                 current = previous
                 while k > 0 and current != owner and count < cap:
@@ -558,14 +562,14 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                     while hi - lo > 1e-13:
                         mid = 0.5 * (lo + hi)
                         if _owner(mid, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
-                                  inverse, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH) == current:
+                                  linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH) == current:
                             lo = mid
                         else:
                             hi = mid
                     out_eta[e, count] = 0.5 * (lo + hi)
                     count += 1
                     current = _owner(hi, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
-                                     solid_boxes, inverse, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN,
+                                     solid_boxes, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN,
                                      H, dH)
                     lo = hi
                 previous = owner
@@ -607,6 +611,7 @@ class _Beams:
                                                                self.beam_origin, self.beam_boxes, search_points)
         reaching = np.concatenate([[0], np.cumsum(~no_face)])
         self.certain = reaching[self.pair_offsets[1:]] == reaching[self.pair_offsets[:-1]]
+        self.pairs_out_of_reach = int(no_face.sum())
         return crossing_eta, crossing_count
 
     def bisection_crossings(self, ctx):
@@ -616,7 +621,7 @@ class _Beams:
         cuts = np.empty((n, cap))
         count = np.zeros(n, dtype=np.int64)
         _bisection_cuts(self.pair_offsets, self.pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-                        ctx.solid_h, ctx.solid_boxes, ctx.inverse, ctx.beam_code, self.Q, self.lengths,
+                        ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, self.Q, self.lengths,
                         self.beam_origin, _BISECTION_SAMPLES, cuts, count)
         crossing_eta = np.zeros((len(self.pair_solid), cap))
         crossing_count = np.zeros(len(self.pair_solid), dtype=np.int64)
@@ -642,7 +647,7 @@ class _Beams:
         seg_start = np.empty(total)
         seg_end = np.empty(total)
         seg_count = np.zeros(n_beam, dtype=np.int64)
-        args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.inverse,
+        args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear,
                 ctx.beam_code, self.Q, self.lengths, self.beam_origin)
         _tile(pair_offsets, self.pair_solid, crossing_eta, crossing_count, *args,
               seg_offsets, seg_solid, seg_start, seg_end, seg_count)
@@ -685,14 +690,18 @@ def segment(ctx, search_points, diagnostics=None):
     segmented again (:func:`resegment`) with ``4 * search_points`` search points, and if it
     still fails, by bisection of its owner along η. ``diagnostics`` (a dict), if given, receives
     the counts ``segmentation_fallbacks`` (beam elements segmented again),
-    ``segmentation_bisections`` (of those, the ones that needed the bisection) and
-    ``segmentation_unresolved`` (still failing the check afterwards).
+    ``segmentation_bisections`` (of those, the ones that needed the bisection),
+    ``segmentation_unresolved`` (still failing the check afterwards), ``pairs_out_of_reach``
+    (candidate pairs whose beam element reaches no face of the solid element: not searched) and
+    ``beam_elements_out_of_reach`` (beam elements all of whose pairs are such).
     """
     everything = _Beams(ctx)
     crossing_eta, crossing_count = everything.crossings(ctx, search_points)
     segments = everything.tile(ctx, crossing_eta, crossing_count)
     bad = segments[4]
-    counts = {"segmentation_fallbacks": int(bad.sum()), "segmentation_bisections": 0, "segmentation_unresolved": 0}
+    counts = {"segmentation_fallbacks": int(bad.sum()), "segmentation_bisections": 0, "segmentation_unresolved": 0,
+              "pairs_out_of_reach": everything.pairs_out_of_reach,
+              "beam_elements_out_of_reach": int(everything.certain.sum())}
     if bad.any():
         elements = np.flatnonzero(bad)
         retry = resegment(ctx, elements, search_points)

@@ -36,7 +36,7 @@ POINT_INSIDE, POINT_OUTSIDE, POINT_NOT_CONVERGED, POINT_UNCOUPLED = INSIDE, OUTS
 
 @njit_parallel
 def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, codes, conn, points,
-                    solid_origin, solid_h, inverse, beam_code, Q, lengths, beam_origin,
+                    solid_origin, solid_h, linear, beam_code, Q, lengths, beam_origin,
                     eta, xi, weight, position, status):
     # segment g gets the n-point rule (n = seg_points[g+1] - seg_points[g]) stored in row n of gx, gw
     n_seg = seg_beam.shape[0]
@@ -54,7 +54,7 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
             s = seg_solid[g]
             code = codes[s]
             n_gauss = seg_points[g + 1] - seg_points[g]
-            affine = is_affine(inverse, s)
+            affine = is_affine(linear, s)
             if not affine:
                 load_element(points, conn, s, code, solid_origin, X)
             s0 = beam_origin[e, 0] - solid_origin[s, 0]
@@ -72,14 +72,14 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
                 position[k, 1] = r1 + solid_origin[s, 1]
                 position[k, 2] = r2 + solid_origin[s, 2]
                 if affine:
-                    linear_parameters(code, inverse, s, r0, r1, r2, x)
+                    linear_parameters(code, linear, s, r0, r1, r2, x)
                     xi[k] = x
                     status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
                     continue
                 # warm start from the previous point of the segment (the first from the
                 # linearised estimate); retry from the centre
                 if q == 0:
-                    linear_parameters(code, inverse, s, r0, r1, r2, x)
+                    linear_parameters(code, linear, s, r0, r1, r2, x)
                 if project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) != CONVERGED:
                     solid.centre(code, x)
                     if project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) != CONVERGED:
@@ -96,7 +96,7 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
 
 @njit_parallel
 def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid_origin, solid_h,
-                    solid_boxes, inverse, beam_code, Q, lengths, beam_origin,
+                    solid_boxes, linear, beam_code, Q, lengths, beam_origin,
                     beam, owner, eta, xi, weight, position, status):
     n_gauss = gx.shape[0]
     n_beam = pair_offsets.shape[0] - 1
@@ -123,10 +123,10 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
                 status[k] = POINT_UNCOUPLED
                 # the lowest-index candidate element containing the point owns it
                 s = first_containing(r0, r1, r2, e, pair_solid, pair_offsets[e], pair_offsets[e + 1], beam_origin,
-                                     solid_boxes, codes, conn, points, solid_origin, solid_h, inverse, tol, X, x,
+                                     solid_boxes, codes, conn, points, solid_origin, solid_h, linear, tol, X, x,
                                      trial, N, dN, -1)
                 if s >= 0:
-                    if not is_affine(inverse, s):
+                    if not is_affine(linear, s):
                         # X still holds the owner's nodes (it was the last element tested)
                         polish(codes[s], X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
                                r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
@@ -149,7 +149,7 @@ def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):
     eta, weight, xi, position, status = carve((n, np.float64), (n, np.float64), ((n, 3), np.float64),
                                               ((n, 3), np.float64), (n, np.int64))
     _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, ctx.codes, ctx.conn, ctx.points,
-                    ctx.solid_origin, ctx.solid_h, ctx.inverse, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin,
+                    ctx.solid_origin, ctx.solid_h, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin,
                     eta, xi, weight, position, status)
     return np.repeat(seg_beam, counts), np.repeat(seg_solid, counts), eta, xi, weight, position, status
 
@@ -191,7 +191,7 @@ def element_points(ctx, n_gauss):
         (n, np.int64))
     xi[:] = 0.0                 # points no element owns keep ξ = 0
     _element_points(ctx.pair_offsets, ctx.pair_solid, gx, gw, ctx.codes, ctx.conn, ctx.points,
-                    ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.inverse, ctx.beam_code, ctx.Q, ctx.lengths,
+                    ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths,
                     ctx.beam_origin, beam, owner, eta, xi, weight, position, status)
     return beam, owner, eta, xi, weight, position, status
 
@@ -452,7 +452,7 @@ def auto_segments(ctx, search_points, n_gauss, n_phi):
     all_solid, all_start, all_end = np.empty(total, dtype=np.int64), np.empty(total), np.empty(total)
     seg_count = np.zeros(n_beam, dtype=np.int64)
     _tile(pair_offsets, pair_solid, crossing_eta, count, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-          ctx.solid_h, ctx.solid_boxes, ctx.inverse, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, seg_offsets,
+          ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, seg_offsets,
           all_solid, all_start, all_end, seg_count)
     keep = _compact_index(seg_offsets, seg_count)
     seg_beam = np.repeat(np.arange(n_beam), seg_count)

@@ -127,9 +127,9 @@ class KernelInput:
         self.codes = solid.element_codes
         self.conn = solid.connectivity
         self.solid_boxes, self.solid_h, self.solid_origin = solid_frames(solid)
-        # per element: inverse of the map linearised at the centre (exact for affine elements)
-        self.inverse = np.empty((solid.n_elements, 5, 3))
-        linear_maps(self.points, self.conn, self.codes, self.solid_origin, self.solid_h, self.inverse)
+        # per element: the map linearised at the centre, inverted (exact for affine elements)
+        self.linear = np.empty((solid.n_elements, 5, 3))
+        linear_maps(self.points, self.conn, self.codes, self.solid_origin, self.solid_h, self.linear)
         self.Q, self.beam_origin, self.beam_boxes, _ = beam_frames(beams)
         self.lengths = beams.lengths
         self.beam_code = beams.element_type.code
