@@ -133,6 +133,7 @@ def _assembly_rows():
                          gp2=gp2, speedup=speedup, median1=one["median_s"] if one else None,
                          median2=two["median_s"] if two else None,
                          paired=paired.get("paired_speedup_median"), control=paired.get("control_speedup_median"),
+                         claimed=paired.get("control_claimed_speedup_median"),
                          paired_fresh=paired.get("paired_speedup_fresh_median"),
                          faults=rec.get("page_faults_per_call_median")))
     return rows
@@ -170,23 +171,26 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
         lines.append("")
         lines.append(f"{'assembly (GP/s = points / median)':<34}{'points':>8}  {'1 thread':>9}  "
                      f"{'target/core':>11}      {'2 threads':>9}  {'speed-up':>8}  {'fresh':>6}  {'paired':>6}  "
-                     f"{'target':>6}      {'control':>7}  {'faults/call':>11}")
+                     f"{'target':>6}      {'control':>7}  {'claimed':>7}  {'faults/call':>11}")
         for r in rows:
             sp = "-" if r["speedup"] is None else f"{r['speedup']:.2f}x"
             paired = "-" if r["paired"] is None else f"{r['paired']:.2f}x"
             fresh = "-" if r["paired_fresh"] is None else f"{r['paired_fresh']:.2f}x"
             control = "-" if r["control"] is None else f"{r['control']:.2f}x"
+            claimed = "-" if r["claimed"] is None else f"{r['claimed']:.2f}x"
             lines.append(
                 f"{r['variant']:<34}{r['n_points']:>8}  {_fmt_rate(r['gp1']):>9}  "
                 f"{'>= ' + format(r['target'], '.1e'):>11} {_mark(r['gp1'], r['target']):>4}  "
                 f"{_fmt_rate(r['gp2']):>9}  {sp:>8}  {fresh:>6}  {paired:>6}  "
                 f"{'>= ' + format(TARGETS['speedup_2_threads'], '.1f') + 'x':>6} "
                 f"{_mark(r['paired'] if r['paired'] is not None else r['speedup'], TARGETS['speedup_2_threads']):>4}"
-                f"  {control:>7}  {'-' if r['faults'] is None else format(r['faults'], '.0f'):>11}")
+                f"  {control:>7}  {claimed:>7}  {'-' if r['faults'] is None else format(r['faults'], '.0f'):>11}")
         lines.append("speed-up: ratio of the medians above; fresh / paired: median of per-round 1/2-thread ratios "
                      "(test_thread_speedup)")
         lines.append("  with the previous result dropped / held (memory faulted in again / reused; paired is judged "
-                     "against the target); control: the same rounds' pure-compute loop;")
+                     "against the target); control: the same rounds' pure-compute loop")
+        lines.append("  (prange as Numba schedules it; claimed: its chunks claimed dynamically, as in the engine's "
+                     "kernels: the ceiling for their parallel parts);")
         lines.append("faults/call: minor page faults per 1-thread call (memory fresh from the OS; "
                      "GLIBC_TUNABLES=glibc.malloc.hugetlb=1 removes most, see benchmarks/README.md)")
     control = RESULTS.get("control_speedup")

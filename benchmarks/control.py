@@ -5,12 +5,24 @@ shared or virtual machine its 2-thread speed-up moves within minutes (1.3x to 1.
 the 2-core VM this project is developed on), so a measured speed-up of the engine means little
 without the control's figure from the same minutes. Used by ``throughput.py`` and by the summary
 of ``make bench``.
+
+Two variants of the same loop: ``prange`` as Numba schedules it (each thread gets half of the
+range up front: a thread slowed by a neighbour holds up the loop), and the chunks claimed
+dynamically as the engine's kernels do (mortar1d3d._schedule): its speed-up is the ceiling for
+the engine's parallel parts on the machine of the moment.
 """
 import time
+
+import sys
+from pathlib import Path
 
 import numba
 import numpy as np
 from numba import njit, prange
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # this checkout's package
+
+from mortar1d3d._schedule import claim, new_claims  # noqa: E402
 
 
 @njit(parallel=True, cache=True)
@@ -22,17 +34,35 @@ def _work(n, out):
         out[i] = x
 
 
-def control_times(threads=(1, 2), size=16000):
-    """Wall time of the control loop per thread count (one call each, after a warm-up call)."""
+@njit(parallel=True, cache=True)
+def _work_claimed(n, out, workers):
+    claims = new_claims()
+    for worker in prange(workers):
+        begin, stop = claim(claims, n)
+        while begin < stop:
+            for i in range(begin, stop):
+                x = 0.0
+                for k in range(1500):
+                    x += np.sin(i * 1e-3 + k * 1e-4)
+                out[i] = x
+            begin, stop = claim(claims, n)
+
+
+def control_times(threads=(1, 2), size=16000, dynamic=False):
+    """Wall time of the control loop per thread count (one call each, after a warm-up call).
+
+    ``dynamic``: the variant whose chunks are claimed dynamically, as in the engine's kernels.
+    """
     out = np.empty(size)
     default = numba.get_num_threads()
-    _work(100, out)
+    work = (lambda n: _work_claimed(n, out, numba.get_num_threads())) if dynamic else (lambda n: _work(n, out))
+    work(100)
     times = {}
     try:
         for nt in threads:
             numba.set_num_threads(nt)
             t0 = time.perf_counter()
-            _work(size, out)
+            work(size)
             times[nt] = time.perf_counter() - t0
     finally:
         numba.set_num_threads(default)

@@ -13,6 +13,7 @@ import mortar1d3d as m13
 from mortar1d3d import generate
 from mortar1d3d.elements.solid.dispatch import (CONTROL_MATRIX, FACE_CONTROL, N_FACE_CONTROL, SOLID_ELEMENTS,
                                                 SOLID_MODULES, control_points)
+from mortar1d3d._schedule import workers
 from mortar1d3d.geometry.projection import linear_maps
 from mortar1d3d.mortar.assemble import KernelInput
 
@@ -70,7 +71,7 @@ def test_curved_elements_get_their_centre_linearisation(element):
     solid = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (3, 3, 3), element), 0.15, seed=1)
     ctx = KernelInput(generate.random_curved_beams(1, 2, seed=1), solid)
     table = np.empty((solid.n_elements, 5, 3))
-    linear_maps(ctx.points, ctx.conn, ctx.codes, ctx.solid_origin, ctx.solid_h, table)
+    linear_maps(ctx.points, ctx.conn, ctx.codes, ctx.solid_origin, ctx.solid_h, table, workers())
     np.testing.assert_array_equal(table, ctx.linear)
     descriptor = SOLID_ELEMENTS[element]
     module = SOLID_MODULES[element]

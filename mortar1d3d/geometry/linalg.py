@@ -37,8 +37,3 @@ def inverse3(a00, a01, a02, a10, a11, a12, a20, a21, a22, out):
 @njit
 def norm3(a, b, c):
     return (a * a + b * b + c * c) ** 0.5
-
-
-@njit
-def n_chunks(n, chunk):
-    return (n + chunk - 1) // chunk

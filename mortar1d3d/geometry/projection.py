@@ -8,9 +8,10 @@ All buffers come from the caller; nothing here allocates.
 import numpy as np
 from numba import prange
 
-from .._config import CHUNK, NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit, njit_parallel
+from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit, njit_parallel
+from .._schedule import claim, new_claims
 from ..elements.solid import dispatch as solid
-from .linalg import inverse3, n_chunks, norm3, solve3
+from .linalg import inverse3, norm3, solve3
 
 CONVERGED = 0
 FAILED = 1
@@ -235,7 +236,7 @@ def affine_parameters(code, Ainv, x0, x1, x2, xi):
 
 
 @njit_parallel
-def linear_maps(points, conn, codes, solid_origin, solid_h, table):
+def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
     """The inverse of every element's map linearised at its parameter centre, for locating points.
 
     ``table[s]`` (5, 3): rows 0-2 the inverse L of the Jacobian at the centre ξ_c, row 3 the
@@ -245,25 +246,29 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table):
     Newton start close to the answer), NaN where the Jacobian at the centre is singular.
     """
     n = conn.shape[0]
-    for c in prange(n_chunks(n, CHUNK)):
+    claims = new_claims()
+    for worker in prange(workers):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
         xc = np.empty(3)
-        for s in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
-            code = codes[s]
-            load_element(points, conn, s, code, solid_origin, X)
-            solid.centre(code, xc)
-            table[s, 3, 0], table[s, 3, 1], table[s, 3, 2] = map_point(code, X, xc, N)
-            table[s, 4, 1] = table[s, 4, 2] = 0.0
-            if affine_inverse(code, X, solid_h[s], EXACT_AFFINE_TOL, table[s, :3]):
-                table[s, 4, 0] = 1.0
-                continue
-            j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xc, dN)
-            if inverse3(j00, j01, j02, j10, j11, j12, j20, j21, j22, table[s, :3]) > 0.0:
-                table[s, 4, 0] = 0.0
-            else:
-                table[s, :, :] = np.nan
+        begin, stop = claim(claims, n)
+        while begin < stop:
+            for s in range(begin, stop):
+                code = codes[s]
+                load_element(points, conn, s, code, solid_origin, X)
+                solid.centre(code, xc)
+                table[s, 3, 0], table[s, 3, 1], table[s, 3, 2] = map_point(code, X, xc, N)
+                table[s, 4, 1] = table[s, 4, 2] = 0.0
+                if affine_inverse(code, X, solid_h[s], EXACT_AFFINE_TOL, table[s, :3]):
+                    table[s, 4, 0] = 1.0
+                    continue
+                j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xc, dN)
+                if inverse3(j00, j01, j02, j10, j11, j12, j20, j21, j22, table[s, :3]) > 0.0:
+                    table[s, 4, 0] = 0.0
+                else:
+                    table[s, :, :] = np.nan
+            begin, stop = claim(claims, n)
 
 
 @njit

@@ -6,13 +6,12 @@ solid element (``descriptor.bounding_matrix``) contains the element. Solid boxes
 a uniform grid; each beam box visits only the grid cells it covers, so the cost is
 O(n_beam + n_solid) for meshes of comparable element sizes, not O(n_beam · n_solid).
 """
-import numba
 import numpy as np
 from numba import prange
 
-from .._config import CHUNK, PARAMETER_TOL, njit, njit_parallel
+from .._config import PARAMETER_TOL, njit, njit_parallel
 from .._memory import carve
-from .linalg import n_chunks
+from .._schedule import claim, new_claims, workers
 from ..elements.solid.dispatch import CONTROL_MATRIX, MAX_NODES, N_NODES, control_points
 
 MAX_CONTROL = CONTROL_MATRIX.shape[1]
@@ -31,7 +30,7 @@ def solid_frames(solid, padding=PARAMETER_TOL):
     boxes = np.empty((solid.n_elements, 2, 3))
     size = np.empty(solid.n_elements)
     origin = np.empty((solid.n_elements, 3))
-    _solid_boxes(solid.points, solid.connectivity, solid.element_codes, padding, boxes, size, origin)
+    _solid_boxes(solid.points, solid.connectivity, solid.element_codes, padding, boxes, size, origin, workers())
     return boxes, size, origin
 
 
@@ -73,25 +72,29 @@ def _finish_box(box, padding):
 
 
 @njit_parallel
-def _solid_boxes(points, conn, codes, padding, boxes, size, origin):
-    for c in prange(n_chunks(conn.shape[0], CHUNK)):
+def _solid_boxes(points, conn, codes, padding, boxes, size, origin, workers):
+    claims = new_claims()
+    for worker in prange(workers):
         X = np.empty((MAX_NODES, 3))
         C = np.empty((MAX_CONTROL, 3))
-        for s in range(c * CHUNK, min(conn.shape[0], (c + 1) * CHUNK)):
-            code = codes[s]
-            for a in range(N_NODES[code]):
+        begin, stop = claim(claims, conn.shape[0])
+        while begin < stop:
+            for s in range(begin, stop):
+                code = codes[s]
+                for a in range(N_NODES[code]):
+                    for i in range(3):
+                        X[a, i] = points[conn[s, a], i]
+                origin[s, 0], origin[s, 1], origin[s, 2] = X[0, 0], X[0, 1], X[0, 2]
+                n = control_points(code, X, C)
                 for i in range(3):
-                    X[a, i] = points[conn[s, a], i]
-            origin[s, 0], origin[s, 1], origin[s, 2] = X[0, 0], X[0, 1], X[0, 2]
-            n = control_points(code, X, C)
-            for i in range(3):
-                lo = hi = C[0, i]
-                for k in range(1, n):
-                    lo = min(lo, C[k, i])
-                    hi = max(hi, C[k, i])
-                boxes[s, 0, i] = lo
-                boxes[s, 1, i] = hi
-            size[s] = _finish_box(boxes[s], padding)
+                    lo = hi = C[0, i]
+                    for k in range(1, n):
+                        lo = min(lo, C[k, i])
+                        hi = max(hi, C[k, i])
+                    boxes[s, 0, i] = lo
+                    boxes[s, 1, i] = hi
+                size[s] = _finish_box(boxes[s], padding)
+            begin, stop = claim(claims, conn.shape[0])
 
 
 @njit_parallel
@@ -247,31 +250,43 @@ def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, di
 
 
 @njit_parallel
-def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims):
+def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, workers):
     # one pass of overlap tests: each beam element gets room for every entry of the cells it
     # covers (a cheap bound), finds its sorted unique candidates in place, then the lists are packed
     n_beam = beam_boxes.shape[0]
     bound = np.zeros(n_beam + 1, dtype=np.int64)
-    for c in prange(n_chunks(n_beam, CHUNK)):
+    claims = new_claims()
+    for worker in prange(workers):
         lo = np.empty(3, dtype=np.int64)
         hi = np.empty(3, dtype=np.int64)
-        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
-            bound[e + 1] = _cell_total(beam_boxes[e], cell_offsets, lower, inv_cell, dims, lo, hi)
+        begin, stop = claim(claims, n_beam)
+        while begin < stop:
+            for e in range(begin, stop):
+                bound[e + 1] = _cell_total(beam_boxes[e], cell_offsets, lower, inv_cell, dims, lo, hi)
+            begin, stop = claim(claims, n_beam)
     room = np.cumsum(bound)
     work = np.empty(room[-1], dtype=np.int64)
     counts = np.zeros(n_beam + 1, dtype=np.int64)
-    for c in prange(n_chunks(n_beam, CHUNK)):
+    claims = new_claims()
+    for worker in prange(workers):
         lo = np.empty(3, dtype=np.int64)
         hi = np.empty(3, dtype=np.int64)
-        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
-            counts[e + 1] = _candidates_of(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims,
-                                           lo, hi, work[room[e]:room[e + 1]])
+        begin, stop = claim(claims, n_beam)
+        while begin < stop:
+            for e in range(begin, stop):
+                counts[e + 1] = _candidates_of(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell,
+                                               dims, lo, hi, work[room[e]:room[e + 1]])
+            begin, stop = claim(claims, n_beam)
     offsets = np.cumsum(counts)
     solids = np.empty(offsets[-1], dtype=np.int64)
-    for c in prange(n_chunks(n_beam, CHUNK)):
-        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
-            for q in range(counts[e + 1]):
-                solids[offsets[e] + q] = work[room[e] + q]
+    claims = new_claims()
+    for worker in prange(workers):
+        begin, stop = claim(claims, n_beam)
+        while begin < stop:
+            for e in range(begin, stop):
+                for q in range(counts[e + 1]):
+                    solids[offsets[e] + q] = work[room[e] + q]
+            begin, stop = claim(claims, n_beam)
     return offsets, solids
 
 
@@ -306,5 +321,5 @@ def find_candidate_pairs(beam_boxes, solid_boxes):
         cell *= 1.25
     dims = np.maximum(np.ceil(extent / cell).astype(np.int64), 1)
     # one part per thread, at most 4 (each part holds a count per grid cell)
-    offsets_c, ids = _bin_solids(solid_boxes, lower, 1.0 / cell, dims, min(4, numba.get_num_threads()))
-    return _find_pairs(beam_boxes, solid_boxes, offsets_c, ids, lower, 1.0 / cell, dims)
+    offsets_c, ids = _bin_solids(solid_boxes, lower, 1.0 / cell, dims, min(4, workers()))
+    return _find_pairs(beam_boxes, solid_boxes, offsets_c, ids, lower, 1.0 / cell, dims, workers())

@@ -21,13 +21,13 @@ intervals they tile [-1, 1] exactly.
 import numpy as np
 from numba import prange
 
-from .._config import CHUNK, PARAMETER_TOL, njit, njit_parallel
+from .._config import PARAMETER_TOL, njit, njit_parallel
 from .._memory import carve
+from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from .beam import beam_point
 from .intersection import face_coordinates, intersect_face
-from .linalg import n_chunks
 from .linalg import solve3
 from .projection import (CONVERGED, first_containing, is_affine, jacobian, linear_parameters, load_element,
                          project_point)
@@ -84,13 +84,13 @@ def pair_crossings(ctx, pair_beam, pair_solid, Q, lengths, beam_origin, beam_box
     crossing_eta, crossing_count, no_face, overflow = carve(((n, min(_FIRST_CAPACITY, full)), np.float64),
                                                             (n, np.int64), (n, np.bool_), (n, np.bool_))
     crossing_count[:] = 0
-    _pair_crossings(pair_beam, pair_solid, *args, crossing_eta, crossing_count, no_face, overflow)
+    _pair_crossings(pair_beam, pair_solid, *args, crossing_eta, crossing_count, no_face, overflow, workers())
     again = np.flatnonzero(overflow)
     if len(again) and crossing_eta.shape[1] < full:
         more_eta = np.empty((len(again), full))
         more_count = np.zeros(len(again), dtype=np.int64)
         _pair_crossings(pair_beam[again], pair_solid[again], *args, more_eta, more_count,
-                        np.empty(len(again), dtype=np.bool_), np.empty(len(again), dtype=np.bool_))
+                        np.empty(len(again), dtype=np.bool_), np.empty(len(again), dtype=np.bool_), workers())
         width = int(more_count.max())
         wide = np.empty((n, max(width, crossing_eta.shape[1])))
         wide[:, : crossing_eta.shape[1]] = crossing_eta
@@ -161,7 +161,7 @@ def _faces_in_reach(code, X, h, box, origin, C, reach):
     so skipping such faces changes no result. No face in reach: the beam element lies entirely
     inside or entirely outside the element.
     """
-    n_ctrl = solid.control_points(code, X, C)
+    solid.control_points(code, X, C)
     big = 0.0
     size = 0.0
     for i in range(3):
@@ -187,10 +187,11 @@ def _faces_in_reach(code, X, h, box, origin, C, reach):
 @njit_parallel
 def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear,
                     beam_code, Q, lengths, beam_origin, beam_boxes, search_points, out_eta, out_count, no_face,
-                    overflow):
+                    overflow, workers):
     n_pairs = pair_beam.shape[0]
     S = search_points
-    for c in prange(n_chunks(n_pairs, CHUNK)):
+    claims = new_claims()
+    for worker in prange(workers):
         C = np.empty((solid.CONTROL_MATRIX.shape[1], 3))
         reach = np.empty(solid.MAX_FACES, dtype=np.bool_)
         X = np.empty((solid.MAX_NODES, 3))
@@ -208,115 +209,119 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
         ok = np.empty(S, dtype=np.bool_)
         g = np.empty(S)
         dg = np.empty(S)
-        for p in range(c * CHUNK, min(n_pairs, (c + 1) * CHUNK)):
-            e = pair_beam[p]
-            s = pair_solid[p]
-            code = codes[s]
-            h = solid_h[s]
-            Qe = Q[e]
-            load_element(points, conn, s, code, solid_origin, X)
-            overflow[p] = False
-            no_face[p] = not _faces_in_reach(code, X, h, beam_boxes[e], solid_origin[s], C, reach)
-            if no_face[p]:
-                out_count[p] = 0
-                continue
-            s0 = beam_origin[e, 0] - solid_origin[s, 0]
-            s1 = beam_origin[e, 1] - solid_origin[s, 1]
-            s2 = beam_origin[e, 2] - solid_origin[s, 2]
-            # samples along the beam element: ξ(η) and dξ/dη = J⁻¹ r'(η) (warm-started Newton)
-            solid.centre(code, xi)
-            affine = is_affine(linear, s)
-            for k in range(S):
-                eta_s[k] = -1.0 + 2.0 * k / (S - 1)
-                r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Qe, lengths[e], s0, s1, s2, eta_s[k], H, dH)
-                if affine:
-                    # ξ(η) and dξ/dη = A⁻¹ r' directly
-                    ok[k] = True
-                    linear_parameters(code, linear, s, r0, r1, r2, xi_s[k])
-                    for i in range(3):
-                        dxi_s[k, i] = linear[s, i, 0] * d0 + linear[s, i, 1] * d1 + linear[s, i, 2] * d2
+        begin, stop = claim(claims, n_pairs)
+        while begin < stop:
+            for p in range(begin, stop):
+                e = pair_beam[p]
+                s = pair_solid[p]
+                code = codes[s]
+                h = solid_h[s]
+                Qe = Q[e]
+                load_element(points, conn, s, code, solid_origin, X)
+                overflow[p] = False
+                no_face[p] = not _faces_in_reach(code, X, h, beam_boxes[e], solid_origin[s], C, reach)
+                if no_face[p]:
+                    out_count[p] = 0
                     continue
-                if k == 0:
-                    linear_parameters(code, linear, s, r0, r1, r2, xi)    # else: from the centre
-                start[:] = xi
-                ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
-                if ok[k]:
-                    xi_s[k] = xi
-                    j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, dN)
-                    det, dxi_s[k, 0], dxi_s[k, 1], dxi_s[k, 2] = solve3(j00, j01, j02, j10, j11, j12, j20, j21,
-                                                                       j22, d0, d1, d2)
-                else:
-                    xi_s[k] = start
-                    dxi_s[k] = 0.0
-                    solid.centre(code, xi)
-            faces = solid.faces(code)
-            count = 0
-            for f in range(faces.shape[0]):
-                if not reach[f]:
-                    continue
-                face = faces[f]
+                s0 = beam_origin[e, 0] - solid_origin[s, 0]
+                s1 = beam_origin[e, 1] - solid_origin[s, 1]
+                s2 = beam_origin[e, 2] - solid_origin[s, 2]
+                # samples along the beam element: ξ(η) and dξ/dη = J⁻¹ r'(η) (warm-started Newton)
+                solid.centre(code, xi)
+                affine = is_affine(linear, s)
                 for k in range(S):
-                    g[k] = (face[3, 0] * (xi_s[k, 0] - face[0, 0]) + face[3, 1] * (xi_s[k, 1] - face[0, 1])
-                            + face[3, 2] * (xi_s[k, 2] - face[0, 2]))
-                    dg[k] = face[3, 0] * dxi_s[k, 0] + face[3, 1] * dxi_s[k, 1] + face[3, 2] * dxi_s[k, 2]
-                for k in range(S):
-                    if not ok[k]:
-                        # the projection failed here: start on the face centre
-                        _face_centre(code, face, start)
-                        eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s[k],
-                                            start[0], start[1], start[2], z, xi, N, dN, H, dH)
-                        count = _record(eta, out_eta, p, count, overflow)
-                for k in range(S - 1):
-                    if not (ok[k] and ok[k + 1]):
+                    eta_s[k] = -1.0 + 2.0 * k / (S - 1)
+                    r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Qe, lengths[e], s0, s1, s2, eta_s[k], H, dH)
+                    if affine:
+                        # ξ(η) and dξ/dη = A⁻¹ r' directly
+                        ok[k] = True
+                        linear_parameters(code, linear, s, r0, r1, r2, xi_s[k])
+                        for i in range(3):
+                            dxi_s[k, i] = linear[s, i, 0] * d0 + linear[s, i, 1] * d1 + linear[s, i, 2] * d2
                         continue
-                    step = eta_s[k + 1] - eta_s[k]
-                    g0, g1 = g[k], g[k + 1]
-                    d0, d1 = dg[k] * step, dg[k + 1] * step
-                    # cheap reject: the cubic stays clearly on one side of the face
-                    if min(g0, g1) > 0.5 * (abs(d0) + abs(d1)) or max(g0, g1) < -0.5 * (abs(d0) + abs(d1)):
+                    if k == 0:
+                        linear_parameters(code, linear, s, r0, r1, r2, xi)    # else: from the centre
+                    start[:] = xi
+                    ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
+                    if ok[k]:
+                        xi_s[k] = xi
+                        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, dN)
+                        det, dxi_s[k, 0], dxi_s[k, 1], dxi_s[k, 2] = solve3(j00, j01, j02, j10, j11, j12, j20, j21,
+                                                                           j22, d0, d1, d2)
+                    else:
+                        xi_s[k] = start
+                        dxi_s[k] = 0.0
+                        solid.centre(code, xi)
+                faces = solid.faces(code)
+                count = 0
+                for f in range(faces.shape[0]):
+                    if not reach[f]:
                         continue
-                    # scan the cubic model: start Newton at each sign change and at a near touch
-                    prev = g0
-                    best = abs(g0)
-                    best_t = 0.0
-                    for i in range(1, _SCAN + 1):
-                        t = i / _SCAN
-                        cur = _hermite_g(g0, g1, d0, d1, t)
-                        t_start = -1.0
-                        if prev * cur <= 0.0 and not (prev == 0.0 and i > 1):
-                            t_start = t - 1.0 / _SCAN + (1.0 / _SCAN) * (prev / (prev - cur) if prev != cur else 0.5)
-                        if abs(cur) < best:
-                            best = abs(cur)
-                            best_t = t
-                        prev = cur
-                        if t_start < 0.0:
-                            continue
-                        eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
-                                           t_start, z, xi, N, dN, H, dH)
-                        count = _record(eta, out_eta, p, count, overflow)
-                    # a sample on the face: the scan starts Newton there and finds that point again;
-                    # a crossing soon after it (leaving at a corner and coming back) is a root of
-                    # the cubic divided by its known root (found by make fuzz, see test_hard_cases)
-                    for end in range(2):
-                        if abs(g1 if end else g0) > PARAMETER_TOL:
-                            continue
-                        if end:
-                            r_a, r_b = _deflated_roots(g0, -d1, -d0)
-                            r_a, r_b = 1.0 - r_a, 1.0 - r_b
-                        else:
-                            r_a, r_b = _deflated_roots(g1, d0, d1)
-                        for t_start in (r_a, r_b):
-                            if not 0.0 < t_start < 1.0:
-                                continue
-                            eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s,
-                                               k, t_start, z, xi, N, dN, H, dH)
+                    face = faces[f]
+                    for k in range(S):
+                        g[k] = (face[3, 0] * (xi_s[k, 0] - face[0, 0]) + face[3, 1] * (xi_s[k, 1] - face[0, 1])
+                                + face[3, 2] * (xi_s[k, 2] - face[0, 2]))
+                        dg[k] = face[3, 0] * dxi_s[k, 0] + face[3, 1] * dxi_s[k, 1] + face[3, 2] * dxi_s[k, 2]
+                    for k in range(S):
+                        if not ok[k]:
+                            # the projection failed here: start on the face centre
+                            _face_centre(code, face, start)
+                            eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s[k],
+                                                start[0], start[1], start[2], z, xi, N, dN, H, dH)
                             count = _record(eta, out_eta, p, count, overflow)
-                    if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0:
-                        # close to the face without a sign change: a touch or a missed double crossing
-                        eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
-                                           best_t, z, xi, N, dN, H, dH)
-                        count = _record(eta, out_eta, p, count, overflow)
-            out_count[p] = count
+                    for k in range(S - 1):
+                        if not (ok[k] and ok[k + 1]):
+                            continue
+                        step = eta_s[k + 1] - eta_s[k]
+                        g0, g1 = g[k], g[k + 1]
+                        d0, d1 = dg[k] * step, dg[k + 1] * step
+                        # cheap reject: the cubic stays clearly on one side of the face
+                        if min(g0, g1) > 0.5 * (abs(d0) + abs(d1)) or max(g0, g1) < -0.5 * (abs(d0) + abs(d1)):
+                            continue
+                        # scan the cubic model: start Newton at each sign change and at a near touch
+                        prev = g0
+                        best = abs(g0)
+                        best_t = 0.0
+                        for i in range(1, _SCAN + 1):
+                            t = i / _SCAN
+                            cur = _hermite_g(g0, g1, d0, d1, t)
+                            t_start = -1.0
+                            if prev * cur <= 0.0 and not (prev == 0.0 and i > 1):
+                                step = prev / (prev - cur) if prev != cur else 0.5
+                                t_start = t - 1.0 / _SCAN + (1.0 / _SCAN) * step
+                            if abs(cur) < best:
+                                best = abs(cur)
+                                best_t = t
+                            prev = cur
+                            if t_start < 0.0:
+                                continue
+                            eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
+                                               t_start, z, xi, N, dN, H, dH)
+                            count = _record(eta, out_eta, p, count, overflow)
+                        # a sample on the face: the scan starts Newton there and finds that point again;
+                        # a crossing soon after it (leaving at a corner and coming back) is a root of
+                        # the cubic divided by its known root (found by make fuzz, see test_hard_cases)
+                        for end in range(2):
+                            if abs(g1 if end else g0) > PARAMETER_TOL:
+                                continue
+                            if end:
+                                r_a, r_b = _deflated_roots(g0, -d1, -d0)
+                                r_a, r_b = 1.0 - r_a, 1.0 - r_b
+                            else:
+                                r_a, r_b = _deflated_roots(g1, d0, d1)
+                            for t_start in (r_a, r_b):
+                                if not 0.0 < t_start < 1.0:
+                                    continue
+                                eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s,
+                                                   k, t_start, z, xi, N, dN, H, dH)
+                                count = _record(eta, out_eta, p, count, overflow)
+                        if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0:
+                            # close to the face without a sign change: a touch or a missed double crossing
+                            eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
+                                               best_t, z, xi, N, dN, H, dH)
+                            count = _record(eta, out_eta, p, count, overflow)
+                out_count[p] = count
+            begin, stop = claim(claims, n_pairs)
 
 
 @njit
@@ -344,10 +349,11 @@ def _deep_end(eta, owner, e, pair_solid, p0, p1, codes, conn, points, solid_orig
 @njit_parallel
 def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, points, solid_origin,
           solid_h, solid_boxes, linear, beam_code, Q, lengths, beam_origin, seg_offsets, seg_solid,
-          seg_start, seg_end, seg_count):
+          seg_start, seg_end, seg_count, workers):
     n_beam = pair_offsets.shape[0] - 1
     tol = PARAMETER_TOL
-    for c in prange(n_chunks(n_beam, CHUNK)):
+    claims = new_claims()
+    for worker in prange(workers):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
@@ -357,95 +363,101 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
         trial = np.empty(3)
         cuts = np.empty(64)
         owners = np.empty(64, dtype=np.int64)
-        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
-            p0 = pair_offsets[e]
-            p1 = pair_offsets[e + 1]
-            m = 0
-            for p in range(p0, p1):
-                m += crossing_count[p]
-            if m + 2 > cuts.shape[0]:
-                cuts = np.empty(2 * (m + 2))
-                owners = np.empty(2 * (m + 2), dtype=np.int64)
-            # breakpoints: -1, the crossings (sorted, merged within the tolerance), +1
-            m = 0
-            for p in range(p0, p1):
-                for q in range(crossing_count[p]):
-                    cuts[1 + m] = crossing_eta[p, q]
-                    m += 1
-            _insertion_sort(cuts[1:], m)
-            cuts[0] = -1.0
-            n_pts = 1
-            for q in range(1, m + 1):
-                if cuts[q] > cuts[n_pts - 1] + tol and cuts[q] < 1.0 - tol:
-                    cuts[n_pts] = cuts[q]
-                    n_pts += 1
-            cuts[n_pts] = 1.0
-            n_pts += 1
+        begin, stop = claim(claims, n_beam)
+        while begin < stop:
+            for e in range(begin, stop):
+                p0 = pair_offsets[e]
+                p1 = pair_offsets[e + 1]
+                m = 0
+                for p in range(p0, p1):
+                    m += crossing_count[p]
+                if m + 2 > cuts.shape[0]:
+                    cuts = np.empty(2 * (m + 2))
+                    owners = np.empty(2 * (m + 2), dtype=np.int64)
+                # breakpoints: -1, the crossings (sorted, merged within the tolerance), +1
+                m = 0
+                for p in range(p0, p1):
+                    for q in range(crossing_count[p]):
+                        cuts[1 + m] = crossing_eta[p, q]
+                        m += 1
+                _insertion_sort(cuts[1:], m)
+                cuts[0] = -1.0
+                n_pts = 1
+                for q in range(1, m + 1):
+                    if cuts[q] > cuts[n_pts - 1] + tol and cuts[q] < 1.0 - tol:
+                        cuts[n_pts] = cuts[q]
+                        n_pts += 1
+                cuts[n_pts] = 1.0
+                n_pts += 1
 
-            # owner of every interval: the lowest-index candidate containing its midpoint
-            for iv in range(n_pts - 1):
-                mid = 0.5 * (cuts[iv] + cuts[iv + 1])
-                r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
-                owners[iv] = first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
-                                              points, solid_origin, solid_h, linear, tol, X, xi, trial, N, dN, -1)
-            # a sliver between two crossings closer than _SLIVER is a tangential touch of a face
-            # (a double root, resolved only to ~sqrt(eps)): it joins a neighbour that contains it,
-            # or is dropped when both neighbours are uncoupled (touching the solid from outside).
-            # The end η = ±1 of the beam element is no crossing: a sliver there whose end lies
-            # clearly (beyond the tolerance) inside its owner is embedded length (found by make
-            # fuzz: an element ending 1.2e-7 inside a face), so a run of slivers reaching such an
-            # end takes the end sliver's owner as its neighbour on that side. An end within the
-            # tolerance band (a beam leaving the solid at a corner) is a touch like any other.
-            iv = 0
-            while iv < n_pts - 1:
-                if cuts[iv + 1] - cuts[iv] >= _SLIVER:
-                    iv += 1
-                    continue
-                last = iv       # run of consecutive slivers iv..last, judged by its neighbours
-                while last + 1 < n_pts - 1 and cuts[last + 2] - cuts[last + 1] < _SLIVER:
-                    last += 1
-                before = owners[iv - 1] if iv > 0 else _deep_end(-1.0, owners[0], e, pair_solid, p0, p1, codes,
-                                                                   conn, points, solid_origin, solid_h, solid_boxes,
-                                                                   linear, beam_code, Q, lengths, beam_origin, X, xi,
-                                                                   trial, N, dN, H, dH)
-                after = owners[last + 1] if last + 1 < n_pts - 1 else _deep_end(1.0, owners[n_pts - 2], e, pair_solid,
-                                                                                p0, p1, codes, conn, points,
-                                                                                solid_origin, solid_h, solid_boxes,
-                                                                                linear, beam_code, Q, lengths,
-                                                                                beam_origin, X, xi, trial, N, dN, H,
-                                                                                dH)
-                for k in range(iv, last + 1):
-                    if owners[k] < 0 or owners[k] == before or owners[k] == after:
-                        continue
-                    if before < 0 and after < 0:
-                        owners[k] = -1
-                        continue
-                    mid = 0.5 * (cuts[k] + cuts[k + 1])
+                # owner of every interval: the lowest-index candidate containing its midpoint
+                for iv in range(n_pts - 1):
+                    mid = 0.5 * (cuts[iv] + cuts[iv + 1])
                     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
-                    for neighbour in (before, after):
-                        if neighbour >= 0 and first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin,
-                                                               solid_boxes, codes, conn, points, solid_origin, solid_h,
-                                                               linear, tol, X, xi, trial, N, dN,
-                                                               neighbour) == neighbour:
-                            owners[k] = neighbour
-                            break
-                iv = last + 1
-            base = seg_offsets[e]
-            n_seg = 0
-            for iv in range(n_pts - 1):
-                owner = owners[iv]
-                a = cuts[iv]
-                b = cuts[iv + 1]
-                if owner < 0:
-                    continue
-                if n_seg > 0 and seg_solid[base + n_seg - 1] == owner and seg_end[base + n_seg - 1] == a:
-                    seg_end[base + n_seg - 1] = b
-                else:
-                    seg_solid[base + n_seg] = owner
-                    seg_start[base + n_seg] = a
-                    seg_end[base + n_seg] = b
-                    n_seg += 1
-            seg_count[e] = n_seg
+                    owners[iv] = first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes,
+                                                  conn, points, solid_origin, solid_h, linear, tol, X, xi, trial, N,
+                                                  dN, -1)
+                # a sliver between two crossings closer than _SLIVER is a tangential touch of a face
+                # (a double root, resolved only to ~sqrt(eps)): it joins a neighbour that contains it,
+                # or is dropped when both neighbours are uncoupled (touching the solid from outside).
+                # The end η = ±1 of the beam element is no crossing: a sliver there whose end lies
+                # clearly (beyond the tolerance) inside its owner is embedded length (found by make
+                # fuzz: an element ending 1.2e-7 inside a face), so a run of slivers reaching such an
+                # end takes the end sliver's owner as its neighbour on that side. An end within the
+                # tolerance band (a beam leaving the solid at a corner) is a touch like any other.
+                iv = 0
+                while iv < n_pts - 1:
+                    if cuts[iv + 1] - cuts[iv] >= _SLIVER:
+                        iv += 1
+                        continue
+                    last = iv       # run of consecutive slivers iv..last, judged by its neighbours
+                    while last + 1 < n_pts - 1 and cuts[last + 2] - cuts[last + 1] < _SLIVER:
+                        last += 1
+                    if iv > 0:
+                        before = owners[iv - 1]
+                    else:
+                        before = _deep_end(-1.0, owners[0], e, pair_solid, p0, p1, codes, conn, points, solid_origin,
+                                           solid_h, solid_boxes, linear, beam_code, Q, lengths, beam_origin, X, xi,
+                                           trial, N, dN, H, dH)
+                    if last + 1 < n_pts - 1:
+                        after = owners[last + 1]
+                    else:
+                        after = _deep_end(1.0, owners[n_pts - 2], e, pair_solid, p0, p1, codes, conn, points,
+                                          solid_origin, solid_h, solid_boxes, linear, beam_code, Q, lengths,
+                                          beam_origin, X, xi, trial, N, dN, H, dH)
+                    for k in range(iv, last + 1):
+                        if owners[k] < 0 or owners[k] == before or owners[k] == after:
+                            continue
+                        if before < 0 and after < 0:
+                            owners[k] = -1
+                            continue
+                        mid = 0.5 * (cuts[k] + cuts[k + 1])
+                        r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
+                        for neighbour in (before, after):
+                            if neighbour >= 0 and first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin,
+                                                                   solid_boxes, codes, conn, points, solid_origin,
+                                                                   solid_h, linear, tol, X, xi, trial, N, dN,
+                                                                   neighbour) == neighbour:
+                                owners[k] = neighbour
+                                break
+                    iv = last + 1
+                base = seg_offsets[e]
+                n_seg = 0
+                for iv in range(n_pts - 1):
+                    owner = owners[iv]
+                    a = cuts[iv]
+                    b = cuts[iv + 1]
+                    if owner < 0:
+                        continue
+                    if n_seg > 0 and seg_solid[base + n_seg - 1] == owner and seg_end[base + n_seg - 1] == a:
+                        seg_end[base + n_seg - 1] = b
+                    else:
+                        seg_solid[base + n_seg] = owner
+                        seg_start[base + n_seg] = a
+                        seg_end[base + n_seg] = b
+                        n_seg += 1
+                seg_count[e] = n_seg
+            begin, stop = claim(claims, n_beam)
 
 
 _GAP_PROBES = 7
@@ -454,7 +466,7 @@ _GAP_PROBES = 7
 @njit_parallel
 def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, pair_solid, codes, conn,
                   points, solid_origin, solid_h, solid_boxes, linear, beam_code, Q, lengths, beam_origin, certain,
-                  bad):
+                  bad, workers):
     """Flag beam elements whose pieces do not tile their embedded part.
 
     Probes every segment at 1/4 and 3/4 (its midpoint chose the owner): each probe must lie in
@@ -470,7 +482,8 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
     """
     n_beam = pair_offsets.shape[0] - 1
     loose = 1e3 * PARAMETER_TOL
-    for c in prange(n_chunks(n_beam, CHUNK)):
+    claims = new_claims()
+    for worker in prange(workers):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
@@ -478,41 +491,44 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
         dH = np.empty(MAX_FUNCTIONS)
         xi = np.empty(3)
         trial = np.empty(3)
-        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
-            p0 = pair_offsets[e]
-            p1 = pair_offsets[e + 1]
-            base = seg_offsets[e]
-            if certain[e] and seg_count[e] == 1 and seg_start[base] == -1.0 and seg_end[base] == 1.0:
-                bad[e] = False
-                continue
-            failed = False
-            gap_start = -1.0
-            for q in range(seg_count[e] + 1):
-                last = q == seg_count[e]
-                a = 1.0 if last else seg_start[base + q]
-                if a - gap_start > PARAMETER_TOL:
-                    for k in range(1, _GAP_PROBES + 1):
-                        eta = gap_start + k * (a - gap_start) / (_GAP_PROBES + 1)
+        begin, stop = claim(claims, n_beam)
+        while begin < stop:
+            for e in range(begin, stop):
+                p0 = pair_offsets[e]
+                p1 = pair_offsets[e + 1]
+                base = seg_offsets[e]
+                if certain[e] and seg_count[e] == 1 and seg_start[base] == -1.0 and seg_end[base] == 1.0:
+                    bad[e] = False
+                    continue
+                failed = False
+                gap_start = -1.0
+                for q in range(seg_count[e] + 1):
+                    last = q == seg_count[e]
+                    a = 1.0 if last else seg_start[base + q]
+                    if a - gap_start > PARAMETER_TOL:
+                        for k in range(1, _GAP_PROBES + 1):
+                            eta = gap_start + k * (a - gap_start) / (_GAP_PROBES + 1)
+                            r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
+                            if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes,
+                                                conn, points, solid_origin, solid_h, linear, -loose, X, xi, trial, N,
+                                                dN, -1) >= 0:
+                                failed = True
+                    if last or failed:
+                        break
+                    b = seg_end[base + q]
+                    owner = seg_solid[base + q]
+                    for k in (1, 3):
+                        eta = a + 0.25 * k * (b - a)
                         r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
                         if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
-                                            points, solid_origin, solid_h, linear, -loose, X, xi, trial, N, dN,
-                                            -1) >= 0:
+                                            points, solid_origin, solid_h, linear, loose, X, xi, trial, N, dN,
+                                            owner) != owner:
                             failed = True
-                if last or failed:
-                    break
-                b = seg_end[base + q]
-                owner = seg_solid[base + q]
-                for k in (1, 3):
-                    eta = a + 0.25 * k * (b - a)
-                    r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
-                    if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
-                                        points, solid_origin, solid_h, linear, loose, X, xi, trial, N, dN,
-                                        owner) != owner:
-                        failed = True
-                if failed:
-                    break
-                gap_start = b
-            bad[e] = failed
+                    if failed:
+                        break
+                    gap_start = b
+                bad[e] = failed
+            begin, stop = claim(claims, n_beam)
 
 
 @njit
@@ -526,7 +542,7 @@ def _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_
 
 @njit_parallel
 def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, linear,
-                    beam_code, Q, lengths, beam_origin, n_samples, out_eta, out_count):
+                    beam_code, Q, lengths, beam_origin, n_samples, out_eta, out_count, workers):
     """Cuts of each beam element where the owner (lowest-index element containing r(η)) changes.
 
     The fallback that does not rely on face intersections: the owner is sampled at
@@ -537,7 +553,8 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
     """
     n_beam = pair_offsets.shape[0] - 1
     cap = out_eta.shape[1]
-    for c in prange(n_chunks(n_beam, CHUNK)):
+    claims = new_claims()
+    for worker in prange(workers):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
@@ -545,36 +562,40 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
         dH = np.empty(MAX_FUNCTIONS)
         xi = np.empty(3)
         trial = np.empty(3)
-        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
-            p0 = pair_offsets[e]
-            p1 = pair_offsets[e + 1]
-            count = 0
-            previous = -2
-            eta_previous = -1.0
-            for k in range(n_samples):
-                eta = -1.0 + 2.0 * k / (n_samples - 1)
-                owner = _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
-                               linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH)
-                lo = eta_previous
-                current = previous
-                while k > 0 and current != owner and count < cap:
-                    hi = eta
-                    while hi - lo > 1e-13:
-                        mid = 0.5 * (lo + hi)
-                        if _owner(mid, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
-                                  linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH) == current:
-                            lo = mid
-                        else:
-                            hi = mid
-                    out_eta[e, count] = 0.5 * (lo + hi)
-                    count += 1
-                    current = _owner(hi, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
-                                     solid_boxes, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN,
-                                     H, dH)
-                    lo = hi
-                previous = owner
-                eta_previous = eta
-            out_count[e] = count
+        begin, stop = claim(claims, n_beam)
+        while begin < stop:
+            for e in range(begin, stop):
+                p0 = pair_offsets[e]
+                p1 = pair_offsets[e + 1]
+                count = 0
+                previous = -2
+                eta_previous = -1.0
+                for k in range(n_samples):
+                    eta = -1.0 + 2.0 * k / (n_samples - 1)
+                    owner = _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
+                                   linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH)
+                    lo = eta_previous
+                    current = previous
+                    while k > 0 and current != owner and count < cap:
+                        hi = eta
+                        while hi - lo > 1e-13:
+                            mid = 0.5 * (lo + hi)
+                            if _owner(mid, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
+                                      solid_boxes, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H,
+                                      dH) == current:
+                                lo = mid
+                            else:
+                                hi = mid
+                        out_eta[e, count] = 0.5 * (lo + hi)
+                        count += 1
+                        current = _owner(hi, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
+                                         solid_boxes, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN,
+                                         H, dH)
+                        lo = hi
+                    previous = owner
+                    eta_previous = eta
+                out_count[e] = count
+            begin, stop = claim(claims, n_beam)
 
 
 #: search points of the first retry of a beam element whose pieces do not tile
@@ -622,7 +643,7 @@ class _Beams:
         count = np.zeros(n, dtype=np.int64)
         _bisection_cuts(self.pair_offsets, self.pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
                         ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, self.Q, self.lengths,
-                        self.beam_origin, _BISECTION_SAMPLES, cuts, count)
+                        self.beam_origin, _BISECTION_SAMPLES, cuts, count, workers())
         crossing_eta = np.zeros((len(self.pair_solid), cap))
         crossing_count = np.zeros(len(self.pair_solid), dtype=np.int64)
         has_pairs = np.diff(self.pair_offsets) > 0
@@ -650,10 +671,10 @@ class _Beams:
         args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear,
                 ctx.beam_code, self.Q, self.lengths, self.beam_origin)
         _tile(pair_offsets, self.pair_solid, crossing_eta, crossing_count, *args,
-              seg_offsets, seg_solid, seg_start, seg_end, seg_count)
+              seg_offsets, seg_solid, seg_start, seg_end, seg_count, workers())
         bad = np.zeros(n_beam, dtype=np.bool_)
         _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, self.pair_solid,
-                      *args, self.certain, bad)
+                      *args, self.certain, bad, workers())
         keep = _compact_index(seg_offsets, seg_count)
         beam_element = np.repeat(self.ids, seg_count)
         return beam_element, seg_solid[keep], seg_start[keep], seg_end[keep], bad

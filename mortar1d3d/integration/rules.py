@@ -18,12 +18,13 @@ from functools import lru_cache
 import numpy as np
 from numba import prange
 
-from .._config import CHUNK, PARAMETER_TOL, njit, njit_parallel
+from .._config import PARAMETER_TOL, njit, njit_parallel
 from .._memory import carve
+from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from ..geometry.beam import beam_point
-from ..geometry.linalg import n_chunks, norm3
+from ..geometry.linalg import norm3
 from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse, affine_parameters,
                                    first_containing, is_affine, linear_parameters, load_element, polish,
                                    project_point)
@@ -37,11 +38,12 @@ POINT_INSIDE, POINT_OUTSIDE, POINT_NOT_CONVERGED, POINT_UNCOUPLED = INSIDE, OUTS
 @njit_parallel
 def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, codes, conn, points,
                     solid_origin, solid_h, linear, beam_code, Q, lengths, beam_origin,
-                    eta, xi, weight, position, status):
+                    eta, xi, weight, position, status, workers):
     # segment g gets the n-point rule (n = seg_points[g+1] - seg_points[g]) stored in row n of gx, gw
     n_seg = seg_beam.shape[0]
     loose = 1e3 * PARAMETER_TOL
-    for c in prange(n_chunks(n_seg, CHUNK)):
+    claims = new_claims()
+    for worker in prange(workers):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
@@ -49,59 +51,63 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
         dH = np.empty(MAX_FUNCTIONS)
         x = np.empty(3)
         trial = np.empty(3)
-        for g in range(c * CHUNK, min(n_seg, (c + 1) * CHUNK)):
-            e = seg_beam[g]
-            s = seg_solid[g]
-            code = codes[s]
-            n_gauss = seg_points[g + 1] - seg_points[g]
-            affine = is_affine(linear, s)
-            if not affine:
-                load_element(points, conn, s, code, solid_origin, X)
-            s0 = beam_origin[e, 0] - solid_origin[s, 0]
-            s1 = beam_origin[e, 1] - solid_origin[s, 1]
-            s2 = beam_origin[e, 2] - solid_origin[s, 2]
-            half = 0.5 * (seg_end[g] - seg_start[g])
-            mid = 0.5 * (seg_end[g] + seg_start[g])
-            solid.centre(code, x)
-            for q in range(n_gauss):
-                k = seg_points[g] + q
-                eta[k] = mid + half * gx[n_gauss, q]
-                r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q[e], lengths[e], s0, s1, s2, eta[k], H, dH)
-                weight[k] = gw[n_gauss, q] * half * norm3(d0, d1, d2)
-                position[k, 0] = r0 + solid_origin[s, 0]
-                position[k, 1] = r1 + solid_origin[s, 1]
-                position[k, 2] = r2 + solid_origin[s, 2]
-                if affine:
-                    linear_parameters(code, linear, s, r0, r1, r2, x)
-                    xi[k] = x
-                    status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
-                    continue
-                # warm start from the previous point of the segment (the first from the
-                # linearised estimate); retry from the centre
-                if q == 0:
-                    linear_parameters(code, linear, s, r0, r1, r2, x)
-                if project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) != CONVERGED:
-                    solid.centre(code, x)
-                    if project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) != CONVERGED:
-                        status[k] = NOT_CONVERGED
-                        solid.centre(code, x)
+        begin, stop = claim(claims, n_seg)
+        while begin < stop:
+            for g in range(begin, stop):
+                e = seg_beam[g]
+                s = seg_solid[g]
+                code = codes[s]
+                n_gauss = seg_points[g + 1] - seg_points[g]
+                affine = is_affine(linear, s)
+                if not affine:
+                    load_element(points, conn, s, code, solid_origin, X)
+                s0 = beam_origin[e, 0] - solid_origin[s, 0]
+                s1 = beam_origin[e, 1] - solid_origin[s, 1]
+                s2 = beam_origin[e, 2] - solid_origin[s, 2]
+                half = 0.5 * (seg_end[g] - seg_start[g])
+                mid = 0.5 * (seg_end[g] + seg_start[g])
+                solid.centre(code, x)
+                for q in range(n_gauss):
+                    k = seg_points[g] + q
+                    eta[k] = mid + half * gx[n_gauss, q]
+                    r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q[e], lengths[e], s0, s1, s2, eta[k], H, dH)
+                    weight[k] = gw[n_gauss, q] * half * norm3(d0, d1, d2)
+                    position[k, 0] = r0 + solid_origin[s, 0]
+                    position[k, 1] = r1 + solid_origin[s, 1]
+                    position[k, 2] = r2 + solid_origin[s, 2]
+                    if affine:
+                        linear_parameters(code, linear, s, r0, r1, r2, x)
                         xi[k] = x
+                        status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
                         continue
-                polish(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN)
-                xi[k] = x
-                # a segment lies in its element: a point clearly outside means a missed
-                # crossing; it is reported, not hidden
-                status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
+                    # warm start from the previous point of the segment (the first from the
+                    # linearised estimate); retry from the centre
+                    if q == 0:
+                        linear_parameters(code, linear, s, r0, r1, r2, x)
+                    if project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) != CONVERGED:
+                        solid.centre(code, x)
+                        if project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) != CONVERGED:
+                            status[k] = NOT_CONVERGED
+                            solid.centre(code, x)
+                            xi[k] = x
+                            continue
+                    polish(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN)
+                    xi[k] = x
+                    # a segment lies in its element: a point clearly outside means a missed
+                    # crossing; it is reported, not hidden
+                    status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
+            begin, stop = claim(claims, n_seg)
 
 
 @njit_parallel
 def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid_origin, solid_h,
                     solid_boxes, linear, beam_code, Q, lengths, beam_origin,
-                    beam, owner, eta, xi, weight, position, status):
+                    beam, owner, eta, xi, weight, position, status, workers):
     n_gauss = gx.shape[0]
     n_beam = pair_offsets.shape[0] - 1
     tol = PARAMETER_TOL
-    for c in prange(n_chunks(n_beam, CHUNK)):
+    claims = new_claims()
+    for worker in prange(workers):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
@@ -109,31 +115,34 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
         dH = np.empty(MAX_FUNCTIONS)
         x = np.empty(3)
         trial = np.empty(3)
-        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
-            for q in range(n_gauss):
-                k = e * n_gauss + q
-                beam[k] = e
-                eta[k] = gx[q]
-                r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, gx[q], H, dH)
-                weight[k] = gw[q] * norm3(d0, d1, d2)
-                position[k, 0] = r0 + beam_origin[e, 0]
-                position[k, 1] = r1 + beam_origin[e, 1]
-                position[k, 2] = r2 + beam_origin[e, 2]
-                owner[k] = -1
-                status[k] = POINT_UNCOUPLED
-                # the lowest-index candidate element containing the point owns it
-                s = first_containing(r0, r1, r2, e, pair_solid, pair_offsets[e], pair_offsets[e + 1], beam_origin,
-                                     solid_boxes, codes, conn, points, solid_origin, solid_h, linear, tol, X, x,
-                                     trial, N, dN, -1)
-                if s >= 0:
-                    if not is_affine(linear, s):
-                        # X still holds the owner's nodes (it was the last element tested)
-                        polish(codes[s], X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
-                               r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
-                               r2 + (beam_origin[e, 2] - solid_origin[s, 2]), solid_h[s], x, trial, N, dN)
-                    owner[k] = s
-                    status[k] = POINT_INSIDE
-                    xi[k] = x
+        begin, stop = claim(claims, n_beam)
+        while begin < stop:
+            for e in range(begin, stop):
+                for q in range(n_gauss):
+                    k = e * n_gauss + q
+                    beam[k] = e
+                    eta[k] = gx[q]
+                    r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, gx[q], H, dH)
+                    weight[k] = gw[q] * norm3(d0, d1, d2)
+                    position[k, 0] = r0 + beam_origin[e, 0]
+                    position[k, 1] = r1 + beam_origin[e, 1]
+                    position[k, 2] = r2 + beam_origin[e, 2]
+                    owner[k] = -1
+                    status[k] = POINT_UNCOUPLED
+                    # the lowest-index candidate element containing the point owns it
+                    s = first_containing(r0, r1, r2, e, pair_solid, pair_offsets[e], pair_offsets[e + 1], beam_origin,
+                                         solid_boxes, codes, conn, points, solid_origin, solid_h, linear, tol, X, x,
+                                         trial, N, dN, -1)
+                    if s >= 0:
+                        if not is_affine(linear, s):
+                            # X still holds the owner's nodes (it was the last element tested)
+                            polish(codes[s], X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
+                                   r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
+                                   r2 + (beam_origin[e, 2] - solid_origin[s, 2]), solid_h[s], x, trial, N, dN)
+                        owner[k] = s
+                        status[k] = POINT_INSIDE
+                        xi[k] = x
+            begin, stop = claim(claims, n_beam)
 
 
 def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):
@@ -150,7 +159,7 @@ def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):
                                               ((n, 3), np.float64), (n, np.int64))
     _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, ctx.codes, ctx.conn, ctx.points,
                     ctx.solid_origin, ctx.solid_h, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin,
-                    eta, xi, weight, position, status)
+                    eta, xi, weight, position, status, workers())
     return np.repeat(seg_beam, counts), np.repeat(seg_solid, counts), eta, xi, weight, position, status
 
 
@@ -192,7 +201,7 @@ def element_points(ctx, n_gauss):
     xi[:] = 0.0                 # points no element owns keep ξ = 0
     _element_points(ctx.pair_offsets, ctx.pair_solid, gx, gw, ctx.codes, ctx.conn, ctx.points,
                     ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths,
-                    ctx.beam_origin, beam, owner, eta, xi, weight, position, status)
+                    ctx.beam_origin, beam, owner, eta, xi, weight, position, status, workers())
     return beam, owner, eta, xi, weight, position, status
 
 
@@ -277,7 +286,7 @@ def _control_points(beam_code, Qe, length, ctrl):
 
 @njit_parallel
 def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, beam_code, Q, lengths,
-                    beam_origin, crossing_eta, crossing_count, pair_state, beam_affine, beam_inside):
+                    beam_origin, crossing_eta, crossing_count, pair_state, beam_affine, beam_inside, workers):
     """Face crossings of every candidate pair where they can be had without a search.
 
     Per beam element e and candidate solid element s (both frames local, see projection):
@@ -290,7 +299,8 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
     """
     n_beam = pair_offsets.shape[0] - 1
     tol = PARAMETER_TOL
-    for c in prange(n_chunks(n_beam, CHUNK)):
+    claims = new_claims()
+    for worker in prange(workers):
         X = np.empty((solid.MAX_NODES, 3))
         H = np.empty(MAX_FUNCTIONS)
         dH = np.empty(MAX_FUNCTIONS)
@@ -299,99 +309,106 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
         alpha = np.empty(3)
         beta = np.empty(3)
         xi = np.empty(3)
-        for e in range(c * CHUNK, min(n_beam, (c + 1) * CHUNK)):
-            Qe = Q[e]
-            straight = beam_is_affine(beam_code, Qe, lengths[e])
-            beam_affine[e] = straight
-            # the line r(η) = p + q η (straight) or the control polygon (curved), beam-local frame
-            p0, p1, p2, q0, q1, q2 = beam_point(beam_code, Qe, lengths[e], 0.0, 0.0, 0.0, 0.0, H, dH)
-            n_ctrl = 0 if straight else _control_points(beam_code, Qe, lengths[e], ctrl)
-            inside = -1
-            for p in range(pair_offsets[e], pair_offsets[e + 1]):
-                s = pair_solid[p]
-                code = codes[s]
-                crossing_count[p] = 0
-                pair_state[p] = PAIR_NUMERIC
-                load_element(points, conn, s, code, solid_origin, X)
-                if not affine_inverse(code, X, solid_h[s], AFFINE_TOL, Ainv):
-                    continue
-                s0 = beam_origin[e, 0] - solid_origin[s, 0]
-                s1 = beam_origin[e, 1] - solid_origin[s, 1]
-                s2 = beam_origin[e, 2] - solid_origin[s, 2]
-                if not straight:
-                    certified = True
-                    for k in range(n_ctrl):
-                        affine_parameters(code, Ainv, ctrl[k, 0] + s0, ctrl[k, 1] + s1, ctrl[k, 2] + s2, xi)
-                        if solid.outside_distance(code, xi) > -CERTIFY_MARGIN:
-                            certified = False
-                            break
-                    if certified:
-                        inside = s
-                        break
-                    continue
-                pair_state[p] = PAIR_DONE
-                affine_parameters(code, Ainv, p0 + s0, p1 + s1, p2 + s2, alpha)
-                for i in range(3):
-                    beta[i] = Ainv[i, 0] * q0 + Ainv[i, 1] * q1 + Ainv[i, 2] * q2
-                # clip the line against the half-spaces n·(ξ - o) <= 0 of the faces
-                eta_in = -np.inf
-                eta_out = np.inf
-                empty = False
-                faces = solid.faces(code)
-                for f in range(faces.shape[0]):
-                    g0 = 0.0
-                    g1 = 0.0
-                    for i in range(3):
-                        g0 += faces[f, 3, i] * (alpha[i] - faces[f, 0, i])
-                        g1 += faces[f, 3, i] * beta[i]
-                    if g1 == 0.0:
-                        if g0 > 0.0:
-                            empty = True
-                    elif g1 > 0.0:
-                        eta_out = min(eta_out, -g0 / g1)
-                    else:
-                        eta_in = max(eta_in, -g0 / g1)
-                if empty:
-                    continue
-                # entry and exit are crossings when they lie on the element (inside test with the
-                # tolerance, as for a numeric crossing) and on the beam element
-                n = 0
-                for k in range(2):
-                    t = eta_in if k == 0 else eta_out
-                    if not (-1.0 - tol <= t <= 1.0 + tol):
-                        continue
-                    for i in range(3):
-                        xi[i] = alpha[i] + beta[i] * t
-                    if solid.is_inside(code, xi, tol):
-                        crossing_eta[p, n] = min(max(t, -1.0), 1.0)
-                        n += 1
-                crossing_count[p] = n
-            beam_inside[e] = inside
-            if inside >= 0:
+        begin, stop = claim(claims, n_beam)
+        while begin < stop:
+            for e in range(begin, stop):
+                Qe = Q[e]
+                straight = beam_is_affine(beam_code, Qe, lengths[e])
+                beam_affine[e] = straight
+                # the line r(η) = p + q η (straight) or the control polygon (curved), beam-local frame
+                p0, p1, p2, q0, q1, q2 = beam_point(beam_code, Qe, lengths[e], 0.0, 0.0, 0.0, 0.0, H, dH)
+                n_ctrl = 0 if straight else _control_points(beam_code, Qe, lengths[e], ctrl)
+                inside = -1
                 for p in range(pair_offsets[e], pair_offsets[e + 1]):
+                    s = pair_solid[p]
+                    code = codes[s]
                     crossing_count[p] = 0
+                    pair_state[p] = PAIR_NUMERIC
+                    load_element(points, conn, s, code, solid_origin, X)
+                    if not affine_inverse(code, X, solid_h[s], AFFINE_TOL, Ainv):
+                        continue
+                    s0 = beam_origin[e, 0] - solid_origin[s, 0]
+                    s1 = beam_origin[e, 1] - solid_origin[s, 1]
+                    s2 = beam_origin[e, 2] - solid_origin[s, 2]
+                    if not straight:
+                        certified = True
+                        for k in range(n_ctrl):
+                            affine_parameters(code, Ainv, ctrl[k, 0] + s0, ctrl[k, 1] + s1, ctrl[k, 2] + s2, xi)
+                            if solid.outside_distance(code, xi) > -CERTIFY_MARGIN:
+                                certified = False
+                                break
+                        if certified:
+                            inside = s
+                            break
+                        continue
                     pair_state[p] = PAIR_DONE
+                    affine_parameters(code, Ainv, p0 + s0, p1 + s1, p2 + s2, alpha)
+                    for i in range(3):
+                        beta[i] = Ainv[i, 0] * q0 + Ainv[i, 1] * q1 + Ainv[i, 2] * q2
+                    # clip the line against the half-spaces n·(ξ - o) <= 0 of the faces
+                    eta_in = -np.inf
+                    eta_out = np.inf
+                    empty = False
+                    faces = solid.faces(code)
+                    for f in range(faces.shape[0]):
+                        g0 = 0.0
+                        g1 = 0.0
+                        for i in range(3):
+                            g0 += faces[f, 3, i] * (alpha[i] - faces[f, 0, i])
+                            g1 += faces[f, 3, i] * beta[i]
+                        if g1 == 0.0:
+                            if g0 > 0.0:
+                                empty = True
+                        elif g1 > 0.0:
+                            eta_out = min(eta_out, -g0 / g1)
+                        else:
+                            eta_in = max(eta_in, -g0 / g1)
+                    if empty:
+                        continue
+                    # entry and exit are crossings when they lie on the element (inside test with the
+                    # tolerance, as for a numeric crossing) and on the beam element
+                    n = 0
+                    for k in range(2):
+                        t = eta_in if k == 0 else eta_out
+                        if not (-1.0 - tol <= t <= 1.0 + tol):
+                            continue
+                        for i in range(3):
+                            xi[i] = alpha[i] + beta[i] * t
+                        if solid.is_inside(code, xi, tol):
+                            crossing_eta[p, n] = min(max(t, -1.0), 1.0)
+                            n += 1
+                    crossing_count[p] = n
+                beam_inside[e] = inside
+                if inside >= 0:
+                    for p in range(pair_offsets[e], pair_offsets[e + 1]):
+                        crossing_count[p] = 0
+                        pair_state[p] = PAIR_DONE
+            begin, stop = claim(claims, n_beam)
 
 
 @njit_parallel
 def _auto_gauss_counts(seg_beam, seg_solid, codes, conn, points, solid_origin, solid_h, beam_affine, beam_code,
-                       n_phi, n_gauss, counts, exact):
+                       n_phi, n_gauss, counts, exact, workers):
     """Gauss points per segment: the minimal exact rule where the integrand is a polynomial, else n_gauss."""
     n_seg = seg_beam.shape[0]
-    for c in prange(n_chunks(n_seg, CHUNK)):
+    claims = new_claims()
+    for worker in prange(workers):
         X = np.empty((solid.MAX_NODES, 3))
         Ainv = np.empty((3, 3))
-        for g in range(c * CHUNK, min(n_seg, (c + 1) * CHUNK)):
-            s = seg_solid[g]
-            code = codes[s]
-            counts[g] = n_gauss
-            exact[g] = False
-            if beam_affine[seg_beam[g]]:
-                load_element(points, conn, s, code, solid_origin, X)
-                if affine_inverse(code, X, solid_h[s], AFFINE_TOL, Ainv):
-                    degree = n_phi - 1 + max(BEAM_DEGREE[beam_code], LINE_DEGREE[code])
-                    counts[g] = degree // 2 + 1
-                    exact[g] = True
+        begin, stop = claim(claims, n_seg)
+        while begin < stop:
+            for g in range(begin, stop):
+                s = seg_solid[g]
+                code = codes[s]
+                counts[g] = n_gauss
+                exact[g] = False
+                if beam_affine[seg_beam[g]]:
+                    load_element(points, conn, s, code, solid_origin, X)
+                    if affine_inverse(code, X, solid_h[s], AFFINE_TOL, Ainv):
+                        degree = n_phi - 1 + max(BEAM_DEGREE[beam_code], LINE_DEGREE[code])
+                        counts[g] = degree // 2 + 1
+                        exact[g] = True
+            begin, stop = claim(claims, n_seg)
 
 
 def exact_gauss_count(beam_code, solid_code, n_phi):
@@ -432,7 +449,7 @@ def auto_segments(ctx, search_points, n_gauss, n_phi):
     beam_inside = np.empty(n_beam, dtype=np.int64)
     _auto_crossings(pair_offsets, pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h,
                     ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, closed, count, state, beam_affine,
-                    beam_inside)
+                    beam_inside, workers())
     numeric = np.flatnonzero(state == PAIR_NUMERIC)
     crossing_eta = closed
     if len(numeric):
@@ -453,14 +470,14 @@ def auto_segments(ctx, search_points, n_gauss, n_phi):
     seg_count = np.zeros(n_beam, dtype=np.int64)
     _tile(pair_offsets, pair_solid, crossing_eta, count, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
           ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, seg_offsets,
-          all_solid, all_start, all_end, seg_count)
+          all_solid, all_start, all_end, seg_count, workers())
     keep = _compact_index(seg_offsets, seg_count)
     seg_beam = np.repeat(np.arange(n_beam), seg_count)
     seg_solid, seg_start, seg_end = all_solid[keep], all_start[keep], all_end[keep]
     counts = np.empty(len(seg_beam), dtype=np.int64)
     exact = np.empty(len(seg_beam), dtype=np.bool_)
     _auto_gauss_counts(seg_beam, seg_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h,
-                       beam_affine, ctx.beam_code, n_phi, n_gauss, counts, exact)
+                       beam_affine, ctx.beam_code, n_phi, n_gauss, counts, exact, workers())
     per_beam = np.bincount(seg_beam, minlength=n_beam)
     whole = (per_beam == 1)[seg_beam] & (seg_start == -1.0) & (seg_end == 1.0)
     info = {"face_crossings": int(count.sum()), "numeric_pairs": int(len(numeric)),

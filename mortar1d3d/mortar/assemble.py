@@ -14,9 +14,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import prange
 
-from .._config import CHUNK, njit, njit_parallel
+from .._config import njit, njit_parallel
 from .._memory import carve
-from ..geometry.linalg import n_chunks
+from .._schedule import claim, new_claims, workers
 from ..elements.multiplier import multiplier as multiplier_type
 from ..elements.multiplier import shape as lm_shape
 from ..elements.beam import MAX_FUNCTIONS
@@ -129,7 +129,7 @@ class KernelInput:
         self.solid_boxes, self.solid_h, self.solid_origin = solid_frames(solid)
         # per element: the map linearised at the centre, inverted (exact for affine elements)
         self.linear = np.empty((solid.n_elements, 5, 3))
-        linear_maps(self.points, self.conn, self.codes, self.solid_origin, self.solid_h, self.linear)
+        linear_maps(self.points, self.conn, self.codes, self.solid_origin, self.solid_h, self.linear, workers())
         self.Q, self.beam_origin, self.beam_boxes, _ = beam_frames(beams)
         self.lengths = beams.lengths
         self.beam_code = beams.element_type.code
@@ -138,43 +138,47 @@ class KernelInput:
 
 @njit_parallel
 def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
-                     codes, m_offsets, D_local, M_local, kappa_local):
+                     codes, m_offsets, D_local, M_local, kappa_local, workers):
     """Local D, M and κ of every group of points."""
     n_groups = group_start.shape[0] - 1
     nH = beam_n_functions(beam_code)
-    for c in prange(n_chunks(n_groups, CHUNK)):
+    claims = new_claims()
+    for worker in prange(workers):
         Phi = np.empty(4)
         H = np.empty(MAX_FUNCTIONS)
         N = np.empty(solid_types.MAX_NODES)
         Dg = np.empty((4, MAX_FUNCTIONS))
         Mg = np.empty((4, solid_types.MAX_NODES))
         kg = np.empty(4)
-        for g in range(c * CHUNK, min(n_groups, (c + 1) * CHUNK)):
-            e = p_beam[group_start[g]]
-            s = p_solid[group_start[g]]
-            nN = solid_types.n_nodes(codes[s])
-            Dg[:] = 0.0
-            Mg[:] = 0.0
-            kg[:] = 0.0
-            for q in range(group_start[g], group_start[g + 1]):
-                lm_shape(n_phi, eta[q], Phi)
-                beam_shape(beam_code, eta[q], lengths[e], H)
-                solid_types.shape(codes[s], xi[q], N)
-                w = weight[q]
+        begin, stop = claim(claims, n_groups)
+        while begin < stop:
+            for g in range(begin, stop):
+                e = p_beam[group_start[g]]
+                s = p_solid[group_start[g]]
+                nN = solid_types.n_nodes(codes[s])
+                Dg[:] = 0.0
+                Mg[:] = 0.0
+                kg[:] = 0.0
+                for q in range(group_start[g], group_start[g + 1]):
+                    lm_shape(n_phi, eta[q], Phi)
+                    beam_shape(beam_code, eta[q], lengths[e], H)
+                    solid_types.shape(codes[s], xi[q], N)
+                    w = weight[q]
+                    for j in range(n_phi):
+                        wj = w * Phi[j]
+                        kg[j] += wj
+                        for k in range(nH):
+                            Dg[j, k] += wj * H[k]
+                        for a in range(nN):
+                            Mg[j, a] += wj * N[a]
                 for j in range(n_phi):
-                    wj = w * Phi[j]
-                    kg[j] += wj
+                    kappa_local[g, j] = kg[j]
                     for k in range(nH):
-                        Dg[j, k] += wj * H[k]
+                        D_local[g, j * nH + k] = Dg[j, k]
+                    base = m_offsets[g] + j * nN
                     for a in range(nN):
-                        Mg[j, a] += wj * N[a]
-            for j in range(n_phi):
-                kappa_local[g, j] = kg[j]
-                for k in range(nH):
-                    D_local[g, j * nH + k] = Dg[j, k]
-                base = m_offsets[g] + j * nN
-                for a in range(nN):
-                    M_local[base + a] = Mg[j, a]
+                        M_local[base + a] = Mg[j, a]
+            begin, stop = claim(claims, n_groups)
 
 
 @njit
@@ -358,7 +362,7 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     D_local, M_local, kappa_local = carve(((n_groups, n_phi * nH), np.float64), (m_offsets[-1], np.float64),
                                           ((n_groups, n_phi), np.float64))
     _group_operators(group_start, p_beam, p_solid, eta, xi, weight, ctx.beam_code, ctx.lengths, n_phi, ctx.codes,
-                     m_offsets, D_local, M_local, kappa_local)
+                     m_offsets, D_local, M_local, kappa_local, workers())
     lm_index, n_lm = lm_numbering(beams, lm_type)
     src_offsets, src = row_sources(lm_index, n_phi, n_lm)
     kappa = np.empty(n_lm)

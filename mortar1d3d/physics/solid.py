@@ -35,9 +35,9 @@ import scipy.sparse as sp
 from numba import prange
 
 from .._config import CHUNK, njit, njit_parallel
+from .._schedule import n_chunks
 from ..elements.solid.dispatch import BY_CODE, MAX_NODES, N_NODES, SOLID_MODULES, deriv
 from ..errors import MeshError, format_ids
-from ..geometry.linalg import n_chunks
 from ..integration.quadrature import gauss_legendre
 from ..mesh import SolidMesh
 from .fibre_material import FibreField, add_fibres
