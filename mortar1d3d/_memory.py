@@ -6,11 +6,62 @@ on the benchmark scene was page faults). NumPy asks the kernel for transparent h
 (``madvise``) for allocations of 4 MiB and more; arrays that are written together are therefore
 carved from one such block, starting on a 2 MiB boundary, which faults in 2 MiB at a time (where
 the kernel has transparent huge pages enabled; elsewhere nothing changes).
+
+Such blocks are also reused: a block all of whose arrays are gone (the caller dropped the
+result) serves the next call of about its size, instead of going back to the OS and being faulted
+in (and zeroed) again, which on this project's VM costs about 3 ms per call on the benchmark scene
+and scales badly with threads. At most :data:`POOL_LIMIT` bytes of unused blocks are kept.
 """
+import sys
+import threading
+
 import numpy as np
 
 _ALIGN = 64
 _HUGE_PAGE = 2 << 20
+
+#: bytes of unused blocks kept for reuse, at most
+POOL_LIMIT = 256 << 20
+_pool = []                  # every large block handed out and not yet given back (oldest first)
+_pool_lock = threading.Lock()
+
+
+def _in_use(i):
+    # references to _pool[i]: the pool's list and getrefcount's argument; every array carved
+    # from the block, or derived from such an array, holds one more (NumPy views refer to the
+    # array that owns the memory)
+    return sys.getrefcount(_pool[i]) > 2
+
+
+def _block(n_bytes):
+    """A block of at least ``n_bytes`` (a multiple of 2 MiB): an unused pooled one of about that size, or new."""
+    with _pool_lock:
+        best = -1
+        for i in range(len(_pool)):
+            size = _pool[i].nbytes
+            if n_bytes <= size <= n_bytes + n_bytes // 4 + _HUGE_PAGE and not _in_use(i):
+                if best < 0 or size < _pool[best].nbytes:
+                    best = i
+        if best >= 0:
+            block = _pool.pop(best)
+        else:
+            block = np.empty(n_bytes, dtype=np.uint8)
+        _pool.append(block)     # most recently used last
+        unused = 0
+        for i in range(len(_pool) - 2, -1, -1):
+            if not _in_use(i):
+                unused += _pool[i].nbytes
+                if unused > POOL_LIMIT:
+                    del _pool[i]
+        return block
+
+
+def release_pool():
+    """Give every unused pooled block back (to the allocator, which returns large ones to the OS)."""
+    with _pool_lock:
+        for i in range(len(_pool) - 1, -1, -1):
+            if not _in_use(i):
+                del _pool[i]
 
 
 def carve(*specs):
@@ -33,9 +84,10 @@ def carve(*specs):
     if total >= _HUGE_PAGE:
         align = _HUGE_PAGE
         total = -(-total // _HUGE_PAGE) * _HUGE_PAGE
+        block = _block(total + align)
     else:
         align = _ALIGN
-    block = np.empty(total + align, dtype=np.uint8)
+        block = np.empty(total + align, dtype=np.uint8)
     start = (-block.ctypes.data) % align
     return [block[start + offset:start + offset + n_bytes].view(dtype).reshape(shape)
             for offset, n_bytes, shape, dtype in layout]
