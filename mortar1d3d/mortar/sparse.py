@@ -116,11 +116,11 @@ def _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_tab
             begin, stop = claim(claims, n_rows)
 
 
-@njit
+@njit_parallel
 def _block_indptr(first, unique, block, indptr):
     """Row pointers of the expanded matrix: block row r has ``block`` rows of ``unique[r]`` entries."""
     indptr[0] = 0
-    for r in range(unique.shape[0]):
+    for r in prange(unique.shape[0]):
         for i in range(block):
             indptr[block * r + i + 1] = block * first[r] + (i + 1) * unique[r]
 
