@@ -191,8 +191,8 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
                      "against the target); control: the same rounds' pure-compute loop")
         lines.append("  (prange as Numba schedules it; claimed: its chunks claimed dynamically, as in the engine's "
                      "kernels: the ceiling for their parallel parts);")
-        lines.append("faults/call: minor page faults per 1-thread call (memory fresh from the OS; "
-                     "GLIBC_TUNABLES=glibc.malloc.hugetlb=1 removes most, see benchmarks/README.md)")
+        lines.append("faults/call: minor page faults per 1-thread call with the previous result dropped (the "
+                     "engine reuses its big blocks, see benchmarks/README.md)")
     control = RESULTS.get("control_speedup")
     if control:
         lines.append(f"control (benchmarks/control.py, pure compute, 1 -> 2 threads): speed-up "
