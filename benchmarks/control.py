@@ -22,16 +22,21 @@ from numba import njit, prange
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # this checkout's package
 
-from mortar1d3d._schedule import claim, new_claims  # noqa: E402
+from mortar1d3d._schedule import claim, new_claims, workers  # noqa: E402
+
+
+@njit(cache=True)
+def _item(i):
+    x = 0.0
+    for k in range(1500):
+        x += np.sin(i * 1e-3 + k * 1e-4)
+    return x
 
 
 @njit(parallel=True, cache=True)
 def _work(n, out):
     for i in prange(n):
-        x = 0.0
-        for k in range(1500):
-            x += np.sin(i * 1e-3 + k * 1e-4)
-        out[i] = x
+        out[i] = _item(i)
 
 
 @njit(parallel=True, cache=True)
@@ -41,10 +46,7 @@ def _work_claimed(n, out, workers):
         begin, stop = claim(claims, n)
         while begin < stop:
             for i in range(begin, stop):
-                x = 0.0
-                for k in range(1500):
-                    x += np.sin(i * 1e-3 + k * 1e-4)
-                out[i] = x
+                out[i] = _item(i)
             begin, stop = claim(claims, n)
 
 
@@ -55,7 +57,7 @@ def control_times(threads=(1, 2), size=16000, dynamic=False):
     """
     out = np.empty(size)
     default = numba.get_num_threads()
-    work = (lambda n: _work_claimed(n, out, numba.get_num_threads())) if dynamic else (lambda n: _work(n, out))
+    work = (lambda n: _work_claimed(n, out, workers())) if dynamic else (lambda n: _work(n, out))
     work(100)
     times = {}
     try:

@@ -1,6 +1,6 @@
 """Standalone throughput of assemble_mortar outside pytest (best and median of repeated calls).
 
-    .venv/bin/python benchmarks/throughput.py [--repeats 9] [--distort 0.1] [--drop]
+    .venv/bin/python benchmarks/throughput.py [--repeats 9] [--distort 0.1] [--drop] [--no-reuse]
 
 Same scene as the pytest-benchmark harness (fibre_cube(20, 1000, 20), n_gauss=4, straight
 fibres). Every round times each integration with 1 and then 2 threads back to back, and the
@@ -52,12 +52,18 @@ def main(argv=None):
     parser.add_argument("--drop", action="store_true",
                         help="drop each result before the next call (as make bench does): glibc may then return "
                              "the memory to the OS and every call faults it in again")
+    parser.add_argument("--no-reuse", action="store_true",
+                        help="every big block fresh from the allocator (mortar1d3d._memory.POOL_LIMIT = 0); with "
+                             "--drop: the memory regime before the engine reused its blocks")
     parser.add_argument("--full", type=float, default=1.85, metavar="X",
                         help="also report the speed-up over the rounds whose control reached X (default 1.85)")
     args = parser.parse_args(argv)
     beams, solid = m13.generate.fibre_cube(20, 1000, 20)
     if args.distort:
         solid = m13.generate.distort(solid, args.distort, seed=1)
+    if args.no_reuse:
+        from mortar1d3d import _memory
+        _memory.POOL_LIMIT = 0
     m13.warmup()
     print(f"threading layer {numba.threading_layer()}, NUMBA_NUM_THREADS {numba.config.NUMBA_NUM_THREADS}"
           + (f", cube distorted by {args.distort} cells" if args.distort else ""))

@@ -9,8 +9,9 @@ the kernel has transparent huge pages enabled; elsewhere nothing changes).
 
 Such blocks are also reused: a block all of whose arrays are gone (the caller dropped the
 result) serves the next call of about its size, instead of going back to the OS and being faulted
-in (and zeroed) again, which on this project's VM costs about 3 ms per call on the benchmark scene
-and scales badly with threads. At most :data:`POOL_LIMIT` bytes of unused blocks are kept.
+in (and zeroed) again, which on this project's VM cost about 3.6 ms of a 41 ms element-based call
+on the benchmark scene and scales badly with threads (``benchmarks/throughput.py --drop`` with and
+without ``--no-reuse``). At most :data:`POOL_LIMIT` bytes of unused blocks are kept.
 """
 import sys
 import threading
@@ -20,7 +21,7 @@ import numpy as np
 _ALIGN = 64
 _HUGE_PAGE = 2 << 20
 
-#: bytes of unused blocks kept for reuse, at most
+#: bytes of unused blocks kept for reuse, at most (0: no reuse, every block fresh from the allocator)
 POOL_LIMIT = 256 << 20
 _pool = []                  # every large block handed out and not yet given back (oldest first)
 _pool_lock = threading.Lock()
@@ -35,6 +36,8 @@ def _in_use(i):
 
 def _block(n_bytes):
     """A block of at least ``n_bytes`` (a multiple of 2 MiB): an unused pooled one of about that size, or new."""
+    if POOL_LIMIT <= 0:
+        return np.empty(n_bytes, dtype=np.uint8)
     with _pool_lock:
         best = -1
         for i in range(len(_pool)):

@@ -37,7 +37,7 @@ def test_a_block_with_any_array_alive_is_not_reused(empty_pool):
     assert np.all(piece == 7.0)
     del piece, c, d
     e, f = _memory.carve(*BIG)
-    assert e.ctypes.data in (address, _memory._pool[0].ctypes.data)
+    assert e.ctypes.data == address        # both blocks free and equal: the older one is taken
 
 
 def test_unused_blocks_beyond_the_limit_are_given_back(empty_pool, monkeypatch):
@@ -71,3 +71,12 @@ def test_reused_memory_changes_no_result(empty_pool, monkeypatch):
             assert np.array_equal(ops.D.toarray(), D) and np.array_equal(ops.M.toarray(), M)
             assert np.array_equal(ops.kappa, kappa) and np.array_equal(ops.points, points)
     assert len(_memory._pool) > 0
+
+
+def test_a_zero_limit_turns_reuse_off(empty_pool, monkeypatch):
+    monkeypatch.setattr(_memory, "POOL_LIMIT", 0)
+    a, b = _memory.carve(*BIG)
+    assert a.shape == (700, 600) and a.ctypes.data % (2 << 20) == 0
+    del a, b
+    _memory.carve(*BIG)
+    assert _memory._pool == []

@@ -55,4 +55,4 @@ def test_operators_are_attached_not_copied_and_valid():
         rebuilt.sum_duplicates()
         assert rebuilt.nnz == matrix.nnz
         assert np.array_equal(rebuilt.indices, matrix.indices) and np.array_equal(rebuilt.data, matrix.data)
-        assert (ops.D.shape[0], matrix.indptr[-1]) == (matrix.shape[0], matrix.nnz)
+        assert matrix.shape[0] == 3 * ops.n_lm and len(matrix.data) == len(matrix.indices) == matrix.nnz

@@ -10,6 +10,7 @@ from numba import prange
 
 from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit, njit_parallel
 from .._schedule import claim, new_claims
+from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from .linalg import inverse3, norm3, solve3
 
@@ -269,6 +270,17 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
                 else:
                     table[s, :, :] = np.nan
             begin, stop = claim(claims, n)
+
+
+@njit
+def point_buffers():
+    """Work buffers of the kernels that follow beam points into solid elements (one set per worker).
+
+    ``X`` (element nodes), ``N``, ``dN`` (shape functions and derivatives), ``H``, ``dH`` (beam
+    functions and derivatives), ``xi`` (parameters), ``trial`` (Newton trial point).
+    """
+    return (np.empty((solid.MAX_NODES, 3)), np.empty(solid.MAX_NODES), np.empty((solid.MAX_NODES, 3)),
+            np.empty(MAX_FUNCTIONS), np.empty(MAX_FUNCTIONS), np.empty(3), np.empty(3))
 
 
 @njit

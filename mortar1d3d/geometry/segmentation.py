@@ -24,13 +24,12 @@ from numba import prange
 from .._config import PARAMETER_TOL, njit, njit_parallel
 from .._memory import carve
 from .._schedule import claim, new_claims, workers
-from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from .beam import beam_point
 from .intersection import face_coordinates, intersect_face
 from .linalg import solve3
 from .projection import (CONVERGED, first_containing, is_affine, jacobian, linear_parameters, load_element,
-                         project_point)
+                         point_buffers, project_point)
 
 _NEAR_FACE = 0.1     # min |g| of the cubic model below this fraction of its variation: try a touch there
 _SCAN = 8            # points per sample interval at which the cubic model of g is scanned
@@ -194,13 +193,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
     for worker in prange(workers):
         C = np.empty((solid.CONTROL_MATRIX.shape[1], 3))
         reach = np.empty(solid.MAX_FACES, dtype=np.bool_)
-        X = np.empty((solid.MAX_NODES, 3))
-        N = np.empty(solid.MAX_NODES)
-        dN = np.empty((solid.MAX_NODES, 3))
-        H = np.empty(MAX_FUNCTIONS)
-        dH = np.empty(MAX_FUNCTIONS)
-        xi = np.empty(3)
-        trial = np.empty(3)
+        X, N, dN, H, dH, xi, trial = point_buffers()
         z = np.empty(3)
         start = np.empty(3)
         eta_s = np.empty(S)
@@ -354,13 +347,7 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
     tol = PARAMETER_TOL
     claims = new_claims()
     for worker in prange(workers):
-        X = np.empty((solid.MAX_NODES, 3))
-        N = np.empty(solid.MAX_NODES)
-        dN = np.empty((solid.MAX_NODES, 3))
-        H = np.empty(MAX_FUNCTIONS)
-        dH = np.empty(MAX_FUNCTIONS)
-        xi = np.empty(3)
-        trial = np.empty(3)
+        X, N, dN, H, dH, xi, trial = point_buffers()
         cuts = np.empty(64)
         owners = np.empty(64, dtype=np.int64)
         begin, stop = claim(claims, n_beam)
@@ -484,13 +471,7 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
     loose = 1e3 * PARAMETER_TOL
     claims = new_claims()
     for worker in prange(workers):
-        X = np.empty((solid.MAX_NODES, 3))
-        N = np.empty(solid.MAX_NODES)
-        dN = np.empty((solid.MAX_NODES, 3))
-        H = np.empty(MAX_FUNCTIONS)
-        dH = np.empty(MAX_FUNCTIONS)
-        xi = np.empty(3)
-        trial = np.empty(3)
+        X, N, dN, H, dH, xi, trial = point_buffers()
         begin, stop = claim(claims, n_beam)
         while begin < stop:
             for e in range(begin, stop):
@@ -555,13 +536,7 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
     cap = out_eta.shape[1]
     claims = new_claims()
     for worker in prange(workers):
-        X = np.empty((solid.MAX_NODES, 3))
-        N = np.empty(solid.MAX_NODES)
-        dN = np.empty((solid.MAX_NODES, 3))
-        H = np.empty(MAX_FUNCTIONS)
-        dH = np.empty(MAX_FUNCTIONS)
-        xi = np.empty(3)
-        trial = np.empty(3)
+        X, N, dN, H, dH, xi, trial = point_buffers()
         begin, stop = claim(claims, n_beam)
         while begin < stop:
             for e in range(begin, stop):

@@ -26,8 +26,8 @@ from ..elements.solid import dispatch as solid
 from ..geometry.beam import beam_point
 from ..geometry.linalg import norm3
 from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse, affine_parameters,
-                                   first_containing, is_affine, linear_parameters, load_element, polish,
-                                   project_point)
+                                   first_containing, is_affine, linear_parameters, load_element,
+                                   point_buffers, polish, project_point)
 from ..geometry.segmentation import resegment, splice
 from .quadrature import gauss_legendre
 
@@ -44,13 +44,7 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
     loose = 1e3 * PARAMETER_TOL
     claims = new_claims()
     for worker in prange(workers):
-        X = np.empty((solid.MAX_NODES, 3))
-        N = np.empty(solid.MAX_NODES)
-        dN = np.empty((solid.MAX_NODES, 3))
-        H = np.empty(MAX_FUNCTIONS)
-        dH = np.empty(MAX_FUNCTIONS)
-        x = np.empty(3)
-        trial = np.empty(3)
+        X, N, dN, H, dH, x, trial = point_buffers()
         begin, stop = claim(claims, n_seg)
         while begin < stop:
             for g in range(begin, stop):
@@ -108,13 +102,7 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
     tol = PARAMETER_TOL
     claims = new_claims()
     for worker in prange(workers):
-        X = np.empty((solid.MAX_NODES, 3))
-        N = np.empty(solid.MAX_NODES)
-        dN = np.empty((solid.MAX_NODES, 3))
-        H = np.empty(MAX_FUNCTIONS)
-        dH = np.empty(MAX_FUNCTIONS)
-        x = np.empty(3)
-        trial = np.empty(3)
+        X, N, dN, H, dH, x, trial = point_buffers()
         begin, stop = claim(claims, n_beam)
         while begin < stop:
             for e in range(begin, stop):
