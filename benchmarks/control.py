@@ -41,13 +41,13 @@ def _work(n, out):
 
 @njit(parallel=True, cache=True)
 def _work_claimed(n, out, workers):
-    claims = new_claims()
+    claims = new_claims(n, workers)
     for worker in prange(workers):
-        begin, stop = claim(claims, n)
+        begin, stop = claim(claims, n, worker)
         while begin < stop:
             for i in range(begin, stop):
                 out[i] = _item(i)
-            begin, stop = claim(claims, n)
+            begin, stop = claim(claims, n, worker)
 
 
 def control_times(threads=(1, 2), size=16000, dynamic=False):

@@ -1,21 +1,29 @@
-"""Dynamic scheduling of the kernels' parallel loops.
+"""Dynamic scheduling of the kernels' parallel loops: each worker owns a part, idle ones steal.
 
 ``prange`` hands each thread one equal, contiguous share of the range before the loop starts
 (Numba's OpenMP and workqueue layers; ``numba.set_parallel_chunksize`` does not change that on
 them: measured with a loop whose first half costs ten times its second). A loop then lasts as
 long as its slowest thread, and on a shared or virtual machine one thread is often slowed by a
-neighbour for a while. The kernels therefore start one worker per thread, and every worker
-claims chunks of :data:`CHUNK` items from a shared counter (an atomic fetch-and-add) until none
-are left: a slowed thread simply claims fewer chunks. ::
+neighbour for a while. The kernels therefore start one worker per thread and hand out chunks of
+:data:`CHUNK` items from counters (atomic fetch-and-add). Worker ``w`` owns the ``w``-th
+contiguous part of the chunks and claims from it first, in order; once its part is done it
+claims chunks of the other parts (the next worker's first), so a slowed thread simply ends up
+with fewer chunks. ::
 
-    claims = new_claims()
-    for worker in prange(workers):      # workers: numba.get_num_threads(), passed in
+    claims = new_claims(n, workers)     # workers: numba.get_num_threads(), passed in
+    for worker in prange(workers):
         ... work buffers, once per worker ...
-        begin, stop = claim(claims, n)
+        begin, stop = claim(claims, n, worker)
         while begin < stop:
             for item in range(begin, stop):
                 ...
-            begin, stop = claim(claims, n)
+            begin, stop = claim(claims, n, worker)
+
+Owning a part keeps consecutive kernels' work on the same thread where the machine allows it:
+the engine's arrays (points, groups, LM rows) are all ordered by beam element, so the items a
+thread writes in one loop are mostly the ones it reads in the next, from its own cache. (With a
+single shared counter the chunks alternate between the threads at random, and each loop read
+about half of its input from the other core's cache.)
 
 A chunk's items and what they write do not depend on which thread claimed it, so results stay
 bit-identical for any number of threads (partial sums are kept per chunk, ``begin // CHUNK``).
@@ -57,14 +65,34 @@ def n_chunks(n, chunk):
     return (n + chunk - 1) // chunk
 
 
-@njit
-def new_claims():
-    """The chunk counter of one loop."""
-    return np.zeros(1, dtype=np.int64)
+_LINE = 8      # int64 per worker row of the claims: one cache line, so the counters do not share one
 
 
 @njit
-def claim(claims, n):
-    """The items ``begin:stop`` of the next unclaimed chunk of 0..n-1; ``begin == stop`` when none is left."""
-    begin = min(n, _fetch_add(claims) * CHUNK)
-    return begin, min(n, begin + CHUNK)
+def new_claims(n, workers):
+    """The chunk counters of one loop over ``0..n-1`` run by ``workers`` workers.
+
+    Row ``w``: the next unclaimed chunk of worker ``w``'s part and the end of that part.
+    """
+    chunks = n_chunks(n, CHUNK)
+    claims = np.empty((workers, _LINE), dtype=np.int64)
+    for w in range(workers):
+        claims[w, 0] = w * chunks // workers
+        claims[w, 1] = (w + 1) * chunks // workers
+    return claims
+
+
+@njit
+def claim(claims, n, worker):
+    """The items ``begin:stop`` of the next chunk for ``worker``: its own part's next one, else
+    another part's; ``begin == stop`` when none is left."""
+    workers = claims.shape[0]
+    for k in range(workers):
+        part = worker + k
+        if part >= workers:
+            part -= workers
+        chunk = _fetch_add(claims[part])
+        if chunk < claims[part, 1]:
+            begin = chunk * CHUNK
+            return begin, min(n, begin + CHUNK)
+    return n, n

@@ -12,14 +12,14 @@ from mortar1d3d._schedule import claim, n_chunks, new_claims, workers
 
 @njit_parallel
 def _visit(n, visits, chunk_of, workers):
-    claims = new_claims()
+    claims = new_claims(n, workers)
     for worker in prange(workers):
-        begin, stop = claim(claims, n)
+        begin, stop = claim(claims, n, worker)
         while begin < stop:
             for item in range(begin, stop):
                 visits[item] += 1
                 chunk_of[item] = begin // CHUNK
-            begin, stop = claim(claims, n)
+            begin, stop = claim(claims, n, worker)
 
 
 @pytest.mark.parametrize("n", [0, 1, CHUNK - 1, CHUNK, CHUNK + 1, 5 * CHUNK + 7])
@@ -56,3 +56,22 @@ def test_operators_are_attached_not_copied_and_valid():
         assert rebuilt.nnz == matrix.nnz
         assert np.array_equal(rebuilt.indices, matrix.indices) and np.array_equal(rebuilt.data, matrix.data)
         assert matrix.shape[0] == 3 * ops.n_lm and len(matrix.data) == len(matrix.indices) == matrix.nnz
+
+
+def test_workers_claim_their_own_part_first_then_steal():
+    n = 10 * CHUNK + 3                       # 11 chunks: worker 0 owns 0-4, worker 1 owns 5-10
+    claims = new_claims(n, 2)
+    assert claim(claims, n, 1) == (5 * CHUNK, 6 * CHUNK)
+    assert claim(claims, n, 0) == (0, CHUNK)
+    for chunk in range(6, 11):               # worker 1 finishes its part (the last chunk is short) ...
+        assert claim(claims, n, 1) == (chunk * CHUNK, min(n, (chunk + 1) * CHUNK))
+    for chunk in range(1, 5):                # ... then takes worker 0's chunks in order
+        assert claim(claims, n, 1) == (chunk * CHUNK, (chunk + 1) * CHUNK)
+    assert claim(claims, n, 0) == (n, n) and claim(claims, n, 1) == (n, n)
+
+
+def test_more_workers_than_chunks():
+    claims = new_claims(CHUNK + 1, 5)        # 2 chunks: workers 0, 1, 3 own none
+    assert claim(claims, CHUNK + 1, 0) == (0, CHUNK)          # stolen from worker 2's part
+    assert claim(claims, CHUNK + 1, 3) == (CHUNK, CHUNK + 1)  # from worker 4's
+    assert claim(claims, CHUNK + 1, 4) == (CHUNK + 1, CHUNK + 1)

@@ -247,13 +247,13 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
     Newton start close to the answer), NaN where the Jacobian at the centre is singular.
     """
     n = conn.shape[0]
-    claims = new_claims()
+    claims = new_claims(n, workers)
     for worker in prange(workers):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
         xc = np.empty(3)
-        begin, stop = claim(claims, n)
+        begin, stop = claim(claims, n, worker)
         while begin < stop:
             for s in range(begin, stop):
                 code = codes[s]
@@ -269,7 +269,7 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
                     table[s, 4, 0] = 0.0
                 else:
                     table[s, :, :] = np.nan
-            begin, stop = claim(claims, n)
+            begin, stop = claim(claims, n, worker)
 
 
 @njit

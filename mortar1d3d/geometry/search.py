@@ -73,11 +73,11 @@ def _finish_box(box, padding):
 
 @njit_parallel
 def _solid_boxes(points, conn, codes, padding, boxes, size, origin, workers):
-    claims = new_claims()
+    claims = new_claims(conn.shape[0], workers)
     for worker in prange(workers):
         X = np.empty((MAX_NODES, 3))
         C = np.empty((MAX_CONTROL, 3))
-        begin, stop = claim(claims, conn.shape[0])
+        begin, stop = claim(claims, conn.shape[0], worker)
         while begin < stop:
             for s in range(begin, stop):
                 code = codes[s]
@@ -94,7 +94,7 @@ def _solid_boxes(points, conn, codes, padding, boxes, size, origin, workers):
                     boxes[s, 0, i] = lo
                     boxes[s, 1, i] = hi
                 size[s] = _finish_box(boxes[s], padding)
-            begin, stop = claim(claims, conn.shape[0])
+            begin, stop = claim(claims, conn.shape[0], worker)
 
 
 @njit_parallel
@@ -255,38 +255,38 @@ def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell
     # covers (a cheap bound), finds its sorted unique candidates in place, then the lists are packed
     n_beam = beam_boxes.shape[0]
     bound = np.zeros(n_beam + 1, dtype=np.int64)
-    claims = new_claims()
+    claims = new_claims(n_beam, workers)
     for worker in prange(workers):
         lo = np.empty(3, dtype=np.int64)
         hi = np.empty(3, dtype=np.int64)
-        begin, stop = claim(claims, n_beam)
+        begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             for e in range(begin, stop):
                 bound[e + 1] = _cell_total(beam_boxes[e], cell_offsets, lower, inv_cell, dims, lo, hi)
-            begin, stop = claim(claims, n_beam)
+            begin, stop = claim(claims, n_beam, worker)
     room = np.cumsum(bound)
     work = np.empty(room[-1], dtype=np.int64)
     counts = np.zeros(n_beam + 1, dtype=np.int64)
-    claims = new_claims()
+    claims = new_claims(n_beam, workers)
     for worker in prange(workers):
         lo = np.empty(3, dtype=np.int64)
         hi = np.empty(3, dtype=np.int64)
-        begin, stop = claim(claims, n_beam)
+        begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             for e in range(begin, stop):
                 counts[e + 1] = _candidates_of(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell,
                                                dims, lo, hi, work[room[e]:room[e + 1]])
-            begin, stop = claim(claims, n_beam)
+            begin, stop = claim(claims, n_beam, worker)
     offsets = np.cumsum(counts)
     solids = np.empty(offsets[-1], dtype=np.int64)
-    claims = new_claims()
+    claims = new_claims(n_beam, workers)
     for worker in prange(workers):
-        begin, stop = claim(claims, n_beam)
+        begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             for e in range(begin, stop):
                 for q in range(counts[e + 1]):
                     solids[offsets[e] + q] = work[room[e] + q]
-            begin, stop = claim(claims, n_beam)
+            begin, stop = claim(claims, n_beam, worker)
     return offsets, solids
 
 

@@ -189,7 +189,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                     overflow, workers):
     n_pairs = pair_beam.shape[0]
     S = search_points
-    claims = new_claims()
+    claims = new_claims(n_pairs, workers)
     for worker in prange(workers):
         C = np.empty((solid.CONTROL_MATRIX.shape[1], 3))
         reach = np.empty(solid.MAX_FACES, dtype=np.bool_)
@@ -202,7 +202,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
         ok = np.empty(S, dtype=np.bool_)
         g = np.empty(S)
         dg = np.empty(S)
-        begin, stop = claim(claims, n_pairs)
+        begin, stop = claim(claims, n_pairs, worker)
         while begin < stop:
             for p in range(begin, stop):
                 e = pair_beam[p]
@@ -314,7 +314,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                                                best_t, z, xi, N, dN, H, dH)
                             count = _record(eta, out_eta, p, count, overflow)
                 out_count[p] = count
-            begin, stop = claim(claims, n_pairs)
+            begin, stop = claim(claims, n_pairs, worker)
 
 
 @njit
@@ -345,12 +345,12 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
           seg_start, seg_end, seg_count, workers):
     n_beam = pair_offsets.shape[0] - 1
     tol = PARAMETER_TOL
-    claims = new_claims()
+    claims = new_claims(n_beam, workers)
     for worker in prange(workers):
         X, N, dN, H, dH, xi, trial = point_buffers()
         cuts = np.empty(64)
         owners = np.empty(64, dtype=np.int64)
-        begin, stop = claim(claims, n_beam)
+        begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             for e in range(begin, stop):
                 p0 = pair_offsets[e]
@@ -444,7 +444,7 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                         seg_end[base + n_seg] = b
                         n_seg += 1
                 seg_count[e] = n_seg
-            begin, stop = claim(claims, n_beam)
+            begin, stop = claim(claims, n_beam, worker)
 
 
 _GAP_PROBES = 7
@@ -469,10 +469,10 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
     """
     n_beam = pair_offsets.shape[0] - 1
     loose = 1e3 * PARAMETER_TOL
-    claims = new_claims()
+    claims = new_claims(n_beam, workers)
     for worker in prange(workers):
         X, N, dN, H, dH, xi, trial = point_buffers()
-        begin, stop = claim(claims, n_beam)
+        begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             for e in range(begin, stop):
                 p0 = pair_offsets[e]
@@ -509,7 +509,7 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
                         break
                     gap_start = b
                 bad[e] = failed
-            begin, stop = claim(claims, n_beam)
+            begin, stop = claim(claims, n_beam, worker)
 
 
 @njit
@@ -534,10 +534,10 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
     """
     n_beam = pair_offsets.shape[0] - 1
     cap = out_eta.shape[1]
-    claims = new_claims()
+    claims = new_claims(n_beam, workers)
     for worker in prange(workers):
         X, N, dN, H, dH, xi, trial = point_buffers()
-        begin, stop = claim(claims, n_beam)
+        begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             for e in range(begin, stop):
                 p0 = pair_offsets[e]
@@ -570,7 +570,7 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                     previous = owner
                     eta_previous = eta
                 out_count[e] = count
-            begin, stop = claim(claims, n_beam)
+            begin, stop = claim(claims, n_beam, worker)
 
 
 #: search points of the first retry of a beam element whose pieces do not tile

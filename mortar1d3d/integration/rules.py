@@ -42,10 +42,10 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
     # segment g gets the n-point rule (n = seg_points[g+1] - seg_points[g]) stored in row n of gx, gw
     n_seg = seg_beam.shape[0]
     loose = 1e3 * PARAMETER_TOL
-    claims = new_claims()
+    claims = new_claims(n_seg, workers)
     for worker in prange(workers):
         X, N, dN, H, dH, x, trial = point_buffers()
-        begin, stop = claim(claims, n_seg)
+        begin, stop = claim(claims, n_seg, worker)
         while begin < stop:
             for g in range(begin, stop):
                 e = seg_beam[g]
@@ -90,7 +90,7 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
                     # a segment lies in its element: a point clearly outside means a missed
                     # crossing; it is reported, not hidden
                     status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
-            begin, stop = claim(claims, n_seg)
+            begin, stop = claim(claims, n_seg, worker)
 
 
 @njit_parallel
@@ -100,10 +100,10 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
     n_gauss = gx.shape[0]
     n_beam = pair_offsets.shape[0] - 1
     tol = PARAMETER_TOL
-    claims = new_claims()
+    claims = new_claims(n_beam, workers)
     for worker in prange(workers):
         X, N, dN, H, dH, x, trial = point_buffers()
-        begin, stop = claim(claims, n_beam)
+        begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             for e in range(begin, stop):
                 for q in range(n_gauss):
@@ -130,7 +130,7 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
                         owner[k] = s
                         status[k] = POINT_INSIDE
                         xi[k] = x
-            begin, stop = claim(claims, n_beam)
+            begin, stop = claim(claims, n_beam, worker)
 
 
 def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):
@@ -287,7 +287,7 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
     """
     n_beam = pair_offsets.shape[0] - 1
     tol = PARAMETER_TOL
-    claims = new_claims()
+    claims = new_claims(n_beam, workers)
     for worker in prange(workers):
         X = np.empty((solid.MAX_NODES, 3))
         H = np.empty(MAX_FUNCTIONS)
@@ -297,7 +297,7 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
         alpha = np.empty(3)
         beta = np.empty(3)
         xi = np.empty(3)
-        begin, stop = claim(claims, n_beam)
+        begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             for e in range(begin, stop):
                 Qe = Q[e]
@@ -371,7 +371,7 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                     for p in range(pair_offsets[e], pair_offsets[e + 1]):
                         crossing_count[p] = 0
                         pair_state[p] = PAIR_DONE
-            begin, stop = claim(claims, n_beam)
+            begin, stop = claim(claims, n_beam, worker)
 
 
 @njit_parallel
@@ -379,11 +379,11 @@ def _auto_gauss_counts(seg_beam, seg_solid, codes, conn, points, solid_origin, s
                        n_phi, n_gauss, counts, exact, workers):
     """Gauss points per segment: the minimal exact rule where the integrand is a polynomial, else n_gauss."""
     n_seg = seg_beam.shape[0]
-    claims = new_claims()
+    claims = new_claims(n_seg, workers)
     for worker in prange(workers):
         X = np.empty((solid.MAX_NODES, 3))
         Ainv = np.empty((3, 3))
-        begin, stop = claim(claims, n_seg)
+        begin, stop = claim(claims, n_seg, worker)
         while begin < stop:
             for g in range(begin, stop):
                 s = seg_solid[g]
@@ -396,7 +396,7 @@ def _auto_gauss_counts(seg_beam, seg_solid, codes, conn, points, solid_origin, s
                         degree = n_phi - 1 + max(BEAM_DEGREE[beam_code], LINE_DEGREE[code])
                         counts[g] = degree // 2 + 1
                         exact[g] = True
-            begin, stop = claim(claims, n_seg)
+            begin, stop = claim(claims, n_seg, worker)
 
 
 def exact_gauss_count(beam_code, solid_code, n_phi):

@@ -142,7 +142,7 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
     """Local D, M and κ of every group of points."""
     n_groups = group_start.shape[0] - 1
     nH = beam_n_functions(beam_code)
-    claims = new_claims()
+    claims = new_claims(n_groups, workers)
     for worker in prange(workers):
         Phi = np.empty(4)
         H = np.empty(MAX_FUNCTIONS)
@@ -150,7 +150,7 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
         Dg = np.empty((4, MAX_FUNCTIONS))
         Mg = np.empty((4, solid_types.MAX_NODES))
         kg = np.empty(4)
-        begin, stop = claim(claims, n_groups)
+        begin, stop = claim(claims, n_groups, worker)
         while begin < stop:
             for g in range(begin, stop):
                 e = p_beam[group_start[g]]
@@ -178,7 +178,7 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
                     base = m_offsets[g] + j * nN
                     for a in range(nN):
                         M_local[base + a] = Mg[j, a]
-            begin, stop = claim(claims, n_groups)
+            begin, stop = claim(claims, n_groups, worker)
 
 
 @njit

@@ -43,10 +43,10 @@ def _count_unique(src_offsets, src, n_phi, beam_groups, width, col_table, col_ro
     counting costs one visit per entry, no sort, in any order of the rows.
     """
     n_rows = src_offsets.shape[0] - 1
-    claims = new_claims()
+    claims = new_claims(n_rows, workers)
     for worker in prange(workers):
         marker = np.full(n_cols, -1, dtype=np.int64)
-        begin, stop = claim(claims, n_rows)
+        begin, stop = claim(claims, n_rows, worker)
         while begin < stop:
             for r in range(begin, stop):
                 u = 0
@@ -63,7 +63,7 @@ def _count_unique(src_offsets, src, n_phi, beam_groups, width, col_table, col_ro
                         n += width[g]
                 unique[r] = u
                 bound[r] = n
-            begin, stop = claim(claims, n_rows)
+            begin, stop = claim(claims, n_rows, worker)
 
 
 @njit_parallel
@@ -71,11 +71,11 @@ def _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_tab
                max_bound, block, indices, data, workers):
     """Gather, sort and sum each row, and write its ``block`` expanded copies."""
     n_rows = src_offsets.shape[0] - 1
-    claims = new_claims()
+    claims = new_claims(n_rows, workers)
     for worker in prange(workers):
         cols = np.empty(max_bound, dtype=np.int64)
         vs = np.empty(max_bound)
-        begin, stop = claim(claims, n_rows)
+        begin, stop = claim(claims, n_rows, worker)
         while begin < stop:
             for r in range(begin, stop):
                 # gather in a fixed order (beam elements ascending, groups, columns): deterministic sums
@@ -113,7 +113,7 @@ def _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_tab
                     for t in range(m):
                         indices[out + t] = block * cols[t] + i
                         data[out + t] = vs[t]
-            begin, stop = claim(claims, n_rows)
+            begin, stop = claim(claims, n_rows, worker)
 
 
 @njit_parallel
@@ -170,9 +170,9 @@ def _residual_squares(d_ptr, d_idx, d_val, q, m_ptr, m_idx, m_val, x, partial, w
     # per chunk of rows: Σ (D q - M x)_r² and Σ (D q)_r², rows in order;
     # chunks summed in order by the caller, so the result does not depend on the number of threads
     n_rows = d_ptr.shape[0] - 1
-    claims = new_claims()
+    claims = new_claims(n_rows, workers)
     for worker in prange(workers):
-        begin, stop = claim(claims, n_rows)
+        begin, stop = claim(claims, n_rows, worker)
         while begin < stop:
             diff = 0.0
             ref = 0.0
@@ -187,7 +187,7 @@ def _residual_squares(d_ptr, d_idx, d_val, q, m_ptr, m_idx, m_val, x, partial, w
                 ref += a * a
             partial[begin // CHUNK, 0] = diff
             partial[begin // CHUNK, 1] = ref
-            begin, stop = claim(claims, n_rows)
+            begin, stop = claim(claims, n_rows, worker)
 
 
 def relative_residual(D, q, M, x):
