@@ -65,7 +65,7 @@ def n_chunks(n, chunk):
     return (n + chunk - 1) // chunk
 
 
-_LINE = 8      # int64 per worker row of the claims: one cache line, so the counters do not share one
+_LINE = 8      # int64 per worker row of the claims: 64 bytes apart, two workers' counters never share a cache line
 
 
 @njit
