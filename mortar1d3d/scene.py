@@ -273,7 +273,9 @@ def _beam(value, i, base_dir):
         E = _number(_required(s, "E", f"{path}.section"), f"{path}.section.E", low=0.0, low_open=True)
         r = _number(_required(s, "radius", f"{path}.section"), f"{path}.section.radius", low=0.0,
                     low_open=True)
-        out["section"] = {"EA": E * math.pi * r * r, "EI": E * math.pi * r ** 4 / 4.0, "E": E, "radius": r}
+        # a truss has no bending stiffness: EI derived from the radius would only be ignored
+        EI = 0.0 if model == "truss" else E * math.pi * r ** 4 / 4.0
+        out["section"] = {"EA": E * math.pi * r * r, "EI": EI, "E": E, "radius": r}
     else:
         EA = _number(_required(s, "EA", f"{path}.section"), f"{path}.section.EA", low=0.0, low_open=True)
         if model == "truss":

@@ -161,3 +161,17 @@ def test_cli_plan_prints_the_effects():
     out = subprocess.run([sys.executable, "-m", "mortar1d3d.cli", "plan", str(EXAMPLE)],
                          capture_output=True, text=True, check=True).stdout
     assert "mortar.segmentation" in out and "solver.newton" in out and "4 load steps" in out
+
+
+def test_truss_by_radius_has_no_bending_stiffness_and_no_warning():
+    # a truss given by E and radius must not carry the derived EI (which BeamModel would
+    # reject with an "EI is ignored" warning the user never asked for)
+    import warnings
+    data = copy.deepcopy(BASE)
+    data["beams"][0]["model"] = "truss"
+    scene = Scene.from_dict(data)
+    section = scene.beams[0]["section"]
+    assert section["EI"] == 0.0 and section["EA"] == pytest.approx(2e11 * np.pi * 1e-4, rel=1e-15)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Model(scene).prepare()
