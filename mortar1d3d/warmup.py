@@ -4,13 +4,14 @@ import time
 
 def warmup(verbose=False):
     """Touch every stage once: the mortar engine (search, segmentation, both integrations,
-    assembly, CSR) and the physics (solid, torsion-free beam, truss, coupling, pressure).
+    assembly, CSR, point projection) and the physics (solid, torsion-free beam, truss, coupling, pressure).
 
     Kernels dispatch on integer element codes, so small scenes compile everything that later
     scenes of any element type use. Returns the elapsed time in seconds.
     """
     from . import generate
     from .model import solve
+    from .geometry.projection import project_points
     from .mortar.assemble import assemble_mortar
     from .scene import Scene
 
@@ -18,6 +19,7 @@ def warmup(verbose=False):
     beams, solid = generate.fibre_cube(2, 1, 2)
     for integration in ("segment", "element", "auto"):
         assemble_mortar(beams, solid, integration=integration, n_gauss=2)
+    project_points(solid, beams.positions, 0)
     t1 = time.perf_counter()
     box = {"box": [[0, 0, 0], [1, 0.2, 0.2]], "cells": [2, 1, 1]}
     for model, material in (("torsion_free", "neo_hooke"), ("truss", "saint_venant_kirchhoff")):

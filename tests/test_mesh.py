@@ -1,4 +1,5 @@
 """Validated meshes: Hermite arc lengths, input errors, meshio round trips, mixed solid blocks."""
+import re
 import warnings
 
 import meshio
@@ -6,6 +7,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
+from mortar1d3d import generate
 from mortar1d3d.elements.beam import hermite
 from mortar1d3d.elements.solid import dispatch
 from mortar1d3d.errors import MeshError, format_ids
@@ -259,6 +261,28 @@ def test_degenerate_flat_hex():
     points[4:, 2] = 0.0    # top face collapsed onto the bottom one (distinct nodes, same positions)
     with pytest.raises(MeshError, match=r"degenerate hexahedron elements .*: 0$"):
         SolidMesh(points, {"hexahedron": np.arange(8)[None]})
+
+
+@pytest.mark.parametrize("element", ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"])
+def test_inverted_and_degenerate_every_element_type(element):
+    box = generate.box((0, 0, 0), (1, 1, 1), (2, 1, 1), element)
+    ids = re.escape(format_ids(range(box.n_elements)))              # "0, 1, ... 9 (and 2 more)" for 12 tets
+    # mirrored (x -> -x, same node order): every element turned inside out
+    with pytest.raises(MeshError, match=rf"inverted {element} elements .*: {ids}$"):
+        SolidMesh(box.points * [-1.0, 1.0, 1.0], box.cells)
+    # squashed flat (z -> 1e-14 z): distinct nodes, zero volume relative to the element size
+    with pytest.raises(MeshError, match=rf"degenerate {element} elements .*: {ids}$"):
+        SolidMesh(box.points * [1.0, 1.0, 1e-14], box.cells)
+    # the last element's nodes listed as its mirror image (ξ_3 -> -ξ_3 for hexahedra, ξ_1 <-> ξ_2 for
+    # tetrahedra): that element alone is inverted
+    d = dispatch.SOLID_ELEMENTS[element]
+    ref = d.reference_nodes
+    mirrored = ref * [1, 1, -1] if d.family == "hex" else ref[:, [1, 0, 2]]
+    perm = [int(np.flatnonzero((np.abs(ref - m) < 1e-12).all(axis=1))[0]) for m in mirrored]
+    cells = box.cells[element].copy()
+    cells[-1] = cells[-1][perm]
+    with pytest.raises(MeshError, match=rf"inverted {element} elements .*: {box.n_elements - 1}$"):
+        SolidMesh(box.points, {element: cells})
 
 
 def test_zero_length_beam_element():

@@ -8,8 +8,8 @@ All buffers come from the caller; nothing here allocates.
 import numpy as np
 from numba import prange
 
-from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit, njit_parallel
-from .._schedule import claim, new_claims
+from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit, njit_parallel
+from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from .linalg import inverse3, norm3, solve3
@@ -314,3 +314,99 @@ def linear_parameters(code, table, s, x0, x1, x2, xi):
         return False
     xi[0], xi[1], xi[2] = y0, y1, y2
     return True
+
+
+@njit_parallel
+def _project_points_kernel(points, conn, codes, solid_origin, solid_h, linear, x, elements, tol, xi, status,
+                           workers):
+    """ξ and INSIDE / OUTSIDE / NOT_CONVERGED of each point ``x[i]`` in element ``elements[i]``."""
+    n = x.shape[0]
+    claims = new_claims(n, workers)
+    for worker in prange(workers):
+        X, N, dN, _, _, _, trial = point_buffers()
+        begin, stop = claim(claims, n, worker)
+        while begin < stop:
+            for i in range(begin, stop):
+                s = elements[i]
+                code = codes[s]
+                x0 = x[i, 0] - solid_origin[s, 0]
+                x1 = x[i, 1] - solid_origin[s, 1]
+                x2 = x[i, 2] - solid_origin[s, 2]
+                found = True
+                if is_affine(linear, s):
+                    linear_parameters(code, linear, s, x0, x1, x2, xi[i])
+                else:
+                    load_element(points, conn, s, code, solid_origin, X)
+                    if not (linear_parameters(code, linear, s, x0, x1, x2, xi[i])
+                            and project_point(code, X, x0, x1, x2, solid_h[s], xi[i], trial, N, dN) == CONVERGED):
+                        found = locate(code, X, x0, x1, x2, solid_h[s], tol, xi[i], trial, N, dN) != NOT_CONVERGED
+                    if found:
+                        polish(code, X, x0, x1, x2, solid_h[s], xi[i], trial, N, dN)
+                if not found:
+                    status[i] = NOT_CONVERGED
+                    xi[i, 0] = xi[i, 1] = xi[i, 2] = np.nan
+                elif solid.is_inside(code, xi[i], tol):
+                    status[i] = INSIDE
+                else:
+                    status[i] = OUTSIDE
+            begin, stop = claim(claims, n, worker)
+
+
+def project_points(solid, points, elements):
+    """Parameter coordinates ξ of ``points`` in the solid elements ``elements``: x(ξ) = p.
+
+    Parameters
+    ----------
+    solid : SolidMesh
+    points : (n, 3) array_like of float
+        Points in the solid mesh's coordinates.
+    elements : int or (n,) array_like of int
+        The element each point is projected into (one element for all points, or one each).
+
+    Returns
+    -------
+    xi : (n, 3) float64
+        Parameter coordinates (hexahedra: [-1, 1]³; tetrahedra: the unit simplex); NaN where
+        the projection did not converge.
+    status : (n,) int64
+        ``INSIDE`` (0): converged, ξ in the element up to the parameter tolerance 1e-9;
+        ``OUTSIDE`` (1): converged, ξ outside the element (x(ξ) = p still holds);
+        ``NOT_CONVERGED`` (2): Newton failed (the point lies far outside a curved element,
+        where the map extended beyond its element folds or runs away).
+
+    Notes
+    -----
+    The projection used by :func:`mortar1d3d.assemble_mortar` (design.md §2): Newton on
+    x(ξ) - p with a backtracking line search, converged when |x(ξ) - p| <= 1e-12 h (h: the
+    element's size), at most 20 iterations, started from the element map linearised at its
+    centre and, failing that, from the centre; affine elements (every tet4, parallelepiped hex8,
+    straight-edged quadratic elements) use their exact inverse map instead.
+    """
+    from ..errors import MeshError, format_ids
+    from ..mesh import SolidMesh, _as_points
+    from .search import solid_frames
+
+    if not isinstance(solid, SolidMesh):
+        raise TypeError(f"solid must be a SolidMesh, got {type(solid).__name__}")
+    x = _as_points(points, "points")
+    try:
+        elements = np.asarray(elements)
+    except (TypeError, ValueError) as exc:
+        raise MeshError(f"elements: expected integers ({exc})") from None
+    if elements.dtype.kind not in "iu":
+        raise MeshError(f"elements: expected integer element ids, got dtype {elements.dtype}")
+    elements = np.ascontiguousarray(np.broadcast_to(elements, (len(x),)) if elements.ndim == 0 else elements,
+                                    dtype=np.int64)
+    if elements.shape != (len(x),):
+        raise MeshError(f"elements: expected one element id or {len(x)} of them, got shape {elements.shape}")
+    bad = np.flatnonzero((elements < 0) | (elements >= solid.n_elements))
+    if bad.size:
+        raise MeshError(f"elements: ids out of range [0, {solid.n_elements}) at points {format_ids(bad)}")
+    _, solid_h, solid_origin = solid_frames(solid)
+    linear = np.empty((solid.n_elements, 5, 3))
+    linear_maps(solid.points, solid.connectivity, solid.element_codes, solid_origin, solid_h, linear, workers())
+    xi = np.zeros((len(x), 3))
+    status = np.empty(len(x), dtype=np.int64)
+    _project_points_kernel(solid.points, solid.connectivity, solid.element_codes, solid_origin, solid_h, linear, x,
+                           elements, PARAMETER_TOL, xi, status, workers())
+    return xi, status

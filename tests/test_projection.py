@@ -1,0 +1,118 @@
+"""``project_points``: Newton projection of points into solid elements, with its three outcomes.
+
+Points are made from known parameters (x = x(ξ_true) with the element modules' shape
+functions, which tests/test_elements.py checks), so the answer is known without a second
+projection code: converged inside, converged outside (x(ξ) = p still holds), not converged.
+"""
+import numpy as np
+import pytest
+
+import mortar1d3d as m13
+from mortar1d3d import generate
+from mortar1d3d.elements.solid.dispatch import BY_CODE, SOLID_MODULES
+from mortar1d3d.geometry.projection import INSIDE, NOT_CONVERGED, OUTSIDE
+from mortar1d3d.geometry.search import solid_bounding_boxes
+
+SOLID_TYPES = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
+
+
+def distorted(element, seed=1):
+    return generate.distort(generate.box((0, 0, 0), (1, 1, 1), (2, 2, 2), element), 0.15, seed=seed)
+
+
+def mapped(solid, s, xi):
+    """x(ξ) of element s, for the rows of ``xi`` (numpy, from the element module)."""
+    d = BY_CODE[int(solid.element_codes[s])]
+    X = solid.points[solid.connectivity[s, : d.n_nodes]]
+    N = np.empty(d.n_nodes)
+    out = np.empty((len(xi), 3))
+    for i, x in enumerate(xi):
+        SOLID_MODULES[d.name].shape.py_func(np.ascontiguousarray(x), N)
+        out[i] = N @ X
+    return out
+
+
+def parameters(family, rng, n, margin):
+    """n parameter points inside the reference element shrunk by ``margin`` (negative: outside
+    it by -margin in at least one coordinate, and still within 0.3 of it)."""
+    if family == "hex":
+        if margin >= 0:
+            return rng.uniform(-1 + margin, 1 - margin, (n, 3))
+        xi = rng.uniform(-1, 1, (n, 3))
+        axis = rng.integers(0, 3, n)
+        xi[np.arange(n), axis] = rng.choice([-1, 1], n) * (1 - margin + rng.uniform(0, 0.2, n))
+        return xi
+    bary = rng.dirichlet(np.ones(4), n)
+    if margin >= 0:
+        return margin + (1 - 4 * margin) * bary[:, 1:]
+    xi = bary[:, 1:].copy()
+    axis = rng.integers(0, 3, n)
+    xi[np.arange(n), axis] = margin - rng.uniform(0, 0.2, n)        # behind face ξ_axis = 0
+    return xi
+
+
+@pytest.mark.parametrize("element", SOLID_TYPES)
+def test_recovers_known_parameters_inside_and_outside(element):
+    solid = distorted(element)
+    family = BY_CODE[int(solid.element_codes[0])].family
+    h = solid_bounding_boxes(solid)[1]
+    rng = np.random.default_rng(5)
+    for margin, expected in ((1e-6, INSIDE), (-1e-6, OUTSIDE)):
+        for s in (0, solid.n_elements - 1):
+            xi_true = parameters(family, rng, 40, margin)
+            p = mapped(solid, s, xi_true)
+            xi, status = m13.project_points(solid, p, s)
+            assert xi.shape == (40, 3) and status.dtype == np.int64
+            np.testing.assert_array_equal(status, expected)
+            # x(ξ) = p to the design tolerance (1e-12 h), and ξ is the one the point was made from
+            assert np.abs(mapped(solid, s, xi) - p).max() <= 1e-12 * h[s]
+            np.testing.assert_allclose(xi, xi_true, rtol=0, atol=1e-10)
+
+
+def test_one_element_per_point_and_points_on_nodes():
+    solid = distorted("hexahedron20")
+    d = BY_CODE[int(solid.element_codes[0])]
+    elements = np.repeat(np.arange(solid.n_elements), d.n_nodes)
+    p = solid.points[solid.connectivity[:, : d.n_nodes].ravel()]
+    xi, status = m13.project_points(solid, p, elements)
+    np.testing.assert_array_equal(status, INSIDE)                    # nodes lie on the boundary: inside
+    np.testing.assert_allclose(xi, np.tile(d.reference_nodes, (solid.n_elements, 1)), rtol=0, atol=1e-12)
+
+
+def test_not_converged_far_outside_a_curved_element():
+    solid = distorted("hexahedron27")
+    # far from a curved element its (extended) map folds: Newton runs away or stalls
+    xi, status = m13.project_points(solid, [[1e4, -3e4, 2e4], [0.3, 0.3, 0.3]], 0)
+    assert status[0] == NOT_CONVERGED and np.isnan(xi[0]).all()
+    assert status[1] in (INSIDE, OUTSIDE) and np.isfinite(xi[1]).all()
+    # an affine element has an exact inverse map: the same point is simply outside
+    box = generate.box((0, 0, 0), (1, 1, 1), (2, 2, 2), "tetra")
+    xi, status = m13.project_points(box, [[1e4, -3e4, 2e4]], 0)
+    assert status[0] == OUTSIDE
+    np.testing.assert_allclose(mapped(box, 0, xi), [[1e4, -3e4, 2e4]], rtol=1e-12)
+
+
+def test_agrees_with_the_integration_points_of_assemble_mortar():
+    solid = distorted("tetra10")
+    beams = generate.random_curved_beams(2, 6, seed=3)
+    ops = m13.assemble_mortar(beams, solid)
+    pts = ops.points
+    xi, status = m13.project_points(solid, pts["position"], pts["solid_element"])
+    np.testing.assert_array_equal(status, INSIDE)
+    np.testing.assert_allclose(xi, pts["xi"], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("points, elements, error, message", [
+    ([[0.1, 0.1, 0.1]], 8, m13.MeshError, r"out of range \[0, 8\) at points 0"),
+    ([[0.1, 0.1, 0.1], [0.2, 0.2, 0.2]], [0, -1], m13.MeshError, "out of range.*at points 1"),
+    ([[0.1, 0.1, 0.1]], [0, 1], m13.MeshError, "one element id or 1 of them"),
+    ([[0.1, 0.1, 0.1]], 0.0, m13.MeshError, "integer element ids"),
+    ([[0.1, np.nan, 0.1]], 0, m13.MeshError, "NaN or infinite coordinates at rows 0"),
+    ([0.1, 0.1, 0.1], 0, m13.MeshError, r"shape \(n, 3\)"),
+])
+def test_bad_input(points, elements, error, message):
+    solid = generate.box((0, 0, 0), (1, 1, 1), (2, 2, 2), "hexahedron")
+    with pytest.raises(error, match=message):
+        m13.project_points(solid, points, elements)
+    with pytest.raises(TypeError, match="SolidMesh"):
+        m13.project_points(solid.points, points, elements)
