@@ -17,7 +17,6 @@ import statistics
 import time
 
 import numba
-import pytest
 import scipy.sparse.linalg as spla
 
 import mortar1d3d as m13

@@ -34,7 +34,32 @@ def _configure_cache():
         base = package_cache if os.access(package_cache.parent, os.W_OK) else Path.home() / ".cache" / "mortar1d3d"
     directory = Path(base) / f"mortar1d3d-{_source_fingerprint()}"
     numba.config.CACHE_DIR = str(directory)
+    _prune_caches(directory)
     return directory
+
+
+#: caches of other source versions kept beside the current one (most recently used first)
+KEEP_OTHER_CACHES = 3
+
+
+def _prune_caches(current, keep=KEEP_OTHER_CACHES):
+    """Remove all but the ``keep`` newest caches of other source versions (about 10 MB each).
+
+    Every edit of the package makes a new cache directory (see :func:`_source_fingerprint`); a
+    development checkout would otherwise collect one per edit. Caches of recent versions stay,
+    for switching between branches. Only directories named like ours are touched, and a failure
+    to remove one (another process using it, permissions) leaves it for next time.
+    """
+    import shutil
+
+    try:
+        others = [p for p in current.parent.glob("mortar1d3d-*") if p.is_dir() and p.name != current.name
+                  and len(p.name) == len(current.name)]
+        others.sort(key=lambda p: p.stat().st_mtime, reverse=True)
+    except OSError:
+        return
+    for old in others[keep:]:
+        shutil.rmtree(old, ignore_errors=True)
 
 
 #: where compiled kernels are cached (set before any kernel is decorated)

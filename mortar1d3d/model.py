@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .errors import AccuracyWarning, CouplingWarning, MeshError, format_ids
-from .generate import _helices, box as box_mesh
+from .generate import box as box_mesh
 from .mesh import BeamMesh, SolidMesh, zero_length_elements
 from .mortar.assemble import assemble_mortar
 from .scene import BOX_FACES, Scene, SceneError

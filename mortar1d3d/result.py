@@ -36,7 +36,6 @@ class Result:
         self.model, self.z, self.steps, self.history, self.wall_time = model, z, steps, history, wall_time
         self.scene = model.scene
         self.counts = model.counts
-        n = model.n_displacement_dofs
         self.solid_displacement = z[: 3 * model.n_solid_nodes].reshape(-1, 3).copy()
         pos, tan = [], []
         for entry in range(len(self.scene.beams)):
@@ -113,7 +112,6 @@ class Result:
         tmp = directory.parent / f".{directory.name}.tmp-{uuid.uuid4().hex[:8]}"
         tmp.mkdir()
         model = self.model
-        n = model.n_displacement_dofs
         try:
             entries, written = [], []
             static = []

@@ -15,7 +15,6 @@ test_hard_cases.py.
 import warnings
 
 import numpy as np
-import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 from scipy.spatial import Delaunay

@@ -1,6 +1,5 @@
 """The nonlinear beam-in-solid model end to end: patch test, rebar, penalty vs Lagrange,
 Newton, supports, what runs (counts), and output."""
-import copy
 import math
 import subprocess
 import sys

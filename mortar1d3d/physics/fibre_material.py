@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from .._config import njit
-from .materials import VOIGT, stress_tangent
+from .materials import stress_tangent
 
 
 @njit

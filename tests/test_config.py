@@ -1,0 +1,28 @@
+"""The kernel cache directory: keyed by the package sources, old versions pruned."""
+import os
+
+from mortar1d3d import _config
+
+
+def test_cache_directory_is_keyed_by_the_sources():
+    assert _config.CACHE_DIR.name == f"mortar1d3d-{_config._source_fingerprint()}"
+
+
+def test_prune_keeps_the_newest_other_versions(tmp_path):
+    current = tmp_path / "mortar1d3d-0000000000000000"
+    current.mkdir()
+    os.utime(current, (1.0, 1.0))                          # the current one stays, however old
+    others = [tmp_path / f"mortar1d3d-{k:016x}" for k in range(1, 7)]
+    for age, d in enumerate(others):                       # others[0] newest
+        (d / "sub").mkdir(parents=True)
+        (d / "sub" / "kernel.nbi").write_bytes(b"x")
+        os.utime(d, (1e9 - age, 1e9 - age))
+    unrelated = [tmp_path / "mortar1d3d-notes", tmp_path / "numba-cache"]
+    for d in unrelated:
+        d.mkdir()
+    (tmp_path / "mortar1d3d-000000000000000f").write_text("a file, not a cache")
+    _config._prune_caches(current, keep=3)
+    left = sorted(p.name for p in tmp_path.iterdir())
+    expected = sorted([current.name] + [d.name for d in others[:3]] + [d.name for d in unrelated]
+                      + ["mortar1d3d-000000000000000f"])
+    assert left == expected
