@@ -11,9 +11,9 @@ range up front: a thread slowed by a neighbour holds up the loop), and the chunk
 dynamically as the engine's kernels do (mortar1d3d._schedule): its speed-up is the ceiling for
 the engine's parallel parts on the machine of the moment.
 """
-import time
-
+import os
 import sys
+import time
 from pathlib import Path
 
 import numba
@@ -31,6 +31,12 @@ def _item(i):
     for k in range(1500):
         x += np.sin(i * 1e-3 + k * 1e-4)
     return x
+
+
+@njit(cache=True)
+def _work_serial(n, out):
+    for i in range(n):
+        out[i] = _item(i)
 
 
 @njit(parallel=True, cache=True)
@@ -83,3 +89,28 @@ def control_speedup(rounds=3):
         ratios.append(t[1] / t[2])
         singles.append(t[1])
     return float(np.median(ratios)), float(np.median(singles))
+
+
+def core_times(size=8000):
+    """Time of the control loop run serially on each CPU this process may use, pinned in turn.
+
+    On a virtual machine the vCPUs need not be equally fast: a neighbour on the host slows one
+    of them, for minutes, and which one changes. With chunks claimed dynamically, two threads
+    then reach at most 1 + t_fast / t_slow. Returns ``{cpu: seconds}`` (empty where the OS has
+    no affinity calls). Only the calling thread is pinned, and only while it runs the loop.
+    """
+    if not hasattr(os, "sched_setaffinity"):
+        return {}
+    allowed = os.sched_getaffinity(0)
+    out = np.empty(size)
+    _work_serial(100, out)
+    times = {}
+    try:
+        for cpu in sorted(allowed):
+            os.sched_setaffinity(0, {cpu})
+            t0 = time.perf_counter()
+            _work_serial(size, out)
+            times[cpu] = time.perf_counter() - t0
+    finally:
+        os.sched_setaffinity(0, allowed)
+    return times

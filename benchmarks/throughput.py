@@ -8,8 +8,9 @@ control of ``control.py`` (an embarrassingly parallel compute loop, as Numba sch
 and with dynamically claimed chunks as the engine's kernels) with 1 and 2 threads. The
 speed-up is given as the ratio of the medians and as the median of the per-round ratios
 (paired: both calls of a round see the same machine state); the control's speed-up says what
-the machine gave two threads in the same minutes. The per-stage times are those of the
-fastest call.
+the machine gave two threads in the same minutes. Each round also times the control serially on
+each CPU in turn (pinned): on a VM one vCPU is often slower than the other, which caps what two
+threads can give at 1 + t_fast / t_slow. The per-stage times are those of the fastest call.
 """
 import argparse
 import resource
@@ -23,7 +24,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # measure this checkout's package
 
 import mortar1d3d as m13  # noqa: E402
-from control import control_times  # noqa: E402
+from control import control_times, core_times  # noqa: E402
 
 THREADS = (1, 2)
 
@@ -72,7 +73,9 @@ def main(argv=None):
     control = {nt: [] for nt in THREADS}
     claimed = {nt: [] for nt in THREADS}
     n_points = {}
+    cores = []
     for _ in range(args.repeats):
+        cores.append(core_times())
         for nt, t in control_times(THREADS).items():
             control[nt].append(t)
         for nt, t in control_times(THREADS, dynamic=True).items():
@@ -104,6 +107,18 @@ def main(argv=None):
         print(f"{label}  1 / 2 threads median {np.median(times[1]) * 1e3:.1f} / {np.median(times[2]) * 1e3:.1f} ms: "
               f"speed-up {of_medians:.2f}x (medians), {paired:.2f}x (median of paired rounds)"
               + ("  [prange as Numba schedules it]" if label == "control" else "  [chunks claimed dynamically]"))
+    claimed_ratio = np.array(claimed[1]) / np.array(claimed[2])
+    for integration in integrations:
+        one, two = ([t for t, _, _ in calls[integration, nt]] for nt in THREADS)
+        print(f"{integration:8s} speed-up / the claimed control's of the same round: median "
+              f"{np.median(np.array(one) / np.array(two) / claimed_ratio):.2f}")
+    if cores and cores[0]:
+        per_cpu = {cpu: np.median([c[cpu] for c in cores]) for cpu in cores[0]}
+        ceiling = np.array([1.0 + min(c.values()) / max(c.values()) for c in cores])
+        print("cores (control serially, pinned to each CPU): "
+              + ", ".join(f"cpu{cpu} {t * 1e3:.0f} ms" for cpu, t in per_cpu.items())
+              + f" (medians); 1 + t_fast / t_slow per round: median {np.median(ceiling):.2f}x, "
+              f"range {ceiling.min():.2f}x-{ceiling.max():.2f}x")
     # the engine's speed-up in the rounds where the machine gave two threads nearly two cores
     control_ratio = np.array(control[1]) / np.array(control[2])
     good = control_ratio >= args.full
