@@ -19,7 +19,7 @@ import numba
 import pytest
 
 import mortar1d3d as m13
-from control import control_speedup
+from control import control_speedup, core_times
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
@@ -57,7 +57,7 @@ def pytest_sessionstart(session):
         pass
     if numba.config.NUMBA_NUM_THREADS >= 2 and available_cpus() >= 2:
         ratio, single = control_speedup()
-        RESULTS["control_speedup"] = {"start": ratio, "start_1thread_s": single}
+        RESULTS["control_speedup"] = {"start": ratio, "start_1thread_s": single, "start_cores_s": core_times()}
 
 
 @pytest.fixture(scope="session")
@@ -134,6 +134,7 @@ def _assembly_rows():
                          median2=two["median_s"] if two else None,
                          paired=paired.get("paired_speedup_median"), control=paired.get("control_speedup_median"),
                          claimed=paired.get("control_claimed_speedup_median"),
+                         of_claimed=paired.get("paired_over_claimed_median"),
                          paired_fresh=paired.get("paired_speedup_fresh_median"),
                          faults=rec.get("page_faults_per_call_median")))
     return rows
@@ -159,7 +160,7 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
         pass
     if "control_speedup" in RESULTS:
         ratio, single = control_speedup()
-        RESULTS["control_speedup"].update(end=ratio, end_1thread_s=single)
+        RESULTS["control_speedup"].update(end=ratio, end_1thread_s=single, end_cores_s=core_times())
     tr = terminalreporter
     lines = []
     load = " -> ".join("/".join(f"{x:.2f}" for x in _LOAD[k]) for k in ("start", "end") if k in _LOAD)
@@ -171,26 +172,29 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
         lines.append("")
         lines.append(f"{'assembly (GP/s = points / median)':<34}{'points':>8}  {'1 thread':>9}  "
                      f"{'target/core':>11}      {'2 threads':>9}  {'speed-up':>8}  {'fresh':>6}  {'paired':>6}  "
-                     f"{'target':>6}      {'control':>7}  {'claimed':>7}  {'faults/call':>11}")
+                     f"{'target':>6}      {'control':>7}  {'claimed':>7}  {'of claimed':>10}  {'faults/call':>11}")
         for r in rows:
             sp = "-" if r["speedup"] is None else f"{r['speedup']:.2f}x"
             paired = "-" if r["paired"] is None else f"{r['paired']:.2f}x"
             fresh = "-" if r["paired_fresh"] is None else f"{r['paired_fresh']:.2f}x"
             control = "-" if r["control"] is None else f"{r['control']:.2f}x"
             claimed = "-" if r["claimed"] is None else f"{r['claimed']:.2f}x"
+            of_claimed = "-" if r["of_claimed"] is None else f"{r['of_claimed']:.2f}"
             lines.append(
                 f"{r['variant']:<34}{r['n_points']:>8}  {_fmt_rate(r['gp1']):>9}  "
                 f"{'>= ' + format(r['target'], '.1e'):>11} {_mark(r['gp1'], r['target']):>4}  "
                 f"{_fmt_rate(r['gp2']):>9}  {sp:>8}  {fresh:>6}  {paired:>6}  "
                 f"{'>= ' + format(TARGETS['speedup_2_threads'], '.1f') + 'x':>6} "
                 f"{_mark(r['paired'] if r['paired'] is not None else r['speedup'], TARGETS['speedup_2_threads']):>4}"
-                f"  {control:>7}  {claimed:>7}  {'-' if r['faults'] is None else format(r['faults'], '.0f'):>11}")
+                f"  {control:>7}  {claimed:>7}  {of_claimed:>10}  "
+                f"{'-' if r['faults'] is None else format(r['faults'], '.0f'):>11}")
         lines.append("speed-up: ratio of the medians above; fresh / paired: median of per-round 1/2-thread ratios "
                      "(test_thread_speedup)")
         lines.append("  with the previous result dropped / held (memory faulted in again / reused; paired is judged "
                      "against the target); control: the same rounds' pure-compute loop")
         lines.append("  (prange as Numba schedules it; claimed: its chunks claimed dynamically, as in the engine's "
                      "kernels: the ceiling for their parallel parts);")
+        lines.append("  of claimed: median over the rounds of paired / claimed (1.0: the engine got all the machine gave)")
         lines.append("faults/call: minor page faults per 1-thread call with the previous result dropped (the "
                      "engine reuses its big blocks, see benchmarks/README.md)")
     control = RESULTS.get("control_speedup")
@@ -201,6 +205,13 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
         lines.append(f"  its 1-thread time {control['start_1thread_s'] * 1e3:.0f} ms at the start, "
                      f"{control.get('end_1thread_s', float('nan')) * 1e3:.0f} ms at the end "
                      "(how fast one core was: about 255 ms on this project's VM when undisturbed)")
+        cores = [(when, control.get(f"{when}_cores_s")) for when in ("start", "end")]
+        if all(c for _, c in cores):
+            lines.append("  half of it serially on each CPU in turn (pinned): "
+                         + "; ".join(f"{', '.join(f'cpu{cpu} {t * 1e3:.0f} ms' for cpu, t in c.items())} at the {when}"
+                                     for when, c in cores)
+                         + " (a slow vCPU caps two threads at 1 + t_fast / t_slow; interference between two busy "
+                         "vCPUs shows only in the control's speed-up)")
     startup = RESULTS["startup"]
     if startup:
         lines.append("")

@@ -96,7 +96,9 @@ def core_times(size=8000):
 
     On a virtual machine the vCPUs need not be equally fast: a neighbour on the host slows one
     of them, for minutes, and which one changes. With chunks claimed dynamically, two threads
-    then reach at most 1 + t_fast / t_slow. Returns ``{cpu: seconds}`` (empty where the OS has
+    then reach at most 1 + t_fast / t_slow. (Two equally fast vCPUs may still slow each other
+    down when both are busy, e.g. hyperthreads of one host core: only the 2-thread control
+    shows that.) Returns ``{cpu: seconds}`` (empty where the OS has
     no affinity calls). Only the calling thread is pinned, and only while it runs the loop.
     """
     if not hasattr(os, "sched_setaffinity"):

@@ -10,7 +10,9 @@ speed-up is given as the ratio of the medians and as the median of the per-round
 (paired: both calls of a round see the same machine state); the control's speed-up says what
 the machine gave two threads in the same minutes. Each round also times the control serially on
 each CPU in turn (pinned): on a VM one vCPU is often slower than the other, which caps what two
-threads can give at 1 + t_fast / t_slow. The per-stage times are those of the fastest call.
+threads can give at 1 + t_fast / t_slow (two vCPUs that are equally fast alone may still slow each
+other down when both are busy; only the 2-thread control shows that). The per-stage times are
+those of the fastest call.
 """
 import argparse
 import resource
