@@ -194,7 +194,8 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
                      "against the target); control: the same rounds' pure-compute loop")
         lines.append("  (prange as Numba schedules it; claimed: its chunks claimed dynamically, as in the engine's "
                      "kernels: the ceiling for their parallel parts);")
-        lines.append("  of claimed: median over the rounds of paired / claimed (1.0: the engine got all the machine gave)")
+        lines.append("  of claimed: median over the rounds of paired / claimed (1.0: the engine got all the "
+                     "machine gave)")
         lines.append("faults/call: minor page faults per 1-thread call with the previous result dropped (the "
                      "engine reuses its big blocks, see benchmarks/README.md)")
     control = RESULTS.get("control_speedup")

@@ -109,11 +109,14 @@ def main(argv=None):
         print(f"{label}  1 / 2 threads median {np.median(times[1]) * 1e3:.1f} / {np.median(times[2]) * 1e3:.1f} ms: "
               f"speed-up {of_medians:.2f}x (medians), {paired:.2f}x (median of paired rounds)"
               + ("  [prange as Numba schedules it]" if label == "control" else "  [chunks claimed dynamically]"))
+    # paired (per-round) 1/2-thread ratios of the engine and of both controls
+    ratio = {i: np.array([t for t, _, _ in calls[i, 1]]) / np.array([t for t, _, _ in calls[i, 2]])
+             for i in integrations}
+    control_ratio = np.array(control[1]) / np.array(control[2])
     claimed_ratio = np.array(claimed[1]) / np.array(claimed[2])
     for integration in integrations:
-        one, two = ([t for t, _, _ in calls[integration, nt]] for nt in THREADS)
         print(f"{integration:8s} speed-up / the claimed control's of the same round: median "
-              f"{np.median(np.array(one) / np.array(two) / claimed_ratio):.2f}")
+              f"{np.median(ratio[integration] / claimed_ratio):.2f}")
     if cores and cores[0]:
         per_cpu = {cpu: np.median([c[cpu] for c in cores]) for cpu in cores[0]}
         ceiling = np.array([1.0 + min(c.values()) / max(c.values()) for c in cores])
@@ -122,15 +125,13 @@ def main(argv=None):
               + f" (medians); 1 + t_fast / t_slow per round: median {np.median(ceiling):.2f}x, "
               f"range {ceiling.min():.2f}x-{ceiling.max():.2f}x")
     # the engine's speed-up in the rounds where the machine gave two threads nearly two cores
-    control_ratio = np.array(control[1]) / np.array(control[2])
     good = control_ratio >= args.full
     for integration in integrations:
-        one, two = ([t for t, _, _ in calls[integration, nt]] for nt in THREADS)
-        ratio = np.array(one) / np.array(two)
+        r = ratio[integration]
         if good.any():
             print(f"{integration:8s} rounds with control >= {args.full}x ({good.sum()} of {len(good)}): "
-                  f"speed-up median {np.median(ratio[good]):.2f}x (min {ratio[good].min():.2f}x); "
-                  f"other rounds {np.median(ratio[~good]) if (~good).any() else float('nan'):.2f}x")
+                  f"speed-up median {np.median(r[good]):.2f}x (min {r[good].min():.2f}x); "
+                  f"other rounds {np.median(r[~good]) if (~good).any() else float('nan'):.2f}x")
 
 
 if __name__ == "__main__":

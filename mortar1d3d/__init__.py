@@ -19,5 +19,5 @@ from .model import Effect, Model, plan, solve  # noqa: E402
 from .result import Result  # noqa: E402
 from .solvers.newton import ConvergenceError  # noqa: E402
 
-__all__ += ["MortarOperators", "assemble_mortar", "project_points", "warmup", "Scene", "SceneError", "Effect", "Model", "plan",
-            "solve", "Result", "ConvergenceError"]
+__all__ += ["MortarOperators", "assemble_mortar", "project_points", "warmup", "Scene", "SceneError", "Effect",
+            "Model", "plan", "solve", "Result", "ConvergenceError"]

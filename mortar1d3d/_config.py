@@ -12,15 +12,15 @@ from pathlib import Path
 import numba
 
 
-def _source_fingerprint():
-    """Hash of the package's source files.
+def _source_fingerprint(root=None):
+    """Hash of the package's source files (of the ``*.py`` files below ``root``, default: this package).
 
     Numba's cache checks only the file of the cached function itself, not of the kernels it
     calls from other modules: after editing a callee, a stale caller would be loaded. Keying
     the cache directory by the whole package's sources makes any edit start a fresh cache.
     """
     digest = hashlib.sha1()
-    root = Path(__file__).resolve().parent
+    root = Path(__file__).resolve().parent if root is None else Path(root)
     for path in sorted(root.rglob("*.py")):
         digest.update(str(path.relative_to(root)).encode())
         digest.update(path.read_bytes())

@@ -4,8 +4,22 @@ import os
 from mortar1d3d import _config
 
 
-def test_cache_directory_is_keyed_by_the_sources():
+def test_cache_directory_is_keyed_by_the_sources(tmp_path):
     assert _config.CACHE_DIR.name == f"mortar1d3d-{_config._source_fingerprint()}"
+    # an edit of any module, even one no cached kernel lives in, gives a new key; the same text the same
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "a.py").write_text("x = 1\n")
+    (tmp_path / "sub" / "b.py").write_text("y = 2\n")
+    (tmp_path / "notes.txt").write_text("not a source")
+    before = _config._source_fingerprint(tmp_path)
+    assert len(before) == 16 and before == _config._source_fingerprint(tmp_path)
+    (tmp_path / "notes.txt").write_text("edited, still not a source")
+    assert _config._source_fingerprint(tmp_path) == before
+    (tmp_path / "sub" / "b.py").write_text("y = 3\n")
+    edited = _config._source_fingerprint(tmp_path)
+    assert edited != before
+    (tmp_path / "sub" / "b.py").rename(tmp_path / "b.py")               # same text, other file: new key
+    assert _config._source_fingerprint(tmp_path) not in (before, edited)
 
 
 def test_prune_keeps_the_newest_other_versions(tmp_path):
