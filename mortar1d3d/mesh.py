@@ -10,12 +10,12 @@ from numba import prange
 from ._config import njit, njit_parallel
 from .elements.beam import BEAM_ELEMENTS, beam_element
 from .elements.beam import hermite as _hermite
-from .elements.solid.dispatch import MAX_NODES, N_NODES, SOLID_ELEMENTS, SOLID_MODULES, solid_element
+from .elements.solid.dispatch import MAX_NODES, N_NODES, SOLID_ELEMENTS, solid_element
+from .elements.validity import DEGENERATE, FOLDED, INVERTED, jacobian_validity
 from .errors import MeshError, format_ids
 
 # cell types of lower dimension that a volume mesh file may carry (boundary markers)
 _LOWER_DIMENSIONAL = {"vertex", "line", "line3", "triangle", "triangle6", "quad", "quad8", "quad9"}
-_DEGENERATE_JACOBIAN = 1e-12  # det J <= this * h^3 counts as degenerate
 
 
 def _as_points(points, what):
@@ -51,17 +51,6 @@ def _as_connectivity(cells, n_per_cell, n_points, what):
     return arr
 
 
-def _jacobian_determinants(descriptor, X):
-    """det J at the reference nodes and the centre of every element. X: (m, n_nodes, 3)."""
-    sample = np.vstack([descriptor.reference_nodes, descriptor.centre[None, :]])
-    deriv = SOLID_MODULES[descriptor.name].deriv.py_func   # pure Python: nothing compiles here
-    dN = np.empty((len(sample), descriptor.n_nodes, 3))
-    for q, xi in enumerate(sample):
-        deriv(xi, dN[q])
-    J = np.matmul(X.transpose(0, 2, 1)[:, None], dN[None])   # J[m, q] = ∂x/∂ξ of element m at sample q
-    return np.linalg.det(J)
-
-
 class SolidMesh:
     """A 3D mesh of solid elements (meshio names, VTK node order), possibly of mixed types.
 
@@ -76,7 +65,8 @@ class SolidMesh:
     ------
     MeshError
         Unknown element type, wrong shapes, NaN/inf coordinates, node ids out of range,
-        inverted or degenerate elements (det J <= 1e-12 h^3 at a node or the centre).
+        inverted, folded or degenerate elements (det J not > 1e-12 h^3 everywhere in the element,
+        proved with Bernstein bounds of det J, not only at sample points).
     """
 
     def __init__(self, points, cells, *, point_sets=None):
@@ -113,21 +103,23 @@ class SolidMesh:
         return {d.name: c for d, c in self.blocks}
 
     def _check_jacobians(self):
+        """MeshError naming the elements whose det J is not positive throughout (a bound that cannot
+        miss a fold between sample points: :mod:`mortar1d3d.elements.validity`)."""
         start = 0
         for d, conn in self.blocks:
             X = self.points[conn]
             h = np.linalg.norm(X.max(axis=1) - X.min(axis=1), axis=1)
-            det = _jacobian_determinants(d, X)
             ids = np.arange(start, start + len(conn))
-            zero_size = h == 0.0
-            inverted = (det.min(axis=1) < 0.0) & ~zero_size
-            degenerate = ((np.abs(det) <= _DEGENERATE_JACOBIAN * h[:, None] ** 3).any(axis=1) | zero_size) & ~inverted
-            if inverted.any():
-                raise MeshError(f"inverted {d.name} elements (negative Jacobian determinant; check the "
-                                f"VTK node order): {format_ids(ids[inverted])}")
-            if degenerate.any():
-                raise MeshError(f"degenerate {d.name} elements (zero Jacobian determinant): "
-                                f"{format_ids(ids[degenerate])}")
+            outcome = jacobian_validity(d, X, h)
+            outcome[h == 0.0] = DEGENERATE
+            for kind, text in ((INVERTED, "inverted {} elements (negative Jacobian determinant at a corner; "
+                                          "check the VTK node order)"),
+                               (FOLDED, "folded {} elements (det J <= 0 inside the element, > 0 at its corners: "
+                                        "a mid-side node too far from the middle of its edge or face)"),
+                               (DEGENERATE, "degenerate {} elements (zero Jacobian determinant)")):
+                bad = outcome == kind
+                if bad.any():
+                    raise MeshError(f"{text.format(d.name)}: {format_ids(ids[bad])}")
             start += len(conn)
 
     @classmethod

@@ -32,6 +32,11 @@ class SolidElementType:
     bounding_matrix : (m, n_nodes) float64
         Maps element nodes to points whose convex hull contains the element
         (Bernstein control points for quadratic elements; identity for linear ones).
+    monomials : (n_nodes, 3) int64
+        Exponents α of the monomials ξ^α that span the element's shape functions (the same space
+        as the shape functions, one monomial per node). The geometry kernels bound the map's
+        derivatives with them (point location, :mod:`mortar1d3d.geometry.projection`) and the
+        mesh check bounds det J (:mod:`mortar1d3d.mesh`).
     """
 
     name: str
@@ -44,7 +49,33 @@ class SolidElementType:
     faces: np.ndarray = field(repr=False)
     face_nodes: tuple = field(repr=False)
     bounding_matrix: np.ndarray = field(repr=False)
+    monomials: np.ndarray = field(repr=False, default=None)
     dim: int = 3
+
+    def __post_init__(self):
+        exps = np.asarray(self.monomials, dtype=np.int64)
+        if exps.shape != (self.n_nodes, 3):
+            raise ValueError(f"{self.name}: monomials must have shape ({self.n_nodes}, 3), got {exps.shape}")
+        object.__setattr__(self, "monomials", exps)
+
+    @property
+    def parameter_box(self):
+        """(2, 3) lower and upper corner of the box spanned by the reference nodes."""
+        return np.stack([self.reference_nodes.min(axis=0), self.reference_nodes.max(axis=0)])
+
+    @property
+    def jacobian_degree(self):
+        """Polynomial degree of det J: per direction for hexahedra (det J ∈ Q_p), total for tetrahedra (P_p).
+
+        A column ∂x/∂ξ_j of J has the degree of the monomials differentiated by ξ_j; det J takes
+        one factor from each column.
+        """
+        exps = self.monomials
+        if self.family == "hex":
+            # degree in ξ_i of column j: max of α_i - [i == j] over the monomials that ξ_j does not kill
+            return max(sum(int(max(exps[exps[:, j] > 0, i] - (i == j), default=0)) for j in range(3))
+                       for i in range(3))
+        return 3 * max(int(exps.sum(axis=1).max()) - 1, 0)
 
     @property
     def n_faces(self):

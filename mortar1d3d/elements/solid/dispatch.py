@@ -55,6 +55,36 @@ def _control_tables():
 N_CONTROL, CONTROL_MATRIX, CONTROL_IS_NODES, FACE_CONTROL, N_FACE_CONTROL = _control_tables()
 
 
+def _monomial_tables():
+    """Per code: monomial exponents α, the matrix from nodes to the coefficients of x(ξ) = Σ_α a_α y^α
+    with y = ξ - ξ_c (the element centre), and the parameter box and its max-norm radius about ξ_c.
+
+    ``a = TO_MONOMIAL[code] @ X`` (nodes X, one row per node) inverts the Vandermonde matrix of the
+    shape functions' space at the reference nodes; the geometry kernels bound derivatives of the
+    map with these coefficients (:func:`mortar1d3d.geometry.projection.derivative_bounds`).
+    """
+    n_codes = len(BY_CODE)
+    exps = np.zeros((n_codes, MAX_NODES, 3), dtype=np.int64)
+    to_monomial = np.zeros((n_codes, MAX_NODES, MAX_NODES))
+    centre = np.zeros((n_codes, 3))
+    box = np.zeros((n_codes, 2, 3))
+    radius = np.zeros(n_codes)
+    for c, d in BY_CODE.items():
+        y = d.reference_nodes - d.centre
+        vandermonde = np.prod(y[:, None, :] ** d.monomials[None, :, :], axis=2)     # [node, monomial]
+        exps[c, : d.n_nodes] = d.monomials
+        to_monomial[c, : d.n_nodes, : d.n_nodes] = np.linalg.inv(vandermonde)
+        centre[c] = d.centre
+        box[c] = d.parameter_box
+        radius[c] = np.abs(y).max()
+    return exps, to_monomial, centre, box, radius
+
+
+#: per code: monomial exponents, nodes → monomial coefficients about the centre, the centre, the
+#: parameter box (lower, upper corner) and the max-norm radius of the element about its centre
+MONOMIALS, TO_MONOMIAL, CENTRE, PARAMETER_BOX, RADIUS = _monomial_tables()
+
+
 def solid_element(name):
     """Descriptor of the solid element type called ``name`` (meshio name)."""
     try:

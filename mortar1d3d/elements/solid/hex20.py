@@ -72,4 +72,6 @@ DESCRIPTOR = SolidElementType(
     name="hexahedron20", code=1, n_nodes=20, degree=2, family="hex",
     reference_nodes=REFERENCE_NODES, centre=HEX_CENTRE, faces=HEX_FACES, face_nodes=HEX_FACE_NODES,
     bounding_matrix=_bounding_matrix(),
+    # serendipity: exponents up to 2 with at most one of them equal to 2
+    monomials=[(i, j, k) for i in range(3) for j in range(3) for k in range(3) if (i, j, k).count(2) <= 1],
 )

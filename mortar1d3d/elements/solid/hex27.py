@@ -73,4 +73,5 @@ DESCRIPTOR = SolidElementType(
     name="hexahedron27", code=2, n_nodes=27, degree=2, family="hex",
     reference_nodes=REFERENCE_NODES, centre=HEX_CENTRE, faces=HEX_FACES, face_nodes=HEX_FACE_NODES,
     bounding_matrix=_bounding_matrix(),
+    monomials=[(i, j, k) for i in range(3) for j in range(3) for k in range(3)],   # triquadratic
 )

@@ -48,4 +48,5 @@ DESCRIPTOR = SolidElementType(
     name="hexahedron", code=0, n_nodes=8, degree=1, family="hex",
     reference_nodes=REFERENCE_NODES, centre=HEX_CENTRE, faces=HEX_FACES, face_nodes=HEX_FACE_NODES,
     bounding_matrix=np.eye(8),
+    monomials=[(i, j, k) for i in (0, 1) for j in (0, 1) for k in (0, 1)],     # trilinear
 )

@@ -55,4 +55,5 @@ DESCRIPTOR = SolidElementType(
     name="tetra10", code=4, n_nodes=10, degree=2, family="tet",
     reference_nodes=REFERENCE_NODES, centre=TET_CENTRE, faces=TET_FACES, face_nodes=TET_FACE_NODES,
     bounding_matrix=_bounding_matrix(),
+    monomials=[(i, j, k) for i in range(3) for j in range(3) for k in range(3) if i + j + k <= 2],   # quadratic
 )

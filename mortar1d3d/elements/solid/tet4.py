@@ -36,4 +36,5 @@ DESCRIPTOR = SolidElementType(
     name="tetra", code=3, n_nodes=4, degree=1, family="tet",
     reference_nodes=REFERENCE_NODES, centre=TET_CENTRE, faces=TET_FACES, face_nodes=TET_FACE_NODES,
     bounding_matrix=np.eye(4),
+    monomials=[(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)],                  # linear
 )
