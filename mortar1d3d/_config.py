@@ -74,7 +74,19 @@ njit_parallel = numba.njit(parallel=True, **JIT_OPTIONS)
 
 # Relative tolerances (design.md §2). Distances are relative to the element size h.
 NEWTON_RESIDUAL_TOL = 1e-12   # |x(xi) - p| <= tol * h
-PARAMETER_TOL = 1e-9          # inside test, merging of intersection points (parameter space)
+PARAMETER_TOL = 1e-9          # inside test of points and of face crossings (parameter space)
+#: a segment's owner must contain its midpoint to this (parameter space): far below PARAMETER_TOL,
+#: so that a piece of beam passing outside an element within the crossings' tolerance band is not
+#: coupled; the embedded length then follows the geometry continuously (a band of 1e-9 would add
+#: and drop pieces of its own width as a beam moves across its edge)
+SEGMENT_OWNER_TOL = 1e-11
+#: face crossings closer than this along the beam (relative to the solid element size h) are one cut:
+#: the same crossing found twice, or one point of a shared face seen from both sides (round-off apart)
+MERGE_TOL = 64 * 2.220446049250313e-16
+#: a piece between two crossings of the same face of its owner is inside only if its midpoint lies on
+#: the owner's side of that face to round-off (parameter space): a tangential touch is decided by the
+#: face condition, never by the piece's length
+TOUCH_TOL = 64 * 2.220446049250313e-16
 NEWTON_MAX_ITERATIONS = 20
 
 #: items per parallel chunk: work buffers are allocated once per chunk, never per item, and the

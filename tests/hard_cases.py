@@ -71,19 +71,8 @@ def element_nodes(solid, s):
     return d, solid.points[solid.connectivity[s, : d.n_nodes]]
 
 
-def locate_points(name, X, P, iterations=40):
-    """ξ (k, 3) of the points P (k, 3) in the elements with nodes X (k, n_nodes, 3), one pair per row,
-    and whether Newton converged (|x - p| <= 1e-13 h).
-
-    Computed in each element's local frame (nodes minus its first node), like the library, so
-    that far-from-origin meshes keep their digits. Vectorised over all pairs at once.
-    """
-    d = next(d for d in BY_CODE.values() if d.name == name)
-    origin = X[:, :1, :]
-    X = X - origin
-    P = P - origin[:, 0, :]
-    h = np.linalg.norm(X.max(axis=1) - X.min(axis=1), axis=1)
-    xi = np.tile(d.centre, (len(P), 1)).astype(float)
+def _newton(name, X, P, xi, h, iterations):
+    """Vectorised Newton on x(ξ) = P from ``xi`` (modified), one element per row; converged flags."""
     active = np.arange(len(P))
     for _ in range(iterations):
         N, dN = shape_values(name, xi[active])
@@ -99,7 +88,49 @@ def locate_points(name, X, P, iterations=40):
         xi[active] += np.linalg.solve(J, r[:, :, None])[:, :, 0]
     N, _ = shape_values(name, xi)
     res = np.linalg.norm(P - np.einsum("ka,kai->ki", N, X), axis=1)
-    return xi, res <= 1e-13 * h
+    return res <= 1e-13 * h
+
+
+def _starts(d):
+    """Newton starts spread over the reference element: a 3x3x3 lattice (hex) or the 10 lattice
+    points of a quadratic tet pulled towards the centroid."""
+    if d.family == "hex":
+        g = np.array([-0.75, 0.0, 0.75])
+        return np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    tet10 = next(t for t in BY_CODE.values() if t.name == "tetra10")
+    return 0.25 + 0.8 * (tet10.reference_nodes - 0.25)
+
+
+def locate_points(name, X, P, iterations=40):
+    """ξ (k, 3) of the points P (k, 3) in the elements with nodes X (k, n_nodes, 3), one pair per row,
+    and whether Newton converged (|x - p| <= 1e-13 h).
+
+    Computed in each element's local frame (nodes minus its first node), like the library, so
+    that far-from-origin meshes keep their digits. Vectorised over all pairs at once. Newton runs
+    from the element centre; a point not found inside that way is tried again from starts spread
+    over the element (a curved element's map folds outside it, so Newton can converge to a second
+    solution outside while the point lies inside), and a solution inside wins.
+    """
+    d = next(d for d in BY_CODE.values() if d.name == name)
+    origin = X[:, :1, :]
+    X = X - origin
+    P = P - origin[:, 0, :]
+    h = np.linalg.norm(X.max(axis=1) - X.min(axis=1), axis=1)
+    xi = np.tile(d.centre, (len(P), 1)).astype(float)
+    converged = _newton(name, X, P, xi, h, iterations)
+    if d.degree > 1 or name == "hexahedron":
+        retry = np.flatnonzero(~converged | (outside_distance(d.family, xi) > 0.0))
+        for start in _starts(d):
+            if not len(retry):
+                break
+            trial = np.tile(start, (len(retry), 1))
+            ok = _newton(name, X[retry], P[retry], trial, h[retry], iterations)
+            better = ok & (~converged[retry] | (outside_distance(d.family, trial) < outside_distance(d.family,
+                                                                                                   xi[retry])))
+            xi[retry[better]] = trial[better]
+            converged[retry[better]] = True
+            retry = retry[~(ok & (outside_distance(d.family, trial) <= 0.0))]
+    return xi, converged
 
 
 def containment(solid, P):

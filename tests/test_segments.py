@@ -293,10 +293,12 @@ def _arch_length(c=0.6, z0=0.2, z1=0.8):
     return beams.lengths[0]
 
 
-# Tangential touches: the face Newton polishes a converged crossing to a parameter step of 1e-11, and a
-# sliver run shorter than 1e-6 between crossings joins a neighbour that contains it, or is dropped
-# when both neighbours are uncoupled (segmentation._tile). Without these the touch gave a sliver
-# segment [-3.05e-6, 3.05e-6].
+# Tangential touches: the face Newton polishes a converged crossing to a parameter step of 1e-11; two
+# crossings of the same face with the centreline on that face in between (a double root, found as
+# several close cuts) are a touch: those pieces join a neighbour that contains them, or stay uncoupled
+# when the beam touches from outside (segmentation._tile). Without this the touch gave a segment
+# [-3.05e-6, 3.05e-6] (and with the earlier rule, any piece shorter than 1e-6 in η between crossings
+# was taken for a touch: issue 16, see the corner cuts below).
 
 
 def test_touching_a_face_from_outside():
@@ -356,6 +358,105 @@ def test_touching_a_shared_face_counts_the_length_once():
     assert_no_overlap(ops)
     assert ops.embedded_length == pytest.approx(arc_length(curve, -1.0, 1.0), rel=1e-12)
     assert ops.segments["eta_start"].min() == -1.0 and ops.segments["eta_end"].max() == 1.0
+
+
+def _poking_arch(depth, c=0.6):
+    """The arch inside the unit cube whose apex pokes out through x = 1 by ``depth`` (< 0: stays inside)."""
+    L = _arch_length(c)
+    beams, curve = _arch(1.0 + depth - c * L / 4, "up", c)
+    return beams, curve, L
+
+
+@pytest.mark.parametrize("depth", [1e-2, 1e-5, 1e-8, 1e-11, 1e-13])
+def test_a_shallow_excursion_through_a_face_follows_the_geometry(depth):
+    """The piece outside has length ~ sqrt(depth): decided by the face condition at every depth (the
+    earlier rule dropped excursions shorter than 1e-6 in η, i.e. deeper than ~1e-13 here but coupled
+    the part outside the solid for depths below ~1e-13 ... 1e-12)."""
+    solid = generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1))
+    beams, curve, L = _poking_arch(depth)
+    half = np.sqrt(4 * depth / (0.6 * L))                 # x(±half) = 1
+    assert abs(curve[0](half) - 1.0) < 1e-14
+    ops = assemble_mortar(beams, solid, n_gauss=20)
+    inside = arc_length(curve, -1.0, -half) + arc_length(curve, half, 1.0)
+    # the roots of a near-double root are determined to ~ round-off / (curvature · half-width)
+    assert ops.embedded_length == pytest.approx(inside, rel=1e-12, abs=1e-14 / half)
+    assert len(ops.segments) == 2
+
+
+@pytest.mark.parametrize("depth", [0.0, -1e-13, -1e-9])
+def test_an_arch_touching_a_face_from_inside_stays_whole(depth):
+    solid = generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1))
+    beams, curve, L = _poking_arch(depth)
+    ops = assemble_mortar(beams, solid, n_gauss=20)
+    assert_segments(ops, [(0, 0, -1.0, 1.0)], tol=0.0)
+    assert ops.embedded_length == pytest.approx(arc_length(curve, -1.0, 1.0), rel=1e-13)
+
+
+# --------------------------------------------------------------------------------------------
+# A4b. corner and edge cuts at every depth (issue 16): no threshold in the beam element's η
+# --------------------------------------------------------------------------------------------
+def _corner_cut(s):
+    """A straight beam element of length 2 in the plane z = 0.5 crossing the edge x = y = 1 of the unit
+    cube at 45°, on the line x + y = 2 - s: for s > 0 it cuts off a piece of chord √2 s, for s <= 0 it
+    passes outside (at distance |s|/√2 from the edge)."""
+    mid = np.array([1.0 - 0.5 * s, 1.0 - 0.5 * s, 0.5])
+    d = np.array([1.0, -1.0, 0.0]) / np.sqrt(2.0)
+    return straight_beam(mid - d, mid + d)
+
+
+UNIT_CUBE = generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1))
+
+
+@pytest.mark.parametrize("integration", ["segment", "auto"])
+def test_corner_cut_at_every_depth(integration):
+    """Issue 16: a cut of depth 5e-7 (s = 6.9e-7, chord 9.8e-7 < 1e-6 in η) coupled nothing: a piece
+    shorter than 1e-6 in the beam's η between crossings was taken for a tangential touch."""
+    for s in [6.9e-7] + [10.0 ** -k for k in range(1, 14)]:
+        ops = assemble_mortar(_corner_cut(s), UNIT_CUBE, integration=integration)
+        assert ops.embedded_length == pytest.approx(np.sqrt(2) * s, rel=1e-9, abs=1e-15), s
+        assert len(ops.segments) == 1
+    for s in [0.0] + [-(10.0 ** -k) for k in range(1, 15)]:
+        ops = assemble_mortar(_corner_cut(s), UNIT_CUBE, integration=integration)
+        assert ops.embedded_length == 0.0 and len(ops.segments) == 0, s
+
+
+@pytest.mark.parametrize("centre", [0.0, 7.0710678e-7, 1e-11, -1e-11, -5e-10, 5e-10])
+def test_corner_cut_is_continuous_across_every_threshold(centre):
+    """Sweeping the cut in steps of 1e-13 (h = √3) across the former sliver threshold (chord 1e-6), the
+    tangency s = 0, and the bands of the crossing (5e-10 beyond the face, in parameter units 1e-9) and of
+    the ownership (1e-11): κ, D and M change by O(step) each time, never by a jump."""
+    step = 1e-13
+    full = assemble_mortar(_corner_cut(1.0), UNIT_CUBE)          # a cut through the whole cube
+    previous = None
+    for k in range(-6, 7):
+        s = centre + k * step
+        ops = assemble_mortar(_corner_cut(s), UNIT_CUBE)
+        assert ops.embedded_length == pytest.approx(np.sqrt(2) * max(s, 0.0), rel=1e-6, abs=2e-15)
+        if previous is not None:
+            for name in ("D", "M"):
+                change = abs(getattr(ops, name) - getattr(previous, name)).max() / abs(getattr(full, name)).max()
+                assert change <= 4 * step, (s, name, change)
+            assert abs(ops.kappa - previous.kappa).max() <= 4 * step
+        previous = ops
+
+
+def test_a_long_beam_element_keeps_its_small_pieces():
+    """Issue 16: one beam element of length 200 over a row of 100 hex8 (h = 2) lost its pieces of 1e-4 h
+    (in its η: 1e-6, the former sliver length). The beam enters through y = 0 at 5e-5 before the face
+    x = 20 between elements 9 and 10: element 9 gets a piece of length 5.0003e-5."""
+    solid = generate.box((0, 0, 0), (200, 2, 2), (100, 1, 1))
+    slope = 2.0 / 150.0
+    entry = 20.0 - 5e-5
+    a = np.array([0.0, -slope * entry, 1.0])
+    b = np.array([200.0, slope * (200.0 - entry), 1.0])
+    exit_x = entry + 150.0                                   # y = 2 there
+    ops = assemble_mortar(straight_beam(a, b), solid)
+    first = ops.segments[0]
+    assert first["solid_element"] == 9
+    per_x = np.sqrt(1 + slope ** 2)
+    assert (first["eta_end"] - first["eta_start"]) * 0.5 * np.linalg.norm(b - a) == pytest.approx(5e-5 * per_x, rel=1e-8)
+    assert ops.embedded_length == pytest.approx((exit_x - entry) * per_x, rel=1e-12)
+    assert len(ops.segments) == 76
 
 
 # --------------------------------------------------------------------------------------------

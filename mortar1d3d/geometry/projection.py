@@ -112,14 +112,259 @@ def load_element(points, conn, element, code, origin, X):
 
 
 @njit
-def locate(code, X, p0, p1, p2, h, tol, xi, trial, N, dN):
-    """Project p from the element centre: INSIDE, OUTSIDE or NOT_CONVERGED; ξ in ``xi``."""
-    solid.centre(code, xi)
-    if project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) != CONVERGED:
-        return NOT_CONVERGED
-    if solid.is_inside(code, xi, tol):
+def monomial_coefficients(code, X, a):
+    """Coefficients ``a[k]`` (3,) of the map x(ξ) = Σ_k a_k y^{α_k}, y = ξ - ξ_c, of local nodes ``X``."""
+    n = solid.n_nodes(code)
+    for k in range(n):
+        a0 = a1 = a2 = 0.0
+        for b in range(n):
+            w = solid.TO_MONOMIAL[code, k, b]
+            if w != 0.0:
+                a0 += w * X[b, 0]
+                a1 += w * X[b, 1]
+                a2 += w * X[b, 2]
+        a[k, 0], a[k, 1], a[k, 2] = a0, a1, a2
+
+
+@njit
+def injectivity_bound(code, a, L, radius):
+    """ρ >= sup ‖L J(ξ) - I‖∞ over the box |ξ - ξ_c|∞ <= ``radius``, for L = J(ξ_c)⁻¹.
+
+    L J(ξ) - I = Σ_{|α| >= 2} (L a_α) ∇(y^α)ᵀ (the linear monomials give J(ξ_c)), and on the box
+    Σ_j |∂_j y^α| <= |α| radius^(|α|-1). If ρ < 1, then |L (x(ξ) - x(ζ)) - (ξ - ζ)|∞ <= ρ |ξ - ζ|∞
+    for any two points of the box: the map is one-to-one there.
+    """
+    rho = 0.0
+    for i in range(3):
+        row = 0.0
+        for k in range(solid.n_nodes(code)):
+            degree = solid.MONOMIALS[code, k, 0] + solid.MONOMIALS[code, k, 1] + solid.MONOMIALS[code, k, 2]
+            if degree >= 2:
+                b = L[i, 0] * a[k, 0] + L[i, 1] * a[k, 1] + L[i, 2] * a[k, 2]
+                row += degree * radius ** (degree - 1) * abs(b)
+        rho = max(rho, row)
+    return rho
+
+
+@njit
+def curvature_bound(code, a, radius):
+    """K >= max_i Σ_{j,k} |∂²x_i/∂ξ_j∂ξ_k| over the box |ξ - ξ_c|∞ <= ``radius``.
+
+    Then ‖J(ξ) - J(ζ)‖∞ <= K |ξ - ζ|∞ there (Σ_{j,k} |∂_j ∂_k y^α| <= |α| (|α| - 1) radius^(|α|-2)).
+    """
+    K = 0.0
+    for i in range(3):
+        row = 0.0
+        for k in range(solid.n_nodes(code)):
+            degree = solid.MONOMIALS[code, k, 0] + solid.MONOMIALS[code, k, 1] + solid.MONOMIALS[code, k, 2]
+            if degree >= 2:
+                row += degree * (degree - 1) * radius ** (degree - 2) * abs(a[k, i])
+        K = max(K, row)
+    return K
+
+
+#: enlargements δ (max norm, parameter units) of the element about its centre tried for the
+#: one-to-one certificate of :func:`linear_maps`, largest first
+_CERTIFIED_MARGINS = (1.0, 0.5, 0.25, 0.125)
+
+
+@njit
+def certified_margin(code, X, L, a):
+    """Largest δ of ``_CERTIFIED_MARGINS`` for which the element's map is provably one-to-one on the
+    box |ξ - ξ_c|∞ <= R + δ (R: the element's radius about its centre); -1 if none.
+
+    ``L`` (3, 3) is J(ξ_c)⁻¹; ``a`` receives the monomial coefficients (scratch).
+    """
+    monomial_coefficients(code, X, a)
+    for delta in _CERTIFIED_MARGINS:
+        if injectivity_bound(code, a, L, solid.RADIUS[code] + delta) < 1.0:
+            return delta
+    return -1.0
+
+
+@njit
+def certified_outside(code, table, s, xi):
+    """Whether a solution ξ of x(ξ) = p outside element s proves that p lies outside it.
+
+    True when ξ lies in the box on which the map is one-to-one (:func:`certified_margin`, stored
+    in ``table[s, 4, 1]``): that box contains the element, and p has no other preimage in it.
+    """
+    margin = table[s, 4, 1]
+    if not margin >= 0.0:
+        return False
+    limit = solid.RADIUS[code] + margin
+    return (abs(xi[0] - solid.CENTRE[code, 0]) <= limit and abs(xi[1] - solid.CENTRE[code, 1]) <= limit
+            and abs(xi[2] - solid.CENTRE[code, 2]) <= limit)
+
+
+#: boxes of the subdivision search are halved at most this often (2^-16 of the element: far below
+#: what any valid element needs, see :func:`search_inside`)
+_SEARCH_DEPTH = 16
+#: fixed-point iterations of the search in a box where the map is a contraction (factor <= 1/2)
+_CHORD_ITERATIONS = 64
+
+
+@njit
+def search_buffers():
+    """Scratch of :func:`search_inside`: monomial coefficients (MAX_NODES, 3) and the box stack."""
+    return np.empty((solid.MAX_NODES, 3)), np.empty((8 * _SEARCH_DEPTH + 8, 4))
+
+
+@njit
+def _box_in_region(code, m0, m1, m2, r, tol):
+    """Whether the box |ξ - m|∞ <= r meets {ξ : outside_distance(ξ) <= tol} (hex: always, by construction)."""
+    if solid.FAMILY[code] == solid.HEX:
+        return True
+    if m0 + r < -tol or m1 + r < -tol or m2 + r < -tol:
+        return False
+    return max(m0 - r, -tol) + max(m1 - r, -tol) + max(m2 - r, -tol) <= 1.0 + tol
+
+
+@njit
+def search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN):
+    """Find ξ with x(ξ) = p and outside_distance(ξ) <= ``tol``, or prove that there is none.
+
+    A point inside a curved element can have further preimages outside it (the extended map folds);
+    Newton may converge to one of those. This search cannot miss the one inside. It covers the
+    element's parameter box (plus ``tol``) with boxes C = {|ξ - m|∞ <= r}. With L = J(m)⁻¹ and K
+    bounding the second derivatives (:func:`curvature_bound`), ρ = ‖L‖∞ K r bounds
+    ‖L (J(ξ) - J(m))‖∞ on C, so a preimage in C implies |L (p - x(m))|∞ <= (1 + ρ) r: boxes that fail
+    this are discarded. When 2ρ <= 1/2, the fixed-point map ξ ↦ ξ + L (p - x(ξ)) contracts by 1/2
+    on the doubled box and converges from m to the only preimage there, if any; otherwise the box
+    is halved in every direction. A valid element (det J > 0) has ‖L‖ bounded, so boxes become
+    small enough long before ``_SEARCH_DEPTH``.
+
+    Returns INSIDE (``xi`` holds the preimage, polished), OUTSIDE (proved: no preimage with
+    outside_distance <= tol) or NOT_CONVERGED (a box reached the depth limit undecided: a singular
+    Jacobian inside the element).
+    """
+    monomial_coefficients(code, X, a)
+    c0, c1, c2 = solid.CENTRE[code, 0], solid.CENTRE[code, 1], solid.CENTRE[code, 2]
+    lo = solid.PARAMETER_BOX[code, 0]
+    hi = solid.PARAMETER_BOX[code, 1]
+    r0 = 0.0
+    for i in range(3):
+        r0 = max(r0, 0.5 * (hi[i] - lo[i]) + tol)
+    if not r0 > 0.0:
+        return OUTSIDE
+    stack[0, 0] = 0.5 * (lo[0] + hi[0])
+    stack[0, 1] = 0.5 * (lo[1] + hi[1])
+    stack[0, 2] = 0.5 * (lo[2] + hi[2])
+    stack[0, 3] = r0
+    top = 1
+    undecided = False
+    r_min = r0 * 0.5 ** _SEARCH_DEPTH
+    while top > 0:
+        top -= 1
+        m0, m1, m2, r = stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3]
+        if not _box_in_region(code, m0, m1, m2, r, tol):
+            continue
+        trial[0], trial[1], trial[2] = m0, m1, m2
+        x0, x1, x2 = map_point(code, X, trial, N)
+        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, trial, dN)
+        det = j00 * (j11 * j22 - j12 * j21) - j01 * (j10 * j22 - j12 * j20) + j02 * (j10 * j21 - j11 * j20)
+        split = True
+        if det > 0.0:
+            inv = 1.0 / det
+            l00, l01, l02 = inv * (j11 * j22 - j12 * j21), inv * (j02 * j21 - j01 * j22), inv * (j01 * j12 - j02 * j11)
+            l10, l11, l12 = inv * (j12 * j20 - j10 * j22), inv * (j00 * j22 - j02 * j20), inv * (j02 * j10 - j00 * j12)
+            l20, l21, l22 = inv * (j10 * j21 - j11 * j20), inv * (j01 * j20 - j00 * j21), inv * (j00 * j11 - j01 * j10)
+            norm_l = max(abs(l00) + abs(l01) + abs(l02), abs(l10) + abs(l11) + abs(l12), abs(l20) + abs(l21) + abs(l22))
+            reach = max(abs(m0 - c0), abs(m1 - c1), abs(m2 - c2)) + 2.0 * r      # the doubled box about ξ_c
+            rho = norm_l * curvature_bound(code, a, reach) * r
+            e0, e1, e2 = p0 - x0, p1 - x1, p2 - x2
+            d0 = l00 * e0 + l01 * e1 + l02 * e2
+            d1 = l10 * e0 + l11 * e1 + l12 * e2
+            d2 = l20 * e0 + l21 * e1 + l22 * e2
+            # no preimage in C (a hair of slack for the round-off of x(m) and L)
+            if max(abs(d0), abs(d1), abs(d2)) > (1.0 + rho) * r * (1.0 + 1e-9) + 1e-14:
+                continue
+            if 2.0 * rho <= 0.5:
+                split = False
+                # the steps shrink by 1/2 or faster until round-off stops them; leaving the doubled
+                # box means there is no preimage in C
+                y0, y1, y2 = m0 + d0, m1 + d1, m2 + d2
+                step = max(abs(d0), abs(d1), abs(d2))
+                within = True
+                for _ in range(_CHORD_ITERATIONS):
+                    if max(abs(y0 - m0), abs(y1 - m1), abs(y2 - m2)) > 2.0 * r:
+                        within = False
+                        break
+                    trial[0], trial[1], trial[2] = y0, y1, y2
+                    x0, x1, x2 = map_point(code, X, trial, N)
+                    e0, e1, e2 = p0 - x0, p1 - x1, p2 - x2
+                    d0 = l00 * e0 + l01 * e1 + l02 * e2
+                    d1 = l10 * e0 + l11 * e1 + l12 * e2
+                    d2 = l20 * e0 + l21 * e1 + l22 * e2
+                    last = step
+                    step = max(abs(d0), abs(d1), abs(d2))
+                    if step >= last:
+                        break
+                    y0, y1, y2 = y0 + d0, y1 + d1, y2 + d2
+                if within:
+                    xi[0], xi[1], xi[2] = y0, y1, y2
+                    x0, x1, x2 = map_point(code, X, xi, N)
+                    if norm3(p0 - x0, p1 - x1, p2 - x2) <= NEWTON_RESIDUAL_TOL * h:
+                        polish(code, X, p0, p1, p2, h, xi, trial, N, dN)
+                        if solid.outside_distance(code, xi) <= tol:
+                            return INSIDE
+        if split:
+            if r <= r_min:
+                undecided = True
+                continue
+            # children, the one holding the linear estimate m + d last (searched first)
+            half = 0.5 * r
+            first = top
+            for child in range(8):
+                stack[top, 0] = m0 + (half if child & 1 else -half)
+                stack[top, 1] = m1 + (half if child & 2 else -half)
+                stack[top, 2] = m2 + (half if child & 4 else -half)
+                stack[top, 3] = half
+                top += 1
+            if det > 0.0:
+                best = first + (1 if d0 > 0.0 else 0) + (2 if d1 > 0.0 else 0) + (4 if d2 > 0.0 else 0)
+                for i in range(4):
+                    v = stack[best, i]
+                    stack[best, i] = stack[top - 1, i]
+                    stack[top - 1, i] = v
+    return NOT_CONVERGED if undecided else OUTSIDE
+
+
+#: solutions this close to the element's boundary (parameter units) are polished before the inside test
+_NEAR_BOUNDARY = 1e-6
+
+
+@njit
+def locate_point(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack):
+    """INSIDE, OUTSIDE or NOT_CONVERGED of the local point p in the non-affine element s (nodes ``X``).
+
+    Newton from the linearised estimate (from the centre if that fails). A solution inside is
+    final; one outside is final when the element's one-to-one certificate covers it
+    (:func:`certified_outside`). Otherwise p may still have a preimage inside (a curved element
+    folds beyond its faces, and Newton found another branch): :func:`search_inside` decides.
+    On INSIDE or OUTSIDE ``xi`` holds a solution of x(ξ) = p; NOT_CONVERGED: no solution known
+    (and none inside the element unless the search was undecided).
+    """
+    converged = (linear_parameters(code, table, s, p0, p1, p2, xi)
+                 and project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) == CONVERGED)
+    if not converged:
+        solid.centre(code, xi)
+        converged = project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) == CONVERGED
+    if converged:
+        if abs(solid.outside_distance(code, xi)) <= _NEAR_BOUNDARY:
+            # the inside test near a face is decided to round-off, not to the Newton tolerance
+            polish(code, X, p0, p1, p2, h, xi, trial, N, dN)
+        if solid.is_inside(code, xi, tol):
+            return INSIDE
+        if certified_outside(code, table, s, xi):
+            return OUTSIDE
+    o0, o1, o2 = xi[0], xi[1], xi[2]
+    if search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN) == INSIDE:
         return INSIDE
-    return OUTSIDE
+    if converged:
+        xi[0], xi[1], xi[2] = o0, o1, o2
+        return OUTSIDE
+    return NOT_CONVERGED
 
 
 @njit
@@ -151,16 +396,17 @@ def polish(code, X, p0, p1, p2, h, xi, trial, N, dN):
 
 @njit
 def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points, solid_origin,
-                     solid_h, linear, tol, X, xi, trial, N, dN, only):
+                     solid_h, linear, tol, X, xi, trial, N, dN, a, stack, only):
     """Lowest-index candidate of beam element ``e`` containing the point r (beam-local frame).
 
     Candidates are ``pair_solid[p0:p1]`` (ascending); returns -1 if none contains the point.
     With ``only`` >= 0, tests just that element. On success ``xi`` holds the point's ξ.
     This is the ownership rule of both integrations (design.md §1-§2): a point on a face,
     edge or node shared by several elements belongs to the lowest-index one. Affine elements
-    are located with their inverse map (``linear``, :func:`linear_maps`); for the others a
-    Newton projection runs from the linearised estimate (from the centre if there is none or it
-    fails) and ``X`` is left holding the nodes of the last element tested.
+    are located with their inverse map (``linear``, :func:`linear_maps`), the others by
+    :func:`locate_point` (``a``, ``stack``: :func:`search_buffers`), which finds a point inside a
+    curved element whatever branch Newton takes; ``X`` is left holding the nodes of the last
+    element tested.
     """
     for p in range(p0, p1):
         s = pair_solid[p]
@@ -174,14 +420,12 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
         x2 = r2 + (beam_origin[e, 2] - solid_origin[s, 2])
         if is_affine(linear, s):
             linear_parameters(code, linear, s, x0, x1, x2, xi)
+            if solid.is_inside(code, xi, tol):
+                return s
         else:
             load_element(points, conn, s, code, solid_origin, X)
-            if not (linear_parameters(code, linear, s, x0, x1, x2, xi)
-                    and project_point(code, X, x0, x1, x2, solid_h[s], xi, trial, N, dN) == CONVERGED):
-                if locate(code, X, x0, x1, x2, solid_h[s], tol, xi, trial, N, dN) == NOT_CONVERGED:
-                    continue
-        if solid.is_inside(code, xi, tol):
-            return s
+            if locate_point(code, X, x0, x1, x2, solid_h[s], tol, linear, s, xi, trial, N, dN, a, stack) == INSIDE:
+                return s
     return -1
 
 
@@ -244,7 +488,10 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
     position x_c = x(ξ_c) (local to node 0), row 4 ``[kind, 0, 0]``: kind 1 for elements affine to
     round-off (every tet4, parallelepiped hex8, straight-edged quadratic elements; L is then
     the exact inverse map and ``ξ = ξ_c + L (x - x_c)`` needs no Newton), 0 for the others (a
-    Newton start close to the answer), NaN where the Jacobian at the centre is singular.
+    Newton start close to the answer), NaN where the Jacobian at the centre is singular. Row 4,
+    column 1: the margin δ of the element's one-to-one certificate (:func:`certified_margin`; -1 if
+    none), with which a Newton solution outside the element proves a point outside
+    (:func:`certified_outside`).
     """
     n = conn.shape[0]
     claims = new_claims(n, workers)
@@ -252,6 +499,7 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
         X = np.empty((solid.MAX_NODES, 3))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
+        a = np.empty((solid.MAX_NODES, 3))
         xc = np.empty(3)
         begin, stop = claim(claims, n, worker)
         while begin < stop:
@@ -267,6 +515,7 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
                 j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xc, dN)
                 if inverse3(j00, j01, j02, j10, j11, j12, j20, j21, j22, table[s, :3]) > 0.0:
                     table[s, 4, 0] = 0.0
+                    table[s, 4, 1] = certified_margin(code, X, table[s, :3], a)
                 else:
                     table[s, :, :] = np.nan
             begin, stop = claim(claims, n, worker)
@@ -324,6 +573,7 @@ def _project_points_kernel(points, conn, codes, solid_origin, solid_h, linear, x
     claims = new_claims(n, workers)
     for worker in prange(workers):
         X, N, dN, _, _, _, trial = point_buffers()
+        a, stack = search_buffers()
         begin, stop = claim(claims, n, worker)
         while begin < stop:
             for i in range(begin, stop):
@@ -332,26 +582,17 @@ def _project_points_kernel(points, conn, codes, solid_origin, solid_h, linear, x
                 x0 = x[i, 0] - solid_origin[s, 0]
                 x1 = x[i, 1] - solid_origin[s, 1]
                 x2 = x[i, 2] - solid_origin[s, 2]
-                # the steps of first_containing for one given element, written out: a helper
-                # shared by both (numba inline="always") made the element-based assembly about
-                # 10 % slower (pinned to one CPU, 37.6-40.3 ms -> 42.3-44.9 ms per call)
-                found = True
                 if is_affine(linear, s):
                     linear_parameters(code, linear, s, x0, x1, x2, xi[i])
-                else:
-                    load_element(points, conn, s, code, solid_origin, X)
-                    if not (linear_parameters(code, linear, s, x0, x1, x2, xi[i])
-                            and project_point(code, X, x0, x1, x2, solid_h[s], xi[i], trial, N, dN) == CONVERGED):
-                        found = locate(code, X, x0, x1, x2, solid_h[s], tol, xi[i], trial, N, dN) != NOT_CONVERGED
-                    if found:
-                        polish(code, X, x0, x1, x2, solid_h[s], xi[i], trial, N, dN)
-                if not found:
-                    status[i] = NOT_CONVERGED
+                    status[i] = INSIDE if solid.is_inside(code, xi[i], tol) else OUTSIDE
+                    continue
+                load_element(points, conn, s, code, solid_origin, X)
+                status[i] = locate_point(code, X, x0, x1, x2, solid_h[s], tol, linear, s, xi[i], trial, N, dN, a,
+                                         stack)
+                if status[i] == NOT_CONVERGED:
                     xi[i, 0] = xi[i, 1] = xi[i, 2] = np.nan
-                elif solid.is_inside(code, xi[i], tol):
-                    status[i] = INSIDE
                 else:
-                    status[i] = OUTSIDE
+                    polish(code, X, x0, x1, x2, solid_h[s], xi[i], trial, N, dN)
             begin, stop = claim(claims, n, worker)
 
 
@@ -373,17 +614,23 @@ def project_points(solid, points, elements):
         the projection did not converge.
     status : (n,) int64
         ``INSIDE`` (0): converged, ξ in the element up to the parameter tolerance 1e-9;
-        ``OUTSIDE`` (1): converged, ξ outside the element (x(ξ) = p still holds);
-        ``NOT_CONVERGED`` (2): Newton failed (the point lies far outside a curved element,
-        where the map extended beyond its element folds or runs away).
+        ``OUTSIDE`` (1): the point lies outside the element; ξ is a solution of x(ξ) = p
+        outside it (the map extended beyond the element);
+        ``NOT_CONVERGED`` (2): the point lies outside the element and no solution of x(ξ) = p
+        was found (far outside a curved element, where the extended map folds or runs away).
 
     Notes
     -----
-    The projection used by :func:`mortar1d3d.assemble_mortar` (design.md §2): Newton on
-    x(ξ) - p with a backtracking line search, converged when |x(ξ) - p| <= 1e-12 h (h: the
-    element's size), at most 20 iterations, started from the element map linearised at its
-    centre and, failing that, from the centre; affine elements (every tet4, parallelepiped hex8,
-    straight-edged quadratic elements) use their exact inverse map instead.
+    The location used by :func:`mortar1d3d.assemble_mortar`: affine elements (every tet4,
+    parallelepiped hex8, straight-edged quadratic elements) use their exact inverse map. The
+    others run Newton on x(ξ) - p with a backtracking line search, converged when
+    |x(ξ) - p| <= 1e-12 h (h: the element's size), at most 20 iterations, from the element's map
+    linearised at its centre (else from the centre). A curved element's extended map can fold,
+    so a point inside may have further solutions outside, and Newton may find one of those.
+    A solution outside therefore counts only where the map is proved one-to-one (a bound on its
+    second derivatives); elsewhere a subdivision search with the same bound either finds the
+    solution inside or proves there is none. A point inside a valid element (det J > 0
+    throughout) is always found inside.
     """
     from ..errors import MeshError, format_ids
     from ..mesh import SolidMesh, _as_points

@@ -21,19 +21,18 @@ intervals they tile [-1, 1] exactly.
 import numpy as np
 from numba import prange
 
-from .._config import PARAMETER_TOL, njit, njit_parallel
+from .._config import MERGE_TOL, PARAMETER_TOL, SEGMENT_OWNER_TOL, TOUCH_TOL, njit, njit_parallel
 from .._memory import carve
 from .._schedule import claim, new_claims, workers
 from ..elements.solid import dispatch as solid
 from .beam import beam_point
 from .intersection import face_coordinates, intersect_face
-from .linalg import solve3
-from .projection import (CONVERGED, first_containing, is_affine, jacobian, linear_parameters, load_element,
-                         point_buffers, project_point)
+from .linalg import norm3, solve3
+from .projection import (CONVERGED, NOT_CONVERGED, certified_outside, first_containing, is_affine, jacobian,
+                         linear_parameters, load_element, locate_point, point_buffers, project_point, search_buffers)
 
 _NEAR_FACE = 0.1     # min |g| of the cubic model below this fraction of its variation: try a touch there
 _SCAN = 8            # points per sample interval at which the cubic model of g is scanned
-_SLIVER = 1e-6       # intervals shorter than this (in η) between crossings: tangential touches
 _REACH_MARGIN = 1e-6  # faces whose box misses a beam element's box by more than this (relative): no crossing
 
 
@@ -58,13 +57,25 @@ def crossings_capacity(search_points):
 _FIRST_CAPACITY = 16
 
 
+#: added to the face id of a crossing that lies on the face's plane but off the face itself by more than
+#: round-off (accepted within PARAMETER_TOL: a beam passing an edge or corner just outside)
+BAND = 8
+
+
 @njit
-def _record(eta, out_eta, p, count, overflow):
-    """Store a crossing (NaN: none) in row p; flag the pair when its row is full."""
+def _face_code(code, f, xi, band_tol):
+    """The face id f of a crossing at ξ, plus ``BAND`` when ξ lies off the face by more than ``band_tol``."""
+    return f + BAND if solid.outside_distance(code, xi) > band_tol else f
+
+
+@njit
+def _record(eta, face, out_eta, out_face, p, count, overflow):
+    """Store a crossing (NaN: none) of face ``face`` in row p; flag the pair when its row is full."""
     if np.isnan(eta):
         return count
     if count < out_eta.shape[1]:
         out_eta[p, count] = eta
+        out_face[p, count] = face
         return count + 1
     overflow[p] = True
     return count
@@ -73,30 +84,37 @@ def _record(eta, out_eta, p, count, overflow):
 def pair_crossings(ctx, pair_beam, pair_solid, Q, lengths, beam_origin, beam_boxes, search_points):
     """Face crossings of the candidate pairs (pair_beam indexes ``Q``, ``lengths``, ...).
 
-    Returns ``crossing_eta`` (n_pairs, width), ``crossing_count`` (n_pairs,) and ``no_face``
-    (n_pairs,): the pairs whose beam element reaches no face of the solid element.
+    Returns ``crossing_eta`` (n_pairs, width), ``crossing_face`` (n_pairs, width: the face of the
+    solid element each crossing lies on), ``crossing_count`` (n_pairs,) and ``no_face`` (n_pairs,):
+    the pairs whose beam element reaches no face of the solid element.
     """
     n = len(pair_solid)
     args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.linear, ctx.beam_code, Q, lengths,
             beam_origin, beam_boxes, search_points)
     full = crossings_capacity(search_points)
-    crossing_eta, crossing_count, no_face, overflow = carve(((n, min(_FIRST_CAPACITY, full)), np.float64),
-                                                            (n, np.int64), (n, np.bool_), (n, np.bool_))
+    width = min(_FIRST_CAPACITY, full)
+    crossing_eta, crossing_face, crossing_count, no_face, overflow = carve(
+        ((n, width), np.float64), ((n, width), np.int64), (n, np.int64), (n, np.bool_), (n, np.bool_))
     crossing_count[:] = 0
-    _pair_crossings(pair_beam, pair_solid, *args, crossing_eta, crossing_count, no_face, overflow, workers())
+    _pair_crossings(pair_beam, pair_solid, *args, crossing_eta, crossing_face, crossing_count, no_face, overflow,
+                    workers())
     again = np.flatnonzero(overflow)
     if len(again) and crossing_eta.shape[1] < full:
         more_eta = np.empty((len(again), full))
+        more_face = np.empty((len(again), full), dtype=np.int64)
         more_count = np.zeros(len(again), dtype=np.int64)
-        _pair_crossings(pair_beam[again], pair_solid[again], *args, more_eta, more_count,
+        _pair_crossings(pair_beam[again], pair_solid[again], *args, more_eta, more_face, more_count,
                         np.empty(len(again), dtype=np.bool_), np.empty(len(again), dtype=np.bool_), workers())
         width = int(more_count.max())
         wide = np.empty((n, max(width, crossing_eta.shape[1])))
+        wide_face = np.empty((n, max(width, crossing_eta.shape[1])), dtype=np.int64)
         wide[:, : crossing_eta.shape[1]] = crossing_eta
+        wide_face[:, : crossing_eta.shape[1]] = crossing_face
         wide[again, :width] = more_eta[:, :width]
-        crossing_eta = wide
+        wide_face[again, :width] = more_face[:, :width]
+        crossing_eta, crossing_face = wide, wide_face
         crossing_count[again] = more_count
-    return crossing_eta, crossing_count, no_face
+    return crossing_eta, crossing_face, crossing_count, no_face
 
 
 @njit
@@ -185,8 +203,8 @@ def _faces_in_reach(code, X, h, box, origin, C, reach):
 
 @njit_parallel
 def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear,
-                    beam_code, Q, lengths, beam_origin, beam_boxes, search_points, out_eta, out_count, no_face,
-                    overflow, workers):
+                    beam_code, Q, lengths, beam_origin, beam_boxes, search_points, out_eta, out_face, out_count,
+                    no_face, overflow, workers):
     n_pairs = pair_beam.shape[0]
     S = search_points
     claims = new_claims(n_pairs, workers)
@@ -194,6 +212,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
         C = np.empty((solid.CONTROL_MATRIX.shape[1], 3))
         reach = np.empty(solid.MAX_FACES, dtype=np.bool_)
         X, N, dN, H, dH, xi, trial = point_buffers()
+        a, stack = search_buffers()
         z = np.empty(3)
         start = np.empty(3)
         eta_s = np.empty(S)
@@ -219,6 +238,9 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                 s0 = beam_origin[e, 0] - solid_origin[s, 0]
                 s1 = beam_origin[e, 1] - solid_origin[s, 1]
                 s2 = beam_origin[e, 2] - solid_origin[s, 2]
+                big = max(abs(solid_origin[s, 0]), abs(solid_origin[s, 1]), abs(solid_origin[s, 2]),
+                          abs(beam_origin[e, 0]), abs(beam_origin[e, 1]), abs(beam_origin[e, 2]))
+                band_tol = TOUCH_TOL + 64.0 * 2.220446049250313e-16 * big / h
                 # samples along the beam element: ξ(η) and dξ/dη = J⁻¹ r'(η) (warm-started Newton)
                 solid.centre(code, xi)
                 affine = is_affine(linear, s)
@@ -236,6 +258,16 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                         linear_parameters(code, linear, s, r0, r1, r2, xi)    # else: from the centre
                     start[:] = xi
                     ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
+                    if not (ok[k] and (solid.is_inside(code, xi, PARAMETER_TOL)
+                                       or certified_outside(code, linear, s, xi))):
+                        # the warm start may have followed a branch of the map folded outside a
+                        # curved element: locate the sample for certain
+                        start[:] = xi
+                        status = locate_point(code, X, r0, r1, r2, h, PARAMETER_TOL, linear, s, xi, trial, N, dN,
+                                              a, stack)
+                        ok[k] = status != NOT_CONVERGED
+                        if not ok[k]:
+                            xi[:] = start
                     if ok[k]:
                         xi_s[k] = xi
                         j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, dN)
@@ -261,7 +293,8 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                             _face_centre(code, face, start)
                             eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s[k],
                                                 start[0], start[1], start[2], z, xi, N, dN, H, dH)
-                            count = _record(eta, out_eta, p, count, overflow)
+                            count = _record(eta, _face_code(code, f, xi, band_tol), out_eta, out_face, p, count,
+                                            overflow)
                     for k in range(S - 1):
                         if not (ok[k] and ok[k + 1]):
                             continue
@@ -290,7 +323,8 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                                 continue
                             eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
                                                t_start, z, xi, N, dN, H, dH)
-                            count = _record(eta, out_eta, p, count, overflow)
+                            count = _record(eta, _face_code(code, f, xi, band_tol), out_eta, out_face, p, count,
+                                            overflow)
                         # a sample on the face: the scan starts Newton there and finds that point again;
                         # a crossing soon after it (leaving at a corner and coming back) is a root of
                         # the cubic divided by its known root (found by make fuzz, see test_hard_cases)
@@ -307,12 +341,24 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                                     continue
                                 eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s,
                                                    k, t_start, z, xi, N, dN, H, dH)
-                                count = _record(eta, out_eta, p, count, overflow)
+                                count = _record(eta, _face_code(code, f, xi, band_tol), out_eta, out_face, p, count,
+                                            overflow)
                         if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0:
-                            # close to the face without a sign change: a touch or a missed double crossing
+                            # close to the face without a sign change: a touch or a missed double crossing.
+                            # Newton converges to one of two close roots; the other lies about as far on
+                            # the other side of the extremum of g: start there too (a dip through the
+                            # face shorter than a sample interval has both ends found)
                             eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
                                                best_t, z, xi, N, dN, H, dH)
-                            count = _record(eta, out_eta, p, count, overflow)
+                            count = _record(eta, _face_code(code, f, xi, band_tol), out_eta, out_face, p, count,
+                                            overflow)
+                            if not np.isnan(eta):
+                                t_mirror = 2.0 * best_t - (eta - eta_s[k]) / (eta_s[k + 1] - eta_s[k])
+                                if 0.0 < t_mirror < 1.0:
+                                    eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s,
+                                                       xi_s, k, t_mirror, z, xi, N, dN, H, dH)
+                                    count = _record(eta, _face_code(code, f, xi, band_tol), out_eta, out_face, p, count,
+                                            overflow)
                 out_count[p] = count
             begin, stop = claim(claims, n_pairs, worker)
 
@@ -329,26 +375,79 @@ def _insertion_sort(a, n):
 
 
 @njit
-def _deep_end(eta, owner, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, linear,
-              beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH):
-    """``owner`` if the beam element's end r(η) (η = ±1) lies inside it by more than the tolerance, else -1."""
-    if owner < 0:
-        return -1
-    r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
-    return first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
-                            solid_origin, solid_h, linear, -PARAMETER_TOL, X, xi, trial, N, dN, owner)
+def _next_crossing(crossing_eta, crossing_face, crossing_count, p, q, tol):
+    """η of the next crossing of the same face after crossing q of pair p (farther than ``tol``); inf if none."""
+    f = crossing_face[p, q]
+    after = np.inf
+    if f < 0:
+        return after
+    for k in range(crossing_count[p]):
+        eta = crossing_eta[p, k]
+        if crossing_face[p, k] % BAND == f % BAND and crossing_eta[p, q] + tol < eta < after:
+            after = eta
+    return after
+
+
+@njit
+def _face_zone(crossing_eta, crossing_face, crossing_count, p, a, b, tol):
+    """The face of pair p's element whose consecutive crossings η1 <= a and η2 >= b enclose [a, b]
+    (to ``tol``): between them the beam stays on one side of that face. -1 if none."""
+    for q in range(crossing_count[p]):
+        if crossing_face[p, q] >= 0 and crossing_eta[p, q] <= a + tol:
+            if b - tol <= _next_crossing(crossing_eta, crossing_face, crossing_count, p, q, tol) < np.inf:
+                return crossing_face[p, q] % BAND
+    return -1
+
+
+@njit
+def _band_end(crossing_eta, crossing_face, crossing_count, p, a, b, tol):
+    """Whether pair p has a crossing off its face (``BAND``) within ``tol`` of η = a or η = b."""
+    for q in range(crossing_count[p]):
+        if crossing_face[p, q] >= BAND and (abs(crossing_eta[p, q] - a) <= tol or abs(crossing_eta[p, q] - b) <= tol):
+            return True
+    return False
+
+
+@njit
+def _face_condition(e, s, f, eta, codes, conn, points, solid_origin, solid_h, linear, beam_code, Q, lengths,
+                    beam_origin, X, xi, trial, N, dN, H, dH, a, stack):
+    """g = n·(ξ - o) of face f of element s at the centreline point r(η) (> 0: beyond the face); NaN if
+    r(η) cannot be located in s. Leaves ξ in ``xi``."""
+    code = codes[s]
+    r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], beam_origin[e, 0] - solid_origin[s, 0],
+                                     beam_origin[e, 1] - solid_origin[s, 1], beam_origin[e, 2] - solid_origin[s, 2],
+                                     eta, H, dH)
+    if is_affine(linear, s):
+        linear_parameters(code, linear, s, r0, r1, r2, xi)
+    else:
+        load_element(points, conn, s, code, solid_origin, X)
+        if locate_point(code, X, r0, r1, r2, solid_h[s], PARAMETER_TOL, linear, s, xi, trial, N, dN, a,
+                        stack) == NOT_CONVERGED:
+            return np.nan
+    face = solid.faces(code)[f]
+    return (face[3, 0] * (xi[0] - face[0, 0]) + face[3, 1] * (xi[1] - face[0, 1])
+            + face[3, 2] * (xi[2] - face[0, 2]))
+
+
+@njit
+def _merge_distance(beam_code, Qe, length, eta, h, H, dH):
+    """Cuts closer than this in η are one point: ``MERGE_TOL`` h along the centreline at η."""
+    _, _, _, d0, d1, d2 = beam_point(beam_code, Qe, length, 0.0, 0.0, 0.0, eta, H, dH)
+    return MERGE_TOL * h / max(norm3(d0, d1, d2), 1e-300)
 
 
 @njit_parallel
-def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, points, solid_origin,
+def _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes, conn, points, solid_origin,
           solid_h, solid_boxes, linear, beam_code, Q, lengths, beam_origin, seg_offsets, seg_solid,
           seg_start, seg_end, seg_count, workers):
     n_beam = pair_offsets.shape[0] - 1
-    tol = PARAMETER_TOL
     claims = new_claims(n_beam, workers)
     for worker in prange(workers):
         X, N, dN, H, dH, xi, trial = point_buffers()
+        a, stack = search_buffers()
         cuts = np.empty(64)
+        reach = np.empty(64)
+        touch = np.empty(64, dtype=np.bool_)
         owners = np.empty(64, dtype=np.int64)
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
@@ -356,12 +455,22 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                 p0 = pair_offsets[e]
                 p1 = pair_offsets[e + 1]
                 m = 0
+                h = np.inf
+                big = max(abs(beam_origin[e, 0]), abs(beam_origin[e, 1]), abs(beam_origin[e, 2]))
                 for p in range(p0, p1):
                     m += crossing_count[p]
+                    h = min(h, solid_h[pair_solid[p]])
+                # far from the origin the coordinates themselves carry round-off (about eps |x|; in
+                # parameter units relative to h): a beam meant to lie in a face is off it by that much
+                round_off = 2.220446049250313e-16 * big / h
+                owner_tol = SEGMENT_OWNER_TOL + 8.0 * round_off
+                touch_tol = TOUCH_TOL + 64.0 * round_off
                 if m + 2 > cuts.shape[0]:
                     cuts = np.empty(2 * (m + 2))
+                    reach = np.empty(2 * (m + 2))
+                    touch = np.empty(2 * (m + 2), dtype=np.bool_)
                     owners = np.empty(2 * (m + 2), dtype=np.int64)
-                # breakpoints: -1, the crossings (sorted, merged within the tolerance), +1
+                # breakpoints: -1, the crossings (sorted; physically coincident ones merged), +1
                 m = 0
                 for p in range(p0, p1):
                     for q in range(crossing_count[p]):
@@ -369,79 +478,117 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_count, codes, conn, p
                         m += 1
                 _insertion_sort(cuts[1:], m)
                 cuts[0] = -1.0
+                reach[0] = _merge_distance(beam_code, Q[e], lengths[e], -1.0, h, H, dH)
                 n_pts = 1
                 for q in range(1, m + 1):
-                    if cuts[q] > cuts[n_pts - 1] + tol and cuts[q] < 1.0 - tol:
+                    tol = _merge_distance(beam_code, Q[e], lengths[e], cuts[q], h, H, dH)
+                    if cuts[q] > cuts[n_pts - 1] + max(tol, reach[n_pts - 1]) and cuts[q] < 1.0 - tol:
                         cuts[n_pts] = cuts[q]
+                        reach[n_pts] = tol
                         n_pts += 1
                 cuts[n_pts] = 1.0
+                reach[n_pts] = _merge_distance(beam_code, Q[e], lengths[e], 1.0, h, H, dH)
                 n_pts += 1
+
+                # a tangential touch: two consecutive crossings of the same face of one candidate with
+                # the centreline on that face between them (the face condition vanishes there and,
+                # both ends being roots, so does its derivative: a double root, which Newton
+                # resolves only to about sqrt(round-off), into several close cuts). Every interval
+                # between them is a touch.
+                for iv in range(n_pts - 1):
+                    touch[iv] = False
+                for p in range(p0, p1):
+                    for q in range(crossing_count[p]):
+                        eta1 = crossing_eta[p, q]
+                        eta2 = _next_crossing(crossing_eta, crossing_face, crossing_count, p, q, reach[0])
+                        if eta2 == np.inf:
+                            continue
+                        g = _face_condition(e, pair_solid[p], crossing_face[p, q] % BAND, 0.5 * (eta1 + eta2), codes,
+                                            conn, points, solid_origin, solid_h, linear, beam_code, Q, lengths,
+                                            beam_origin, X, xi, trial, N, dN, H, dH, a, stack)
+                        if not abs(g) <= touch_tol:
+                            continue
+                        for iv in range(n_pts - 1):
+                            if cuts[iv] >= eta1 - 2.0 * reach[iv] and cuts[iv + 1] <= eta2 + 2.0 * reach[iv + 1]:
+                                touch[iv] = True
 
                 # owner of every interval: the lowest-index candidate containing its midpoint
                 for iv in range(n_pts - 1):
+                    owners[iv] = -1
                     mid = 0.5 * (cuts[iv] + cuts[iv + 1])
                     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
-                    owners[iv] = first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes,
-                                                  conn, points, solid_origin, solid_h, linear, tol, X, xi, trial, N,
-                                                  dN, -1)
-                # a sliver between two crossings closer than _SLIVER is a tangential touch of a face
-                # (a double root, resolved only to ~sqrt(eps)): it joins a neighbour that contains it,
-                # or is dropped when both neighbours are uncoupled (touching the solid from outside).
-                # The end η = ±1 of the beam element is no crossing: a sliver there whose end lies
-                # clearly (beyond the tolerance) inside its owner is embedded length (found by make
-                # fuzz: an element ending 1.2e-7 inside a face), so a run of slivers reaching such an
-                # end takes the end sliver's owner as its neighbour on that side. An end within the
-                # tolerance band (a beam leaving the solid at a corner) is a touch like any other.
+                    first = p0
+                    while first < p1:
+                        owner = first_containing(r0, r1, r2, e, pair_solid, first, p1, beam_origin, solid_boxes, codes,
+                                                 conn, points, solid_origin, solid_h, linear, owner_tol, X, xi, trial,
+                                                 N, dN, a, stack, -1)
+                        if owner < 0:
+                            break
+                        # a piece that leaves the owner through one of its faces and comes back through
+                        # it lies on the owner's side of that face only if the face condition says so
+                        # at its midpoint, not within the inside tolerance
+                        p = first
+                        while pair_solid[p] != owner:
+                            p += 1
+                        tol = 2.0 * max(reach[iv], reach[iv + 1])
+                        f = _face_zone(crossing_eta, crossing_face, crossing_count, p, cuts[iv], cuts[iv + 1], tol)
+                        if f >= 0:
+                            face = solid.faces(codes[owner])[f]
+                            outside = (face[3, 0] * (xi[0] - face[0, 0]) + face[3, 1] * (xi[1] - face[0, 1])
+                                       + face[3, 2] * (xi[2] - face[0, 2]))
+                        elif _band_end(crossing_eta, crossing_face, crossing_count, p, cuts[iv], cuts[iv + 1], tol):
+                            # a piece ending on a face's plane beyond the face (a beam passing an edge or
+                            # a corner just outside): inside only if the geometry says so, not the band
+                            outside = solid.outside_distance(codes[owner], xi)
+                        else:
+                            owners[iv] = owner
+                            break
+                        if outside <= touch_tol:
+                            owners[iv] = owner
+                            break
+                        first = p + 1
+                # a run of touches stays on the side the beam is on: it joins a neighbouring piece whose
+                # owner contains it, or is not coupled (a touch from outside). A beam element that
+                # lies in a face from end to end has no such neighbour: its pieces are owned as usual.
                 iv = 0
                 while iv < n_pts - 1:
-                    if cuts[iv + 1] - cuts[iv] >= _SLIVER:
+                    if not touch[iv]:
                         iv += 1
                         continue
-                    last = iv       # run of consecutive slivers iv..last, judged by its neighbours
-                    while last + 1 < n_pts - 1 and cuts[last + 2] - cuts[last + 1] < _SLIVER:
+                    last = iv
+                    while last + 1 < n_pts - 1 and touch[last + 1]:
                         last += 1
-                    if iv > 0:
-                        before = owners[iv - 1]
-                    else:
-                        before = _deep_end(-1.0, owners[0], e, pair_solid, p0, p1, codes, conn, points, solid_origin,
-                                           solid_h, solid_boxes, linear, beam_code, Q, lengths, beam_origin, X, xi,
-                                           trial, N, dN, H, dH)
-                    if last + 1 < n_pts - 1:
-                        after = owners[last + 1]
-                    else:
-                        after = _deep_end(1.0, owners[n_pts - 2], e, pair_solid, p0, p1, codes, conn, points,
-                                          solid_origin, solid_h, solid_boxes, linear, beam_code, Q, lengths,
-                                          beam_origin, X, xi, trial, N, dN, H, dH)
+                    if iv == 0 and last == n_pts - 2:
+                        break
+                    before = owners[iv - 1] if iv > 0 else -1
+                    after = owners[last + 1] if last + 1 < n_pts - 1 else -1
                     for k in range(iv, last + 1):
-                        if owners[k] < 0 or owners[k] == before or owners[k] == after:
-                            continue
-                        if before < 0 and after < 0:
-                            owners[k] = -1
-                            continue
+                        owners[k] = -1
                         mid = 0.5 * (cuts[k] + cuts[k + 1])
                         r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
                         for neighbour in (before, after):
-                            if neighbour >= 0 and first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin,
-                                                                   solid_boxes, codes, conn, points, solid_origin,
-                                                                   solid_h, linear, tol, X, xi, trial, N, dN,
-                                                                   neighbour) == neighbour:
+                            if neighbour >= 0 and first_containing(
+                                    r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
+                                    solid_origin, solid_h, linear, owner_tol, X, xi, trial, N, dN, a, stack,
+                                    neighbour) == neighbour:
                                 owners[k] = neighbour
                                 break
                     iv = last + 1
+
                 base = seg_offsets[e]
                 n_seg = 0
                 for iv in range(n_pts - 1):
                     owner = owners[iv]
-                    a = cuts[iv]
-                    b = cuts[iv + 1]
                     if owner < 0:
                         continue
-                    if n_seg > 0 and seg_solid[base + n_seg - 1] == owner and seg_end[base + n_seg - 1] == a:
-                        seg_end[base + n_seg - 1] = b
+                    a_eta = cuts[iv]
+                    b_eta = cuts[iv + 1]
+                    if n_seg > 0 and seg_solid[base + n_seg - 1] == owner and seg_end[base + n_seg - 1] == a_eta:
+                        seg_end[base + n_seg - 1] = b_eta
                     else:
                         seg_solid[base + n_seg] = owner
-                        seg_start[base + n_seg] = a
-                        seg_end[base + n_seg] = b
+                        seg_start[base + n_seg] = a_eta
+                        seg_end[base + n_seg] = b_eta
                         n_seg += 1
                 seg_count[e] = n_seg
             begin, stop = claim(claims, n_beam, worker)
@@ -472,6 +619,7 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
     claims = new_claims(n_beam, workers)
     for worker in prange(workers):
         X, N, dN, H, dH, xi, trial = point_buffers()
+        a_buf, stack = search_buffers()
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             for e in range(begin, stop):
@@ -492,7 +640,7 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
                             r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
                             if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes,
                                                 conn, points, solid_origin, solid_h, linear, -loose, X, xi, trial, N,
-                                                dN, -1) >= 0:
+                                                dN, a_buf, stack, -1) >= 0:
                                 failed = True
                     if last or failed:
                         break
@@ -503,7 +651,7 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
                         r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
                         if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
                                             points, solid_origin, solid_h, linear, loose, X, xi, trial, N, dN,
-                                            owner) != owner:
+                                            a_buf, stack, owner) != owner:
                             failed = True
                     if failed:
                         break
@@ -514,11 +662,15 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
 
 @njit
 def _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, linear, beam_code, Q,
-           lengths, beam_origin, X, xi, trial, N, dN, H, dH):
-    """Lowest-index candidate containing r(η) to 1e-12 (sharp: the cuts land on the faces)."""
+           lengths, beam_origin, X, xi, trial, N, dN, H, dH, a, stack):
+    """Lowest-index candidate containing r(η) to ``_SHARP`` (round-off: the owner changes where the
+    centreline crosses a face, so the bisected cuts land on the faces)."""
     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
     return first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
-                            solid_origin, solid_h, linear, 1e-3 * PARAMETER_TOL, X, xi, trial, N, dN, -1)
+                            solid_origin, solid_h, linear, _SHARP, X, xi, trial, N, dN, a, stack, -1)
+
+
+_SHARP = TOUCH_TOL
 
 
 @njit_parallel
@@ -537,6 +689,7 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
     claims = new_claims(n_beam, workers)
     for worker in prange(workers):
         X, N, dN, H, dH, xi, trial = point_buffers()
+        a, stack = search_buffers()
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             for e in range(begin, stop):
@@ -548,7 +701,7 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                 for k in range(n_samples):
                     eta = -1.0 + 2.0 * k / (n_samples - 1)
                     owner = _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
-                                   linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH)
+                                   linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH, a, stack)
                     lo = eta_previous
                     current = previous
                     while k > 0 and current != owner and count < cap:
@@ -557,7 +710,7 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                             mid = 0.5 * (lo + hi)
                             if _owner(mid, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
                                       solid_boxes, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H,
-                                      dH) == current:
+                                      dH, a, stack) == current:
                                 lo = mid
                             else:
                                 hi = mid
@@ -565,7 +718,7 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                         count += 1
                         current = _owner(hi, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
                                          solid_boxes, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN,
-                                         H, dH)
+                                         H, dH, a, stack)
                         lo = hi
                     previous = owner
                     eta_previous = eta
@@ -603,12 +756,12 @@ class _Beams:
 
     def crossings(self, ctx, search_points):
         pair_beam = np.repeat(np.arange(len(self.ids)), np.diff(self.pair_offsets))
-        crossing_eta, crossing_count, no_face = pair_crossings(ctx, pair_beam, self.pair_solid, self.Q, self.lengths,
-                                                               self.beam_origin, self.beam_boxes, search_points)
+        crossing_eta, crossing_face, crossing_count, no_face = pair_crossings(
+            ctx, pair_beam, self.pair_solid, self.Q, self.lengths, self.beam_origin, self.beam_boxes, search_points)
         reaching = np.concatenate([[0], np.cumsum(~no_face)])
         self.certain = reaching[self.pair_offsets[1:]] == reaching[self.pair_offsets[:-1]]
         self.pairs_out_of_reach = int(no_face.sum())
-        return crossing_eta, crossing_count
+        return crossing_eta, crossing_face, crossing_count
 
     def bisection_crossings(self, ctx):
         """Owner changes found by bisection, stored as the crossings of each element's first pair."""
@@ -620,14 +773,15 @@ class _Beams:
                         ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, self.Q, self.lengths,
                         self.beam_origin, _BISECTION_SAMPLES, cuts, count, workers())
         crossing_eta = np.zeros((len(self.pair_solid), cap))
+        crossing_face = np.full((len(self.pair_solid), cap), -1, dtype=np.int64)     # not a face crossing
         crossing_count = np.zeros(len(self.pair_solid), dtype=np.int64)
         has_pairs = np.diff(self.pair_offsets) > 0
         first = self.pair_offsets[:-1][has_pairs]
         crossing_eta[first] = cuts[has_pairs]
         crossing_count[first] = count[has_pairs]
-        return crossing_eta, crossing_count
+        return crossing_eta, crossing_face, crossing_count
 
-    def tile(self, ctx, crossing_eta, crossing_count):
+    def tile(self, ctx, crossing_eta, crossing_face, crossing_count):
         """Segments from the crossings, and which beam elements fail the tiling check.
 
         Returns (beam_element (global ids), solid_element, eta_start, eta_end, bad (per element)).
@@ -645,7 +799,7 @@ class _Beams:
         seg_count = np.zeros(n_beam, dtype=np.int64)
         args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear,
                 ctx.beam_code, self.Q, self.lengths, self.beam_origin)
-        _tile(pair_offsets, self.pair_solid, crossing_eta, crossing_count, *args,
+        _tile(pair_offsets, self.pair_solid, crossing_eta, crossing_face, crossing_count, *args,
               seg_offsets, seg_solid, seg_start, seg_end, seg_count, workers())
         bad = np.zeros(n_beam, dtype=np.bool_)
         _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, self.pair_solid,
@@ -692,8 +846,8 @@ def segment(ctx, search_points, diagnostics=None):
     ``beam_elements_out_of_reach`` (beam elements all of whose pairs are such).
     """
     everything = _Beams(ctx)
-    crossing_eta, crossing_count = everything.crossings(ctx, search_points)
-    segments = everything.tile(ctx, crossing_eta, crossing_count)
+    crossing_eta, crossing_face, crossing_count = everything.crossings(ctx, search_points)
+    segments = everything.tile(ctx, crossing_eta, crossing_face, crossing_count)
     bad = segments[4]
     counts = {"segmentation_fallbacks": int(bad.sum()), "segmentation_bisections": 0, "segmentation_unresolved": 0,
               "pairs_out_of_reach": everything.pairs_out_of_reach,

@@ -18,7 +18,7 @@ from functools import lru_cache
 import numpy as np
 from numba import prange
 
-from .._config import PARAMETER_TOL, njit, njit_parallel
+from .._config import PARAMETER_TOL, TOUCH_TOL, njit, njit_parallel
 from .._memory import carve
 from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
@@ -26,9 +26,9 @@ from ..elements.solid import dispatch as solid
 from ..geometry.beam import beam_point
 from ..geometry.linalg import norm3
 from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse, affine_parameters,
-                                   first_containing, is_affine, linear_parameters, load_element,
-                                   point_buffers, polish, project_point)
-from ..geometry.segmentation import resegment, splice
+                                   first_containing, is_affine, linear_parameters, load_element, locate_point,
+                                   point_buffers, polish, project_point, search_buffers)
+from ..geometry.segmentation import _face_code, resegment, splice
 from .quadrature import gauss_legendre
 
 #: point outcome codes (as stored in ``status``)
@@ -45,6 +45,7 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
     claims = new_claims(n_seg, workers)
     for worker in prange(workers):
         X, N, dN, H, dH, x, trial = point_buffers()
+        a, stack = search_buffers()
         begin, stop = claim(claims, n_seg, worker)
         while begin < stop:
             for g in range(begin, stop):
@@ -75,13 +76,15 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
                         status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
                         continue
                     # warm start from the previous point of the segment (the first from the
-                    # linearised estimate); retry from the centre
+                    # linearised estimate); if that does not end inside, locate the point for
+                    # certain (a curved element's map folds outside it: Newton may take that branch)
                     if q == 0:
                         linear_parameters(code, linear, s, r0, r1, r2, x)
-                    if project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) != CONVERGED:
-                        solid.centre(code, x)
-                        if project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) != CONVERGED:
-                            status[k] = NOT_CONVERGED
+                    if not (project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) == CONVERGED
+                            and solid.is_inside(code, x, loose)):
+                        status[k] = locate_point(code, X, r0, r1, r2, solid_h[s], loose, linear, s, x, trial, N, dN,
+                                                 a, stack)
+                        if status[k] == NOT_CONVERGED:
                             solid.centre(code, x)
                             xi[k] = x
                             continue
@@ -103,6 +106,7 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
     claims = new_claims(n_beam, workers)
     for worker in prange(workers):
         X, N, dN, H, dH, x, trial = point_buffers()
+        a, stack = search_buffers()
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             for e in range(begin, stop):
@@ -120,7 +124,7 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
                     # the lowest-index candidate element containing the point owns it
                     s = first_containing(r0, r1, r2, e, pair_solid, pair_offsets[e], pair_offsets[e + 1], beam_origin,
                                          solid_boxes, codes, conn, points, solid_origin, solid_h, linear, tol, X, x,
-                                         trial, N, dN, -1)
+                                         trial, N, dN, a, stack, -1)
                     if s >= 0:
                         if not is_affine(linear, s):
                             # X still holds the owner's nodes (it was the last element tested)
@@ -274,7 +278,8 @@ def _control_points(beam_code, Qe, length, ctrl):
 
 @njit_parallel
 def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, beam_code, Q, lengths,
-                    beam_origin, crossing_eta, crossing_count, pair_state, beam_affine, beam_inside, workers):
+                    beam_origin, crossing_eta, crossing_face, crossing_count, pair_state, beam_affine, beam_inside,
+                    workers):
     """Face crossings of every candidate pair where they can be had without a search.
 
     Per beam element e and candidate solid element s (both frames local, see projection):
@@ -330,12 +335,16 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                             break
                         continue
                     pair_state[p] = PAIR_DONE
+                    big = max(abs(solid_origin[s, 0]), abs(solid_origin[s, 1]), abs(solid_origin[s, 2]),
+                              abs(beam_origin[e, 0]), abs(beam_origin[e, 1]), abs(beam_origin[e, 2]))
+                    band_tol = TOUCH_TOL + 64.0 * 2.220446049250313e-16 * big / solid_h[s]
                     affine_parameters(code, Ainv, p0 + s0, p1 + s1, p2 + s2, alpha)
                     for i in range(3):
                         beta[i] = Ainv[i, 0] * q0 + Ainv[i, 1] * q1 + Ainv[i, 2] * q2
                     # clip the line against the half-spaces n·(ξ - o) <= 0 of the faces
                     eta_in = -np.inf
                     eta_out = np.inf
+                    face_in = face_out = -1
                     empty = False
                     faces = solid.faces(code)
                     for f in range(faces.shape[0]):
@@ -348,9 +357,12 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                             if g0 > 0.0:
                                 empty = True
                         elif g1 > 0.0:
-                            eta_out = min(eta_out, -g0 / g1)
-                        else:
-                            eta_in = max(eta_in, -g0 / g1)
+                            if -g0 / g1 < eta_out:
+                                eta_out = -g0 / g1
+                                face_out = f
+                        elif -g0 / g1 > eta_in:
+                            eta_in = -g0 / g1
+                            face_in = f
                     if empty:
                         continue
                     # entry and exit are crossings when they lie on the element (inside test with the
@@ -364,6 +376,7 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                             xi[i] = alpha[i] + beta[i] * t
                         if solid.is_inside(code, xi, tol):
                             crossing_eta[p, n] = min(max(t, -1.0), 1.0)
+                            crossing_face[p, n] = _face_code(code, face_in if k == 0 else face_out, xi, band_tol)
                             n += 1
                     crossing_count[p] = n
                 beam_inside[e] = inside
@@ -431,23 +444,27 @@ def auto_segments(ctx, search_points, n_gauss, n_phi):
     n_beam = len(pair_offsets) - 1
     n_pairs = len(pair_solid)
     closed = np.empty((n_pairs, 2))
+    closed_face = np.empty((n_pairs, 2), dtype=np.int64)
     count = np.zeros(n_pairs, dtype=np.int64)
     state = np.empty(n_pairs, dtype=np.int64)
     beam_affine = np.empty(n_beam, dtype=np.bool_)
     beam_inside = np.empty(n_beam, dtype=np.int64)
     _auto_crossings(pair_offsets, pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h,
-                    ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, closed, count, state, beam_affine,
+                    ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, closed, closed_face, count, state, beam_affine,
                     beam_inside, workers())
     numeric = np.flatnonzero(state == PAIR_NUMERIC)
-    crossing_eta = closed
+    crossing_eta, crossing_face = closed, closed_face
     if len(numeric):
         pair_beam = np.repeat(np.arange(n_beam), np.diff(pair_offsets))
-        found, found_count, _ = pair_crossings(ctx, pair_beam[numeric], pair_solid[numeric], ctx.Q, ctx.lengths,
-                                               ctx.beam_origin, ctx.beam_boxes, search_points)
+        found, found_face, found_count, _ = pair_crossings(ctx, pair_beam[numeric], pair_solid[numeric], ctx.Q,
+                                                           ctx.lengths, ctx.beam_origin, ctx.beam_boxes, search_points)
         width = max(2, int(found_count.max()))
         crossing_eta = np.empty((n_pairs, width))
+        crossing_face = np.empty((n_pairs, width), dtype=np.int64)
         crossing_eta[:, :2] = closed
+        crossing_face[:, :2] = closed_face
         crossing_eta[numeric, :width] = found[:, :width]
+        crossing_face[numeric, :width] = found_face[:, :width]
         count[numeric] = found_count
     # the segmentation's second stage, unchanged: sort and merge the crossings, owners by the
     # lowest-index rule, merge neighbours with the same owner (same as segmentation.segment)
@@ -456,8 +473,8 @@ def auto_segments(ctx, search_points, n_gauss, n_phi):
     total = int(seg_offsets[-1])
     all_solid, all_start, all_end = np.empty(total, dtype=np.int64), np.empty(total), np.empty(total)
     seg_count = np.zeros(n_beam, dtype=np.int64)
-    _tile(pair_offsets, pair_solid, crossing_eta, count, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-          ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, seg_offsets,
+    _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, count, ctx.codes, ctx.conn, ctx.points,
+          ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, seg_offsets,
           all_solid, all_start, all_end, seg_count, workers())
     keep = _compact_index(seg_offsets, seg_count)
     seg_beam = np.repeat(np.arange(n_beam), seg_count)
