@@ -23,6 +23,7 @@ from .generate import box as box_mesh
 from .mesh import BeamMesh, SolidMesh, zero_length_elements
 from .mortar.assemble import assemble_mortar
 from .scene import BOX_FACES, Scene, SceneError
+from .supports import RotatedBasis, clamp_frame
 
 DEFAULT_PENALTY_FACTOR = 1e3     # ε = 1e3 E_solid when the scene gives no penalty
 AUTO_DIRECT_LIMIT = 3_000        # unknowns up to which solver = "auto" factorises (measured crossover,
@@ -248,7 +249,7 @@ class Model:
                               "(about machine epsilon × penalty / E relative). Use 1e2..1e6 × E, or "
                               "enforcement = \"lagrange\"", AccuracyWarning, stacklevel=3)
         self._check_solver()
-        self.fixed_dofs, self.fixed_values, self.dirichlet_dofs = self._dirichlet()
+        self.fixed_dofs, self.fixed_values, self.dirichlet_dofs, self.basis = self._dirichlet()
         self.prepared = False
         self._follow = None          # auxiliary-space split, built on first use (_follow_split)
 
@@ -312,7 +313,10 @@ class Model:
         return (base + comps[None, :]).ravel()
 
     def _dirichlet(self):
+        """Fixed DOFs and their values in the basis of the unknowns, the position DOFs of each entry
+        (for its reaction), and that basis (:class:`~mortar1d3d.supports.RotatedBasis` of the clamps)."""
         dofs, values, per_entry = [], [], []
+        clamps = {}
         for i, d in enumerate(self.scene.dirichlet):
             sel = self.select(d["on"], f"dirichlet[{i}].on")
             idx = self._set_dofs(sel, d["components"])
@@ -323,12 +327,16 @@ class Model:
                 g = sel[1]
                 if g.model != "torsion_free":
                     raise SceneError(f"dirichlet[{i}].clamp: beam {d['on']!r} has no tangent DOFs ({g.model})")
-                t_idx = self._clamp_dofs(g, sel[2])
+                starts, frames = self._clamp_frames(g, sel[2])
+                clamps.update(zip(starts.tolist(), frames))
+                t_idx = (starts[:, None] + np.arange(2)).ravel()      # e1·Δt, e2·Δt in the rotated frame
                 dofs.append(t_idx)
                 values.append(np.zeros(len(t_idx)))
             per_entry.append(idx)     # position DOFs only: their reactions are forces
+        starts = sorted(clamps)
+        basis = RotatedBasis(starts, [clamps[s] for s in starts])
         if not dofs:
-            return np.zeros(0, np.int64), np.zeros(0), per_entry
+            return np.zeros(0, np.int64), np.zeros(0), per_entry, basis
         dofs, values = np.concatenate(dofs), np.concatenate(values)
         order = np.argsort(dofs, kind="stable")
         dofs, values = dofs[order], values[order]
@@ -340,25 +348,18 @@ class Model:
                                  "different values")
             keep = np.concatenate([[True], ~same])
             dofs, values = dofs[keep], values[keep]
-        return dofs, values, per_entry
+        return dofs, values, per_entry, basis
 
     @staticmethod
-    def _clamp_dofs(g, nodes):
-        """Tangent DOFs a clamp fixes: the tangent's direction, not its length.
+    def _clamp_frames(g, nodes):
+        """First tangent DOF of each clamped node and its frame ``(e1, e2, t0)``.
 
-        At a Hermite node the tangent's length is the local stretch; fixing it would force zero
-        axial strain there. When the reference tangent is parallel to a coordinate axis, the two
-        other components are fixed (direction clamped, stretch free); otherwise all three are
-        (the stretch at that node is then held at zero too).
+        At a Hermite node the tangent's length is the local stretch: a clamp fixes only its
+        direction, the components along ``e1`` and ``e2`` (see :mod:`mortar1d3d.supports`), so
+        that a clamped beam behaves the same in every orientation.
         """
-        out = []
-        for node in nodes:
-            t = g.mesh.tangents[node]
-            major = int(np.argmax(np.abs(t)))
-            aligned = np.abs(np.delete(t, major)).max() <= 1e-12
-            comps = [c for c in range(3) if c != major] if aligned else [0, 1, 2]
-            out.append(g.dof_offset + 6 * node + 3 + np.array(comps))
-        return np.concatenate(out)
+        starts = g.dof_offset + 6 * np.asarray(nodes, dtype=np.int64) + 3
+        return starts, [clamp_frame(g.mesh.tangents[node]) for node in nodes]
 
     def _check_solver(self):
         solver, enforcement = self.scene.analysis["solver"], self.scene.coupling["enforcement"]
@@ -664,7 +665,8 @@ class Model:
 
     def rigid_body_modes(self, dofs=None):
         """(n_dofs, 6) rigid-body modes of the displacement DOFs (translations, rotations about the
-        centroid of ``dofs``); tangent DOFs of Hermite beams rotate, never translate."""
+        centroid of ``dofs``); tangent DOFs of Hermite beams rotate, never translate. In the basis of
+        the unknowns (clamped tangents in their rotated frames), like ``fixed`` and ``free``."""
         ref = self.reference()
         n = self.n_displacement_dofs
         is_tangent = np.zeros(n // 3, dtype=bool)
@@ -686,7 +688,7 @@ class Model:
             e[k] = 1.0
             R[~is_tangent, k, k] = 1.0
             R[:, :, 3 + k] = np.cross(e, P)
-        return R.reshape(n, 6)
+        return self.basis.to_unknowns(R.reshape(n, 6))
 
     def check_supports(self):
         """Raise SceneError if a body can move as a rigid body (before any solve)."""
@@ -755,9 +757,13 @@ class Model:
         return r, K
 
     def residual(self, z, t, tangent=True):
-        """Residual ``r = f_int + (coupling) − t f_ext`` over all unknowns, and its Jacobian."""
+        """Residual ``r = f_int + (coupling) − t f_ext`` over all unknowns, and its Jacobian.
+
+        ``z``, ``r`` and the Jacobian are in the basis of the unknowns (``self.basis``: clamped
+        tangents in their rotated frames); the physics is evaluated on physical components.
+        """
         n = self.n_displacement_dofs
-        d = z[:n]
+        d = self.basis.to_physical(z[:n])
         r, K = self.internal(d, tangent)
         r -= t * self.dead_load
         nS = 3 * self.n_solid_nodes
@@ -782,6 +788,7 @@ class Model:
             r = np.concatenate([r + B.T @ lam, B @ d])
             if tangent:
                 K = sp.bmat([[K, B.T], [B, None]], format="csr")
+        r, K = self.basis.to_unknowns(r), self.basis.matrix(K)
         self.last_residual = r
         return r, (K.tocsr() if tangent else None)
 
@@ -800,6 +807,7 @@ class Model:
             free = self.free[self.free < self.n_displacement_dofs]
             blocks = [follow_operator(g.operators, g.mesh) for g in self.groups]
             P = sp.vstack(blocks, format="csr")           # groups are contiguous after the solid
+            P = self.basis.to_unknowns(P, offset=nS)      # rows of clamped tangents: rotated frames
             solid = np.flatnonzero(free < nS)
             beam = np.flatnonzero(free >= nS)
             P = P[free[beam] - nS][:, free[solid]].tocsr()
