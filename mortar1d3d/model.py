@@ -119,10 +119,40 @@ def check_solid_nodes(mesh, where):
     size = float(np.linalg.norm(np.ptp(X, axis=0)))
     pairs = cKDTree(X).query_pairs(1e-10 * size, output_type="ndarray")
     if len(pairs):
-        pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
-        shown = ", ".join(f"{a} and {b}" for a, b in pairs[:5]) + (f" (and {len(pairs) - 5} more pairs)" if len(pairs) > 5 else "")
-        raise SceneError(f"{where}: duplicate nodes at the same position: {shown}; the elements on either side are "
-                         "not connected (merge the duplicates)")
+        raise SceneError(f"{where}: duplicate nodes at the same position: {_node_pairs(pairs)}; the elements on either "
+                         "side are not connected (merge the duplicates)")
+
+
+def _node_pairs(pairs, limit=5):
+    """``"1 and 12, 4 and 13 (and 2 more pairs)"``: node pairs in a fixed order for messages."""
+    pairs = np.sort(np.asarray(pairs), axis=1)
+    pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    more = f" (and {len(pairs) - limit} more pairs)" if len(pairs) > limit else ""
+    return ", ".join(f"{a} and {b}" for a, b in pairs[:limit]) + more
+
+
+def check_beam_nodes(mesh, where):
+    """SceneError naming node ids if the beam mesh ``mesh`` has nodes no element uses (their
+    stiffness is zero: the solve would fail as singular) or two chain ends at the same place (one
+    beam split in two pieces that do not connect, the beam counterpart of a crack).
+
+    Coincident nodes elsewhere are allowed: fibres that cross or touch at a node of one of them
+    are separate beams on purpose. Two nodes coincide when they are closer than 1e-10 of the
+    mesh's bounding-box diagonal.
+    """
+    used = np.zeros(mesh.n_nodes, dtype=bool)
+    used[mesh.elements] = True
+    if not used.all():
+        raise SceneError(f"{where}: nodes not used by any element: {format_ids(np.flatnonzero(~used))} (remove them)")
+    # columns 0 and 1 are the element's end nodes for every beam element type (line3: ends, then middle)
+    ends = np.bincount(mesh.elements[:, :2].ravel(), minlength=mesh.n_nodes) == 1
+    from scipy.spatial import cKDTree
+    X = mesh.positions[ends]
+    size = float(np.linalg.norm(np.ptp(mesh.positions, axis=0)))
+    pairs = np.flatnonzero(ends)[cKDTree(X).query_pairs(1e-10 * size, output_type="ndarray")] if len(X) > 1 else []
+    if len(pairs):
+        raise SceneError(f"{where}: beam ends at the same position: {_node_pairs(pairs)}; the elements on either side "
+                         "are not connected (use one node there)")
 
 
 def _read_beam_file(path, hermite, where):
@@ -150,7 +180,12 @@ def build_beam_mesh(spec, path):
     try:
         if "mesh" in spec:
             mesh = spec["mesh"]
-            return mesh if isinstance(mesh, BeamMesh) else _read_beam_file(mesh, hermite, f"{path}.mesh")
+            if isinstance(mesh, BeamMesh):
+                check_beam_nodes(mesh, f"{path}.mesh")
+                return mesh
+            beams = _read_beam_file(mesh, hermite, f"{path}.mesh")
+            check_beam_nodes(beams, f"{path}.mesh {str(mesh)!r}")
+            return beams
         curve, n = spec["curve"], spec["elements"]
         if "polyline" in curve:
             pts = curve["polyline"]
@@ -250,13 +285,17 @@ class Model:
                               "enforcement = \"lagrange\"", AccuracyWarning, stacklevel=3)
         self._check_solver()
         self.fixed_dofs, self.fixed_values, self.dirichlet_dofs, self.basis = self._dirichlet()
+        # every set is resolved here, so that plan() reports what solve() would
+        self.load_sets = self._load_sets()
+        self.fibre_regions = self._fibre_regions()
         self.prepared = False
         self._follow = None          # auxiliary-space split, built on first use (_follow_split)
 
     # -- sets -----------------------------------------------------------------------------------
     def _beam_nodes(self, entry, which, path):
         if entry >= len(self.scene.beams):
-            raise SceneError(f"{path}: beam {entry} does not exist (the scene has {len(self.scene.beams)} beams)")
+            n = len(self.scene.beams)
+            raise SceneError(f"{path}: beam {entry} does not exist (the scene has {n} beam{'s' if n != 1 else ''})")
         g = self.entry_group[entry]
         k = g.entries.index(entry)
         start, stop = g.entry_elements[k]
@@ -565,15 +604,13 @@ class Model:
                                  f"kappa {np.shape(ops.kappa)} (expected ({n_lm},))")
         return operators
 
-    def _fibre_field(self, families):
-        """FibreField of ``solid.material.fibres``: a family without ``inside`` reinforces every
-        element, one with ``inside`` the elements whose node centroid lies in the box."""
-        from .physics.fibre_material import FibreField, fibre_family
+    def _fibre_regions(self):
+        """Per ``solid.material.fibres`` family: None (every element) or the mask of the elements
+        whose node centroid lies in its ``inside`` box."""
+        families = self.scene.solid["material"].get("fibres", ()) if self.solid_mesh is not None else ()
         mesh = self.solid_mesh
-        rows = []
+        out = []
         for i, f in enumerate(families):
-            path = f"solid.material.fibres[{i}]"
-            row = fibre_family(f["direction"], f["E"], f["volume_fraction"], path)
             elements = None
             if f["inside"] is not None:
                 lo, hi = f["inside"]
@@ -583,30 +620,55 @@ class Model:
                 tol = 1e-9 * float(np.linalg.norm(np.ptp(mesh.points, axis=0)))
                 elements = ((centroid >= lo - tol) & (centroid <= hi + tol)).all(axis=1)
                 if not elements.any():
-                    raise SceneError(f"{path}.inside: no element centroid lies in {lo.tolist()} – {hi.tolist()}")
+                    raise SceneError(f"solid.material.fibres[{i}].inside: no element centroid lies in "
+                                     f"{lo.tolist()} – {hi.tolist()}")
+            out.append(elements)
+        return out
+
+    def _fibre_field(self, families):
+        """FibreField of ``solid.material.fibres``: a family without ``inside`` reinforces every
+        element, one with ``inside`` the elements of its region (:meth:`_fibre_regions`)."""
+        from .physics.fibre_material import FibreField, fibre_family
+        rows = []
+        for i, (f, elements) in enumerate(zip(families, self.fibre_regions)):
+            row = fibre_family(f["direction"], f["E"], f["volume_fraction"], f"solid.material.fibres[{i}]")
             rows.append((row, elements))
-        return FibreField(mesh.n_elements, rows)
+        return FibreField(self.solid_mesh.n_elements, rows)
+
+    def _load_sets(self):
+        """Per ``load`` entry: its resolved set (None for a body force) and, for surface loads,
+        its boundary faces."""
+        from .physics.surface import boundary_faces
+        out = []
+        for i, item in enumerate(self.scene.loads):
+            if item["type"] == "body":
+                out.append((None, None))
+                continue
+            path = f"load[{i}].on"
+            sel = self.select(item["on"], path)
+            faces = None
+            if item["type"] in ("traction", "pressure"):
+                faces = boundary_faces(self.solid_mesh, sel[1])
+                if len(faces) == 0:
+                    raise SceneError(f"{path}: {item['on']!r} contains no boundary face of the solid")
+            out.append((sel, faces))
+        return out
 
     def _prepare_loads(self):
-        from .physics.surface import Pressure, boundary_faces, traction_force
+        from .physics.surface import Pressure, traction_force
         n = self.n_displacement_dofs
         self.dead_load = np.zeros(n)
         self.pressures, self.moments = [], []
-        for i, item in enumerate(self.scene.loads):
-            path = f"load[{i}]"
+        for item, (sel, faces) in zip(self.scene.loads, self.load_sets):
             kind = item["type"]
             if kind == "body":
                 self.dead_load[: 3 * self.n_solid_nodes] += self.solid_physics.body_force(item["value"])
                 self.counts["load.body"] += 1
                 continue
-            sel = self.select(item["on"], f"{path}.on")
             if kind == "point":
                 self.dead_load[self._set_dofs(sel, [0, 1, 2])] += np.tile(item["value"], len(self._set_dofs(sel, [0, 1, 2])) // 3)
                 self.counts["load.point"] += 1
             elif kind in ("traction", "pressure"):
-                faces = boundary_faces(self.solid_mesh, sel[1])
-                if len(faces) == 0:
-                    raise SceneError(f"{path}.on: {item['on']!r} contains no boundary face of the solid")
                 if kind == "traction":
                     self.dead_load[: 3 * self.n_solid_nodes] += traction_force(self.solid_mesh, faces, item["value"])
                     self.counts["load.traction"] += 1
@@ -863,7 +925,8 @@ def _as_scene(scene):
 def plan(scene):
     """The effects :func:`solve` will run for ``scene``, in order (list of :class:`Effect`).
 
-    Builds the meshes and resolves the sets (so a bad set is reported here), assembles nothing.
+    Builds the meshes and resolves every set (supports, loads, fibre regions: a set that is
+    unknown or selects nothing is reported here, as :func:`solve` would), assembles nothing.
     """
     return Model(_as_scene(scene)).effects()
 
