@@ -214,6 +214,92 @@ def build_solid_mesh(spec):
     return mesh
 
 
+def free_rigid_motions(R, Rf, tol, centre, size):
+    """Names of a basis of the rigid-body motions of a body that its supports do not stop.
+
+    Parameters
+    ----------
+    R : (m, 6) float
+        The body's rigid-body modes (:meth:`Model.rigid_body_modes` restricted to its DOFs):
+        translations in x, y, z, then rotations about x, y, z through ``centre`` with the
+        positions scaled by ``1/size``.
+    Rf : (k, 6) float
+        The rows of ``R`` at fixed DOFs.
+    tol : float
+        Singular values up to ``tol`` count as zero (the rank threshold of the caller).
+    centre : (3,) float
+    size : float
+
+    Returns
+    -------
+    list of str
+        One name per free motion, ``rank(R) − rank(Rf)`` of them: the free motions are ``R a``
+        with ``Rf a = 0``, counted modulo the coefficients ``a`` that move nothing (``R a = 0``,
+        e.g. a straight torsion-free beam turning about its own axis). The basis is the reduced
+        row echelon form with rotations first: a single-axis motion gets its plain name ("rotation
+        about x"), any other an axis direction and, when it does not pass through the centroid,
+        a point on it.
+    """
+    _, s, Vt = np.linalg.svd(R)
+    row = Vt[: np.count_nonzero(s > tol)]                   # coefficients that move the body
+    if len(Rf):
+        _, sf, Vft = np.linalg.svd(Rf)
+        null = Vft[np.count_nonzero(sf > tol):]             # coefficients the supports do not see
+    else:
+        null = np.eye(6)
+    # null(Rf) is the orthogonal sum of null(R) and null(Rf) ∩ row(R): projecting it onto row(R)
+    # leaves the free motions, with singular values 1 (kept) or 0 (motions that move nothing)
+    _, sp_, basis = np.linalg.svd(null @ row.T @ row)
+    basis = basis[: np.count_nonzero(sp_ > 0.5)]
+    order = [3, 4, 5, 0, 1, 2]                              # rotations first: pivots on rotations
+    A = basis[:, order]
+    r = 0
+    for c in range(6):
+        if r == len(A):
+            break
+        p = r + int(np.argmax(np.abs(A[r:, c])))
+        if abs(A[p, c]) <= 1e-8:                             # rows are orthonormal: O(1) entries
+            continue
+        A[[r, p]] = A[[p, r]]
+        A[r] /= A[r, c]
+        others = np.arange(len(A)) != r
+        A[others] -= np.outer(A[others, c], A[r])
+        r += 1
+    coefficients = np.empty_like(A)
+    coefficients[:, order] = A
+    names = [_motion_name(a[:3], a[3:] / size, centre, size) for a in coefficients]
+    return sorted(names, key=lambda name: not name.startswith("translation"))
+
+
+def _motion_name(v, w, centre, size):
+    """Name of the rigid motion ``u(X) = v + w × (X − centre)``."""
+    def direction(d):
+        d = d / np.linalg.norm(d)
+        d = np.where(np.abs(d) <= 1e-9, 0.0, d)
+        d = d if d[np.flatnonzero(d)[0]] > 0 else -d            # a motion's sign is arbitrary
+        nonzero = np.flatnonzero(d)
+        if len(nonzero) == 1:
+            return "xyz"[nonzero[0]]
+        return "(" + ", ".join(f"{x:.3g}" for x in d + 0.0) + ")"
+
+    wn, vn = float(np.linalg.norm(w)), float(np.linalg.norm(v))
+    if wn * size <= 1e-9 * vn:
+        d = direction(v)
+        return f"translation {'in' if len(d) == 1 else 'along'} {d}"
+    axis = w / wn
+    name = f"rotation about {direction(w)}"
+    offset = np.cross(w, v) / wn ** 2                          # centroid → nearest point of the axis
+    if np.linalg.norm(offset) > 1e-9 * size:
+        point = centre + offset
+        # round-off of the coordinates (scale: size and distance from the origin) printed as 0
+        point[np.abs(point) <= 1e-9 * (size + np.abs(centre).max())] = 0.0
+        name += " through (" + ", ".join(f"{x:.4g}" for x in point + 0.0) + ")"
+    slide = float(v @ axis) / wn                                # translation along the axis per radian
+    if abs(slide) > 1e-9 * size:
+        name += f" with a slide of {slide:.3g} along it per radian (screw)"
+    return name
+
+
 @dataclass
 class BeamGroup:
     """Beams of one model in one BeamMesh (entries keep their order)."""
@@ -725,23 +811,34 @@ class Model:
             bodies.insert(0, (label, np.concatenate(solid_body)))
         return bodies
 
+    def _tangent_triplets(self):
+        """(n_displacement_dofs // 3,) bool: which DOF triplets are Hermite tangents."""
+        is_tangent = np.zeros(self.n_displacement_dofs // 3, dtype=bool)
+        for g in self.groups:
+            if g.model == "torsion_free":
+                first = g.dof_offset // 3
+                is_tangent[first + 1: first + 2 * g.mesh.n_nodes: 2] = True
+        return is_tangent
+
+    def _mode_frame(self, dofs, is_tangent):
+        """Centre and length scale of :meth:`rigid_body_modes`: the centroid and the largest extent
+        of the positions among ``dofs`` (all when None)."""
+        X = self.reference().reshape(-1, 3)
+        triplets = np.arange(len(X)) if dofs is None else np.unique(dofs // 3)
+        pos = triplets[~is_tangent[triplets]]
+        centre = X[pos].mean(axis=0) if len(pos) else np.zeros(3)
+        size = float(np.ptp(X[pos], axis=0).max()) if len(pos) > 1 else 1.0
+        return centre, (size if size > 0 else 1.0)
+
     def rigid_body_modes(self, dofs=None):
         """(n_dofs, 6) rigid-body modes of the displacement DOFs (translations, rotations about the
         centroid of ``dofs``); tangent DOFs of Hermite beams rotate, never translate. In the basis of
         the unknowns (clamped tangents in their rotated frames), like ``fixed`` and ``free``."""
         ref = self.reference()
         n = self.n_displacement_dofs
-        is_tangent = np.zeros(n // 3, dtype=bool)
-        for g in self.groups:
-            if g.model == "torsion_free":
-                first = g.dof_offset // 3
-                is_tangent[first + 1: first + 2 * g.mesh.n_nodes: 2] = True
+        is_tangent = self._tangent_triplets()
         X = ref.reshape(-1, 3)
-        triplets = np.arange(n // 3) if dofs is None else np.unique(dofs // 3)
-        pos = triplets[~is_tangent[triplets]]
-        centre = X[pos].mean(axis=0) if len(pos) else np.zeros(3)
-        size = float(np.ptp(X[pos], axis=0).max()) if len(pos) > 1 else 1.0
-        size = size if size > 0 else 1.0
+        centre, size = self._mode_frame(dofs, is_tangent)
         R = np.zeros((n // 3, 3, 6))
         P = (X - centre) / size
         P[is_tangent] = X[is_tangent] / size     # a tangent turns with the body: ω × t, same scale
@@ -757,8 +854,6 @@ class Model:
         self.counts["check.rigid_body_modes"] += 1
         fixed = np.zeros(self.n_displacement_dofs, dtype=bool)
         fixed[self.fixed_dofs[self.fixed_dofs < self.n_displacement_dofs]] = True
-        names = ("translation in x", "translation in y", "translation in z",
-                 "rotation about x", "rotation about y", "rotation about z")
         for label, dofs in self._bodies():
             R = self.rigid_body_modes(dofs)[dofs]
             s_all = np.linalg.svd(R, compute_uv=False)
@@ -770,11 +865,10 @@ class Model:
             else:
                 rank_fix = 0
             if rank_fix < rank_all:
-                col = np.linalg.norm(Rf, axis=0) if len(Rf) else np.zeros(6)
-                free = [names[k] for k in range(6) if col[k] <= 1e-10 * s_all[0] and np.linalg.norm(R[:, k]) > 0]
-                what = ", ".join(free) if free else f"{rank_all - rank_fix} combination(s) of rigid-body motions"
-                raise SceneError(f"dirichlet: {label} can move freely ({rank_all - rank_fix} rigid-body mode(s) not "
-                                 f"fixed: {what}); add supports ([[dirichlet]]) that stop these motions")
+                centre, size = self._mode_frame(dofs, self._tangent_triplets())
+                free = free_rigid_motions(R, Rf, 1e-10 * s_all[0], centre, size)
+                raise SceneError(f"dirichlet: {label} can move freely ({len(free)} rigid-body mode(s) not "
+                                 f"fixed: {', '.join(free)}); add supports ([[dirichlet]]) that stop these motions")
 
     # -- the nonlinear system (see solvers.newton) ---------------------------------------------
     def prescribed(self, t):

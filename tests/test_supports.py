@@ -1,5 +1,6 @@
 """Supports (issue 16, part 5): clamps fix the tangent's direction in a rotated basis, rigidly moved
-scenes give rotated results."""
+scenes give rotated results, and free rigid-body motions are counted and named from the null space
+of the supports."""
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -102,3 +103,33 @@ def test_a_clamp_on_a_truss_is_an_error_naming_the_entry():
                   dirichlet=[{"on": "beam:0:start", "clamp": True}, {"on": "beam:0:end"}])
     with pytest.raises(SceneError, match=r"^dirichlet\[0\]\.clamp: beam 'beam:0:start' has no tangent DOFs"):
         m13.plan(scene)
+
+
+# --------------------------------------------------------------------------------------------
+# free rigid-body motions
+# --------------------------------------------------------------------------------------------
+def _free_motions(scene):
+    with pytest.raises(SceneError) as info:
+        Model(scene).prepare()
+    return str(info.value)
+
+
+def test_free_motions_are_counted_and_named_from_the_null_space_of_the_supports():
+    """Before: an unsupported oblique beam was reported as '5 rigid-body mode(s) not fixed' followed
+    by all six names (the turn about its own axis moves nothing, but no single-axis rotation is
+    that turn); a block pinned at one corner gave '3 combination(s) of rigid-body motions'."""
+    oblique = Scene(beams=[{"curve": {"line": [[0, 0, 0], [1, 1, 0]]}, "elements": 2, "section": {"EA": 1, "EI": 1}}])
+    assert ("beam 0 can move freely (5 rigid-body mode(s) not fixed: translation in x, translation in y, "
+            "translation in z, rotation about (0.707, -0.707, 0), rotation about z)") in _free_motions(oblique)
+
+    block = {"mesh": {"box": [[0, 0, 0], [2, 1, 1]], "cells": [2, 1, 1]},
+             "material": {"model": "linear_elastic", "E": 1.0, "nu": 0.3}}
+    corner = Scene(solid=block, dirichlet=[{"on": {"inside": [[0, 0, 0], [0, 0, 0]]}}])
+    # each axis through the pinned corner, named by its point nearest to the centroid (1, 0.5, 0.5)
+    assert ("the solid can move freely (3 rigid-body mode(s) not fixed: rotation about x through (1, 0, 0), "
+            "rotation about y through (0, 0.5, 0), rotation about z through (0, 0, 0.5))") in _free_motions(corner)
+
+    # an edge held in y and z: the turn about that edge (a line through no centroid) and the slide along it
+    edge = Scene(solid=block, dirichlet=[{"on": {"inside": [[0, 1, 1], [2, 1, 1]]}, "components": ["y", "z"]}])
+    assert ("(2 rigid-body mode(s) not fixed: translation in x, rotation about x through (1, 1, 1))"
+            in _free_motions(edge))
