@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import AccuracyWarning, CouplingWarning, MeshError, format_ids
+from .errors import AccuracyWarning, CouplingWarning, LargeDeformationWarning, MeshError, format_ids
 from .generate import box as box_mesh
 from .mesh import BeamMesh, SolidMesh, zero_length_elements
 from .mortar.assemble import assemble_mortar
@@ -29,6 +29,7 @@ DEFAULT_PENALTY_FACTOR = 1e3     # ε = 1e3 E_solid when the scene gives no pena
 AUTO_DIRECT_LIMIT = 3_000        # unknowns up to which solver = "auto" factorises (measured crossover,
                                  # solvers.linear.DIRECT_MAX_DOFS: SuperLU fill grows fast in 3D)
 PENALTY_ROUNDOFF_LIMIT = 1e8     # ε / E_solid above which round-off beats the penalty error (AccuracyWarning)
+LINEAR_DISPLACEMENT_LIMIT = 0.1  # max |u| / body size above which a linear result is flagged (LargeDeformationWarning)
 
 
 @dataclass(frozen=True)
@@ -870,6 +871,25 @@ class Model:
                 raise SceneError(f"dirichlet: {label} can move freely ({len(free)} rigid-body mode(s) not "
                                  f"fixed: {', '.join(free)}); add supports ([[dirichlet]]) that stop these motions")
 
+    def check_linear_displacements(self, z):
+        """Warn (LargeDeformationWarning) for each body that the linear solution ``z`` (unknowns)
+        moves by more than LINEAR_DISPLACEMENT_LIMIT of its size, the diagonal of its bounding box:
+        linear kinematics assumes displacements small against the body."""
+        u = self.basis.to_physical(z[: self.n_displacement_dofs]).reshape(-1, 3)
+        X = self.reference().reshape(-1, 3)
+        position = ~self._tangent_triplets()
+        for label, dofs in self._bodies():
+            triplets = np.unique(dofs // 3)
+            triplets = triplets[position[triplets]]
+            size = float(np.linalg.norm(np.ptp(X[triplets], axis=0)))
+            umax = float(np.linalg.norm(u[triplets], axis=1).max())
+            if umax > LINEAR_DISPLACEMENT_LIMIT * size:
+                warnings.warn(f"analysis.kinematics: {label} moves by up to {umax:.3g}, {umax / size:.3g} times its "
+                              f"size {size:.3g} (the diagonal of its bounding box); with displacements that large, "
+                              "linear kinematics does not hold. Check the units (E in Pa, not MPa, for a scene in "
+                              "metres and newtons) or use kinematics = \"nonlinear\"", LargeDeformationWarning,
+                              stacklevel=3)
+
     # -- the nonlinear system (see solvers.newton) ---------------------------------------------
     def prescribed(self, t):
         return t * self.fixed_values
@@ -1047,6 +1067,11 @@ def solve(scene, *, progress=False):
         Invalid scene, empty sets, or rigid-body motions not fixed (before any solve).
     ConvergenceError
         Newton's method gave up (message says where and what to try).
+
+    Warns
+    -----
+    LargeDeformationWarning
+        Linear kinematics, and a body moved by more than LINEAR_DISPLACEMENT_LIMIT of its size.
     """
     import time as _time
 
@@ -1070,6 +1095,7 @@ def solve(scene, *, progress=False):
                                        float(np.linalg.norm(model.last_residual[free]))],
                             increments=[float(np.linalg.norm(z[free]))], time=_time.perf_counter() - start)
         records, history = [record], [z.copy()]
+        model.check_linear_displacements(z)
         if callback:
             callback(record, 1, 1)
     else:

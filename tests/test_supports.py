@@ -1,12 +1,16 @@
 """Supports (issue 16, part 5): clamps fix the tangent's direction in a rotated basis, rigidly moved
-scenes give rotated results, and free rigid-body motions are counted and named from the null space
-of the supports."""
+scenes give rotated results, free rigid-body motions are counted and named from the null space of
+the supports, and a linear solve warns when its displacements are large against the body."""
+import math
+import warnings
+
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 import mortar1d3d as m13
-from mortar1d3d.model import Model
+from mortar1d3d.errors import LargeDeformationWarning
+from mortar1d3d.model import LINEAR_DISPLACEMENT_LIMIT, Model
 from mortar1d3d.scene import Scene, SceneError
 
 from clamped_scenes import clamped_scene, rotation_error
@@ -133,3 +137,34 @@ def test_free_motions_are_counted_and_named_from_the_null_space_of_the_supports(
     edge = Scene(solid=block, dirichlet=[{"on": {"inside": [[0, 1, 1], [2, 1, 1]]}, "components": ["y", "z"]}])
     assert ("(2 rigid-body mode(s) not fixed: translation in x, rotation about x through (1, 1, 1))"
             in _free_motions(edge))
+
+
+# --------------------------------------------------------------------------------------------
+# large displacements in a linear analysis
+# --------------------------------------------------------------------------------------------
+def _concrete_cantilever(E, kinematics="linear"):
+    """A 2 m concrete cantilever in SI units under a 20 kN tip load."""
+    return Scene(solid={"mesh": {"box": [[0, 0, 0], [2, 0.2, 0.2]], "cells": [8, 1, 1]},
+                        "material": {"model": "linear_elastic", "E": E, "nu": 0.2}},
+                 dirichlet=[{"on": "solid:x_min"}],
+                 load=[{"type": "traction", "on": "solid:x_max", "value": [0, 0, -5e5]}],
+                 analysis={"kinematics": kinematics})
+
+
+def test_a_linear_solve_warns_when_the_body_moves_by_a_tenth_of_its_size():
+    """E of concrete given in MPa in an SI scene: the tip moves by tens of metres on a 2 m beam.
+    Before: no warning."""
+    with pytest.warns(LargeDeformationWarning) as record:
+        result = m13.solve(_concrete_cantilever(30e3))
+    umax = np.linalg.norm(result.solid_displacement, axis=1).max()
+    size = math.sqrt(2.0 ** 2 + 0.2 ** 2 + 0.2 ** 2)
+    assert umax > 10 * size
+    message = str(record[0].message)
+    assert message.startswith(f"analysis.kinematics: the solid moves by up to {umax:.3g}, {umax / size:.3g} "
+                              f"times its size {size:.3g}")
+    assert "E in Pa, not MPa" in message and 'kinematics = "nonlinear"' in message
+    # the same beam with E in Pa moves by 4e-3 of its size: no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", LargeDeformationWarning)
+        small = m13.solve(_concrete_cantilever(30e9))
+    assert np.linalg.norm(small.solid_displacement, axis=1).max() < LINEAR_DISPLACEMENT_LIMIT * size
