@@ -228,6 +228,34 @@ def test_unreadable_scene_files_are_scene_errors(tmp_path):
         Scene.from_toml(latin1)
 
 
+def test_cli_prints_warnings_as_one_line_without_source(tmp_path):
+    """Before: a warning printed the library's file, line number and source line."""
+    scene = tmp_path / "stiff.toml"
+    scene.write_text(EXAMPLE.read_text().replace("penalty = 3e13", "penalty = 3e19"))
+    proc = subprocess.run([sys.executable, "-m", "mortar1d3d.cli", "plan", str(scene)],
+                          capture_output=True, text=True, check=True)
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("warning: AccuracyWarning: coupling.penalty: 3e+19 is 1.0e+09 × "
+                                                   "solid.material.E"), proc.stderr
+    assert ".py:" not in proc.stderr
+
+
+def test_cli_plan_into_a_closed_pipe_exits_quietly(tmp_path):
+    """`mortar1d3d plan scene.toml | head` with the reader gone before the first line: the command
+    stops without a traceback, with the status of a process ended by SIGPIPE (141). The pipe's
+    read end is closed before the process starts, so every write fails: no race.
+    Before: a BrokenPipeError traceback and status 1."""
+    import os
+    read, write = os.pipe()
+    os.close(read)
+    try:
+        proc = subprocess.run([sys.executable, "-m", "mortar1d3d.cli", "plan", str(EXAMPLE)], stdout=write,
+                              stderr=subprocess.PIPE, text=True)
+    finally:
+        os.close(write)
+    assert proc.stderr == "" and proc.returncode == 141
+
+
 def test_truss_by_radius_has_no_bending_stiffness_and_no_warning():
     # a truss given by E and radius must not carry the derived EI (which BeamModel would
     # reject with an "EI is ignored" warning the user never asked for)
