@@ -1,9 +1,12 @@
 """Command line: ``mortar1d3d run|plan scene.toml``, ``mortar1d3d demo``, ``mortar1d3d warmup``,
 ``mortar1d3d bench report``."""
 import argparse
+import os
 import runpy
+import signal
 import sys
 import time
+import warnings
 from pathlib import Path
 
 
@@ -56,7 +59,35 @@ def _bench_report(args):
     return 0
 
 
+def _format_warning(message, category, filename, lineno, line=None):
+    """A warning on the command line: what it says, not where in the library it was raised."""
+    return f"warning: {category.__name__}: {message}\n"
+
+
 def main(argv=None):
+    """Run the command line; returns the exit code.
+
+    Warnings are printed as ``warning: <category>: <message>``. When the reader of stdout goes
+    away (``mortar1d3d plan scene.toml | head``) the command stops quietly, as other command-line
+    tools do, with the exit status of a process ended by SIGPIPE.
+    """
+    previous = warnings.formatwarning
+    warnings.formatwarning = _format_warning
+    try:
+        return _main(argv)
+    except BrokenPipeError:
+        # the interpreter flushes stdout once more at exit: point it at /dev/null so that this
+        # flush does not fail (and print) again
+        try:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        except (AttributeError, OSError, ValueError):    # stdout is not a file (embedded use)
+            pass
+        return 128 + getattr(signal, "SIGPIPE", 13)
+    finally:
+        warnings.formatwarning = previous
+
+
+def _main(argv):
     parser = argparse.ArgumentParser(prog="mortar1d3d", description="Beams embedded in 3D solids (mortar coupling)")
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="solve a scene file and write a ParaView series")

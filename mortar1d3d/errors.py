@@ -18,3 +18,8 @@ class AccuracyWarning(UserWarning):
 
 class CouplingWarning(UserWarning):
     """A beam of a coupled scene is not coupled to the solid (e.g. it lies outside it)."""
+
+
+class LargeDeformationWarning(UserWarning):
+    """A linear analysis moved a body by a sizeable fraction of its own size: linear kinematics is
+    not valid there (often a unit slip, e.g. E in MPa in a scene in metres)."""

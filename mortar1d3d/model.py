@@ -18,16 +18,18 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from .errors import AccuracyWarning, CouplingWarning, MeshError, format_ids
+from .errors import AccuracyWarning, CouplingWarning, LargeDeformationWarning, MeshError, format_ids
 from .generate import box as box_mesh
 from .mesh import BeamMesh, SolidMesh, zero_length_elements
 from .mortar.assemble import assemble_mortar
 from .scene import BOX_FACES, Scene, SceneError
+from .supports import RotatedBasis, clamp_frame
 
 DEFAULT_PENALTY_FACTOR = 1e3     # ε = 1e3 E_solid when the scene gives no penalty
 AUTO_DIRECT_LIMIT = 3_000        # unknowns up to which solver = "auto" factorises (measured crossover,
                                  # solvers.linear.DIRECT_MAX_DOFS: SuperLU fill grows fast in 3D)
 PENALTY_ROUNDOFF_LIMIT = 1e8     # ε / E_solid above which round-off beats the penalty error (AccuracyWarning)
+LINEAR_DISPLACEMENT_LIMIT = 0.1  # max |u| / body size above which a linear result is flagged (LargeDeformationWarning)
 
 
 @dataclass(frozen=True)
@@ -118,10 +120,40 @@ def check_solid_nodes(mesh, where):
     size = float(np.linalg.norm(np.ptp(X, axis=0)))
     pairs = cKDTree(X).query_pairs(1e-10 * size, output_type="ndarray")
     if len(pairs):
-        pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
-        shown = ", ".join(f"{a} and {b}" for a, b in pairs[:5]) + (f" (and {len(pairs) - 5} more pairs)" if len(pairs) > 5 else "")
-        raise SceneError(f"{where}: duplicate nodes at the same position: {shown}; the elements on either side are "
-                         "not connected (merge the duplicates)")
+        raise SceneError(f"{where}: duplicate nodes at the same position: {_node_pairs(pairs)}; the elements on either "
+                         "side are not connected (merge the duplicates)")
+
+
+def _node_pairs(pairs, limit=5):
+    """``"1 and 12, 4 and 13 (and 2 more pairs)"``: node pairs in a fixed order for messages."""
+    pairs = np.sort(np.asarray(pairs), axis=1)
+    pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    more = f" (and {len(pairs) - limit} more pairs)" if len(pairs) > limit else ""
+    return ", ".join(f"{a} and {b}" for a, b in pairs[:limit]) + more
+
+
+def check_beam_nodes(mesh, where):
+    """SceneError naming node ids if the beam mesh ``mesh`` has nodes no element uses (their
+    stiffness is zero: the solve would fail as singular) or two chain ends at the same place (one
+    beam split in two pieces that do not connect, the beam counterpart of a crack).
+
+    Coincident nodes elsewhere are allowed: fibres that cross or touch at a node of one of them
+    are separate beams on purpose. Two nodes coincide when they are closer than 1e-10 of the
+    mesh's bounding-box diagonal.
+    """
+    used = np.zeros(mesh.n_nodes, dtype=bool)
+    used[mesh.elements] = True
+    if not used.all():
+        raise SceneError(f"{where}: nodes not used by any element: {format_ids(np.flatnonzero(~used))} (remove them)")
+    # columns 0 and 1 are the element's end nodes for every beam element type (line3: ends, then middle)
+    ends = np.bincount(mesh.elements[:, :2].ravel(), minlength=mesh.n_nodes) == 1
+    from scipy.spatial import cKDTree
+    X = mesh.positions[ends]
+    size = float(np.linalg.norm(np.ptp(mesh.positions, axis=0)))
+    pairs = np.flatnonzero(ends)[cKDTree(X).query_pairs(1e-10 * size, output_type="ndarray")] if len(X) > 1 else []
+    if len(pairs):
+        raise SceneError(f"{where}: beam ends at the same position: {_node_pairs(pairs)}; the elements on either side "
+                         "are not connected (use one node there)")
 
 
 def _read_beam_file(path, hermite, where):
@@ -149,7 +181,12 @@ def build_beam_mesh(spec, path):
     try:
         if "mesh" in spec:
             mesh = spec["mesh"]
-            return mesh if isinstance(mesh, BeamMesh) else _read_beam_file(mesh, hermite, f"{path}.mesh")
+            if isinstance(mesh, BeamMesh):
+                check_beam_nodes(mesh, f"{path}.mesh")
+                return mesh
+            beams = _read_beam_file(mesh, hermite, f"{path}.mesh")
+            check_beam_nodes(beams, f"{path}.mesh {str(mesh)!r}")
+            return beams
         curve, n = spec["curve"], spec["elements"]
         if "polyline" in curve:
             pts = curve["polyline"]
@@ -176,6 +213,92 @@ def build_solid_mesh(spec):
         raise SceneError(f"solid.mesh: {exc}") from None
     check_solid_nodes(mesh, "solid.mesh")
     return mesh
+
+
+def free_rigid_motions(R, Rf, tol, centre, size):
+    """Names of a basis of the rigid-body motions of a body that its supports do not stop.
+
+    Parameters
+    ----------
+    R : (m, 6) float
+        The body's rigid-body modes (:meth:`Model.rigid_body_modes` restricted to its DOFs):
+        translations in x, y, z, then rotations about x, y, z through ``centre`` with the
+        positions scaled by ``1/size``.
+    Rf : (k, 6) float
+        The rows of ``R`` at fixed DOFs.
+    tol : float
+        Singular values up to ``tol`` count as zero (the rank threshold of the caller).
+    centre : (3,) float
+    size : float
+
+    Returns
+    -------
+    list of str
+        One name per free motion, ``rank(R) − rank(Rf)`` of them: the free motions are ``R a``
+        with ``Rf a = 0``, counted modulo the coefficients ``a`` that move nothing (``R a = 0``,
+        e.g. a straight torsion-free beam turning about its own axis). The basis is the reduced
+        row echelon form with rotations first: a single-axis motion gets its plain name ("rotation
+        about x"), any other an axis direction and, when it does not pass through the centroid,
+        a point on it.
+    """
+    _, s, Vt = np.linalg.svd(R)
+    row = Vt[: np.count_nonzero(s > tol)]                   # coefficients that move the body
+    if len(Rf):
+        _, sf, Vft = np.linalg.svd(Rf)
+        null = Vft[np.count_nonzero(sf > tol):]             # coefficients the supports do not see
+    else:
+        null = np.eye(6)
+    # null(Rf) is the orthogonal sum of null(R) and null(Rf) ∩ row(R): projecting it onto row(R)
+    # leaves the free motions, with singular values 1 (kept) or 0 (motions that move nothing)
+    _, sp_, basis = np.linalg.svd(null @ row.T @ row)
+    basis = basis[: np.count_nonzero(sp_ > 0.5)]
+    order = [3, 4, 5, 0, 1, 2]                              # rotations first: pivots on rotations
+    A = basis[:, order]
+    r = 0
+    for c in range(6):
+        if r == len(A):
+            break
+        p = r + int(np.argmax(np.abs(A[r:, c])))
+        if abs(A[p, c]) <= 1e-8:                             # rows are orthonormal: O(1) entries
+            continue
+        A[[r, p]] = A[[p, r]]
+        A[r] /= A[r, c]
+        others = np.arange(len(A)) != r
+        A[others] -= np.outer(A[others, c], A[r])
+        r += 1
+    coefficients = np.empty_like(A)
+    coefficients[:, order] = A
+    names = [_motion_name(a[:3], a[3:] / size, centre, size) for a in coefficients]
+    return sorted(names, key=lambda name: not name.startswith("translation"))
+
+
+def _motion_name(v, w, centre, size):
+    """Name of the rigid motion ``u(X) = v + w × (X − centre)``."""
+    def direction(d):
+        d = d / np.linalg.norm(d)
+        d = np.where(np.abs(d) <= 1e-9, 0.0, d)
+        d = d if d[np.flatnonzero(d)[0]] > 0 else -d            # a motion's sign is arbitrary
+        nonzero = np.flatnonzero(d)
+        if len(nonzero) == 1:
+            return "xyz"[nonzero[0]]
+        return "(" + ", ".join(f"{x:.3g}" for x in d + 0.0) + ")"
+
+    wn, vn = float(np.linalg.norm(w)), float(np.linalg.norm(v))
+    if wn * size <= 1e-9 * vn:
+        d = direction(v)
+        return f"translation {'in' if len(d) == 1 else 'along'} {d}"
+    axis = w / wn
+    name = f"rotation about {direction(w)}"
+    offset = np.cross(w, v) / wn ** 2                          # centroid → nearest point of the axis
+    if np.linalg.norm(offset) > 1e-9 * size:
+        point = centre + offset
+        # round-off of the coordinates (scale: size and distance from the origin) printed as 0
+        point[np.abs(point) <= 1e-9 * (size + np.abs(centre).max())] = 0.0
+        name += " through (" + ", ".join(f"{x:.4g}" for x in point + 0.0) + ")"
+    slide = float(v @ axis) / wn                                # translation along the axis per radian
+    if abs(slide) > 1e-9 * size:
+        name += f" with a slide of {slide:.3g} along it per radian (screw)"
+    return name
 
 
 @dataclass
@@ -248,14 +371,18 @@ class Model:
                               "(about machine epsilon × penalty / E relative). Use 1e2..1e6 × E, or "
                               "enforcement = \"lagrange\"", AccuracyWarning, stacklevel=3)
         self._check_solver()
-        self.fixed_dofs, self.fixed_values, self.dirichlet_dofs = self._dirichlet()
+        self.fixed_dofs, self.fixed_values, self.dirichlet_dofs, self.basis = self._dirichlet()
+        # every set is resolved here, so that plan() reports what solve() would
+        self.load_sets = self._load_sets()
+        self.fibre_regions = self._fibre_regions()
         self.prepared = False
         self._follow = None          # auxiliary-space split, built on first use (_follow_split)
 
     # -- sets -----------------------------------------------------------------------------------
     def _beam_nodes(self, entry, which, path):
         if entry >= len(self.scene.beams):
-            raise SceneError(f"{path}: beam {entry} does not exist (the scene has {len(self.scene.beams)} beams)")
+            n = len(self.scene.beams)
+            raise SceneError(f"{path}: beam {entry} does not exist (the scene has {n} beam{'s' if n != 1 else ''})")
         g = self.entry_group[entry]
         k = g.entries.index(entry)
         start, stop = g.entry_elements[k]
@@ -312,7 +439,10 @@ class Model:
         return (base + comps[None, :]).ravel()
 
     def _dirichlet(self):
+        """Fixed DOFs and their values in the basis of the unknowns, the position DOFs of each entry
+        (for its reaction), and that basis (:class:`~mortar1d3d.supports.RotatedBasis` of the clamps)."""
         dofs, values, per_entry = [], [], []
+        clamps = {}
         for i, d in enumerate(self.scene.dirichlet):
             sel = self.select(d["on"], f"dirichlet[{i}].on")
             idx = self._set_dofs(sel, d["components"])
@@ -323,12 +453,16 @@ class Model:
                 g = sel[1]
                 if g.model != "torsion_free":
                     raise SceneError(f"dirichlet[{i}].clamp: beam {d['on']!r} has no tangent DOFs ({g.model})")
-                t_idx = self._clamp_dofs(g, sel[2])
+                starts, frames = self._clamp_frames(g, sel[2])
+                clamps.update(zip(starts.tolist(), frames))
+                t_idx = (starts[:, None] + np.arange(2)).ravel()      # e1·Δt, e2·Δt in the rotated frame
                 dofs.append(t_idx)
                 values.append(np.zeros(len(t_idx)))
             per_entry.append(idx)     # position DOFs only: their reactions are forces
+        starts = sorted(clamps)
+        basis = RotatedBasis(starts, [clamps[s] for s in starts])
         if not dofs:
-            return np.zeros(0, np.int64), np.zeros(0), per_entry
+            return np.zeros(0, np.int64), np.zeros(0), per_entry, basis
         dofs, values = np.concatenate(dofs), np.concatenate(values)
         order = np.argsort(dofs, kind="stable")
         dofs, values = dofs[order], values[order]
@@ -340,25 +474,18 @@ class Model:
                                  "different values")
             keep = np.concatenate([[True], ~same])
             dofs, values = dofs[keep], values[keep]
-        return dofs, values, per_entry
+        return dofs, values, per_entry, basis
 
     @staticmethod
-    def _clamp_dofs(g, nodes):
-        """Tangent DOFs a clamp fixes: the tangent's direction, not its length.
+    def _clamp_frames(g, nodes):
+        """First tangent DOF of each clamped node and its frame ``(e1, e2, t0)``.
 
-        At a Hermite node the tangent's length is the local stretch; fixing it would force zero
-        axial strain there. When the reference tangent is parallel to a coordinate axis, the two
-        other components are fixed (direction clamped, stretch free); otherwise all three are
-        (the stretch at that node is then held at zero too).
+        At a Hermite node the tangent's length is the local stretch: a clamp fixes only its
+        direction, the components along ``e1`` and ``e2`` (see :mod:`mortar1d3d.supports`), so
+        that a clamped beam behaves the same in every orientation.
         """
-        out = []
-        for node in nodes:
-            t = g.mesh.tangents[node]
-            major = int(np.argmax(np.abs(t)))
-            aligned = np.abs(np.delete(t, major)).max() <= 1e-12
-            comps = [c for c in range(3) if c != major] if aligned else [0, 1, 2]
-            out.append(g.dof_offset + 6 * node + 3 + np.array(comps))
-        return np.concatenate(out)
+        starts = g.dof_offset + 6 * np.asarray(nodes, dtype=np.int64) + 3
+        return starts, [clamp_frame(g.mesh.tangents[node]) for node in nodes]
 
     def _check_solver(self):
         solver, enforcement = self.scene.analysis["solver"], self.scene.coupling["enforcement"]
@@ -564,15 +691,13 @@ class Model:
                                  f"kappa {np.shape(ops.kappa)} (expected ({n_lm},))")
         return operators
 
-    def _fibre_field(self, families):
-        """FibreField of ``solid.material.fibres``: a family without ``inside`` reinforces every
-        element, one with ``inside`` the elements whose node centroid lies in the box."""
-        from .physics.fibre_material import FibreField, fibre_family
+    def _fibre_regions(self):
+        """Per ``solid.material.fibres`` family: None (every element) or the mask of the elements
+        whose node centroid lies in its ``inside`` box."""
+        families = self.scene.solid["material"].get("fibres", ()) if self.solid_mesh is not None else ()
         mesh = self.solid_mesh
-        rows = []
+        out = []
         for i, f in enumerate(families):
-            path = f"solid.material.fibres[{i}]"
-            row = fibre_family(f["direction"], f["E"], f["volume_fraction"], path)
             elements = None
             if f["inside"] is not None:
                 lo, hi = f["inside"]
@@ -582,30 +707,55 @@ class Model:
                 tol = 1e-9 * float(np.linalg.norm(np.ptp(mesh.points, axis=0)))
                 elements = ((centroid >= lo - tol) & (centroid <= hi + tol)).all(axis=1)
                 if not elements.any():
-                    raise SceneError(f"{path}.inside: no element centroid lies in {lo.tolist()} – {hi.tolist()}")
+                    raise SceneError(f"solid.material.fibres[{i}].inside: no element centroid lies in "
+                                     f"{lo.tolist()} – {hi.tolist()}")
+            out.append(elements)
+        return out
+
+    def _fibre_field(self, families):
+        """FibreField of ``solid.material.fibres``: a family without ``inside`` reinforces every
+        element, one with ``inside`` the elements of its region (:meth:`_fibre_regions`)."""
+        from .physics.fibre_material import FibreField, fibre_family
+        rows = []
+        for i, (f, elements) in enumerate(zip(families, self.fibre_regions)):
+            row = fibre_family(f["direction"], f["E"], f["volume_fraction"], f"solid.material.fibres[{i}]")
             rows.append((row, elements))
-        return FibreField(mesh.n_elements, rows)
+        return FibreField(self.solid_mesh.n_elements, rows)
+
+    def _load_sets(self):
+        """Per ``load`` entry: its resolved set (None for a body force) and, for surface loads,
+        its boundary faces."""
+        from .physics.surface import boundary_faces
+        out = []
+        for i, item in enumerate(self.scene.loads):
+            if item["type"] == "body":
+                out.append((None, None))
+                continue
+            path = f"load[{i}].on"
+            sel = self.select(item["on"], path)
+            faces = None
+            if item["type"] in ("traction", "pressure"):
+                faces = boundary_faces(self.solid_mesh, sel[1])
+                if len(faces) == 0:
+                    raise SceneError(f"{path}: {item['on']!r} contains no boundary face of the solid")
+            out.append((sel, faces))
+        return out
 
     def _prepare_loads(self):
-        from .physics.surface import Pressure, boundary_faces, traction_force
+        from .physics.surface import Pressure, traction_force
         n = self.n_displacement_dofs
         self.dead_load = np.zeros(n)
         self.pressures, self.moments = [], []
-        for i, item in enumerate(self.scene.loads):
-            path = f"load[{i}]"
+        for item, (sel, faces) in zip(self.scene.loads, self.load_sets):
             kind = item["type"]
             if kind == "body":
                 self.dead_load[: 3 * self.n_solid_nodes] += self.solid_physics.body_force(item["value"])
                 self.counts["load.body"] += 1
                 continue
-            sel = self.select(item["on"], f"{path}.on")
             if kind == "point":
                 self.dead_load[self._set_dofs(sel, [0, 1, 2])] += np.tile(item["value"], len(self._set_dofs(sel, [0, 1, 2])) // 3)
                 self.counts["load.point"] += 1
             elif kind in ("traction", "pressure"):
-                faces = boundary_faces(self.solid_mesh, sel[1])
-                if len(faces) == 0:
-                    raise SceneError(f"{path}.on: {item['on']!r} contains no boundary face of the solid")
                 if kind == "traction":
                     self.dead_load[: 3 * self.n_solid_nodes] += traction_force(self.solid_mesh, faces, item["value"])
                     self.counts["load.traction"] += 1
@@ -662,22 +812,34 @@ class Model:
             bodies.insert(0, (label, np.concatenate(solid_body)))
         return bodies
 
-    def rigid_body_modes(self, dofs=None):
-        """(n_dofs, 6) rigid-body modes of the displacement DOFs (translations, rotations about the
-        centroid of ``dofs``); tangent DOFs of Hermite beams rotate, never translate."""
-        ref = self.reference()
-        n = self.n_displacement_dofs
-        is_tangent = np.zeros(n // 3, dtype=bool)
+    def _tangent_triplets(self):
+        """(n_displacement_dofs // 3,) bool: which DOF triplets are Hermite tangents."""
+        is_tangent = np.zeros(self.n_displacement_dofs // 3, dtype=bool)
         for g in self.groups:
             if g.model == "torsion_free":
                 first = g.dof_offset // 3
                 is_tangent[first + 1: first + 2 * g.mesh.n_nodes: 2] = True
-        X = ref.reshape(-1, 3)
-        triplets = np.arange(n // 3) if dofs is None else np.unique(dofs // 3)
+        return is_tangent
+
+    def _mode_frame(self, dofs, is_tangent):
+        """Centre and length scale of :meth:`rigid_body_modes`: the centroid and the largest extent
+        of the positions among ``dofs`` (all when None)."""
+        X = self.reference().reshape(-1, 3)
+        triplets = np.arange(len(X)) if dofs is None else np.unique(dofs // 3)
         pos = triplets[~is_tangent[triplets]]
         centre = X[pos].mean(axis=0) if len(pos) else np.zeros(3)
         size = float(np.ptp(X[pos], axis=0).max()) if len(pos) > 1 else 1.0
-        size = size if size > 0 else 1.0
+        return centre, (size if size > 0 else 1.0)
+
+    def rigid_body_modes(self, dofs=None):
+        """(n_dofs, 6) rigid-body modes of the displacement DOFs (translations, rotations about the
+        centroid of ``dofs``); tangent DOFs of Hermite beams rotate, never translate. In the basis of
+        the unknowns (clamped tangents in their rotated frames), like ``fixed`` and ``free``."""
+        ref = self.reference()
+        n = self.n_displacement_dofs
+        is_tangent = self._tangent_triplets()
+        X = ref.reshape(-1, 3)
+        centre, size = self._mode_frame(dofs, is_tangent)
         R = np.zeros((n // 3, 3, 6))
         P = (X - centre) / size
         P[is_tangent] = X[is_tangent] / size     # a tangent turns with the body: ω × t, same scale
@@ -686,15 +848,13 @@ class Model:
             e[k] = 1.0
             R[~is_tangent, k, k] = 1.0
             R[:, :, 3 + k] = np.cross(e, P)
-        return R.reshape(n, 6)
+        return self.basis.to_unknowns(R.reshape(n, 6))
 
     def check_supports(self):
         """Raise SceneError if a body can move as a rigid body (before any solve)."""
         self.counts["check.rigid_body_modes"] += 1
         fixed = np.zeros(self.n_displacement_dofs, dtype=bool)
         fixed[self.fixed_dofs[self.fixed_dofs < self.n_displacement_dofs]] = True
-        names = ("translation in x", "translation in y", "translation in z",
-                 "rotation about x", "rotation about y", "rotation about z")
         for label, dofs in self._bodies():
             R = self.rigid_body_modes(dofs)[dofs]
             s_all = np.linalg.svd(R, compute_uv=False)
@@ -706,11 +866,29 @@ class Model:
             else:
                 rank_fix = 0
             if rank_fix < rank_all:
-                col = np.linalg.norm(Rf, axis=0) if len(Rf) else np.zeros(6)
-                free = [names[k] for k in range(6) if col[k] <= 1e-10 * s_all[0] and np.linalg.norm(R[:, k]) > 0]
-                what = ", ".join(free) if free else f"{rank_all - rank_fix} combination(s) of rigid-body motions"
-                raise SceneError(f"dirichlet: {label} can move freely ({rank_all - rank_fix} rigid-body mode(s) not "
-                                 f"fixed: {what}); add supports ([[dirichlet]]) that stop these motions")
+                centre, size = self._mode_frame(dofs, self._tangent_triplets())
+                free = free_rigid_motions(R, Rf, 1e-10 * s_all[0], centre, size)
+                raise SceneError(f"dirichlet: {label} can move freely ({len(free)} rigid-body mode(s) not "
+                                 f"fixed: {', '.join(free)}); add supports ([[dirichlet]]) that stop these motions")
+
+    def check_linear_displacements(self, z):
+        """Warn (LargeDeformationWarning) for each body that the linear solution ``z`` (unknowns)
+        moves by more than LINEAR_DISPLACEMENT_LIMIT of its size, the diagonal of its bounding box:
+        linear kinematics assumes displacements small against the body."""
+        u = self.basis.to_physical(z[: self.n_displacement_dofs]).reshape(-1, 3)
+        X = self.reference().reshape(-1, 3)
+        position = ~self._tangent_triplets()
+        for label, dofs in self._bodies():
+            triplets = np.unique(dofs // 3)
+            triplets = triplets[position[triplets]]
+            size = float(np.linalg.norm(np.ptp(X[triplets], axis=0)))
+            umax = float(np.linalg.norm(u[triplets], axis=1).max())
+            if umax > LINEAR_DISPLACEMENT_LIMIT * size:
+                warnings.warn(f"analysis.kinematics: {label} moves by up to {umax:.3g}, {umax / size:.3g} times its "
+                              f"size {size:.3g} (the diagonal of its bounding box); with displacements that large, "
+                              "linear kinematics does not hold. Check the units (E in Pa, not MPa, for a scene in "
+                              "metres and newtons) or use kinematics = \"nonlinear\"", LargeDeformationWarning,
+                              stacklevel=3)
 
     # -- the nonlinear system (see solvers.newton) ---------------------------------------------
     def prescribed(self, t):
@@ -755,9 +933,13 @@ class Model:
         return r, K
 
     def residual(self, z, t, tangent=True):
-        """Residual ``r = f_int + (coupling) − t f_ext`` over all unknowns, and its Jacobian."""
+        """Residual ``r = f_int + (coupling) − t f_ext`` over all unknowns, and its Jacobian.
+
+        ``z``, ``r`` and the Jacobian are in the basis of the unknowns (``self.basis``: clamped
+        tangents in their rotated frames); the physics is evaluated on physical components.
+        """
         n = self.n_displacement_dofs
-        d = z[:n]
+        d = self.basis.to_physical(z[:n])
         r, K = self.internal(d, tangent)
         r -= t * self.dead_load
         nS = 3 * self.n_solid_nodes
@@ -782,6 +964,7 @@ class Model:
             r = np.concatenate([r + B.T @ lam, B @ d])
             if tangent:
                 K = sp.bmat([[K, B.T], [B, None]], format="csr")
+        r, K = self.basis.to_unknowns(r), self.basis.matrix(K)
         self.last_residual = r
         return r, (K.tocsr() if tangent else None)
 
@@ -800,6 +983,7 @@ class Model:
             free = self.free[self.free < self.n_displacement_dofs]
             blocks = [follow_operator(g.operators, g.mesh) for g in self.groups]
             P = sp.vstack(blocks, format="csr")           # groups are contiguous after the solid
+            P = self.basis.to_unknowns(P, offset=nS)      # rows of clamped tangents: rotated frames
             solid = np.flatnonzero(free < nS)
             beam = np.flatnonzero(free >= nS)
             P = P[free[beam] - nS][:, free[solid]].tocsr()
@@ -855,7 +1039,8 @@ def _as_scene(scene):
 def plan(scene):
     """The effects :func:`solve` will run for ``scene``, in order (list of :class:`Effect`).
 
-    Builds the meshes and resolves the sets (so a bad set is reported here), assembles nothing.
+    Builds the meshes and resolves every set (supports, loads, fibre regions: a set that is
+    unknown or selects nothing is reported here, as :func:`solve` would), assembles nothing.
     """
     return Model(_as_scene(scene)).effects()
 
@@ -882,6 +1067,11 @@ def solve(scene, *, progress=False):
         Invalid scene, empty sets, or rigid-body motions not fixed (before any solve).
     ConvergenceError
         Newton's method gave up (message says where and what to try).
+
+    Warns
+    -----
+    LargeDeformationWarning
+        Linear kinematics, and a body moved by more than LINEAR_DISPLACEMENT_LIMIT of its size.
     """
     import time as _time
 
@@ -905,6 +1095,7 @@ def solve(scene, *, progress=False):
                                        float(np.linalg.norm(model.last_residual[free]))],
                             increments=[float(np.linalg.norm(z[free]))], time=_time.perf_counter() - start)
         records, history = [record], [z.copy()]
+        model.check_linear_displacements(z)
         if callback:
             callback(record, 1, 1)
     else:

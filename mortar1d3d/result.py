@@ -15,6 +15,8 @@ class Result:
 
     Attributes
     ----------
+    z : (n_unknowns,) float64
+        All unknowns at the end (Model layout; physical components, clamped tangents included).
     solid_displacement : (n_solid_nodes, 3) float64
     beam_displacement : (n_beam_nodes, 3) float64
         Centreline position displacements, beams in scene order, each beam's nodes in order.
@@ -33,6 +35,9 @@ class Result:
     """
 
     def __init__(self, model, z, steps, history, wall_time=0.0):
+        # the solvers work in the model's basis of unknowns (clamped tangents in rotated frames);
+        # a result holds physical components
+        z, history = model.basis.to_physical(z), [model.basis.to_physical(h) for h in history]
         self.model, self.z, self.steps, self.history, self.wall_time = model, z, steps, history, wall_time
         self.scene = model.scene
         self.counts = model.counts
@@ -48,6 +53,7 @@ class Result:
         self.beam_tangent_displacement = np.vstack(tan) if tan else np.zeros((0, 3))
         self.line_load = self._line_load(z)
         r = getattr(model, "last_residual", None)
+        r = model.basis.to_physical(r) if r is not None else None
         self.reactions = []
         for dofs in model.dirichlet_dofs:
             force = np.zeros(3)

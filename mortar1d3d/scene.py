@@ -315,10 +315,11 @@ def _set_spec(value, path):
         if parts[0] == "solid" and len(parts) == 2 and parts[1]:
             return value
         if parts[0] == "beam" and len(parts) in (2, 3):
-            try:
-                int(parts[1])
-            except ValueError:
-                _fail(path, f"{value!r}: expected beam:<index>[:start|end]")
+            # only plain decimal digits: int() would also take "-1" (counting from the end),
+            # " 1" and "1_0"; the set must name one beam of the scene, counted from 0
+            if not (parts[1].isascii() and parts[1].isdigit()):
+                _fail(path, f"{value!r}: expected beam:<index>[:start|end] with <index> = 0, 1, ... (the "
+                            f"position of the beam in [[beams]]), got index {parts[1]!r}")
             if len(parts) == 3 and parts[2] not in ("start", "end"):
                 _fail(path, f"{value!r}: expected beam:<index>:start or beam:<index>:end")
             return value
@@ -451,8 +452,10 @@ class Scene:
                 data = tomllib.load(f)
         except FileNotFoundError:
             raise SceneError(f"scene file {str(path)!r} does not exist") from None
-        except tomllib.TOMLDecodeError as exc:
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:      # TOML files are UTF-8 text
             raise SceneError(f"{path}: not valid TOML: {exc}") from None
+        except OSError as exc:      # a directory, no permission, ...
+            raise SceneError(f"scene file {str(path)!r} cannot be read: {exc.strerror or exc}") from None
         return cls.from_dict(data, base_dir=path.parent, name=path.stem)
 
     def __repr__(self):

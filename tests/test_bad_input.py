@@ -278,6 +278,40 @@ def test_bad_beam_mesh_files(tmp_path, model, points, cells, message):
     expect_scene_error(write_scene(tmp_path, data), message)
 
 
+@pytest.mark.parametrize("kinematics", ["linear", "nonlinear"])
+@pytest.mark.parametrize("model", ["torsion_free", "truss"])
+@pytest.mark.parametrize("case, points, cells, message", [
+    ("unused_node", [[0.05, 0.1, 0.1], [0.5, 0.1, 0.1], [0.95, 0.1, 0.1], [0.5, 0.15, 0.1]], [[0, 1], [1, 2]],
+     r"nodes not used by any element: 3 \(remove them\)"),
+    ("split_chain", [[0.05, 0.1, 0.1], [0.5, 0.1, 0.1], [0.5, 0.1, 0.1], [0.95, 0.1, 0.1]], [[0, 1], [2, 3]],
+     r"beam ends at the same position: 1 and 2; the elements on either side are not connected"),
+])
+def test_beam_mesh_files_are_checked_like_solid_ones(tmp_path, case, points, cells, message, model, kinematics):
+    """Before: an unused node ended the linear solve in scipy's 'Factor is exactly singular' and the
+    nonlinear one in a ConvergenceError; a chain split at two coincident nodes was solved as two
+    separate bars."""
+    tangent = {"tangent": np.tile([1.0, 0.0, 0.0], (len(points), 1))}      # so that a split chain can be read
+    meshio.write(tmp_path / "beam.vtu", meshio.Mesh(np.array(points, float), [("line", np.array(cells))],
+                                                    point_data=tangent))
+    data = copy.deepcopy(BASE)
+    data["beams"][0] = {"mesh": "beam.vtu", "model": model, "section": {"E": 2e11, "radius": 0.01}}
+    data["dirichlet"][1] = {"on": "beam:0:start"}
+    data["analysis"]["kinematics"] = kinematics
+    expect_scene_error(write_scene(tmp_path, data), r"^beams\[0\]\.mesh '.*beam\.vtu': " + message)
+
+
+def test_fibres_crossing_at_a_node_are_not_duplicates(tmp_path):
+    """Coincident nodes inside two chains are separate fibres crossing on purpose, not a split beam."""
+    points = [[0.05, 0.1, 0.1], [0.5, 0.1, 0.1], [0.95, 0.1, 0.1], [0.5, 0.02, 0.1], [0.5, 0.1, 0.1], [0.5, 0.18, 0.1]]
+    meshio.write(tmp_path / "cross.vtu", meshio.Mesh(np.array(points), [("line", np.array([[0, 1], [1, 2], [3, 4],
+                                                                                            [4, 5]]))]))
+    data = copy.deepcopy(BASE)
+    data["beams"][0] = {"mesh": "cross.vtu", "model": "truss", "section": {"E": 2e11, "radius": 0.01}}
+    data["dirichlet"][1] = {"on": "beam:0"}
+    model = Model(Scene.from_dict(data, base_dir=tmp_path))
+    assert model.groups[0].mesh.n_nodes == 6
+
+
 # --------------------------------------------------------------------------------------------
 # units mix-up: the bar given in millimetres, the solid in metres
 # --------------------------------------------------------------------------------------------

@@ -57,6 +57,15 @@ def scene_with(path, value):
     ("beams.0.curve", {"spiral": 1}, "beams[0].curve.spiral: unknown key"),
     ("dirichlet.0.on", "solid:top", None),        # unknown set: found when the model is built
     ("dirichlet.0.on", "wall", "dirichlet[0].on: 'wall': expected"),
+    # before: beam:-1 selected the last beam (or failed with a bare ValueError), " 0" and "1_0" passed int()
+    ("dirichlet.0.on", "beam:-1:start", "dirichlet[0].on: 'beam:-1:start': expected beam:<index>[:start|end] with "
+                                        "<index> = 0, 1, ..."),
+    ("dirichlet.0.on", "beam:x:end", "dirichlet[0].on: 'beam:x:end': expected beam:<index>[:start|end]"),
+    ("dirichlet.0.on", "beam: 0:end", "dirichlet[0].on: 'beam: 0:end': expected beam:<index>[:start|end]"),
+    ("dirichlet.0.on", "beam:1_0", "dirichlet[0].on: 'beam:1_0': expected beam:<index>[:start|end]"),
+    ("dirichlet.0.on", "beam:7:middle", "dirichlet[0].on: 'beam:7:middle': expected beam:<index>:start or"),
+    ("load.0", {"type": "point", "on": "beam:-1:end", "value": [0, 0, 1]},
+     "load[0].on: 'beam:-1:end': expected beam:<index>[:start|end]"),
     ("dirichlet.0.components", ["x", "w"], "dirichlet[0].components[1]: unknown value 'w'"),
     ("load.0.type", "wind", "load[0].type: unknown value 'wind'"),
     ("load.0.value", [1, 2], "load[0].value: expected a list of 3 numbers, got 2 entries"),
@@ -93,6 +102,39 @@ def test_unknown_top_level_key_and_bad_toml(tmp_path):
 def test_sets_that_select_nothing(on, message):
     data = scene_with("dirichlet.0.on", on)
     with pytest.raises(SceneError, match=message):
+        m13.plan(Scene.from_dict(data))
+
+
+def _fibre_solid(inside):
+    solid = copy.deepcopy(BASE["solid"])
+    solid["material"]["fibres"] = [{"direction": [1, 0, 0], "E": 1e10, "volume_fraction": 0.1, "inside": inside}]
+    return solid
+
+
+@pytest.mark.parametrize("key, value, message", [
+    ("load", [{"type": "point", "on": "beam:3:end", "value": [0, 0, 1]}], r"^load\[0\]\.on: beam 3 does not exist "
+                                                                          r"\(the scene has 1 beam\)"),
+    ("load", [{"type": "point", "on": "solid:top", "value": [0, 0, 1]}], r"^load\[0\]\.on: unknown solid set 'top'"),
+    ("load", [{"type": "point", "on": {"inside": [[5, 5, 5], [6, 6, 6]]}, "value": [0, 0, 1]}],
+     r"^load\[0\]\.on: the box .* contains no solid node"),
+    ("load", [{"type": "moment", "on": "beam:2:end", "value": [0, 0, 1]}], r"^load\[0\]\.on: beam 2 does not exist"),
+    ("solid", _fibre_solid([[5, 5, 5], [6, 6, 6]]), r"^solid\.material\.fibres\[0\]\.inside: no element centroid"),
+])
+def test_plan_resolves_every_set_that_solve_would(key, value, message):
+    """Before: plan() resolved only the Dirichlet sets; these passed plan and failed in solve."""
+    data = scene_with(key, value)
+    with pytest.raises(SceneError, match=message):
+        m13.plan(Scene.from_dict(data))
+
+
+def test_plan_reports_a_surface_load_on_a_set_without_boundary_faces():
+    box = m13.generate.box((0, 0, 0), (1, 1, 1), (2, 2, 2), "hexahedron")
+    centre = np.flatnonzero(np.all(box.points == 0.5, axis=1))
+    solid = m13.SolidMesh(box.points, box.cells, point_sets={"centre": centre})
+    data = copy.deepcopy(BASE)
+    data["solid"]["mesh"] = solid
+    data["load"] = [{"type": "traction", "on": "solid:centre", "value": [0, 0, 1]}]
+    with pytest.raises(SceneError, match=r"^load\[0\]\.on: 'solid:centre' contains no boundary face of the solid"):
         m13.plan(Scene.from_dict(data))
 
 
@@ -161,6 +203,57 @@ def test_cli_plan_prints_the_effects():
     out = subprocess.run([sys.executable, "-m", "mortar1d3d.cli", "plan", str(EXAMPLE)],
                          capture_output=True, text=True, check=True).stdout
     assert "mortar.segmentation" in out and "solver.newton" in out and "4 load steps" in out
+
+
+@pytest.mark.parametrize("on", ["beam:-1:start", "beam:5:end", "solid:top"])
+def test_cli_plan_of_a_bad_set_prints_an_error_not_a_traceback(tmp_path, on, capsys):
+    """Before: 'beam:-1:start' ended `mortar1d3d plan` in a ValueError traceback."""
+    from mortar1d3d.cli import main
+    text = EXAMPLE.read_text().replace('on = "beam:0:start"', f'on = "{on}"')
+    assert f'on = "{on}"' in text
+    scene = tmp_path / "scene.toml"
+    scene.write_text(text)
+    assert main(["plan", str(scene)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("error: dirichlet[1].on: ") and "Traceback" not in err
+
+
+def test_unreadable_scene_files_are_scene_errors(tmp_path):
+    """Before: a directory raised IsADirectoryError, a file that is not UTF-8 UnicodeDecodeError."""
+    with pytest.raises(SceneError, match=r"scene file .* cannot be read: Is a directory"):
+        Scene.from_toml(tmp_path)
+    latin1 = tmp_path / "latin1.toml"
+    latin1.write_bytes('[analysis]\n# Stahlbeton, Träger\n'.encode("latin-1"))
+    with pytest.raises(SceneError, match=r"latin1\.toml: not valid TOML: 'utf-8' codec can't decode"):
+        Scene.from_toml(latin1)
+
+
+def test_cli_prints_warnings_as_one_line_without_source(tmp_path):
+    """Before: a warning printed the library's file, line number and source line."""
+    scene = tmp_path / "stiff.toml"
+    scene.write_text(EXAMPLE.read_text().replace("penalty = 3e13", "penalty = 3e19"))
+    proc = subprocess.run([sys.executable, "-m", "mortar1d3d.cli", "plan", str(scene)],
+                          capture_output=True, text=True, check=True)
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("warning: AccuracyWarning: coupling.penalty: 3e+19 is 1.0e+09 × "
+                                                   "solid.material.E"), proc.stderr
+    assert ".py:" not in proc.stderr
+
+
+def test_cli_plan_into_a_closed_pipe_exits_quietly(tmp_path):
+    """`mortar1d3d plan scene.toml | head` with the reader gone before the first line: the command
+    stops without a traceback, with the status of a process ended by SIGPIPE (141). The pipe's
+    read end is closed before the process starts, so every write fails: no race.
+    Before: a BrokenPipeError traceback and status 1."""
+    import os
+    read, write = os.pipe()
+    os.close(read)
+    try:
+        proc = subprocess.run([sys.executable, "-m", "mortar1d3d.cli", "plan", str(EXAMPLE)], stdout=write,
+                              stderr=subprocess.PIPE, text=True)
+    finally:
+        os.close(write)
+    assert proc.stderr == "" and proc.returncode == 141
 
 
 def test_truss_by_radius_has_no_bending_stiffness_and_no_warning():
