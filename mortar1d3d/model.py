@@ -165,6 +165,19 @@ def build_beam_mesh(spec, path):
         raise SceneError(f"{path}: {exc}") from None
 
 
+def check_straight_torsion_free(mesh, path):
+    """SceneError naming ``path`` if a torsion_free beam's reference centreline is curved.
+
+    The torsion-free theory holds for initially straight beams only (see
+    :class:`~mortar1d3d.physics.beam.BeamModel`); curved is decided by
+    :func:`~mortar1d3d.physics.beam.curved_elements` (curvature times element length above 1e-8).
+    """
+    from .physics.beam import curved_elements, curved_torsion_free_message
+    ids, values = curved_elements(mesh)
+    if ids.size:
+        raise SceneError(f"{path}.model: {curved_torsion_free_message(ids, values, mesh.n_elements)}")
+
+
 def build_solid_mesh(spec):
     mesh = spec["mesh"]
     try:
@@ -216,6 +229,9 @@ class Model:
         # beams grouped by model, entry order kept inside each group
         self.groups, self.entry_group = [], []
         meshes = [build_beam_mesh(b, f"beams[{i}]") for i, b in enumerate(scene.beams)]
+        for i, (b, mesh) in enumerate(zip(scene.beams, meshes)):
+            if b["model"] == "torsion_free":
+                check_straight_torsion_free(mesh, f"beams[{i}]")
         for i, b in enumerate(scene.beams):
             group = next((g for g in self.groups if g.model == b["model"]), None)
             if group is None:
