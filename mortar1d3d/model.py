@@ -430,6 +430,8 @@ class Model:
                 out.append(Effect(f"coupling.{c['constraint']}_penalty", "once",
                                   f"constant stiffness, penalty {self.penalty:.4g}"))
         out.append(Effect("check.rigid_body_modes", "once", "before any solve"))
+        if self.groups:
+            out.append(Effect("check.zero_energy_modes", "once", "beam mechanisms, before any solve"))
         if self.solid_mesh is not None:
             mat = sc.solid["material"]["model"]
             if sc.solid["material"].get("fibres"):
@@ -727,6 +729,72 @@ class Model:
                 what = ", ".join(free) if free else f"{rank_all - rank_fix} combination(s) of rigid-body motions"
                 raise SceneError(f"dirichlet: {label} can move freely ({rank_all - rank_fix} rigid-body mode(s) not "
                                  f"fixed: {what}); add supports ([[dirichlet]]) that stop these motions")
+        self.check_zero_energy_modes()
+
+    def check_zero_energy_modes(self):
+        """Raise SceneError if a beam has a zero-energy mode other than a rigid-body motion.
+
+        Runs after the rigid-body check (so every body is held against rigid motion): each chain
+        of beam elements is probed with the solid held, on its free DOFs, for motions that
+        neither the beam stiffness at the reference state nor the coupling resists
+        (:func:`~mortar1d3d.mechanisms.find_mechanisms`). The modes found are kept in
+        ``zero_energy_modes`` (list of ``(group, Mechanism)``) before the error is raised.
+        """
+        from .mechanisms import chains, find_mechanisms
+        self.counts["check.zero_energy_modes"] += 1
+        self.zero_energy_modes = []
+        fixed = np.zeros(self.n_displacement_dofs, dtype=bool)
+        fixed[self.fixed_dofs[self.fixed_dofs < self.n_displacement_dofs]] = True
+        for g in self.groups:
+            rows = None
+            if g.operators is not None:
+                if self.scene.coupling["constraint"] == "gauss_point":
+                    rows = g.coupling.G[:, g.dof_offset: g.dof_offset + g.mesh.n_centreline_dofs]
+                else:
+                    rows = g.operators.D.tocsr()[g.coupling.coupled_rows]
+            sl = slice(g.dof_offset, g.dof_offset + g.mesh.n_centreline_dofs)
+            found = find_mechanisms(g.mesh, rows, fixed[sl])
+            self.zero_energy_modes += [(g, m) for m in found]
+        if self.zero_energy_modes:
+            g, m = self.zero_energy_modes[0]
+            more = len(self.zero_energy_modes) - 1
+            raise SceneError(self._mechanism_message(g, m, chains(g.mesh)[1])
+                             + (f" ({more} more chain(s) of beam elements have such modes)" if more else ""))
+
+    def _mechanism_message(self, g, m, label):
+        """The SceneError text of one zero-energy mode: which beam, which nodes, why, what to do."""
+        k = int(np.searchsorted(g.node_offsets, m.nodes[0], side="right")) - 1
+        entry, first = g.entries[k], int(g.node_offsets[k])
+        last = int(g.node_offsets[k + 1]) if k + 1 < len(g.node_offsets) else g.mesh.n_nodes
+        entry_chains = np.unique(label[first:last])
+        where = f"beams[{entry}]"
+        if len(entry_chains) > 1:
+            where += (f" (chain {int(np.searchsorted(entry_chains, m.chain))} of its {len(entry_chains)} "
+                      f"unconnected chains, nodes {m.nodes[0] - first}..{m.nodes[-1] - first})")
+        local = m.moving - first
+        per_node = 6 if g.model == "torsion_free" else 3
+        node = int(m.moving[0])
+        comps = np.abs(m.mode[per_node * node: per_node * node + 3])
+        axis = "xyz"[int(np.argmax(comps))] if comps.max() > 0 else "its tangent"
+        coupled = np.zeros(g.mesh.n_nodes, dtype=bool)
+        if g.operators is not None:
+            elements = np.unique(g.operators.point_fields["beam_element"])
+            coupled[np.unique(g.mesh.elements[elements])] = True
+        outside = ~coupled[m.moving]
+        if outside.all():
+            why = ("they are not coupled to the solid (outside it)" if self.solid_mesh is not None
+                   else "nothing but the beam itself holds them")
+            advice = ("a truss has no bending stiffness, so an uncoupled part of it is held only along its bars: "
+                      "support these nodes ([[dirichlet]]), end the beam where it leaves the solid, or use "
+                      "model = \"torsion_free\" (straight beams)" if g.model == "truss" else
+                      "support these nodes ([[dirichlet]])")
+        else:
+            why = "the coupling holds this beam at too few places"
+            advice = ("couple more of it: integration = \"segment\" or more Gauss points (n_gauss) where a beam "
+                      "element barely enters the solid, or support it ([[dirichlet]])")
+        return (f"{where}: zero-energy mode (a mechanism: the beam can move without any stiffness against it, so "
+                f"no solver can determine that motion): nodes {format_ids(local)} move (largest: node {local[0]}, "
+                f"{axis}); {why}. {advice[0].upper() + advice[1:]}")
 
     # -- the nonlinear system (see solvers.newton) ---------------------------------------------
     def prescribed(self, t):
