@@ -741,8 +741,10 @@ class Model:
         ``zero_energy_modes`` (list of ``(group, Mechanism)``) before the error is raised.
         """
         from .mechanisms import chains, find_mechanisms
-        self.counts["check.zero_energy_modes"] += 1
         self.zero_energy_modes = []
+        if not self.groups:
+            return
+        self.counts["check.zero_energy_modes"] += 1
         fixed = np.zeros(self.n_displacement_dofs, dtype=bool)
         fixed[self.fixed_dofs[self.fixed_dofs < self.n_displacement_dofs]] = True
         for g in self.groups:
@@ -793,8 +795,10 @@ class Model:
             advice = ("couple more of it: integration = \"segment\" or more Gauss points (n_gauss) where a beam "
                       "element barely enters the solid, or support it ([[dirichlet]])")
         return (f"{where}: zero-energy mode (a mechanism: the beam can move without any stiffness against it, so "
-                f"no solver can determine that motion): nodes {format_ids(local)} move (largest: node {local[0]}, "
-                f"{axis}); {why}. {advice[0].upper() + advice[1:]}")
+                f"no solver can determine that motion): "
+                + (f"nodes {format_ids(local)} move (largest: node {local[0]}, " if len(local) > 1 else
+                   f"node {local[0]} moves (")
+                + f"{axis}); {why}. {advice[0].upper() + advice[1:]}")
 
     # -- the nonlinear system (see solvers.newton) ---------------------------------------------
     def prescribed(self, t):
