@@ -783,13 +783,17 @@ class Model:
             elements = np.unique(g.operators.point_fields["beam_element"])
             coupled[np.unique(g.mesh.elements[elements])] = True
         outside = ~coupled[m.moving]
-        if outside.all():
-            why = ("they are not coupled to the solid (outside it)" if self.solid_mesh is not None
-                   else "nothing but the beam itself holds them")
+        if outside.all() and self.solid_mesh is None:
+            why = "nothing but the beam itself holds the moving nodes"
+            advice = ("a truss has no bending stiffness, so between supports its nodes are held only along its bars: "
+                      "support them sideways ([[dirichlet]] with components) or use model = \"torsion_free\" "
+                      "(straight beams)" if g.model == "truss" else "support the moving nodes ([[dirichlet]])")
+        elif outside.all():
+            why = "the moving nodes are not coupled to the solid (they lie outside it)"
             advice = ("a truss has no bending stiffness, so an uncoupled part of it is held only along its bars: "
                       "support these nodes ([[dirichlet]]), end the beam where it leaves the solid, or use "
                       "model = \"torsion_free\" (straight beams)" if g.model == "truss" else
-                      "support these nodes ([[dirichlet]])")
+                      "support the moving nodes ([[dirichlet]])")
         else:
             why = "the coupling holds this beam at too few places"
             advice = ("couple more of it: integration = \"segment\" or more Gauss points (n_gauss) where a beam "
