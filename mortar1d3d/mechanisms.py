@@ -58,7 +58,7 @@ MECHANISM_TOLERANCE = 1e-8
 #: shift of the Gram matrix relative to its largest diagonal entry (keeps the Cholesky factor of a
 #: singular ``AᵀA`` finite; only the speed of the inverse iteration depends on it)
 _SHIFT = 1e-12
-_ITERATIONS = 4
+_ITERATIONS = 3
 #: a band wider than this (DOFs) is reordered (reverse Cuthill–McKee) before the banded factorisation
 _NATURAL_BAND = 64
 
@@ -130,43 +130,68 @@ def _element_projectors(mesh, scale):
     projectors : (n_el, nd, nd) float64
     """
     cols = mesh.function_columns()
-    cols = cols[:, cols[0] >= 0]                           # line: 2 columns, Hermite: [r1, t1, r2, t2]
+    cols = np.ascontiguousarray(cols[:, cols[0] >= 0])     # line: 2 columns, Hermite: [r1, t1, r2, t2]
     n_el, n_f = cols.shape
     dofs = (3 * cols[:, :, None] + np.arange(3)).reshape(n_el, 3 * n_f)
+    # per DOF triplet: the vector a rigid motion acts on, and the length its positions are measured in
     if mesh.element_type.name == "hermite":
-        node, tangent = cols // 2, cols % 2 == 1
-        vectors = np.where(tangent[:, :, None], mesh.tangents[node], mesh.positions[node])
+        vectors = np.empty((2 * mesh.n_nodes, 3))
+        vectors[0::2], vectors[1::2] = mesh.positions, mesh.tangents
+        unit = np.zeros(2 * mesh.n_nodes)                  # 0 marks a tangent triplet
+        unit[0::2] = scale
     else:
-        node, tangent = cols, np.zeros(cols.shape, dtype=bool)
-        vectors = mesh.positions[node]
-    a, b = mesh.positions[mesh.elements[:, 0]], mesh.positions[mesh.elements[:, 1]]
-    chord = (b - a) / np.linalg.norm(b - a, axis=1)[:, None]
-    seed = np.where(np.abs(chord[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
-    n1 = np.cross(chord, seed)
-    n1 /= np.linalg.norm(n1, axis=1)[:, None]
-    n2 = np.cross(chord, n1)
-    length = scale[node]                                   # (n_el, n_f)
-    # a rigid motion a + ω × (x − c) moves positions by it / ℓ and turns tangents by ω × t
-    lever = np.where(tangent[:, :, None], vectors, (vectors - 0.5 * (a + b)[:, None, :]) / length[:, :, None])
-    R = np.zeros((n_el, n_f, 3, 5))
-    for k in range(3):
-        R[:, :, k, k] = np.where(tangent, 0.0, 1.0 / length)
-    R[:, :, :, 3] = np.cross(n1[:, None, :], lever)
-    R[:, :, :, 4] = np.cross(n2[:, None, :], lever)
+        vectors, unit = mesh.positions, scale
     projectors = np.empty((n_el, 3 * n_f, 3 * n_f))
-    _complement_projectors(R.reshape(n_el, 3 * n_f, 5), projectors)
+    _complement_projectors(cols, np.ascontiguousarray(vectors), np.ascontiguousarray(unit, dtype=np.float64),
+                           np.ascontiguousarray(mesh.positions[mesh.elements[:, 0]]),
+                           np.ascontiguousarray(mesh.positions[mesh.elements[:, 1]]), projectors)
     return dofs, projectors
 
 
 @njit
-def _complement_projectors(R, out):
-    """``out[e] = I − U Uᵀ`` with U the columns of ``R[e]`` orthonormalised (modified Gram–Schmidt)."""
-    n_el, nd, m = R.shape
-    U = np.empty((nd, m))
+def _complement_projectors(cols, vectors, unit, a, b, out):
+    """``out[e] = I − U Uᵀ``, U an orthonormal basis (modified Gram–Schmidt) of element e's rigid motions.
+
+    A rigid motion ``t + ω × (x − c)`` (c: the element's midpoint) moves a position triplet by it
+    divided by the triplet's length ``unit`` and turns a tangent triplet (``unit`` 0) by ``ω × t``;
+    the columns are the three translations and the rotations about two axes normal to the chord.
+    """
+    n_el, n_f = cols.shape
+    nd = 3 * n_f
+    U = np.empty((nd, 5))
+    axis = np.empty((2, 3))
+    lever = np.empty(3)
+    d = np.empty(3)
     for e in range(n_el):
-        for k in range(m):
-            for i in range(nd):
-                U[i, k] = R[e, i, k]
+        for i in range(3):
+            d[i] = b[e, i] - a[e, i]
+        norm = np.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+        for i in range(3):
+            d[i] /= norm
+        # n1 = d × e_x (or d × e_y when d is close to e_x), n2 = d × n1
+        if abs(d[0]) < 0.9:
+            axis[0, 0], axis[0, 1], axis[0, 2] = 0.0, d[2], -d[1]
+        else:
+            axis[0, 0], axis[0, 1], axis[0, 2] = -d[2], 0.0, d[0]
+        norm = np.sqrt(axis[0, 0] ** 2 + axis[0, 1] ** 2 + axis[0, 2] ** 2)
+        for i in range(3):
+            axis[0, i] /= norm
+        axis[1, 0] = d[1] * axis[0, 2] - d[2] * axis[0, 1]
+        axis[1, 1] = d[2] * axis[0, 0] - d[0] * axis[0, 2]
+        axis[1, 2] = d[0] * axis[0, 1] - d[1] * axis[0, 0]
+        for f in range(n_f):
+            c = cols[e, f]
+            for i in range(3):
+                lever[i] = vectors[c, i] if unit[c] == 0.0 else (vectors[c, i] - 0.5 * (a[e, i] + b[e, i])) / unit[c]
+            for i in range(3):
+                for k in range(3):
+                    U[3 * f + i, k] = (1.0 / unit[c] if (i == k and unit[c] != 0.0) else 0.0)
+            for k in range(2):
+                w = axis[k]
+                U[3 * f + 0, 3 + k] = w[1] * lever[2] - w[2] * lever[1]
+                U[3 * f + 1, 3 + k] = w[2] * lever[0] - w[0] * lever[2]
+                U[3 * f + 2, 3 + k] = w[0] * lever[1] - w[1] * lever[0]
+        for k in range(5):
             for j in range(k):
                 dot = 0.0
                 for i in range(nd):
@@ -181,18 +206,44 @@ def _complement_projectors(R, out):
                 U[i, k] /= norm
         for i in range(nd):
             for j in range(nd):
-                v = -U[i, 0] * U[j, 0]
-                for k in range(1, m):
+                v = 1.0 if i == j else 0.0
+                for k in range(5):
                     v -= U[i, k] * U[j, k]
-                out[e, i, j] = v + (1.0 if i == j else 0.0)
+                out[e, i, j] = v
 
 
-def _coupling_rows(rows, scale_inverse):
-    """Coupling rows in dimensionless DOFs, each of unit length; empty rows dropped."""
-    C = (sp.csr_matrix(rows) @ sp.diags(scale_inverse)).tocsr()
-    norm = np.sqrt(np.asarray(C.multiply(C).sum(axis=1)).ravel())
-    keep = norm > 0
-    return (sp.diags(1.0 / norm[keep]) @ C[keep]).tocsr()
+@njit
+def _unit_rows(indptr, indices, data, scale_inverse, out):
+    """Coupling rows in dimensionless DOFs (``C S⁻¹``), each scaled to unit length (zero rows stay zero)."""
+    for r in range(len(indptr) - 1):
+        norm = 0.0
+        for k in range(indptr[r], indptr[r + 1]):
+            out[k] = data[k] * scale_inverse[indices[k]]
+            norm += out[k] * out[k]
+        if norm > 0.0:
+            norm = np.sqrt(norm)
+            for k in range(indptr[r], indptr[r + 1]):
+                out[k] /= norm
+
+
+@njit
+def _add_row_blocks(indptr, indices, data, position, ab):
+    """Add ``cᵀc`` of every CSR row c into lower banded storage (``ab[r - q, q]``, r >= q)."""
+    for row in range(len(indptr) - 1):
+        for a in range(indptr[row], indptr[row + 1]):
+            r = position[indices[a]]
+            for b in range(indptr[row], indptr[row + 1]):
+                q = position[indices[b]]
+                if r >= q:
+                    ab[r - q, q] += data[a] * data[b]
+
+
+def _row_band(C, position):
+    if C is None or C.nnz == 0:
+        return 0
+    p = position[C.indices]
+    starts = C.indptr[:-1][np.diff(C.indptr) > 0]
+    return int((np.maximum.reduceat(p, starts) - np.minimum.reduceat(p, starts)).max())
 
 
 def find_mechanisms(mesh, coupling_rows=None, fixed=None, tolerance=MECHANISM_TOLERANCE, seed=0):
@@ -226,38 +277,34 @@ def find_mechanisms(mesh, coupling_rows=None, fixed=None, tolerance=MECHANISM_TO
     scale_inverse = np.where(dof_tangent, 1.0, node_scale[dof_node])      # v = scale_inverse * w
     dofs, Pi = _element_projectors(mesh, node_scale)
     C = None
-    extra_rows, extra_cols, extra_vals = [], [], []
     if coupling_rows is not None and coupling_rows.shape[0]:
-        C = _coupling_rows(coupling_rows, scale_inverse)
-        CtC = sp.tril(C.T @ C).tocoo()
-        extra_rows.append(CtC.row)
-        extra_cols.append(CtC.col)
-        extra_vals.append(CtC.data)
-    # a Dirichlet DOF is one more unit row of A (w_i = 0): the DOF numbering stays that of the mesh
-    extra_rows.append(np.flatnonzero(fixed))
-    extra_cols.append(extra_rows[-1])
-    extra_vals.append(np.ones(len(extra_rows[-1])))
-    extra_rows, extra_cols = np.concatenate(extra_rows), np.concatenate(extra_cols)
-    extra_vals = np.concatenate(extra_vals)
+        C = sp.csr_matrix(coupling_rows)
+        C.sum_duplicates()
+        data = np.empty(len(C.data))
+        _unit_rows(C.indptr, C.indices, C.data, scale_inverse, data)
+        C = sp.csr_matrix((data, C.indices, C.indptr), shape=C.shape)
+    fixed_dofs = np.flatnonzero(fixed)
     # banded Cholesky of the Gram matrix: chains numbered along their length (every generator and
     # curve spec does that) give a narrow band; otherwise reverse Cuthill–McKee first
-    order = np.arange(n)
-    band = max(int((dofs.max(axis=1) - dofs.min(axis=1)).max()),
-               int(np.abs(extra_rows - extra_cols).max()) if len(extra_rows) else 0)
+    position = np.arange(n)
+    order = position
+    band = max(_element_band(dofs, position), _row_band(C, position))
     if band > _NATURAL_BAND:
         nd = dofs.shape[1]
         pattern = sp.csr_matrix((np.ones(dofs.size * nd), (np.repeat(dofs, nd, axis=1).ravel(),
                                                            np.tile(dofs, (1, nd)).ravel())), shape=(n, n))
-        pattern = pattern + sp.csr_matrix((np.ones(len(extra_rows)), (extra_rows, extra_cols)), shape=(n, n))
-        order = reverse_cuthill_mckee((pattern + pattern.T).tocsr(), symmetric_mode=True)
-    position = np.empty(n, dtype=np.int64)
-    position[order] = np.arange(n)
-    e_rows, e_cols = position[extra_rows], position[extra_cols]
-    band = max(_element_band(dofs, position), int(np.abs(e_rows - e_cols).max()) if len(e_rows) else 0)
+        if C is not None:
+            pattern = pattern + (abs(C).T @ abs(C)).tocsr()
+        order = reverse_cuthill_mckee(pattern.tocsr(), symmetric_mode=True)
+        position = np.empty(n, dtype=np.int64)
+        position[order] = np.arange(n)
+        band = max(_element_band(dofs, position), _row_band(C, position))
     ab = np.zeros((band + 1, n))
     _add_element_blocks(dofs, Pi, position, ab)
-    lower, upper = np.maximum(e_rows, e_cols), np.minimum(e_rows, e_cols)
-    np.add.at(ab, (lower - upper, upper), extra_vals)
+    if C is not None:
+        _add_row_blocks(C.indptr, C.indices, C.data, position, ab)
+    # a Dirichlet DOF is one more unit row of A (w_i = 0): the DOF numbering stays that of the mesh
+    ab[0, position[fixed_dofs]] += 1.0
     factor = _banded_cholesky(ab)
     chain_of = label[dof_node[order]]                      # chain of every unknown, in factor order
     rng = np.random.default_rng(seed)
@@ -273,10 +320,11 @@ def find_mechanisms(mesh, coupling_rows=None, fixed=None, tolerance=MECHANISM_TO
     element_chain = label[mesh.elements[:, 0]]
     energy = np.bincount(element_chain, weights=(residual * residual).sum(axis=1), minlength=n_chains)
     if C is not None:
-        r = C @ w
-        row_chain = label[dof_node[C.indices[C.indptr[:-1]]]]
+        nonempty = np.diff(C.indptr) > 0
+        r = (C @ w)[nonempty]
+        row_chain = label[dof_node[C.indices[C.indptr[:-1][nonempty]]]]
         energy += np.bincount(row_chain, weights=r * r, minlength=n_chains)
-    energy += np.bincount(label[dof_node[fixed]], weights=w[fixed] ** 2, minlength=n_chains)
+    energy += np.bincount(label[dof_node[fixed_dofs]], weights=w[fixed_dofs] ** 2, minlength=n_chains)
     weight = np.bincount(label[dof_node], weights=w * w, minlength=n_chains)
     sigma = np.sqrt(energy / weight)
     out = []
