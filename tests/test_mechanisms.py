@@ -13,12 +13,13 @@ SOLID = {"mesh": {"box": [[0, 0, 0], [1, 1, 1]], "cells": [3, 3, 3]},
 
 
 def rod_scene(model, end=1.5, enforcement="penalty", integration="segment", n_gauss=6, elements=8,
-              start=(0.2, 0.45, 0.55)):
+              start=(0.2, 0.45, 0.55), constraint="mortar"):
     """A straight beam from inside the unit cube to x = ``end`` (outside for end > 1)."""
     return m13.Scene(solid=SOLID,
                      beams=[{"curve": {"line": [list(start), [end, 0.5, 0.5]]}, "elements": elements, "model": model,
                              "section": {"E": 2e11, "radius": 0.01}}],
-                     coupling={"enforcement": enforcement, "integration": integration, "n_gauss": n_gauss},
+                     coupling={"enforcement": enforcement, "integration": integration, "n_gauss": n_gauss,
+                               "constraint": constraint},
                      dirichlet=[{"on": "solid:x_min"}],
                      load=[{"type": "traction", "on": "solid:x_max", "value": [0, 0, -1e6]}],
                      analysis={"kinematics": "linear"})
@@ -69,10 +70,11 @@ def test_curved_torsion_free_beam_is_a_scene_error_and_the_truss_follows_the_sol
 
 # -- zero-energy modes -----------------------------------------------------------------------------
 
-@pytest.mark.parametrize("enforcement", ["penalty", "lagrange"])
-def test_truss_half_outside_the_solid_is_a_mechanism(enforcement):
+@pytest.mark.parametrize("enforcement, constraint", [("penalty", "mortar"), ("lagrange", "mortar"),
+                                                     ("penalty", "gauss_point")])
+def test_truss_half_outside_the_solid_is_a_mechanism(enforcement, constraint):
     """Nodes 6-8 of the truss lie beyond the element that enters the solid: they swing freely."""
-    model = Model(rod_scene("truss", 1.5, enforcement))
+    model = Model(rod_scene("truss", 1.5, enforcement, constraint=constraint))
     with pytest.raises(SceneError, match=r"^beams\[0\]: zero-energy mode .*nodes 6, 7, 8 move .*not coupled to the "
                                          r"solid.*truss has no bending stiffness"):
         model.prepare()
@@ -89,12 +91,13 @@ def test_truss_half_outside_the_solid_is_a_mechanism(enforcement):
     if enforcement == "lagrange":
         assert np.abs(model.constraint_matrix @ z).max() < 1e-12 * abs(model.constraint_matrix).max()
     # inside the solid the same truss is held
-    Model(rod_scene("truss", 0.9, enforcement)).prepare()
+    Model(rod_scene("truss", 0.9, enforcement, constraint=constraint)).prepare()
 
 
-@pytest.mark.parametrize("enforcement", ["penalty", "lagrange"])
-def test_torsion_free_beam_partly_outside_is_held_by_its_bending_stiffness(enforcement):
-    model = Model(rod_scene("torsion_free", 1.5, enforcement)).prepare()
+@pytest.mark.parametrize("enforcement, constraint", [("penalty", "mortar"), ("lagrange", "mortar"),
+                                                     ("penalty", "gauss_point")])
+def test_torsion_free_beam_partly_outside_is_held_by_its_bending_stiffness(enforcement, constraint):
+    model = Model(rod_scene("torsion_free", 1.5, enforcement, constraint=constraint)).prepare()
     assert model.zero_energy_modes == [] and model.counts["check.zero_energy_modes"] == 1
     g = model.groups[0]
     rows = g.operators.D.tocsr()[g.coupling.coupled_rows]
