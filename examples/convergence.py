@@ -25,12 +25,12 @@ the multiplier functions; its displacement errors and rates hardly depend on h_B
 and 2 gives smooth λ and optimal displacement convergence.
 
 Beam model: the arc is modelled with axial (truss, ``line``) beam elements. The torsion-free
-Hermite beam of :mod:`mortar1d3d.physics.beam` measures bending by the curvature *magnitude*,
-so at a planar curved reference configuration the out-of-plane rotation of its nodal tangents
-has zero linearised stiffness; mortar coupling with ``line2`` multipliers does not constrain
-all tangent DOFs, and the linear system is singular (measured: four zero eigenvalues, the
-tangent y-components, at h_S = 1/4, h_B/h_S = 1). The axial coupling force dominates here,
-and a truss has no tangent DOFs.
+Hermite beam of :mod:`mortar1d3d.physics.beam` holds for initially straight beams only and
+refuses the arc (SceneError): an energy of the curvature *magnitude* would give the
+out-of-plane rotation of the arc's nodal tangents zero stiffness, which mortar coupling with
+``line2`` multipliers does not constrain (measured before that check: four zero eigenvalues,
+the tangent y-components, at h_S = 1/4, h_B/h_S = 1). The axial coupling force dominates here,
+and the truss, embedded over its whole length, is held by the coupling.
 
     python examples/convergence.py [--out results/convergence] [--levels 4 8 16 32] [--no-plot]
 """

@@ -202,6 +202,19 @@ def build_beam_mesh(spec, path):
         raise SceneError(f"{path}: {exc}") from None
 
 
+def check_straight_torsion_free(mesh, path):
+    """SceneError naming ``path`` if a torsion_free beam's reference centreline is curved.
+
+    The torsion-free theory holds for initially straight beams only (see
+    :class:`~mortar1d3d.physics.beam.BeamModel`); curved is decided by
+    :func:`~mortar1d3d.physics.beam.curved_elements` (curvature times element length above 1e-8).
+    """
+    from .physics.beam import curved_elements, curved_torsion_free_message
+    ids, values = curved_elements(mesh)
+    if ids.size:
+        raise SceneError(f"{path}.model: {curved_torsion_free_message(ids, values, mesh.n_elements)}")
+
+
 def build_solid_mesh(spec):
     mesh = spec["mesh"]
     try:
@@ -339,6 +352,9 @@ class Model:
         # beams grouped by model, entry order kept inside each group
         self.groups, self.entry_group = [], []
         meshes = [build_beam_mesh(b, f"beams[{i}]") for i, b in enumerate(scene.beams)]
+        for i, (b, mesh) in enumerate(zip(scene.beams, meshes)):
+            if b["model"] == "torsion_free":
+                check_straight_torsion_free(mesh, f"beams[{i}]")
         for i, b in enumerate(scene.beams):
             group = next((g for g in self.groups if g.model == b["model"]), None)
             if group is None:
@@ -541,6 +557,8 @@ class Model:
                 out.append(Effect(f"coupling.{c['constraint']}_penalty", "once",
                                   f"constant stiffness, penalty {self.penalty:.4g}"))
         out.append(Effect("check.rigid_body_modes", "once", "before any solve"))
+        if self.groups:
+            out.append(Effect("check.zero_energy_modes", "once", "beam mechanisms, before any solve"))
         if self.solid_mesh is not None:
             mat = sc.solid["material"]["model"]
             if sc.solid["material"].get("fibres"):
@@ -870,6 +888,7 @@ class Model:
                 free = free_rigid_motions(R, Rf, 1e-10 * s_all[0], centre, size)
                 raise SceneError(f"dirichlet: {label} can move freely ({len(free)} rigid-body mode(s) not "
                                  f"fixed: {', '.join(free)}); add supports ([[dirichlet]]) that stop these motions")
+        self.check_zero_energy_modes()
 
     def check_linear_displacements(self, z):
         """Warn (LargeDeformationWarning) for each body that the linear solution ``z`` (unknowns)
@@ -889,6 +908,84 @@ class Model:
                               "linear kinematics does not hold. Check the units (E in Pa, not MPa, for a scene in "
                               "metres and newtons) or use kinematics = \"nonlinear\"", LargeDeformationWarning,
                               stacklevel=3)
+
+    def check_zero_energy_modes(self):
+        """Raise SceneError if a beam has a zero-energy mode other than a rigid-body motion.
+
+        Runs after the rigid-body check (so every body is held against rigid motion): each chain
+        of beam elements is probed with the solid held, on its free DOFs, for motions that
+        neither the beam stiffness at the reference state nor the coupling resists
+        (:func:`~mortar1d3d.mechanisms.find_mechanisms`). The modes found are kept in
+        ``zero_energy_modes`` (list of ``(group, Mechanism)``) before the error is raised.
+        """
+        from .mechanisms import chains, find_mechanisms
+        self.zero_energy_modes = []
+        if not self.groups:
+            return
+        self.counts["check.zero_energy_modes"] += 1
+        fixed = np.zeros(self.n_displacement_dofs, dtype=bool)
+        fixed[self.fixed_dofs[self.fixed_dofs < self.n_displacement_dofs]] = True
+        # a clamped tangent is fixed in its rotated frame (direction, not length): the probe works on
+        # physical components and holds the whole tangent there, which hides no mechanism (changing the
+        # tangent's length alone stretches the element)
+        for first in self.basis.starts:
+            fixed[first: first + 3] = fixed[first: first + 3].any()
+        for g in self.groups:
+            rows = None
+            if g.operators is not None:
+                if self.scene.coupling["constraint"] == "gauss_point":
+                    rows = g.coupling.G[:, g.dof_offset: g.dof_offset + g.mesh.n_centreline_dofs]
+                else:
+                    rows = g.operators.D.tocsr()[g.coupling.coupled_rows]
+            sl = slice(g.dof_offset, g.dof_offset + g.mesh.n_centreline_dofs)
+            found = find_mechanisms(g.mesh, rows, fixed[sl])
+            self.zero_energy_modes += [(g, m) for m in found]
+        if self.zero_energy_modes:
+            g, m = self.zero_energy_modes[0]
+            more = len(self.zero_energy_modes) - 1
+            raise SceneError(self._mechanism_message(g, m, chains(g.mesh)[1])
+                             + (f" ({more} more chain(s) of beam elements have such modes)" if more else ""))
+
+    def _mechanism_message(self, g, m, label):
+        """The SceneError text of one zero-energy mode: which beam, which nodes, why, what to do."""
+        k = int(np.searchsorted(g.node_offsets, m.nodes[0], side="right")) - 1
+        entry, first = g.entries[k], int(g.node_offsets[k])
+        last = int(g.node_offsets[k + 1]) if k + 1 < len(g.node_offsets) else g.mesh.n_nodes
+        entry_chains = np.unique(label[first:last])
+        where = f"beams[{entry}]"
+        if len(entry_chains) > 1:
+            where += (f" (chain {int(np.searchsorted(entry_chains, m.chain))} of its {len(entry_chains)} "
+                      f"unconnected chains, nodes {m.nodes[0] - first}..{m.nodes[-1] - first})")
+        local = m.moving - first
+        per_node = 6 if g.model == "torsion_free" else 3
+        node = int(m.moving[0])
+        comps = np.abs(m.mode[per_node * node: per_node * node + 3])
+        axis = "xyz"[int(np.argmax(comps))] if comps.max() > 0 else "its tangent"
+        coupled = np.zeros(g.mesh.n_nodes, dtype=bool)
+        if g.operators is not None:
+            elements = np.unique(g.operators.point_fields["beam_element"])
+            coupled[np.unique(g.mesh.elements[elements])] = True
+        outside = ~coupled[m.moving]
+        if outside.all() and self.solid_mesh is None:
+            why = "nothing but the beam itself holds the moving nodes"
+            advice = ("a truss has no bending stiffness, so between supports its nodes are held only along its bars: "
+                      "support them sideways ([[dirichlet]] with components) or use model = \"torsion_free\" "
+                      "(straight beams)" if g.model == "truss" else "support the moving nodes ([[dirichlet]])")
+        elif outside.all():
+            why = "the moving nodes are not coupled to the solid (they lie outside it)"
+            advice = ("a truss has no bending stiffness, so an uncoupled part of it is held only along its bars: "
+                      "support these nodes ([[dirichlet]]), end the beam where it leaves the solid, or use "
+                      "model = \"torsion_free\" (straight beams)" if g.model == "truss" else
+                      "support the moving nodes ([[dirichlet]])")
+        else:
+            why = "the coupling holds this beam at too few places"
+            advice = ("couple more of it: integration = \"segment\" or more Gauss points (n_gauss) where a beam "
+                      "element barely enters the solid, or support it ([[dirichlet]])")
+        return (f"{where}: zero-energy mode (a mechanism: the beam can move without any stiffness against it, so "
+                f"no solver can determine that motion): "
+                + (f"nodes {format_ids(local)} move (largest: node {local[0]}, " if len(local) > 1 else
+                   f"node {local[0]} moves (")
+                + f"{axis}); {why}. {advice[0].upper() + advice[1:]}")
 
     # -- the nonlinear system (see solvers.newton) ---------------------------------------------
     def prescribed(self, t):

@@ -13,12 +13,14 @@ quantity           formula                                    notes
 =================  =========================================  ============================
 axial strain       ``ε = |r_s| - 1 = |r'|/J - 1``              engineering strain
 curvature          ``k = r_s × r_ss / |r_s|³``                 ``|k| = |r' × r''| / |r'|³``
-energy density     ``W = ½ EA ε² + ½ EI (|k| - |k0|)²``         per reference length
+energy density     ``W = ½ EA ε² + ½ EI |k|²``                 per reference length
 =================  =========================================  ============================
 
-``|k|`` is the geometric curvature of the current curve, independent of the parametrisation:
-the non-constant ``J`` of a curved reference element cancels in it exactly and enters only
-``ε`` and the integration weight ``J w``.
+``|k|`` is the geometric curvature of the current curve, independent of the parametrisation.
+The torsion-free theory holds for initially straight centrelines only: :class:`BeamModel`
+refuses a curved reference (see its Notes), so the reference curvature ``|k0|`` that the
+element kernel still takes (energy ``½ EI (|k| - |k0|)²``) is zero for every element it
+evaluates.
 
 The element kernel returns, per element, the energy, the internal force vector
 ``f = ∂Π/∂q`` and the consistent tangent ``K = ∂²Π/∂q²`` (exact, symmetric). Elements are
@@ -39,7 +41,8 @@ from .._config import CHUNK, njit, njit_parallel
 from ..integration.quadrature import gauss_legendre
 from ..mesh import BeamMesh
 
-__all__ = ["Section", "section", "BeamModel", "end_moment", "MODELS", "N_GAUSS", "AXIAL_GAUSS"]
+__all__ = ["Section", "section", "BeamModel", "end_moment", "reference_curvature", "curved_elements",
+           "MODELS", "N_GAUSS", "AXIAL_GAUSS"]
 
 #: beam models known to :class:`BeamModel` and the centreline element each one needs
 MODELS = {"torsion_free": "hermite", "truss": "line"}
@@ -351,6 +354,70 @@ def _curvature(a, b):
     return np.linalg.norm(np.cross(a, b), axis=-1) / np.linalg.norm(a, axis=-1) ** 3
 
 
+#: parameters at which :func:`reference_curvature` samples each element: ``r0' × r0''`` of a cubic
+#: is a cubic polynomial in η, so it vanishes on the element if it vanishes at four of them
+_CURVATURE_SAMPLES = (-1.0, -0.5, 0.0, 0.5, 1.0)
+
+
+def reference_curvature(beams):
+    """Largest reference curvature times element length of every Hermite element.
+
+    Parameters
+    ----------
+    beams : BeamMesh
+        ``hermite`` centrelines (Lagrange ``line`` elements are straight: zeros).
+
+    Returns
+    -------
+    (n_elements,) float64
+        ``max_η |r0' × r0''| / |r0'|³ · L`` over η = -1, -1/2, 0, 1/2, 1: dimensionless, 0 for
+        a straight element. A kink between two elements shows at the shared node, where the
+        nodal tangent is not the chord direction (a polyline with averaged tangents).
+    """
+    if beams.element_type.name != "hermite":
+        return np.zeros(beams.n_elements)
+    _, dH, ddH = _hermite_tables(_CURVATURE_SAMPLES, beams.lengths)
+    Q = beams.coefficients()                  # r1, t1, r2, t2 per element
+    # r0' and r0'' from the difference of the positions (dH1 = -dH3): no cancellation against |X|
+    Q[:, 2] -= Q[:, 0]
+    Q[:, 0] = 0.0
+    a, b = _curve_derivatives(dH, ddH, Q)
+    return _curvature(a, b).max(axis=1) * beams.lengths
+
+
+def curved_elements(beams):
+    """Ids and :func:`reference_curvature` of the curved elements of a Hermite beam mesh.
+
+    An element is straight when its reference curvature times its length stays below 1e-8,
+    or below the round-off of its stored node positions (64 ε |X| / L: a beam far from the
+    origin cannot be straighter than its coordinates), whichever is larger.
+
+    Returns
+    -------
+    ids : (k,) int64
+    values : (k,) float64
+    """
+    value = reference_curvature(beams)
+    if beams.element_type.name != "hermite":
+        return np.zeros(0, np.int64), value[:0]
+    X = np.abs(beams.positions[beams.elements[:, :2]]).max(axis=(1, 2))
+    tolerance = np.maximum(_STRAIGHT, 64.0 * np.finfo(float).eps * X / beams.lengths)
+    ids = np.flatnonzero(~(value <= tolerance))         # NaN (a cusp) counts as curved
+    return ids, value[ids]
+
+
+def curved_torsion_free_message(ids, values, n_elements):
+    """Why a torsion-free beam refuses a curved reference centreline, and what to use instead."""
+    from ..errors import format_ids
+    worst = float(np.nanmax(values)) if np.isfinite(values).any() else float("nan")
+    return (f"the torsion_free beam needs an initially straight centreline, but {len(ids)} of its {n_elements} "
+            f"elements are curved (elements {format_ids(ids)}; reference curvature × element length up to "
+            f"{worst:.3g}). Its bending energy ½EI(|k| − |k0|)² depends on the size of the curvature only, so a "
+            "curved reference could change its bending plane at no cost (zero stiffness; the coupling does not "
+            "hold it). Use model = \"truss\" for curved fibres; a geometrically exact beam for curved "
+            "centrelines (simo_reissner) is planned")
+
+
 def _stiffness(value, name, n_elements, allow_zero=False):
     arr = np.asarray(value, dtype=float)
     if arr.ndim == 0:
@@ -394,18 +461,16 @@ class BeamModel:
     Notes
     -----
     *Torsion-free Kirchhoff beam* (Meier, Popp & Wall, CMAME 2015/2016), per element
-    ``Π_e = ∫ ½ EA ε² + ½ EI (|k| - |k0|)² ds`` with ``ε = |r_s| - 1`` and
-    ``k = r_s × r_ss / |r_s|³`` (module docstring). For straight reference elements this is
-    ``½ EI |k|²``: objective and smooth. For curved reference elements the energy depends
-    only on the curvature *magnitude*: it is objective, but ignores the direction of the
-    curvature, so a change of the bending plane (out-of-plane bending of a planar arc, or
-    reversing an arc's curvature) costs no bending energy, the tangent has no second-order
-    bending stiffness against it at the reference state, and the energy is not
-    differentiable where a curved element is bent exactly straight (there the kernel uses
-    the straight-reference derivatives). A reference curvature below ``1e-8 / L`` is taken
-    as zero (round-off of straight elements). Curved free beams need a model with a
-    material frame (Simo–Reissner, not implemented); for fibres embedded in a solid the
-    coupling provides that stiffness.
+    ``Π_e = ∫ ½ EA ε² + ½ EI |k|² ds`` with ``ε = |r_s| - 1`` and
+    ``k = r_s × r_ss / |r_s|³`` (module docstring): objective and smooth. The theory holds
+    for initially straight beams with isotropic sections only, so a curved reference
+    centreline (:func:`curved_elements`: reference curvature times element length above
+    1e-8 anywhere, e.g. an arc, a helix, or a polyline with a kink) raises ValueError. The
+    obvious extension ``½ EI (|k| - |k0|)²`` sees only the size of the curvature, not its
+    direction: a change of the bending plane of a planar arc costs nothing, the tangent has
+    no stiffness against it, and embedding the beam in a solid does not supply it (the
+    ``line2`` coupling ties three of the six DOFs per node). Curved fibres need the truss, or
+    a beam with a material frame (Simo–Reissner, planned).
 
     *Gauss rules*: the bending term uses ``n_gauss`` points (default 6): on a straight
     reference element its linearised integrand ``(u'')²`` is a quadratic, and the nonlinear
@@ -448,6 +513,9 @@ class BeamModel:
         n_el = beams.n_elements
         self.EA = _stiffness(EA, "EA", n_el)
         if model == "torsion_free":
+            curved, curvature = curved_elements(beams)
+            if curved.size:
+                raise ValueError(curved_torsion_free_message(curved, curvature, n_el))
             if EI is None:
                 raise ValueError("the torsion_free model needs the bending stiffness EI")
             self.EI = _stiffness(EI, "EI", n_el)
