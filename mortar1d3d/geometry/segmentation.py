@@ -57,17 +57,6 @@ def crossings_capacity(search_points):
 _FIRST_CAPACITY = 16
 
 
-#: added to the face id of a crossing that lies on the face's plane but off the face itself by more than
-#: round-off (accepted within PARAMETER_TOL: a beam passing an edge or corner just outside)
-BAND = 8
-
-
-@njit
-def _face_code(code, f, xi, band_tol):
-    """The face id f of a crossing at ξ, plus ``BAND`` when ξ lies off the face by more than ``band_tol``."""
-    return f + BAND if solid.outside_distance(code, xi) > band_tol else f
-
-
 @njit
 def _record(eta, face, out_eta, out_face, p, count, overflow):
     """Store a crossing (NaN: none) of face ``face`` in row p; flag the pair when its row is full."""
@@ -238,9 +227,6 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                 s0 = beam_origin[e, 0] - solid_origin[s, 0]
                 s1 = beam_origin[e, 1] - solid_origin[s, 1]
                 s2 = beam_origin[e, 2] - solid_origin[s, 2]
-                big = max(abs(solid_origin[s, 0]), abs(solid_origin[s, 1]), abs(solid_origin[s, 2]),
-                          abs(beam_origin[e, 0]), abs(beam_origin[e, 1]), abs(beam_origin[e, 2]))
-                band_tol = TOUCH_TOL + 64.0 * 2.220446049250313e-16 * big / h
                 # samples along the beam element: ξ(η) and dξ/dη = J⁻¹ r'(η) (warm-started Newton)
                 solid.centre(code, xi)
                 affine = is_affine(linear, s)
@@ -293,8 +279,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                             _face_centre(code, face, start)
                             eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s[k],
                                                 start[0], start[1], start[2], z, xi, N, dN, H, dH)
-                            count = _record(eta, _face_code(code, f, xi, band_tol), out_eta, out_face, p, count,
-                                            overflow)
+                            count = _record(eta, f, out_eta, out_face, p, count, overflow)
                     for k in range(S - 1):
                         if not (ok[k] and ok[k + 1]):
                             continue
@@ -323,8 +308,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                                 continue
                             eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
                                                t_start, z, xi, N, dN, H, dH)
-                            count = _record(eta, _face_code(code, f, xi, band_tol), out_eta, out_face, p, count,
-                                            overflow)
+                            count = _record(eta, f, out_eta, out_face, p, count, overflow)
                         # a sample on the face: the scan starts Newton there and finds that point again;
                         # a crossing soon after it (leaving at a corner and coming back) is a root of
                         # the cubic divided by its known root (found by make fuzz, see test_hard_cases)
@@ -341,8 +325,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                                     continue
                                 eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s,
                                                    k, t_start, z, xi, N, dN, H, dH)
-                                count = _record(eta, _face_code(code, f, xi, band_tol), out_eta, out_face, p, count,
-                                            overflow)
+                                count = _record(eta, f, out_eta, out_face, p, count, overflow)
                         if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0:
                             # close to the face without a sign change: a touch or a missed double crossing.
                             # Newton converges to one of two close roots; the other lies about as far on
@@ -350,15 +333,13 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                             # face shorter than a sample interval has both ends found)
                             eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
                                                best_t, z, xi, N, dN, H, dH)
-                            count = _record(eta, _face_code(code, f, xi, band_tol), out_eta, out_face, p, count,
-                                            overflow)
+                            count = _record(eta, f, out_eta, out_face, p, count, overflow)
                             if not np.isnan(eta):
                                 t_mirror = 2.0 * best_t - (eta - eta_s[k]) / (eta_s[k + 1] - eta_s[k])
                                 if 0.0 < t_mirror < 1.0:
                                     eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s,
                                                        xi_s, k, t_mirror, z, xi, N, dN, H, dH)
-                                    count = _record(eta, _face_code(code, f, xi, band_tol), out_eta, out_face, p, count,
-                                            overflow)
+                                    count = _record(eta, f, out_eta, out_face, p, count, overflow)
                 out_count[p] = count
             begin, stop = claim(claims, n_pairs, worker)
 
@@ -383,7 +364,7 @@ def _next_crossing(crossing_eta, crossing_face, crossing_count, p, q, tol):
         return after
     for k in range(crossing_count[p]):
         eta = crossing_eta[p, k]
-        if crossing_face[p, k] % BAND == f % BAND and crossing_eta[p, q] + tol < eta < after:
+        if crossing_face[p, k] == f and crossing_eta[p, q] + tol < eta < after:
             after = eta
     return after
 
@@ -395,17 +376,29 @@ def _face_zone(crossing_eta, crossing_face, crossing_count, p, a, b, tol):
     for q in range(crossing_count[p]):
         if crossing_face[p, q] >= 0 and crossing_eta[p, q] <= a + tol:
             if b - tol <= _next_crossing(crossing_eta, crossing_face, crossing_count, p, q, tol) < np.inf:
-                return crossing_face[p, q] % BAND
+                return crossing_face[p, q]
     return -1
 
 
 @njit
-def _band_end(crossing_eta, crossing_face, crossing_count, p, a, b, tol):
-    """Whether pair p has a crossing off its face (``BAND``) within ``tol`` of η = a or η = b."""
+def _face_side(face, xi):
+    """n·(ξ - o) of a face (origin, a, b, normal rows): > 0 beyond it."""
+    return face[3, 0] * (xi[0] - face[0, 0]) + face[3, 1] * (xi[1] - face[0, 1]) + face[3, 2] * (xi[2] - face[0, 2])
+
+
+@njit
+def _beyond_bounding_faces(code, crossing_eta, crossing_face, crossing_count, p, a, b, tol, xi):
+    """How far ξ lies beyond the faces of pair p's element that bound the piece [a, b]: the faces crossed
+    within ``tol`` of its ends, and the face whose consecutive crossings enclose it (-inf if none)."""
+    faces = solid.faces(code)
+    beyond = -np.inf
+    f = _face_zone(crossing_eta, crossing_face, crossing_count, p, a, b, tol)
+    if f >= 0:
+        beyond = _face_side(faces[f], xi)
     for q in range(crossing_count[p]):
-        if crossing_face[p, q] >= BAND and (abs(crossing_eta[p, q] - a) <= tol or abs(crossing_eta[p, q] - b) <= tol):
-            return True
-    return False
+        if crossing_face[p, q] >= 0 and (abs(crossing_eta[p, q] - a) <= tol or abs(crossing_eta[p, q] - b) <= tol):
+            beyond = max(beyond, _face_side(faces[crossing_face[p, q]], xi))
+    return beyond
 
 
 @njit
@@ -424,9 +417,7 @@ def _face_condition(e, s, f, eta, codes, conn, points, solid_origin, solid_h, li
         if locate_point(code, X, r0, r1, r2, solid_h[s], PARAMETER_TOL, linear, s, xi, trial, N, dN, a,
                         stack) == NOT_CONVERGED:
             return np.nan
-    face = solid.faces(code)[f]
-    return (face[3, 0] * (xi[0] - face[0, 0]) + face[3, 1] * (xi[1] - face[0, 1])
-            + face[3, 2] * (xi[2] - face[0, 2]))
+    return _face_side(solid.faces(code)[f], xi)
 
 
 @njit
@@ -503,9 +494,9 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count,
                         eta2 = _next_crossing(crossing_eta, crossing_face, crossing_count, p, q, reach[0])
                         if eta2 == np.inf:
                             continue
-                        g = _face_condition(e, pair_solid[p], crossing_face[p, q] % BAND, 0.5 * (eta1 + eta2), codes,
-                                            conn, points, solid_origin, solid_h, linear, beam_code, Q, lengths,
-                                            beam_origin, X, xi, trial, N, dN, H, dH, a, stack)
+                        g = _face_condition(e, pair_solid[p], crossing_face[p, q], 0.5 * (eta1 + eta2), codes, conn,
+                                            points, solid_origin, solid_h, linear, beam_code, Q, lengths, beam_origin,
+                                            X, xi, trial, N, dN, H, dH, a, stack)
                         if not abs(g) <= touch_tol:
                             continue
                         for iv in range(n_pts - 1):
@@ -524,26 +515,17 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count,
                                                  N, dN, a, stack, -1)
                         if owner < 0:
                             break
-                        # a piece that leaves the owner through one of its faces and comes back through
-                        # it lies on the owner's side of that face only if the face condition says so
-                        # at its midpoint, not within the inside tolerance
                         p = first
                         while pair_solid[p] != owner:
                             p += 1
-                        tol = 2.0 * max(reach[iv], reach[iv + 1])
-                        f = _face_zone(crossing_eta, crossing_face, crossing_count, p, cuts[iv], cuts[iv + 1], tol)
-                        if f >= 0:
-                            face = solid.faces(codes[owner])[f]
-                            outside = (face[3, 0] * (xi[0] - face[0, 0]) + face[3, 1] * (xi[1] - face[0, 1])
-                                       + face[3, 2] * (xi[2] - face[0, 2]))
-                        elif _band_end(crossing_eta, crossing_face, crossing_count, p, cuts[iv], cuts[iv + 1], tol):
-                            # a piece ending on a face's plane beyond the face (a beam passing an edge or
-                            # a corner just outside): inside only if the geometry says so, not the band
-                            outside = solid.outside_distance(codes[owner], xi)
-                        else:
-                            owners[iv] = owner
-                            break
-                        if outside <= touch_tol:
+                        # a piece bounded by crossings of the owner's faces lies on the owner's side of
+                        # those faces only if the face conditions say so at its midpoint, not within the
+                        # inside tolerance: a piece that leaves through a face and comes back through it,
+                        # or a beam that passes an edge or a corner just outside, crossing the faces'
+                        # planes beyond the faces (within the crossings' tolerance)
+                        if _beyond_bounding_faces(codes[owner], crossing_eta, crossing_face, crossing_count, p,
+                                                  cuts[iv], cuts[iv + 1], 2.0 * max(reach[iv], reach[iv + 1]),
+                                                  xi) <= touch_tol:
                             owners[iv] = owner
                             break
                         first = p + 1

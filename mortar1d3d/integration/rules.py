@@ -18,7 +18,7 @@ from functools import lru_cache
 import numpy as np
 from numba import prange
 
-from .._config import PARAMETER_TOL, TOUCH_TOL, njit, njit_parallel
+from .._config import PARAMETER_TOL, njit, njit_parallel
 from .._memory import carve
 from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
@@ -28,7 +28,7 @@ from ..geometry.linalg import norm3
 from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse, affine_parameters,
                                    first_containing, is_affine, linear_parameters, load_element, locate_point,
                                    point_buffers, polish, project_point, search_buffers)
-from ..geometry.segmentation import _face_code, resegment, splice
+from ..geometry.segmentation import resegment, splice
 from .quadrature import gauss_legendre
 
 #: point outcome codes (as stored in ``status``)
@@ -335,9 +335,6 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                             break
                         continue
                     pair_state[p] = PAIR_DONE
-                    big = max(abs(solid_origin[s, 0]), abs(solid_origin[s, 1]), abs(solid_origin[s, 2]),
-                              abs(beam_origin[e, 0]), abs(beam_origin[e, 1]), abs(beam_origin[e, 2]))
-                    band_tol = TOUCH_TOL + 64.0 * 2.220446049250313e-16 * big / solid_h[s]
                     affine_parameters(code, Ainv, p0 + s0, p1 + s1, p2 + s2, alpha)
                     for i in range(3):
                         beta[i] = Ainv[i, 0] * q0 + Ainv[i, 1] * q1 + Ainv[i, 2] * q2
@@ -376,7 +373,7 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                             xi[i] = alpha[i] + beta[i] * t
                         if solid.is_inside(code, xi, tol):
                             crossing_eta[p, n] = min(max(t, -1.0), 1.0)
-                            crossing_face[p, n] = _face_code(code, face_in if k == 0 else face_out, xi, band_tol)
+                            crossing_face[p, n] = face_in if k == 0 else face_out
                             n += 1
                     crossing_count[p] = n
                 beam_inside[e] = inside
