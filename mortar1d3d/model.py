@@ -368,7 +368,7 @@ class Model:
                              "use 'auto', 'direct' or 'amg'")
         if solver == "amg" and lagrange:
             raise SceneError("analysis.solver: Lagrange-multiplier coupling gives a saddle point; use 'auto', "
-                             "'direct' or 'block' (AMG on the solid block inside a block preconditioner)")
+                             "'direct' or 'block' (MINRES, the auxiliary-space AMG inside a block preconditioner)")
 
     # -- effects --------------------------------------------------------------------------------
     @property

@@ -179,6 +179,25 @@ def test_singular_saddle_point_raises_instead_of_returning_multipliers():
     assert len(info["dependent_rows"]) == 3 and np.abs(lam).max() < 1e7   # measured 4.5e6
 
 
+def test_lagrange_scene_without_coupled_rows_solves_the_solid():
+    """A beam outside the solid (held by its supports) leaves no multiplier: the saddle solve used
+    to fail on its empty constraint block (ValueError from a max over no rows)."""
+    scene = Scene.from_dict({
+        "solid": {"mesh": {"box": [[0, 0, 0], [1, 0.1, 0.1]], "cells": [4, 1, 1], "element": "hexahedron"},
+                  "material": {"model": "linear_elastic", "E": 1e9, "nu": 0.0}},
+        "beams": [{"curve": {"line": [[0, 2, 2], [1, 2, 2]]}, "elements": 4, "section": {"E": 2e11, "radius": 0.01}}],
+        "coupling": {"enforcement": "lagrange"},
+        "dirichlet": [{"on": "solid:x_min"}, {"on": "beam:0:start", "clamp": True}, {"on": "beam:0:end"}],
+        "load": [{"type": "traction", "on": "solid:x_max", "value": [1e5, 0, 0]}],
+        "analysis": {"kinematics": "linear"}})
+    with pytest.warns(CouplingWarning, match=r"beams\[0\]: no part of this beam lies inside the solid"):
+        result = m13.solve(scene)
+    assert result.model.n_multipliers == 0
+    # a bar in tension, ν = 0: the end moves by σ L / E
+    X = result.model.solid_mesh.points
+    assert np.allclose(result.solid_displacement[X[:, 0] == 1.0, 0], 1e5 / 1e9, rtol=1e-10)
+
+
 # --------------------------------------------------------------------------------------------
 # far from the origin
 # --------------------------------------------------------------------------------------------
@@ -316,6 +335,8 @@ def test_benchmark_scene_every_solver_path_through_solve(enforcement, solvers):
         assert info["converged"], solver
         assert result.steps[0].residuals[-1] <= 1e-8 * result.steps[0].residuals[0], solver
         assert _rel(result.z, direct.z) < 1e-8, solver               # measured 1e-9
+    for solver, result in results.items():                           # plan() said what would run
+        assert set(result.counts) <= {e.name for e in m13.plan(fibre_cube_scene(4, 60, 8, solver, enforcement))}
     iterative = results["block" if enforcement == "lagrange" else "amg"].model.last_linear_info
     assert iterative["iterations"] <= (90 if enforcement == "lagrange" else 25)     # measured 45, 10
     assert results["auto"].model.last_linear_info["method"] == iterative["method"]

@@ -720,6 +720,8 @@ def dependent_rows(B, beam=None, *, tolerance=DEPENDENT_ROW_TOLERANCE):
     """
     B = B.tocsr()
     m, n = B.shape
+    if B.nnz == 0:
+        return DependentRows(np.zeros(0, np.int64), sp.csr_matrix((0, m)), m)
     is_beam = np.zeros(n, dtype=bool)
     if beam is not None:
         is_beam[np.asarray(beam, dtype=np.int64)] = True
@@ -1161,8 +1163,9 @@ def solve_saddle(K, B, kappa, b, c, method="auto", *, solid=None, beam=None, pen
     lam[rows] = y[n:]
     lam = dependent.least_norm(lam, kappa_rows)
     B_all, c_all = B[all_rows], c[all_rows]
+    row_sum = float(abs(B_all).sum(axis=1).max()) if len(all_rows) else 0.0
     info["constraint_residual"] = float(np.linalg.norm(B_all @ x - c_all) / max(
-        np.linalg.norm(c_all), abs(B_all).sum(axis=1).max() * np.linalg.norm(x), 1e-300))
+        np.linalg.norm(c_all), row_sum * np.linalg.norm(x), 1e-300))
     if not info["converged"]:
         _raise_not_converged("block-preconditioned MINRES", info,
                              "pass near_nullspace=rigid_body_modes(...)[free] and the solid/beam split if "
