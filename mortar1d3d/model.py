@@ -511,7 +511,7 @@ class Model:
                              "use 'auto', 'direct' or 'amg'")
         if solver == "amg" and lagrange:
             raise SceneError("analysis.solver: Lagrange-multiplier coupling gives a saddle point; use 'auto', "
-                             "'direct' or 'block' (AMG on the solid block inside a block preconditioner)")
+                             "'direct' or 'block' (MINRES, the auxiliary-space AMG inside a block preconditioner)")
 
     # -- effects --------------------------------------------------------------------------------
     @property
@@ -598,9 +598,10 @@ class Model:
         amg = ("CG + auxiliary-space preconditioner (AMG on the solid carrying its beams, beam blocks "
                "factorised)" if self._auxiliary_space() else "CG + smoothed aggregation AMG (rigid-body modes)")
         detail = {"direct": "sparse LU (scipy)", "amg": amg,
-                  "block": "MINRES + block preconditioner (AMG solid block, Schur from kappa)"}[method]
+                  "block": "MINRES + block preconditioner (auxiliary space on the augmented stiffness, Schur "
+                           "from kappa)"}[method]
         out.append(Effect(f"linear_solver.{method}", every, detail))
-        if method == "amg" and self._auxiliary_space():
+        if (method == "amg" and self._auxiliary_space()) or (method == "block" and self._auxiliary_space(True)):
             out.append(Effect("linear_solver.follow_operator", "once", "beam DOFs following the solid "
                                                                         "(prolongation of the auxiliary space)"))
         return out
@@ -1065,10 +1066,13 @@ class Model:
         self.last_residual = r
         return r, (K.tocsr() if tangent else None)
 
-    def _auxiliary_space(self):
+    def _auxiliary_space(self, lagrange=False):
         """True when the AMG path uses the auxiliary-space preconditioner: beams penalty-coupled
-        to a solid (plain AMG on the penalty system needs hundreds of iterations at ε = 1e3 E)."""
-        return self.solid_mesh is not None and bool(self.groups) and self.scene.coupled and not self.lagrange
+        to a solid (plain AMG on the penalty system needs hundreds of iterations at ε = 1e3 E),
+        or with ``lagrange=True``, coupled by multipliers (the block solver's augmented stiffness
+        is such a penalty system)."""
+        return (self.solid_mesh is not None and bool(self.groups) and self.scene.coupled
+                and self.lagrange == lagrange)
 
     def _follow_split(self):
         """``solid``, ``beam`` (positions among the free DOFs) and the prolongation ``P`` (free
@@ -1088,9 +1092,63 @@ class Model:
             self.counts["linear_solver.follow_operator"] += 1
         return self._follow
 
-    def solve_linear(self, A, b, x0=None):
-        """Solve a reduced (Dirichlet DOFs removed) linear system of this model."""
+    def _dependent_multipliers(self, B, beam):
+        """Dependent rows of the constraint block ``B`` (free columns), found once per model.
+
+        Warns (CouplingWarning) naming the beams and LM nodes whose rows are left out; raises
+        SceneError if prescribed values contradict them (the constraints then have no solution).
+        """
+        if getattr(self, "_dependent", None) is None:
+            from .elements.multiplier import multiplier
+            from .mortar.assemble import lm_numbering
+            from .solvers.linear import DEPENDENT_ROW_TOLERANCE, dependent_rows
+            dep = dependent_rows(B, beam)
+            if len(dep):
+                # each row of B: (beam entry, LM node as a row of Result.line_load, component)
+                entry, lm_node, comp, first = [], [], [], 0
+                for g in self.groups:
+                    index, n_lm = lm_numbering(g.mesh, multiplier(self.scene.coupling["lm"]))
+                    owner = np.zeros(n_lm, dtype=np.int64)
+                    for k, (start, stop) in enumerate(g.entry_elements):
+                        owner[index[start:stop][index[start:stop] >= 0]] = g.entries[k]
+                    rows = g.coupling.coupled_rows
+                    entry.append(owner[rows // 3])
+                    lm_node.append(first + rows // 3)
+                    comp.append(rows % 3)
+                    first += n_lm
+                entry, lm_node, comp = (np.concatenate(v)[dep.rows] for v in (entry, lm_node, comp))
+                parts = []
+                for e in np.unique(entry):
+                    nodes = [f"{j} ({', '.join('xyz'[c] for c in comp[(entry == e) & (lm_node == j)])})"
+                             for j in np.unique(lm_node[entry == e])]
+                    parts.append(f"beams[{e}] LM nodes {', '.join(nodes)}")
+                what = "; ".join(parts)
+                # prescribed values must satisfy the dropped rows through the kept ones
+                Bf, v, C = self.constraint_matrix[:, self.fixed_dofs], self.fixed_values, dep.combinations
+                gap = np.abs(C @ (Bf @ v))
+                size = abs(C) @ (abs(Bf) @ np.abs(v))
+                if np.any(gap > DEPENDENT_ROW_TOLERANCE * size):
+                    raise SceneError(f"dirichlet: the prescribed values contradict the coupling: the rows of {what} "
+                                     "are combinations of other coupling rows, and the prescribed displacements "
+                                     "satisfy those but not these (prescribe values the embedded beams can follow)")
+                warnings.warn(f"coupling.lm: the coupling rows of {what} are combinations of the other rows (the "
+                              f"multipliers, lm = {self.scene.coupling['lm']!r}, are richer than what the solid mesh "
+                              "resolves along the beam, or supports fixed what they act on); they are left out, and "
+                              "λ there is the least-norm line load transferring the same forces. A lower lm "
+                              "(line2) or a finer solid mesh avoids this", CouplingWarning, stacklevel=4)
+            self._dependent = dep
+        return self._dependent
+
+    def solve_linear(self, A, b, x0=None, rtol=None):
+        """Solve a reduced (Dirichlet DOFs removed) linear system of this model.
+
+        ``rtol``: relative residual to reach (iterative solvers; default ``analysis.rtol``, what
+        a linear analysis needs of its one solve). The solver's info dict is kept in
+        ``last_linear_info`` (its ``note``, if any, says that a solver broke down and which one
+        took over).
+        """
         from .solvers.linear import solve_linear, solve_saddle
+        rtol = self.scene.analysis["rtol"] if rtol is None else rtol
         method = self.linear_solver_method(len(b))
         self.counts[f"linear_solver.{method}"] += 1
         free = self.free
@@ -1098,7 +1156,7 @@ class Model:
         triplets = np.bincount(free // 3, minlength=self.n_unknowns // 3 + 1)
         block = 3 if np.isin(triplets, (0, 3)).all() else 1
         if not self.lagrange:
-            options = dict(method=method)
+            options = dict(method=method, rtol=rtol)
             if method == "amg":
                 options.update(near_nullspace=self.rigid_body_modes()[free], block_size=block)
                 if self._auxiliary_space():
@@ -1116,8 +1174,12 @@ class Model:
         solid = np.flatnonzero(free[p_idx] < 3 * self.n_solid_nodes)
         beam = np.flatnonzero(free[p_idx] >= 3 * self.n_solid_nodes)
         R = self.rigid_body_modes()[free[p_idx]]
-        x, lam, info = solve_saddle(K, B, kappa, b[p_idx], b[m_idx], method="direct" if method == "direct" else "block",
-                                    solid=solid, beam=beam, penalty_scale=self.penalty, near_nullspace=R)
+        options = dict(method="direct" if method == "direct" else "block", solid=solid, beam=beam, near_nullspace=R,
+                       rtol=rtol, block_size=block, dependent=self._dependent_multipliers(B, beam))
+        if method != "direct" and self._auxiliary_space(lagrange=True) and len(solid) and len(beam):
+            options["prolongation"] = self._follow_split()["prolongation"]
+        # γ (augmentation and scaling of the constraint rows) from the operators, never the penalty
+        x, lam, info = solve_saddle(K, B, kappa, b[p_idx], b[m_idx], **options)
         self.last_linear_info = info
         out = np.empty(len(b))
         out[p_idx], out[m_idx] = x, lam
@@ -1146,7 +1208,7 @@ def _print_step(record, index, _n):
     res = record.residuals[-1] if record.residuals else 0.0
     print(f"  step {index:4d}  load factor {record.load_factor:8.4f}  iterations {record.iterations:3d}  "
           f"residual {res:9.3e}" + (f"  (after {record.cuts} cut(s))" if record.cuts else "")
-          + f"  {record.time:6.2f} s", flush=True)
+          + f"  {record.time:6.2f} s" + "".join(f"; {note}" for note in record.notes), flush=True)
 
 
 def solve(scene, *, progress=False):
@@ -1187,10 +1249,12 @@ def solve(scene, *, progress=False):
         rhs = -(r0 + K0 @ z)[free]
         z[free] += model.solve_linear(K0[free][:, free], rhs)
         model.last_residual = r0 + K0 @ z
+        note = model.last_linear_info.get("note")
         record = StepRecord(load_factor=1.0, iterations=1,
                             residuals=[float(np.linalg.norm(r0[free] + (K0 @ z0)[free])),
                                        float(np.linalg.norm(model.last_residual[free]))],
-                            increments=[float(np.linalg.norm(z[free]))], time=_time.perf_counter() - start)
+                            increments=[float(np.linalg.norm(z[free]))], time=_time.perf_counter() - start,
+                            notes=[note] if note else [])
         records, history = [record], [z.copy()]
         model.check_linear_displacements(z)
         if callback:

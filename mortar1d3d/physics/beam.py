@@ -236,7 +236,7 @@ def _gauss_point(a, b, a0, da, J, EA, EI, kappa0, want, grad, hess, work):
 
 
 @njit
-def _element_range(first, last, dH, ddH, A0, J, kappa0, EA_w, EI_w, Q, Qd, want, energy, fe, ke):
+def _element_range(first, last, dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want, energy, fe, ke):
     """Energy, internal force and tangent of elements ``first`` ... ``last - 1``.
 
     Parameters
@@ -248,10 +248,13 @@ def _element_range(first, last, dH, ddH, A0, J, kappa0, EA_w, EI_w, Q, Qd, want,
     EA_w, EI_w : (n_el, n_g) float64
         Stiffnesses times the integration weight ``w J`` of the point; a point may serve
         only the axial (``EI_w = 0``) or only the bending term (``EA_w = 0``).
-    A0 : (n_el, n_g, 3) float64
-        Reference ``r0'`` at the points (``J = |A0|``).
-    Q, Qd : (n_el, n_f, 3) float64
-        Current vector coefficients ``q_k`` and their displacement part ``q_k - q0_k``.
+    A0, B0 : (n_el, n_g, 3) float64
+        Reference ``r0'`` and ``r0''`` at the points (``J = |A0|``), formed from element-local
+        coordinates (see :class:`BeamModel`).
+    Qd : (n_el, n_f, 3) float64
+        Displacement part ``q_k - q0_k`` of the current vector coefficients. The current
+        ``r' = A0 + Σ dH_k Qd_k`` and ``r'' = B0 + Σ ddH_k Qd_k`` never touch absolute
+        coordinates, so the result does not depend on where the model lies.
     want : int
         0 energy, 1 and forces, 2 and tangents.
     energy : (n_el,) float64
@@ -280,8 +283,9 @@ def _element_range(first, last, dH, ddH, A0, J, kappa0, EA_w, EI_w, Q, Qd, want,
                 b[i] = 0.0
                 for k in range(n_f):
                     da[i] += dH[e, g, k] * Qd[e, k, i]
-                    b[i] += ddH[e, g, k] * Q[e, k, i]
+                    b[i] += ddH[e, g, k] * Qd[e, k, i]
                 a[i] = A0[e, g, i] + da[i]
+                b[i] += B0[e, g, i]
             total += _gauss_point(a, b, A0[e, g], da, J[e, g], EA_w[e, g], EI_w[e, g], kappa0[e, g], want, grad,
                                   hess, work)
             if want == 0:
@@ -308,7 +312,7 @@ def _element_range(first, last, dH, ddH, A0, J, kappa0, EA_w, EI_w, Q, Qd, want,
 
 
 @njit_parallel
-def _element_chunks(dH, ddH, A0, J, kappa0, EA_w, EI_w, Q, Qd, want, energy, fe, ke):
+def _element_chunks(dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want, energy, fe, ke):
     """:func:`_element_range` over chunks of :data:`CHUNK` elements in parallel.
 
     Every element is computed by the same serial code whatever the thread count, so the
@@ -316,7 +320,7 @@ def _element_chunks(dH, ddH, A0, J, kappa0, EA_w, EI_w, Q, Qd, want, energy, fe,
     """
     n_el = dH.shape[0]
     for c in prange((n_el + CHUNK - 1) // CHUNK):
-        _element_range(c * CHUNK, min(n_el, (c + 1) * CHUNK), dH, ddH, A0, J, kappa0, EA_w, EI_w, Q, Qd, want,
+        _element_range(c * CHUNK, min(n_el, (c + 1) * CHUNK), dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want,
                        energy, fe, ke)
 
 
@@ -548,8 +552,14 @@ class BeamModel:
         self._q0 = beams.centreline_dofs()
         cols = beams.function_columns()[:, :n_f]
         self._dofs = np.ascontiguousarray((3 * cols[:, :, None] + np.arange(3)).reshape(n_el, 3 * n_f))
-        a0, b0 = _curve_derivatives(self._dH, self._ddH, self._coefficients(self._q0))
+        # position functions: their derivatives sum to zero, so r0' and r0'' follow from positions
+        # relative to each element's first node; from absolute ones they would lose log10(|X|/L)
+        # digits to cancellation (a model 1e5 m from the origin: r0'' = O(1e-11) instead of 0, a
+        # spurious bending force that stalled Newton far above round-off of the load)
+        self._position_function = np.array(beams.element_type.function_offset[:n_f]) == 0
+        a0, b0 = _curve_derivatives(self._dH, self._ddH, self._local(self._coefficients(self._q0)))
         self._A0 = np.ascontiguousarray(a0)
+        self._B0 = np.ascontiguousarray(b0)
         self._J = np.ascontiguousarray(np.linalg.norm(a0, axis=2))
         self._EA_w = np.ascontiguousarray(self.EA[:, None] * w_axial[None, :] * self._J)
         self._EI_w = np.ascontiguousarray(self.EI[:, None] * w_bending[None, :] * self._J)
@@ -568,23 +578,30 @@ class BeamModel:
         n_el, nd = self._dofs.shape
         return np.ascontiguousarray(q[self._dofs].reshape(n_el, nd // 3, 3))
 
-    def _current(self, d):
+    def _local(self, Q):
+        """Coefficients with every element's first node position subtracted from its position
+        coefficients (tangents unchanged): the same r', r'', free of the coordinates' magnitude."""
+        return Q - self._position_function[None, :, None] * Q[:, :1, :]
+
+    def _displacement(self, d):
         d = np.asarray(d, dtype=float)
         if d.shape != (self.n_dofs,):
             raise ValueError(f"displacement: expected shape ({self.n_dofs},), got {d.shape}")
         if not np.isfinite(d).all():
             raise ValueError("displacement has NaN or infinite entries")
-        return self._coefficients(self._q0 + d)
+        return d
+
+    def _current(self, d):
+        return self._coefficients(self._q0 + self._displacement(d))
 
     def _run(self, d, want):
-        Q = self._current(d)
-        Qd = self._coefficients(np.asarray(d, dtype=float))
+        Qd = self._coefficients(self._displacement(d))
         n_el, nd = self._dofs.shape
         energy = np.empty(n_el)
         fe = np.empty((n_el, nd) if want >= 1 else (0, 0))
         ke = np.empty((n_el, nd, nd) if want == 2 else (0, 0, 0))
-        args = (self._dH, self._ddH, self._A0, self._J, self._kappa0, self._EA_w, self._EI_w, Q, Qd, want, energy,
-                fe, ke)
+        args = (self._dH, self._ddH, self._A0, self._B0, self._J, self._kappa0, self._EA_w, self._EI_w, Qd, want,
+                energy, fe, ke)
         if n_el <= CHUNK:
             # one chunk: a parallel region would only add its launch cost (large on a busy machine)
             _element_range(0, n_el, *args)
@@ -670,8 +687,8 @@ class BeamModel:
         else:
             H, dH, ddH = _line_tables(eta, self.beams.n_elements)
         position = np.einsum("egk,eki->egi", H, Q)
-        a, b = _curve_derivatives(dH, ddH, Q)
-        a0, _ = _curve_derivatives(dH, ddH, Q0)
+        a, b = _curve_derivatives(dH, ddH, self._local(Q))
+        a0, _ = _curve_derivatives(dH, ddH, self._local(Q0))
         strain = np.linalg.norm(a, axis=2) / np.linalg.norm(a0, axis=2) - 1.0
         curvature = _curvature(a, b) if self.model == "torsion_free" else np.zeros_like(strain)
         return {"position": position, "displacement": position - np.einsum("egk,eki->egi", H, Q0),

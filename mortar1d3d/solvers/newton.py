@@ -6,7 +6,15 @@ The nonlinear system is any object with
 * ``prescribed(t)``: values of the fixed unknowns at load factor ``t``;
 * ``residual(z, t, tangent=True)``: ``(r, K)``, the full residual vector (internal minus external
   forces, plus constraint rows if any) and its Jacobian (scipy sparse) or None;
-* ``solve_linear(K_ff, b, z_f)``: solution of the reduced linear system.
+* ``solve_linear(K_ff, b, z_f, rtol=...)``: solution of the reduced linear system to the relative
+  residual ``rtol`` (or its round-off level);
+
+and optionally
+
+* ``reference()``: the base configuration of the leading unknowns (coordinates and tangents that
+  the unknowns displace), for the round-off floor of the residual;
+* ``last_linear_info``: a dict set by ``solve_linear``; its ``note`` (a string, e.g. that an
+  iterative solver broke down and another took over) is copied into the step's record.
 """
 import math
 import time
@@ -15,9 +23,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
-#: the round-off floor of a residual is taken as this many machine epsilons times ‖|K| |z|‖
+#: the round-off floor of a residual is taken as this many machine epsilons times ‖|K| (|z| + |X|)‖
 #: (the size of the force terms that cancel in it); see :func:`_newton_step`
 ROUNDOFF_FACTOR = 1e3
+
+#: the linear solve of a Newton iteration reduces its right-hand side (the current residual) by this
+#: times the Newton tolerance ``rtol``: one exactly solved step from the start of a load step then
+#: already meets the residual target, and quadratic convergence is not held back
+LINEAR_RTOL_FACTOR = 0.1
 
 
 class ConvergenceError(RuntimeError):
@@ -41,6 +54,9 @@ class StepRecord:
         How many times the step to this load factor was halved before it converged.
     time : float
         Wall time of the step in seconds.
+    notes : list of str
+        What the step log should say besides the numbers (e.g. that the linear solver of an
+        iteration broke down and another one took over), each once.
     """
 
     load_factor: float
@@ -49,17 +65,30 @@ class StepRecord:
     increments: list = field(default_factory=list)
     cuts: int = 0
     time: float = 0.0
+    notes: list = field(default_factory=list)
 
 
 class _StepFailed(Exception):
     pass
 
 
+def _magnitude(system, z):
+    """``|z|`` plus the magnitude of the base configuration the leading unknowns displace."""
+    size = np.abs(z)
+    if hasattr(system, "reference"):
+        X = np.abs(system.reference())
+        size[: len(X)] += X
+    return size
+
+
 def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence):
-    """Iterate to equilibrium at load factor t from z (modified in place). Returns the record."""
+    """Iterate to equilibrium at load factor t from z (modified in place).
+
+    Returns ``(residuals, increments, notes)``.
+    """
     free = system.free
     z[system.fixed] = system.prescribed(t)
-    residuals, increments = [], []
+    residuals, increments, notes = [], [], []
     r0 = d0 = None
     for k in range(max_iterations + 1):
         try:
@@ -74,33 +103,41 @@ def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence)
         if r0 is None:
             r0 = rn
             if rn == 0.0:
-                return residuals, increments
+                return residuals, increments, notes
         else:
             # residual small relative to the first iteration, and either the last increment
             # small relative to the first one or the residual at round-off (it cannot fall further)
             if rn <= rtol * r0 and (increments[-1] <= increment_rtol * d0 or rn <= 1e-13 * r0):
-                return residuals, increments
+                return residuals, increments, notes
             # round-off floor: very stiff terms (penalty, EA of slender beams) leave a residual that
             # cannot fall further; accept when the increment has converged and the residual is small
             if increments[-1] <= increment_rtol * d0 and rn <= math.sqrt(rtol) * r0:
-                return residuals, increments
-            # with a very large penalty (or EA) the round-off of the force terms themselves, about
-            # eps_mach |K| |z|, can exceed every relative target: accept once the residual is at
-            # that floor and the increments no longer contract (they are round-off of the solve too)
+                return residuals, increments, notes
+            # with a very large penalty (or EA) the round-off of the force terms themselves can
+            # exceed every relative target: accept once the residual is at that floor and the
+            # increments no longer contract (they are round-off of the solve too). The terms are
+            # formed from the current configuration X + z, whose entries carry round-off
+            # eps_mach (|X| + |z|): a model far from the origin has a higher floor wherever a term
+            # uses absolute positions (a follower pressure does; the beam, solid and coupling
+            # kernels work relative to each element and stay below it).
             # (|K| is a copy of the tangent: formed only once the increments have stopped contracting)
             if len(increments) >= 2 and increments[-1] > 0.5 * increments[-2]:
-                floor = ROUNDOFF_FACTOR * np.finfo(float).eps * float(np.linalg.norm((abs(K) @ np.abs(z))[free]))
+                floor = ROUNDOFF_FACTOR * np.finfo(float).eps * float(
+                    np.linalg.norm((abs(K) @ _magnitude(system, z))[free]))
                 if rn <= floor:
-                    return residuals, increments
+                    return residuals, increments, notes
             if rn > divergence * r0:
                 raise _StepFailed(f"the residual grew from {r0:.3e} to {rn:.3e} (diverging)")
         if k == max_iterations:
             raise _StepFailed(f"no convergence in {max_iterations} iterations (residual {r0:.3e} → {rn:.3e}, "
                               f"target {rtol * r0:.3e})")
         try:
-            dz = system.solve_linear(K[free][:, free], -r[free], z[free])
+            dz = system.solve_linear(K[free][:, free], -r[free], z[free], rtol=LINEAR_RTOL_FACTOR * rtol)
         except Exception as exc:  # a singular or unsolvable tangent ends this attempt
             raise _StepFailed(f"the linear solve failed: {exc}") from None
+        note = (getattr(system, "last_linear_info", None) or {}).get("note")
+        if note and note not in notes:
+            notes.append(note)
         dn = float(np.linalg.norm(dz))
         if not math.isfinite(dn):
             raise _StepFailed("the Newton increment is not finite (singular tangent?)")
@@ -129,9 +166,11 @@ def solve_load_steps(system, z0, steps, *, rtol=1e-8, increment_rtol=1e-8, max_i
         Convergence: ‖r_k‖ <= rtol ‖r_0‖ and ‖Δz_k‖ <= increment_rtol ‖Δz_0‖ (both relative to the
         first iteration of the step); or ‖r_k‖ <= 1e-13 ‖r_0‖; or, at a round-off floor of the
         residual, ‖Δz_k‖ <= increment_rtol ‖Δz_0‖ with ‖r_k‖ <= sqrt(rtol) ‖r_0‖; or, when the
-        force terms are so large that their round-off exceeds these targets (penalty ≳ 1e7 E),
-        ‖r_k‖ <= ROUNDOFF_FACTOR eps_mach ‖|K| |z|‖ once the increments stop contracting
-        (‖Δz_k‖ > ‖Δz_{k-1}‖ / 2).
+        force terms are so large that their round-off exceeds these targets (penalty ≳ 1e7 E,
+        follower loads on a model far from the origin), ‖r_k‖ <= ROUNDOFF_FACTOR eps_mach
+        ‖|K| (|z| + |X|)‖ (X: ``system.reference()``, if given) once the increments stop
+        contracting (‖Δz_k‖ > ‖Δz_{k-1}‖ / 2). Each linear solve is asked for the relative
+        residual ``LINEAR_RTOL_FACTOR * rtol``.
     progress : callable, optional
         ``progress(record, step_index, n_steps)`` after every converged step.
 
@@ -159,7 +198,8 @@ def solve_load_steps(system, z0, steps, *, rtol=1e-8, increment_rtol=1e-8, max_i
         trial = z.copy()
         start = time.perf_counter()
         try:
-            residuals, increments = _newton_step(system, trial, t, rtol, increment_rtol, max_iterations, divergence)
+            residuals, increments, notes = _newton_step(system, trial, t, rtol, increment_rtol, max_iterations,
+                                                        divergence)
         except _StepFailed as exc:
             cuts += 1
             if cuts > max_cuts:
@@ -174,7 +214,7 @@ def solve_load_steps(system, z0, steps, *, rtol=1e-8, increment_rtol=1e-8, max_i
         z = trial
         t_done = t
         rec = StepRecord(load_factor=t, iterations=len(increments), residuals=residuals, increments=increments,
-                         cuts=cuts, time=time.perf_counter() - start)
+                         cuts=cuts, time=time.perf_counter() - start, notes=notes)
         records.append(rec)
         history.append(z.copy())
         if progress is not None:
