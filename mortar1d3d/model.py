@@ -1124,7 +1124,10 @@ class Model:
                     parts.append(f"beams[{e}] LM nodes {', '.join(nodes)}")
                 what = "; ".join(parts)
                 # prescribed values must satisfy the dropped rows through the kept ones
-                Bf, v, C = self.constraint_matrix[:, self.fixed_dofs], self.fixed_values, dep.combinations
+                # (fixed DOFs and values are in the unknowns' basis: clamped tangents in rotated frames)
+                Bu = self.constraint_matrix @ self.basis.matrix_T(self.n_displacement_dofs) if self.basis \
+                    else self.constraint_matrix
+                Bf, v, C = Bu.tocsc()[:, self.fixed_dofs], self.fixed_values, dep.combinations
                 gap = np.abs(C @ (Bf @ v))
                 size = abs(C) @ (abs(Bf) @ np.abs(v))
                 if np.any(gap > DEPENDENT_ROW_TOLERANCE * size):
