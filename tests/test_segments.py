@@ -441,22 +441,17 @@ def test_corner_cut_is_continuous_across_every_threshold(centre):
 
 
 def test_a_long_beam_element_keeps_its_small_pieces():
-    """Issue 16: one beam element of length 200 over a row of 100 hex8 (h = 2) lost its pieces of 1e-4 h
-    (in its η: 1e-6, the former sliver length). The beam enters through y = 0 at 5e-5 before the face
-    x = 20 between elements 9 and 10: element 9 gets a piece of length 5.0003e-5."""
+    """Issue 16: one beam element of length 200 over a row of 100 hex8 (h = 2) lost pieces of 1e-4 h (1e-6
+    in its η, the former sliver length). The element runs along the row, nearly parallel to its edge
+    y = 0, z = 2, and cuts that edge's corner of the cross-section: y = t, z = t + 2 - s, inside for
+    0 < t < s, a piece of length s |d| / d_y with d = (100, 1, 1)."""
     solid = generate.box((0, 0, 0), (200, 2, 2), (100, 1, 1))
-    slope = 2.0 / 150.0
-    entry = 20.0 - 5e-5
-    a = np.array([0.0, -slope * entry, 1.0])
-    b = np.array([200.0, slope * (200.0 - entry), 1.0])
-    exit_x = entry + 150.0                                   # y = 2 there
-    ops = assemble_mortar(straight_beam(a, b), solid)
-    first = ops.segments[0]
-    assert first["solid_element"] == 9
-    per_x = np.sqrt(1 + slope ** 2)
-    assert (first["eta_end"] - first["eta_start"]) * 0.5 * np.linalg.norm(b - a) == pytest.approx(5e-5 * per_x, rel=1e-8)
-    assert ops.embedded_length == pytest.approx((exit_x - entry) * per_x, rel=1e-12)
-    assert len(ops.segments) == 76
+    d = np.array([100.0, 1.0, 1.0])
+    for s in (1e-4, 1e-6, 1e-8):
+        centre = np.array([101.0, 0.0, 2.0 - s])                 # t = 0 here
+        ops = assemble_mortar(straight_beam(centre - d, centre + d), solid)
+        assert ops.embedded_length == pytest.approx(s * np.linalg.norm(d), rel=1e-9), s
+        assert list(ops.segments["solid_element"]) == [50]
 
 
 # --------------------------------------------------------------------------------------------
