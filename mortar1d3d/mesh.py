@@ -13,6 +13,7 @@ from .elements.beam import hermite as _hermite
 from .elements.solid.dispatch import MAX_NODES, N_NODES, SOLID_ELEMENTS, solid_element
 from .elements.validity import DEGENERATE, FOLDED, INVERTED, jacobian_validity
 from .errors import MeshError, format_ids
+from .quadrature import gauss_legendre
 
 # cell types of lower dimension that a volume mesh file may carry (boundary markers)
 _LOWER_DIMENSIONAL = {"vertex", "line", "line3", "triangle", "triangle6", "quad", "quad8", "quad9"}
@@ -166,7 +167,7 @@ def hermite_lengths(positions, tangents, elements, rtol=1e-14, max_iterations=50
     starting from the chord. Returns (m,) float64. Raises :class:`MeshError` naming the
     elements for which no positive length is found.
     """
-    x, w = np.polynomial.legendre.leggauss(10)
+    x, w = gauss_legendre(10)
     dH = np.array([[0.75 * (e * e - 1.0), 0.125 * (-1 - 2 * e + 3 * e * e),
                     0.75 * (1.0 - e * e), 0.125 * (-1 + 2 * e + 3 * e * e)] for e in x])   # dH2, dH4 per unit L
     r1, r2 = positions[elements[:, 0]], positions[elements[:, 1]]
@@ -348,7 +349,7 @@ class BeamMesh:
         return cols
 
     def _lagrange_lengths(self):
-        x, w = np.polynomial.legendre.leggauss(10)
+        x, w = gauss_legendre(10)
         Q = self.coefficients()
         if self.element_type.name == "line":
             return np.linalg.norm(Q[:, 1] - Q[:, 0], axis=1)

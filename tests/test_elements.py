@@ -12,7 +12,8 @@ from meshio.gmsh.common import _gmsh_to_meshio_order
 
 from mortar1d3d.elements import beam
 from mortar1d3d.elements.beam import hermite, lagrange
-from mortar1d3d.elements.solid import _family, dispatch, hex8, hex20, hex27, tet4, tet10
+from mortar1d3d.elements.solid import dispatch, hex8, hex20, hex27, tet4, tet10
+from mortar1d3d.elements.solid import family as _family
 
 # ``mortar1d3d.elements.multiplier`` (the attribute) is the function re-exported by the package
 # ``__init__``, which shadows the submodule of the same name: fetch the module itself.

@@ -11,7 +11,9 @@ import pytest
 
 from mortar1d3d import generate
 from mortar1d3d.elements.solid import hex8, hex20, hex27, tet4, tet10
-from mortar1d3d.elements.solid._family import HEX_FACE_NODES, TET_FACE_NODES
+from mortar1d3d.elements.solid.family import HEXAHEDRON, TETRAHEDRON
+
+HEX_FACE_NODES, TET_FACE_NODES = HEXAHEDRON.face_nodes, TETRAHEDRON.face_nodes
 
 MODULES = {"hexahedron": hex8, "hexahedron20": hex20, "hexahedron27": hex27, "tetra": tet4, "tetra10": tet10}
 TYPES = list(MODULES)

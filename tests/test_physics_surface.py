@@ -7,8 +7,8 @@ import pytest
 
 from mortar1d3d import generate
 from mortar1d3d.elements.solid.dispatch import SOLID_ELEMENTS, SOLID_MODULES
-from mortar1d3d.physics.surface import (FACE_DTYPE, Pressure, boundary_faces, face_nodes, quadrilateral_rule,
-                                        traction_force, triangle_rule)
+from mortar1d3d.physics.surface import FACE_DTYPE, Pressure, boundary_faces, face_nodes, traction_force
+from mortar1d3d.quadrature import quadrilateral_rule, triangle_rule
 
 TYPES = list(SOLID_ELEMENTS)
 SIDES = {"x_min": (0, -1.0), "x_max": (0, 1.0), "y_min": (1, -1.0), "y_max": (1, 1.0),

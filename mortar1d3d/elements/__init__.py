@@ -1,8 +1,9 @@
 """Element types: solid interpolations, beam centrelines and Lagrange-multiplier functions.
 
-``mortar1d3d.elements.solid.dispatch`` is the registry of solid element types (the only place
-that knows all of them); beam centreline and multiplier types live in ``beam`` and
-``multiplier``.
+Each type is one module with a descriptor holding all its data (:mod:`.descriptor`);
+:mod:`.solid.registry` lists the solid element types and families, and :mod:`.solid.dispatch`
+derives the per-code tables and the kernels' dispatch from that list. Beam centreline and
+multiplier types live in ``beam`` and ``multiplier``; :mod:`.validity` proves det J > 0.
 """
 from .solid.dispatch import SOLID_ELEMENTS, solid_element
 from .beam import BEAM_ELEMENTS, beam_element

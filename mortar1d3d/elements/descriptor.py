@@ -1,7 +1,59 @@
-"""Frozen descriptors of element types (what Python code needs to know about an element)."""
+"""Frozen descriptors of element types and families: all a type's data, in one object per type.
+
+An element family (:class:`ElementFamily`: hexahedra, tetrahedra) fixes the parameter domain, its
+faces and its quadrature; an element type (:class:`SolidElementType`) adds its nodes, shape
+function space and bounds. The registry (:mod:`mortar1d3d.elements.solid.registry`) lists the
+types; :mod:`mortar1d3d.elements.solid.dispatch` derives every per-code table and the kernels'
+dispatch from these descriptors, so a new type of a known family is one module and one registry
+line.
+"""
 from dataclasses import dataclass, field
 
 import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class ElementFamily:
+    """A parameter domain shared by several element types.
+
+    Attributes
+    ----------
+    name : str
+        ``"hex"`` or ``"tet"`` (what :attr:`SolidElementType.family` says).
+    code : int
+        Integer code used for dispatch inside kernels (position in the registry's family list).
+    domain : str
+        ``"box"`` (the parameter domain is a box: [-1, 1]^3) or ``"simplex"`` (ξ_i >= 0, Σξ_i <= 1):
+        how the validity check cuts it into cells.
+    faces : (n_faces, 4, 3) float64
+        Faces as affine maps of the parameter space: rows ``origin, a, b, outward_normal``;
+        the face is ``ξ = origin + u a + v b`` and ``normal·(ξ - origin) > 0`` is outside.
+    face_nodes : tuple of tuples
+        Corner node ids of each face (VTK order; for output and tests), same order as ``faces``.
+    centre : (3,) float64
+        Centre of the parameter domain (Newton start, expansion point of the bounds).
+    outside_distance : numba dispatcher ``(xi) -> float``
+        How far ξ lies outside the domain (<= 0 inside), in parameter units.
+    face_rule : callable ``() -> (points (q, 2), weights (q,))``
+        Quadrature on a face's (u, v) parameters (surface loads).
+    face_centre : float
+        The face parameters u = v of a face's centroid (0 on a square face [-1, 1]², 1/3 on a
+        triangle u, v >= 0, u + v <= 1).
+    """
+
+    name: str
+    code: int
+    domain: str
+    faces: np.ndarray = field(repr=False)
+    face_nodes: tuple = field(repr=False)
+    centre: np.ndarray = field(repr=False)
+    outside_distance: object = field(repr=False)
+    face_rule: object = field(repr=False)
+    face_centre: float = 0.0
+
+    @property
+    def n_faces(self):
+        return self.faces.shape[0]
 
 
 @dataclass(frozen=True, eq=False)
@@ -18,17 +70,11 @@ class SolidElementType:
         Nodes per element (VTK/meshio order).
     degree : int
         Polynomial degree of the interpolation (1 or 2).
-    family : str
-        ``"hex"`` (parameter space [-1, 1]^3) or ``"tet"`` (ξ_i >= 0, Σξ_i <= 1).
+    family_type : ElementFamily
+        Parameter domain, faces, face quadrature (also as the properties ``family`` (its name),
+        ``centre``, ``faces``, ``face_nodes``, ``n_faces``).
     reference_nodes : (n_nodes, 3) float64
         Parameter coordinates of the nodes, in VTK/meshio order.
-    centre : (3,) float64
-        Start point of Newton iterations (element centre in parameter space).
-    faces : (n_faces, 4, 3) float64
-        Faces as affine maps of the parameter space: rows ``origin, a, b, outward_normal``;
-        the face is ``ξ = origin + u a + v b`` and ``normal·(ξ - origin) > 0`` is outside.
-    face_nodes : tuple of tuples
-        Corner node ids of each face (for output and tests), same order as ``faces``.
     bounding_matrix : (m, n_nodes) float64
         Maps element nodes to points whose convex hull contains the element
         (Bernstein control points for quadratic elements; identity for linear ones).
@@ -37,19 +83,20 @@ class SolidElementType:
         as the shape functions, one monomial per node). The geometry kernels bound the map's
         derivatives with them (point location, :mod:`mortar1d3d.geometry.projection`) and the
         mesh check bounds det J (:mod:`mortar1d3d.mesh`).
+    quadrature : tuple of (points (q, 3), weights (q,))
+        The volume rule of the solid model (:mod:`mortar1d3d.physics.solid`), from
+        :mod:`mortar1d3d.quadrature`.
     """
 
     name: str
     code: int
     n_nodes: int
     degree: int
-    family: str
+    family_type: ElementFamily
     reference_nodes: np.ndarray = field(repr=False)
-    centre: np.ndarray = field(repr=False)
-    faces: np.ndarray = field(repr=False)
-    face_nodes: tuple = field(repr=False)
     bounding_matrix: np.ndarray = field(repr=False)
-    monomials: np.ndarray = field(repr=False, default=None)
+    monomials: np.ndarray = field(repr=False)
+    quadrature: tuple = field(repr=False)
     dim: int = 3
 
     def __post_init__(self):
@@ -57,6 +104,29 @@ class SolidElementType:
         if exps.shape != (self.n_nodes, 3):
             raise ValueError(f"{self.name}: monomials must have shape ({self.n_nodes}, 3), got {exps.shape}")
         object.__setattr__(self, "monomials", exps)
+
+    @property
+    def family(self):
+        """Name of the element's family (``"hex"``, ``"tet"``)."""
+        return self.family_type.name
+
+    @property
+    def centre(self):
+        return self.family_type.centre
+
+    @property
+    def faces(self):
+        return self.family_type.faces
+
+    @property
+    def face_nodes(self):
+        return self.family_type.face_nodes
+
+    @property
+    def line_degree(self):
+        """Degree in η of N_a(ξ(η)) along a straight line (ξ affine in η): the largest total degree
+        of the element's monomials (hex8 3, hex20 4, hex27 6, tet4 1, tet10 2)."""
+        return int(self.monomials.sum(axis=1).max())
 
     @property
     def parameter_box(self):
@@ -71,7 +141,7 @@ class SolidElementType:
         one factor from each column.
         """
         exps = self.monomials
-        if self.family == "hex":
+        if self.family_type.domain == "box":
             # degree in ξ_i of column j: max of α_i - [i == j] over the monomials that ξ_j does not kill
             return max(sum(int(max(exps[exps[:, j] > 0, i] - (i == j), default=0)) for j in range(3))
                        for i in range(3))

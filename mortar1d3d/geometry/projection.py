@@ -213,7 +213,7 @@ def search_buffers():
 @njit
 def _box_in_region(code, m0, m1, m2, r, tol):
     """Whether the box |ξ - m|∞ <= r meets {ξ : outside_distance(ξ) <= tol} (hex: always, by construction)."""
-    if solid.FAMILY[code] == solid.HEX:
+    if not solid.SIMPLEX[code]:
         return True
     if m0 + r < -tol or m1 + r < -tol or m2 + r < -tol:
         return False
@@ -429,13 +429,6 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
     return -1
 
 
-# nodes spanning the parameter axes from node 0 (hex: 1, 3, 4; tet: 1, 2, 3) and their distance
-_AXIS_NODES = np.array([[1, 3, 4], [1, 3, 4], [1, 3, 4], [1, 2, 3], [1, 2, 3]], dtype=np.int64)
-_AXIS_SPAN = np.array([2.0, 2.0, 2.0, 1.0, 1.0])
-_REFERENCE_NODES = np.zeros((len(solid.BY_CODE), solid.MAX_NODES, 3))
-for _code, _descriptor in solid.BY_CODE.items():
-    _REFERENCE_NODES[_code, : _descriptor.n_nodes] = _descriptor.reference_nodes
-
 #: elements whose map is affine to this (relative) accuracy are located with their inverse map,
 #: without Newton: exact to round-off, as a polished Newton projection would be
 EXACT_AFFINE_TOL = 64 * 2.220446049250313e-16
@@ -449,8 +442,8 @@ def affine_inverse(code, X, h, rel_tol, Ainv):
     that is a parallelepiped; quadratic elements with straight edges and centred mid-nodes).
     On success ``Ainv`` (3, 3) holds A⁻¹, so ξ(x) = ξ_0 + A⁻¹ x exactly (no Newton needed).
     """
-    axes = _AXIS_NODES[code]
-    span = _AXIS_SPAN[code]
+    axes = solid.AXIS_NODES[code]
+    span = solid.AXIS_SPAN[code]
     a00 = X[axes[0], 0] / span
     a10 = X[axes[0], 1] / span
     a20 = X[axes[0], 2] / span
@@ -460,7 +453,7 @@ def affine_inverse(code, X, h, rel_tol, Ainv):
     a02 = X[axes[2], 0] / span
     a12 = X[axes[2], 1] / span
     a22 = X[axes[2], 2] / span
-    ref = _REFERENCE_NODES[code]
+    ref = solid.REFERENCE_NODES[code]
     tol = rel_tol * h
     for a in range(solid.n_nodes(code)):
         d0 = ref[a, 0] - ref[0, 0]
@@ -477,7 +470,7 @@ def affine_inverse(code, X, h, rel_tol, Ainv):
 def affine_parameters(code, Ainv, x0, x1, x2, xi):
     """ξ = ξ_0 + A⁻¹ x for an affine element (x local to node 0)."""
     for i in range(3):
-        xi[i] = _REFERENCE_NODES[code, 0, i] + Ainv[i, 0] * x0 + Ainv[i, 1] * x1 + Ainv[i, 2] * x2
+        xi[i] = solid.REFERENCE_NODES[code, 0, i] + Ainv[i, 0] * x0 + Ainv[i, 1] * x1 + Ainv[i, 2] * x2
 
 
 @njit_parallel
@@ -555,10 +548,9 @@ def linear_parameters(code, table, s, x0, x1, x2, xi):
     d0 = x0 - table[s, 3, 0]
     d1 = x1 - table[s, 3, 1]
     d2 = x2 - table[s, 3, 2]
-    c = 0.0 if solid.FAMILY[code] == solid.HEX else 0.25
-    y0 = c + table[s, 0, 0] * d0 + table[s, 0, 1] * d1 + table[s, 0, 2] * d2
-    y1 = c + table[s, 1, 0] * d0 + table[s, 1, 1] * d1 + table[s, 1, 2] * d2
-    y2 = c + table[s, 2, 0] * d0 + table[s, 2, 1] * d1 + table[s, 2, 2] * d2
+    y0 = solid.CENTRE[code, 0] + table[s, 0, 0] * d0 + table[s, 0, 1] * d1 + table[s, 0, 2] * d2
+    y1 = solid.CENTRE[code, 1] + table[s, 1, 0] * d0 + table[s, 1, 1] * d1 + table[s, 1, 2] * d2
+    y2 = solid.CENTRE[code, 2] + table[s, 2, 0] * d0 + table[s, 2, 1] * d1 + table[s, 2, 2] * d2
     if table[s, 4, 0] == 0.0 and max(abs(y0), abs(y1), abs(y2)) > _START_LIMIT:
         return False
     xi[0], xi[1], xi[2] = y0, y1, y2

@@ -37,14 +37,6 @@ _REACH_MARGIN = 1e-6  # faces whose box misses a beam element's box by more than
 
 
 @njit
-def _face_centre(code, face, xi):
-    """Centroid of a face in parameter space (hex faces: u, v in [-1, 1]; tet: the unit triangle)."""
-    c = 0.0 if solid.FAMILY[code] == solid.HEX else 1.0 / 3.0
-    for i in range(3):
-        xi[i] = face[0, i] + c * (face[1, i] + face[2, i])
-
-
-@njit
 def crossings_capacity(search_points):
     """Most crossings one pair reports (in the second pass of :func:`pair_crossings`; further ones are dropped)."""
     return 4 * search_points * solid.MAX_FACES
@@ -276,7 +268,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                     for k in range(S):
                         if not ok[k]:
                             # the projection failed here: start on the face centre
-                            _face_centre(code, face, start)
+                            start[:] = solid.FACE_CENTROIDS[code, f]
                             eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s[k],
                                                 start[0], start[1], start[2], z, xi, N, dN, H, dH)
                             count = _record(eta, f, out_eta, out_face, p, count, overflow)

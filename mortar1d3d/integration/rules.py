@@ -13,8 +13,6 @@ the projection. Only the set of points differs (design.md §1):
   certificate for curved beam elements inside one affine element, which keep the element-based
   points), and per segment the minimal exact Gauss rule where the integrand is a polynomial.
 """
-from functools import lru_cache
-
 import numpy as np
 from numba import prange
 
@@ -29,7 +27,7 @@ from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, af
                                    first_containing, is_affine, linear_parameters, load_element, locate_point,
                                    point_buffers, polish, project_point, search_buffers)
 from ..geometry.segmentation import resegment, splice
-from .quadrature import gauss_legendre
+from ..quadrature import gauss_legendre, gauss_tables
 
 #: point outcome codes (as stored in ``status``)
 POINT_INSIDE, POINT_OUTSIDE, POINT_NOT_CONVERGED, POINT_UNCOUPLED = INSIDE, OUTSIDE, NOT_CONVERGED, 3
@@ -184,7 +182,7 @@ def checked_segment_points(ctx, segments, n_gauss, search_points, diagnostics):
 
 def element_points(ctx, n_gauss):
     """Integration points of element-based integration, uncoupled points included (owner -1)."""
-    gx, gw = gauss_legendre_arrays(n_gauss)
+    gx, gw = gauss_legendre(n_gauss)
     n_beam = len(ctx.pair_offsets) - 1
     n = n_beam * n_gauss
     beam, owner, eta, weight, xi, position, status = carve(
@@ -197,23 +195,6 @@ def element_points(ctx, n_gauss):
     return beam, owner, eta, xi, weight, position, status
 
 
-def gauss_legendre_arrays(n_gauss):
-    x, w = gauss_legendre(n_gauss)
-    return np.ascontiguousarray(x), np.ascontiguousarray(w)
-
-
-@lru_cache(maxsize=None)
-def gauss_tables(n_max):
-    """Gauss-Legendre rules 1..n_max as padded tables (n_max + 1, n_max): row n holds the n-point rule."""
-    gx = np.zeros((n_max + 1, n_max))
-    gw = np.zeros((n_max + 1, n_max))
-    for n in range(1, n_max + 1):
-        gx[n, :n], gw[n, :n] = gauss_legendre(n)
-    gx.flags.writeable = False
-    gw.flags.writeable = False
-    return gx, gw
-
-
 # ------------------------------------------------------------------------------------------------
 # integration="auto": cut only the beam elements that cross faces; exact rules where polynomial
 # ------------------------------------------------------------------------------------------------
@@ -224,9 +205,9 @@ AFFINE_TOL = 1e-12
 #: points lie this far (parameter units) inside; far above PARAMETER_TOL, so no neighbour can
 #: claim any of its points under the ownership rule
 CERTIFY_MARGIN = 1e3 * PARAMETER_TOL
-#: degree along a straight line of the solid shape functions N(ξ(η)) when ξ(η) is affine in η,
-#: per element code (hex8 trilinear: 3, hex20 serendipity: 4, hex27 triquadratic: 6, tet4: 1, tet10: 2)
-LINE_DEGREE = np.array([3, 4, 6, 1, 2], dtype=np.int64)
+#: degree along a straight line of the solid shape functions N(ξ(η)) when ξ(η) is affine in η, per
+#: element code (hex8 trilinear: 3, hex20 serendipity: 4, hex27 triquadratic: 6, tet4: 1, tet10: 2)
+LINE_DEGREE = solid.LINE_DEGREE
 #: polynomial degree of the centreline functions per beam code (hermite, line, line3)
 BEAM_DEGREE = np.array([3, 1, 2], dtype=np.int64)
 #: pair outcome of the auto classification

@@ -21,6 +21,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from ..mesh import BeamMesh, SolidMesh
+from ..quadrature import gauss_legendre
 
 #: Gauss points per sub-interval for arc lengths (the speed |r'| of a cubic is smooth: 10
 #: points on an eighth of an element or on a segment are exact to round-off in practice)
@@ -98,7 +99,7 @@ def _speed_integrals(kind, Q, a, b):
 
     ``a``, ``b``: shared intervals (n,) or per-row intervals (r, n). Returns (r, n).
     """
-    t, w = np.polynomial.legendre.leggauss(ARC_LENGTH_GAUSS)
+    t, w = gauss_legendre(ARC_LENGTH_GAUSS)
     a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
     half = 0.5 * (b - a)
     eta = (0.5 * (a + b))[..., None] + half[..., None] * t            # (..., n, q)

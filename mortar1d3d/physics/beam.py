@@ -38,7 +38,7 @@ import scipy.sparse as sp
 from numba import prange
 
 from .._config import CHUNK, njit, njit_parallel
-from ..integration.quadrature import gauss_legendre
+from ..quadrature import gauss_legendre
 from ..mesh import BeamMesh
 
 __all__ = ["Section", "section", "BeamModel", "end_moment", "reference_curvature", "curved_elements",

@@ -38,7 +38,6 @@ from .._config import CHUNK, njit, njit_parallel
 from .._schedule import n_chunks
 from ..elements.solid.dispatch import BY_CODE, MAX_NODES, N_NODES, SOLID_MODULES, deriv
 from ..errors import MeshError, format_ids
-from ..integration.quadrature import gauss_legendre
 from ..mesh import SolidMesh
 from .fibre_material import FibreField, add_fibres
 from .materials import VOIGT_INDEX, Material, hooke, stress_tangent
@@ -64,28 +63,8 @@ class InvertedElementsError(FloatingPointError):
                          f"elements: {format_ids(self.elements)}")
 
 
-# ----------------------------------------------------------------------------- quadrature
-
-def _hex_rule(n):
-    x, w = gauss_legendre(n)
-    # ξ fastest, then η, then ζ
-    points = np.array([[x[i], x[j], x[k]] for k in range(n) for j in range(n) for i in range(n)])
-    weights = np.array([w[i] * w[j] * w[k] for k in range(n) for j in range(n) for i in range(n)])
-    return points, weights
-
-
-def _tet_rule(n):
-    """1-point (degree 1) or 4-point (degree 2) rule on the unit simplex (volume 1/6)."""
-    if n == 1:
-        return np.full((1, 3), 0.25), np.array([1.0 / 6.0])
-    a = (5.0 - 5.0 ** 0.5) / 20.0
-    b = (5.0 + 3.0 * 5.0 ** 0.5) / 20.0
-    points = np.array([[a, a, a], [b, a, a], [a, b, a], [a, a, b]])
-    return points, np.full(4, 1.0 / 24.0)
-
-
-#: Gauss rule per element code: (points (n_gp, 3), weights (n_gp,))
-RULES = {0: _hex_rule(2), 1: _hex_rule(3), 2: _hex_rule(3), 3: _tet_rule(1), 4: _tet_rule(4)}
+#: volume rule per element code (from the element descriptors): (points (n_gp, 3), weights (n_gp,))
+RULES = {code: d.quadrature for code, d in BY_CODE.items()}
 _N_CODES = len(BY_CODE)
 N_GAUSS = np.array([len(RULES[c][1]) for c in range(_N_CODES)], dtype=np.int64)
 RULE_PTR = np.concatenate([[0], np.cumsum(N_GAUSS)]).astype(np.int64)

@@ -45,35 +45,6 @@ FACE_DTYPE = np.dtype([("element", np.int64), ("face", np.int64), ("code", np.in
 MAX_FACE_NODES = 9
 MAX_FACE_POINTS = 9
 
-# 6-point degree-4 triangle rule (Strang & Fix 1973; Dunavant 1985): orbits (a, a, 1 - 2a) with
-# weights per unit area
-_TRIANGLE_ORBITS = ((0.44594849091596488632, 0.22338158967801146570),
-                    (0.09157621350977074346, 0.10995174365532186764))
-
-
-def triangle_rule():
-    """The 6-point degree-4 rule on the triangle ``u, v >= 0, u + v <= 1``.
-
-    Returns
-    -------
-    points : (6, 2) float64
-    weights : (6,) float64, summing to the area 1/2
-    """
-    points, weights = [], []
-    for a, w in _TRIANGLE_ORBITS:
-        b = 1.0 - 2.0 * a
-        points += [(a, a), (a, b), (b, a)]
-        weights += [0.5 * w] * 3
-    return np.array(points), np.array(weights)
-
-
-def quadrilateral_rule():
-    """The 3 × 3 Gauss–Legendre rule on ``[-1, 1]^2``: points (9, 2), weights (9,) summing to 4."""
-    x, w = np.polynomial.legendre.leggauss(3)
-    u, v = np.meshgrid(x, x, indexing="ij")
-    return np.column_stack([u.ravel(), v.ravel()]), np.outer(w, w).ravel()
-
-
 class _FaceTables:
     """Per element type code: face nodes, quadrature and tabulated face functions (padded arrays).
 
@@ -99,7 +70,7 @@ class _FaceTables:
         N = np.empty(27)
         dN = np.empty((27, 3))
         for code, d in BY_CODE.items():
-            points, weights = quadrilateral_rule() if d.family == "hex" else triangle_rule()
+            points, weights = d.family_type.face_rule()
             self.n_faces[code] = d.n_faces
             self.n_points[code] = len(weights)
             self.weights[code, : len(weights)] = weights

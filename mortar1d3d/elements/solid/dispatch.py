@@ -1,27 +1,80 @@
-"""Registry of solid element types and the kernels that dispatch on their integer code.
+"""Per-code tables and the kernels' dispatch, derived from the registry of solid element types.
 
-This is the only module that knows every solid element type. To add one: write its module
-(``shape``, ``deriv``, ``DESCRIPTOR``), import it here, add it to ``SOLID_ELEMENTS`` and to the
-``if`` chains below. ``tests/test_elements.py`` checks the chains against the registry.
+Everything here is computed from the descriptors listed in
+:mod:`~mortar1d3d.elements.solid.registry`: the element types by integer code (nodes, family,
+reference nodes, faces, centres, parameter boxes, line degrees, the axes of the affine check,
+control-point and monomial tables) and the njit functions that pick an element type's shape
+functions (or a family's inside test) by code. Nothing names a type or a family here.
 
 Dispatching on an integer inside the kernels (rather than compiling one kernel per element
-type) keeps one compiled version of every kernel, which Numba's on-disk cache can store.
+type) keeps one compiled version of every kernel, which Numba's on-disk cache can store. The
+branches are unrolled over the registry's tuple of (code, kernel) pairs at compile time
+(``numba.literal_unroll``): the same code as a hand-written ``if`` chain, generated from the list.
 """
 import numpy as np
+from numba import literal_unroll, types
+from numba.extending import overload
 
 from ..._config import njit
-from . import hex8, hex20, hex27, tet4, tet10
-from ._family import HEX, HEX_FACES, TET, TET_FACES, hex_outside_distance, tet_outside_distance
+from .family import HEX, TET   # noqa: F401  (family codes, re-exported for kernels and tests)
+from .registry import FAMILIES, SOLID_TYPES
 
-SOLID_MODULES = {m.DESCRIPTOR.name: m for m in (hex8, hex20, hex27, tet4, tet10)}
+SOLID_MODULES = {m.DESCRIPTOR.name: m for m in SOLID_TYPES}
 SOLID_ELEMENTS = {name: m.DESCRIPTOR for name, m in SOLID_MODULES.items()}
 BY_CODE = {d.code: d for d in SOLID_ELEMENTS.values()}
+if sorted(BY_CODE) != list(range(len(SOLID_TYPES))) or [f.code for f in FAMILIES] != list(range(len(FAMILIES))):
+    raise ImportError("solid element registry: codes must be 0, 1, 2, ... in registry order")
+_N_CODES = len(BY_CODE)
 MAX_NODES = max(d.n_nodes for d in SOLID_ELEMENTS.values())
-MAX_FACES = 6
+MAX_FACES = max(f.n_faces for f in FAMILIES)
 
-# per code: number of nodes, family
-N_NODES = np.array([BY_CODE[c].n_nodes for c in range(len(BY_CODE))], dtype=np.int64)
-FAMILY = np.array([HEX if BY_CODE[c].family == "hex" else TET for c in range(len(BY_CODE))], dtype=np.int64)
+#: per code: number of nodes, family code, number of faces, degree of N along a straight line
+N_NODES = np.array([BY_CODE[c].n_nodes for c in range(_N_CODES)], dtype=np.int64)
+FAMILY = np.array([BY_CODE[c].family_type.code for c in range(_N_CODES)], dtype=np.int64)
+N_FACES = np.array([BY_CODE[c].n_faces for c in range(_N_CODES)], dtype=np.int64)
+#: per code: whether the parameter domain is a simplex (else a box)
+SIMPLEX = np.array([BY_CODE[c].family_type.domain == "simplex" for c in range(_N_CODES)], dtype=np.bool_)
+LINE_DEGREE = np.array([BY_CODE[c].line_degree for c in range(_N_CODES)], dtype=np.int64)
+
+
+def _face_tables():
+    """Per code: the face table (padded to MAX_FACES) and each face's centroid in parameter space."""
+    faces = np.zeros((_N_CODES, MAX_FACES, 4, 3))
+    centroids = np.zeros((_N_CODES, MAX_FACES, 3))
+    for c, d in BY_CODE.items():
+        faces[c, : d.n_faces] = d.faces
+        u = d.family_type.face_centre
+        centroids[c, : d.n_faces] = d.faces[:, 0] + u * (d.faces[:, 1] + d.faces[:, 2])
+    return faces, centroids
+
+
+#: per code: faces (origin, a, b, outward normal; padded) and their centroids (Newton starts)
+FACES, FACE_CENTROIDS = _face_tables()
+
+
+def _axis_tables():
+    """Per code: nodes a with ξ_a - ξ_0 along each parameter axis (the affine check) and that distance."""
+    axes = np.zeros((_N_CODES, 3), dtype=np.int64)
+    span = np.zeros(_N_CODES)
+    for c, d in BY_CODE.items():
+        offsets = d.reference_nodes - d.reference_nodes[0]
+        for i in range(3):
+            along = np.flatnonzero((np.abs(np.delete(offsets, i, axis=1)) == 0).all(axis=1) & (offsets[:, i] > 0))
+            a = along[np.argmax(offsets[along, i])]
+            axes[c, i] = a
+            span[c] = offsets[a, i]
+        if not np.allclose(span[c], [offsets[axes[c, i], i] for i in range(3)]):
+            raise ImportError(f"{d.name}: the affine check needs the same span along the three axes")
+    return axes, span
+
+
+#: per code: the nodes spanning the parameter axes from node 0 and their distance (hex 1, 3, 4 at 2;
+#: tet 1, 2, 3 at 1), for the affine check of :mod:`mortar1d3d.geometry.projection`
+AXIS_NODES, AXIS_SPAN = _axis_tables()
+#: per code: reference node coordinates (padded)
+REFERENCE_NODES = np.zeros((_N_CODES, MAX_NODES, 3))
+for _c, _d in BY_CODE.items():
+    REFERENCE_NODES[_c, : _d.n_nodes] = _d.reference_nodes
 
 
 def _control_tables():
@@ -94,34 +147,48 @@ def solid_element(name):
                          f"{', '.join(SOLID_ELEMENTS)}") from None
 
 
+_CODES = tuple(range(len(SOLID_TYPES)))
+_FAMILY_CODES = tuple(range(len(FAMILIES)))
+
+
+def _type_kernel(k, name):
+    """Stand-in, inside njit code, for the kernel ``name`` of the element type with literal code k."""
+
+
+def _family_kernel(k, name):
+    """Stand-in, inside njit code, for the kernel ``name`` of the family with literal code k."""
+
+
+@overload(_type_kernel)
+def _type_kernel_impl(k, name):
+    # resolved at compile time: a literal code and name give one registry module's kernel, called
+    # directly (no function pointers), exactly like a hand-written if chain
+    if isinstance(k, types.IntegerLiteral) and isinstance(name, types.StringLiteral):
+        kernel = getattr(SOLID_TYPES[k.literal_value], name.literal_value)
+        return lambda k, name: kernel
+
+
+@overload(_family_kernel)
+def _family_kernel_impl(k, name):
+    if isinstance(k, types.IntegerLiteral) and isinstance(name, types.StringLiteral):
+        kernel = getattr(FAMILIES[k.literal_value], name.literal_value)
+        return lambda k, name: kernel
+
+
 @njit
 def shape(code, xi, N):
     """Shape function values of element type ``code`` at ``xi`` into ``N[:n_nodes]``."""
-    if code == 0:
-        hex8.shape(xi, N)
-    elif code == 1:
-        hex20.shape(xi, N)
-    elif code == 2:
-        hex27.shape(xi, N)
-    elif code == 3:
-        tet4.shape(xi, N)
-    else:
-        tet10.shape(xi, N)
+    for k in literal_unroll(_CODES):
+        if k == code:
+            _type_kernel(k, "shape")(xi, N)
 
 
 @njit
 def deriv(code, xi, dN):
     """Shape function derivatives of element type ``code`` at ``xi`` into ``dN[:n_nodes, :]``."""
-    if code == 0:
-        hex8.deriv(xi, dN)
-    elif code == 1:
-        hex20.deriv(xi, dN)
-    elif code == 2:
-        hex27.deriv(xi, dN)
-    elif code == 3:
-        tet4.deriv(xi, dN)
-    else:
-        tet10.deriv(xi, dN)
+    for k in literal_unroll(_CODES):
+        if k == code:
+            _type_kernel(k, "deriv")(xi, dN)
 
 
 @njit
@@ -132,9 +199,12 @@ def n_nodes(code):
 @njit
 def outside_distance(code, xi):
     """How far ``xi`` lies outside the reference element (<= 0 inside, parameter units)."""
-    if FAMILY[code] == HEX:
-        return hex_outside_distance(xi)
-    return tet_outside_distance(xi)
+    family = FAMILY[code]
+    distance = np.inf
+    for k in literal_unroll(_FAMILY_CODES):
+        if k == family:
+            distance = _family_kernel(k, "outside_distance")(xi)
+    return distance
 
 
 @njit
@@ -145,18 +215,13 @@ def is_inside(code, xi, tol):
 @njit
 def faces(code):
     """Face table (n_faces, 4, 3) of element type ``code``: origin, a, b, outward normal."""
-    if FAMILY[code] == HEX:
-        return HEX_FACES
-    return TET_FACES
+    return FACES[code, : N_FACES[code]]
 
 
 @njit
 def centre(code, xi):
     """Write the parameter-space centre (Newton start) of type ``code`` into ``xi``."""
-    if FAMILY[code] == HEX:
-        xi[0] = xi[1] = xi[2] = 0.0
-    else:
-        xi[0] = xi[1] = xi[2] = 0.25
+    xi[0], xi[1], xi[2] = CENTRE[code, 0], CENTRE[code, 1], CENTRE[code, 2]
 
 
 @njit

@@ -6,11 +6,11 @@ Corners 0-7 as in ``hex8``; mid-edge nodes 8-19 on the edges
 import numpy as np
 
 from ..._config import njit
+from ...quadrature import hexahedron_rule
 from ..descriptor import SolidElementType
-from ._family import HEX_CENTRE, HEX_FACE_NODES, HEX_FACES
-from . import hex27
+from .family import HEXAHEDRON, QUADRATIC_HEX_NODES, triquadratic_bernstein_matrix
 
-REFERENCE_NODES = hex27.REFERENCE_NODES[:20].copy()
+REFERENCE_NODES = QUADRATIC_HEX_NODES[:20].copy()
 
 
 @njit
@@ -61,17 +61,17 @@ def deriv(xi, dN):
 
 def _bounding_matrix():
     # The serendipity space lies inside the triquadratic one: interpolate the hex20 map at the
-    # 27 lattice nodes, then take the hex27 Bernstein control points (a convex-hull bound).
+    # 27 lattice nodes, then take the triquadratic Bernstein control points (a convex-hull bound).
     values = np.empty((27, 20))
     for a in range(27):
-        shape.py_func(hex27.REFERENCE_NODES[a], values[a])
-    return hex27.DESCRIPTOR.bounding_matrix @ values
+        shape.py_func(QUADRATIC_HEX_NODES[a], values[a])
+    return triquadratic_bernstein_matrix() @ values
 
 
 DESCRIPTOR = SolidElementType(
-    name="hexahedron20", code=1, n_nodes=20, degree=2, family="hex",
-    reference_nodes=REFERENCE_NODES, centre=HEX_CENTRE, faces=HEX_FACES, face_nodes=HEX_FACE_NODES,
-    bounding_matrix=_bounding_matrix(),
+    name="hexahedron20", code=1, n_nodes=20, degree=2, family_type=HEXAHEDRON,
+    reference_nodes=REFERENCE_NODES, bounding_matrix=_bounding_matrix(),
     # serendipity: exponents up to 2 with at most one of them equal to 2
     monomials=[(i, j, k) for i in range(3) for j in range(3) for k in range(3) if (i, j, k).count(2) <= 1],
+    quadrature=hexahedron_rule(3),
 )

@@ -7,20 +7,12 @@ polynomials through -1, 0, +1.
 import numpy as np
 
 from ..._config import njit
+from ...quadrature import hexahedron_rule
 from ..descriptor import SolidElementType
-from ._family import HEX_CENTRE, HEX_FACE_NODES, HEX_FACES, quadratic_bernstein_1d
+from .family import HEXAHEDRON, QUADRATIC_HEX_LATTICE, QUADRATIC_HEX_NODES, triquadratic_bernstein_matrix
 
-REFERENCE_NODES = np.array([
-    [-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
-    [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1],
-    [0, -1, -1], [1, 0, -1], [0, 1, -1], [-1, 0, -1],
-    [0, -1, 1], [1, 0, 1], [0, 1, 1], [-1, 0, 1],
-    [-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0],
-    [-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1],
-    [0, 0, 0],
-], dtype=np.float64)
-# lattice index (0, 1, 2) <-> coordinate (-1, 0, +1) of every node, per direction
-_LATTICE = (REFERENCE_NODES + 1).astype(np.int64)
+REFERENCE_NODES = QUADRATIC_HEX_NODES
+_LATTICE = QUADRATIC_HEX_LATTICE
 
 
 @njit
@@ -58,20 +50,10 @@ def deriv(xi, dN):
         dN[a, 2] = v[0, l0] * v[1, l1] * dv[2, l2]
 
 
-def _bounding_matrix():
-    # Bernstein control points of a triquadratic map: tensor product of the 1D conversion.
-    C = quadratic_bernstein_1d()
-    T = np.empty((27, 27))
-    for a in range(27):
-        for b in range(27):
-            T[a, b] = (C[_LATTICE[a, 0], _LATTICE[b, 0]] * C[_LATTICE[a, 1], _LATTICE[b, 1]]
-                       * C[_LATTICE[a, 2], _LATTICE[b, 2]])
-    return T
-
-
 DESCRIPTOR = SolidElementType(
-    name="hexahedron27", code=2, n_nodes=27, degree=2, family="hex",
-    reference_nodes=REFERENCE_NODES, centre=HEX_CENTRE, faces=HEX_FACES, face_nodes=HEX_FACE_NODES,
-    bounding_matrix=_bounding_matrix(),
+    name="hexahedron27", code=2, n_nodes=27, degree=2, family_type=HEXAHEDRON,
+    # Bernstein control points of a triquadratic map: tensor product of the 1D conversion
+    reference_nodes=REFERENCE_NODES, bounding_matrix=triquadratic_bernstein_matrix(),
     monomials=[(i, j, k) for i in range(3) for j in range(3) for k in range(3)],   # triquadratic
+    quadrature=hexahedron_rule(3),
 )

@@ -14,8 +14,9 @@ Parameter space [-1, 1]^3; node a sits at ``REFERENCE_NODES[a]``.
 import numpy as np
 
 from ..._config import njit
+from ...quadrature import hexahedron_rule
 from ..descriptor import SolidElementType
-from ._family import HEX_CENTRE, HEX_FACE_NODES, HEX_FACES
+from .family import HEXAHEDRON
 
 REFERENCE_NODES = np.array([
     [-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
@@ -45,8 +46,8 @@ def deriv(xi, dN):
 
 
 DESCRIPTOR = SolidElementType(
-    name="hexahedron", code=0, n_nodes=8, degree=1, family="hex",
-    reference_nodes=REFERENCE_NODES, centre=HEX_CENTRE, faces=HEX_FACES, face_nodes=HEX_FACE_NODES,
-    bounding_matrix=np.eye(8),
+    name="hexahedron", code=0, n_nodes=8, degree=1, family_type=HEXAHEDRON,
+    reference_nodes=REFERENCE_NODES, bounding_matrix=np.eye(8),
     monomials=[(i, j, k) for i in (0, 1) for j in (0, 1) for k in (0, 1)],     # trilinear
+    quadrature=hexahedron_rule(2),
 )

@@ -6,8 +6,9 @@ With barycentric L = (1 - Σξ, ξ1, ξ2, ξ3): corners L_i (2 L_i - 1), edges 4
 import numpy as np
 
 from ..._config import njit
+from ...quadrature import tetrahedron_rule
 from ..descriptor import SolidElementType
-from ._family import TET_CENTRE, TET_FACE_NODES, TET_FACES
+from .family import TETRAHEDRON
 
 EDGES = np.array([[0, 1], [1, 2], [0, 2], [0, 3], [1, 3], [2, 3]], dtype=np.int64)
 _CORNERS = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
@@ -52,8 +53,8 @@ def _bounding_matrix():
 
 
 DESCRIPTOR = SolidElementType(
-    name="tetra10", code=4, n_nodes=10, degree=2, family="tet",
-    reference_nodes=REFERENCE_NODES, centre=TET_CENTRE, faces=TET_FACES, face_nodes=TET_FACE_NODES,
-    bounding_matrix=_bounding_matrix(),
+    name="tetra10", code=4, n_nodes=10, degree=2, family_type=TETRAHEDRON,
+    reference_nodes=REFERENCE_NODES, bounding_matrix=_bounding_matrix(),
     monomials=[(i, j, k) for i in range(3) for j in range(3) for k in range(3) if i + j + k <= 2],   # quadratic
+    quadrature=tetrahedron_rule(4),
 )

@@ -6,8 +6,9 @@ three unit points: N = (1 - ξ1 - ξ2 - ξ3, ξ1, ξ2, ξ3).
 import numpy as np
 
 from ..._config import njit
+from ...quadrature import tetrahedron_rule
 from ..descriptor import SolidElementType
-from ._family import TET_CENTRE, TET_FACE_NODES, TET_FACES
+from .family import TETRAHEDRON
 
 REFERENCE_NODES = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
 
@@ -33,8 +34,8 @@ def deriv(xi, dN):
 
 
 DESCRIPTOR = SolidElementType(
-    name="tetra", code=3, n_nodes=4, degree=1, family="tet",
-    reference_nodes=REFERENCE_NODES, centre=TET_CENTRE, faces=TET_FACES, face_nodes=TET_FACE_NODES,
-    bounding_matrix=np.eye(4),
+    name="tetra", code=3, n_nodes=4, degree=1, family_type=TETRAHEDRON,
+    reference_nodes=REFERENCE_NODES, bounding_matrix=np.eye(4),
     monomials=[(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)],                  # linear
+    quadrature=tetrahedron_rule(1),
 )
