@@ -246,35 +246,20 @@ def _box_corners(lower, upper):
     return lower, upper
 
 
-def _linear_weights(name, corner_module):
-    """(n_nodes, n_corners) linear shape functions of the corners at the nodes of ``name``.
+def _corner_weights(name):
+    """(n_nodes, n_corners) linear shape functions of the family's corners at the nodes of ``name``.
 
     A node of a straight-sided element sits at this average of the corners; on the doubled
     lattice of quadratic elements the averages are integers (mid-edge, face and cell centres).
+    The family's linear element (its type of degree 1) gives the functions.
     """
-    reference = SOLID_ELEMENTS[name].reference_nodes
-    shape = SOLID_MODULES[corner_module].shape.py_func      # pure Python: nothing compiles here
-    n_corners = SOLID_ELEMENTS[corner_module].n_nodes
-    W = np.empty((len(reference), n_corners))
-    for a, xi in enumerate(reference):
+    descriptor = SOLID_ELEMENTS[name]
+    linear = next(n for n, d in SOLID_ELEMENTS.items() if d.family_type is descriptor.family_type and d.degree == 1)
+    shape = SOLID_MODULES[linear].shape.py_func      # pure Python: nothing compiles here
+    W = np.empty((descriptor.n_nodes, SOLID_ELEMENTS[linear].n_nodes))
+    for a, xi in enumerate(descriptor.reference_nodes):
         shape(xi, W[a])
     return W
-
-
-def _kuhn_offsets():
-    """(6, 4, 3) corner offsets of the Kuhn (Freudenthal) split of the unit cube, det J > 0.
-
-    Tet π walks from (0,0,0) to (1,1,1) along the axes in the order of the permutation π; every
-    cube uses the same split, so the face diagonals (all from the (0,0) to the (1,1) corner of
-    the face) match between neighbours and the mesh is conforming. det[v1-v0, v2-v0, v3-v0] is
-    the sign of π: odd permutations swap their last two vertices.
-    """
-    perms = np.array([[0, 1, 2], [1, 2, 0], [2, 0, 1], [0, 2, 1], [2, 1, 0], [1, 0, 2]])
-    eye = np.eye(3, dtype=np.int64)
-    steps = eye[perms]                                                          # (6, 3 steps, 3)
-    offsets = np.concatenate([np.zeros((6, 1, 3), np.int64), np.cumsum(steps, axis=1)], axis=1)
-    offsets[3:, [2, 3]] = offsets[3:, [3, 2]]                                   # the odd permutations
-    return offsets
 
 
 def box(lower, upper, cells, element="hexahedron"):
@@ -324,12 +309,9 @@ def box(lower, upper, cells, element="hexahedron"):
     # computed once, for the 1 (hex) or 6 (tet) elements of one cell: linear interpolation of the
     # element corners at the reference nodes. The weights are multiples of 1/8 (products of at
     # most three 1/2's), so integer arithmetic on 8 W is exact.
-    if descriptor.family == "hex":
-        corners = ((SOLID_ELEMENTS["hexahedron"].reference_nodes[None] + 1) // 2).astype(np.int64)   # (1, 8, 3)
-        W = _linear_weights(element, "hexahedron")
-    else:
-        corners = _kuhn_offsets()                                                # (6, 4, 3)
-        W = _linear_weights(element, "tetra")
+    family = descriptor.family_type
+    corners = family.cube_split                            # (elements per cube, n_corners, 3)
+    W = _corner_weights(element)
     W8 = np.rint(8 * W).astype(np.int64)
     offsets = (W8 @ (scale * corners)) // 8                                     # (per cell, n_nodes, 3)
     strides = np.array([1, size[0], size[0] * size[1]])

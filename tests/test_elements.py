@@ -13,7 +13,7 @@ from meshio.gmsh.common import _gmsh_to_meshio_order
 from mortar1d3d.elements import beam
 from mortar1d3d.elements.beam import hermite, lagrange
 from mortar1d3d.elements.solid import dispatch, hex8, hex20, hex27, tet4, tet10
-from mortar1d3d.elements.solid import family as _family
+from mortar1d3d.elements.solid import registry
 
 # ``mortar1d3d.elements.multiplier`` (the attribute) is the function re-exported by the package
 # ``__init__``, which shadows the submodule of the same name: fetch the module itself.
@@ -365,12 +365,109 @@ def test_registry_codes_and_sizes():
         assert dispatch.BY_CODE[d.code] is d
         assert dispatch.N_NODES[d.code] == d.n_nodes
         assert dispatch.n_nodes(d.code) == d.n_nodes
-        assert dispatch.FAMILY[d.code] == (_family.HEX if d.family == "hex" else _family.TET)
+        assert registry.FAMILIES[dispatch.FAMILY[d.code]] is d.family_type
         assert dispatch.solid_element(name) is d
         assert d.dim == 3
     expected = {"hexahedron": (8, 1, "hex"), "hexahedron20": (20, 2, "hex"), "hexahedron27": (27, 2, "hex"),
                 "tetra": (4, 1, "tet"), "tetra10": (10, 2, "tet")}
     assert {n: (d.n_nodes, d.degree, d.family) for n, d in dispatch.SOLID_ELEMENTS.items()} == expected
+
+
+def test_registry_lists_are_in_code_order():
+    assert [m.DESCRIPTOR.code for m in registry.SOLID_TYPES] == list(range(len(registry.SOLID_TYPES)))
+    assert [f.code for f in registry.FAMILIES] == list(range(len(registry.FAMILIES)))
+    assert {f.name for f in registry.FAMILIES} == {"hex", "tet"}
+    for d in dispatch.SOLID_ELEMENTS.values():
+        assert d.family_type in registry.FAMILIES
+        np.testing.assert_array_equal(d.reference_nodes[: len(d.family_type.corners)], d.family_type.corners)
+
+
+def _line_degree_by_sampling(d, rng, lines=6, samples=15):
+    """Degree in η of N_a(ξ(η)) along random straight lines ξ(η) = c + η v, found by fitting: the
+    smallest degree whose least-squares polynomial reproduces every N_a to round-off."""
+    eta = np.linspace(-1.0, 1.0, samples)
+    N = np.empty(d.n_nodes)
+    worst = 0
+    for _ in range(lines):
+        c, v = d.centre + 0.1 * rng.normal(size=3), rng.normal(size=3)
+        values = np.empty((samples, d.n_nodes))
+        for q, e in enumerate(eta):
+            dispatch.shape(d.code, c + 0.2 * e * v, N)
+            values[q] = N[: d.n_nodes]
+        for degree in range(samples - 1):
+            fit = np.polynomial.polynomial.polyfit(eta, values, degree)
+            if np.abs(np.polynomial.polynomial.polyval(eta, fit).T - values).max() < 1e-11:
+                break
+        worst = max(worst, degree)
+    return worst
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_line_degree_table_matches_the_shape_functions(name):
+    # what the exact Gauss counts of integration="auto" rely on, found from the kernels themselves
+    d = descriptor(name)
+    assert dispatch.LINE_DEGREE[d.code] == d.line_degree == _line_degree_by_sampling(d, np.random.default_rng(3))
+
+
+def _monomial_integral(d, alpha):
+    """Exact integral of ξ^alpha over the family's domain (box [-1, 1]^3 or the unit simplex)."""
+    from math import factorial
+    if d.family == "hex":
+        return np.prod([0.0 if a % 2 else 2.0 / (a + 1) for a in alpha])
+    return np.prod([factorial(int(a)) for a in alpha]) / factorial(int(sum(alpha)) + 3)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_volume_rule_integrates_the_reference_stiffness_exactly(name):
+    # K_ab = ∫ ∇N_a · ∇N_b dξ on the reference element, integrated exactly through the monomial
+    # expansion of the shape functions, against the descriptor's quadrature (the solid model's rule)
+    from mortar1d3d.physics.solid import RULES
+    d = descriptor(name)
+    exps = d.monomials
+    coefficients = np.linalg.inv(np.prod(d.reference_nodes[:, None, :] ** exps[None, :, :], axis=2))  # [monomial, node]
+    exact = np.zeros((d.n_nodes, d.n_nodes))
+    for i in range(3):
+        for m1, e1 in enumerate(exps):
+            for m2, e2 in enumerate(exps):
+                if e1[i] == 0 or e2[i] == 0:
+                    continue
+                alpha = e1 + e2 - 2 * np.eye(3, dtype=np.int64)[i]
+                exact += e1[i] * e2[i] * _monomial_integral(d, alpha) * np.outer(coefficients[m1], coefficients[m2])
+    points, weights = d.quadrature
+    assert RULES[d.code] is d.quadrature
+    dN = np.empty((dispatch.MAX_NODES, 3))
+    K = np.zeros((d.n_nodes, d.n_nodes))
+    for xi, w in zip(points, weights):
+        dispatch.deriv(d.code, np.array(xi), dN)
+        K += w * dN[: d.n_nodes] @ dN[: d.n_nodes].T
+    np.testing.assert_allclose(K, exact, atol=1e-13 * np.abs(exact).max())
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_derived_face_and_axis_tables(name):
+    d = descriptor(name)
+    for f, nodes in enumerate(d.face_nodes):
+        # the centroid of a face (a Newton start of the crossing search) is the mean of its corners
+        np.testing.assert_allclose(dispatch.FACE_CENTROIDS[d.code, f], d.reference_nodes[list(nodes)].mean(axis=0),
+                                   atol=1e-15)
+    for i in range(3):
+        offset = d.reference_nodes[dispatch.AXIS_NODES[d.code, i]] - d.reference_nodes[0]
+        np.testing.assert_array_equal(offset, dispatch.AXIS_SPAN[d.code] * np.eye(3)[i])
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_box_meets_never_misses_the_domain(name):
+    # the point search discards a box only where it misses the element: sample each discarded box
+    d = descriptor(name)
+    rng = np.random.default_rng(5)
+    tol = 1e-9
+    for _ in range(400):
+        m, r = rng.uniform(-1.5, 1.5, 3), rng.uniform(0.01, 0.5)
+        if dispatch.box_meets(d.code, m[0], m[1], m[2], r, tol):
+            continue
+        samples = m + r * rng.uniform(-1.0, 1.0, (200, 3))
+        samples = np.vstack([samples, m + r * np.array(np.meshgrid(*[[-1, 1]] * 3)).reshape(3, -1).T])
+        assert all(dispatch.outside_distance(d.code, x) > tol for x in samples), (m, r)
 
 
 def test_solid_element_unknown_name():

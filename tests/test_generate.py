@@ -11,7 +11,8 @@ import pytest
 
 from mortar1d3d import generate
 from mortar1d3d.elements.solid import hex8, hex20, hex27, tet4, tet10
-from mortar1d3d.elements.solid.family import HEXAHEDRON, TETRAHEDRON
+from mortar1d3d.elements.solid.hex_family import HEXAHEDRON
+from mortar1d3d.elements.solid.tet_family import TETRAHEDRON
 
 HEX_FACE_NODES, TET_FACE_NODES = HEXAHEDRON.face_nodes, TETRAHEDRON.face_nodes
 

@@ -14,7 +14,8 @@ import numpy as np
 
 @dataclass(frozen=True, eq=False)
 class ElementFamily:
-    """A parameter domain shared by several element types.
+    """A parameter domain shared by several element types (one module per family:
+    :mod:`~mortar1d3d.elements.solid.hex_family`, :mod:`~mortar1d3d.elements.solid.tet_family`).
 
     Attributes
     ----------
@@ -22,20 +23,29 @@ class ElementFamily:
         ``"hex"`` or ``"tet"`` (what :attr:`SolidElementType.family` says).
     code : int
         Integer code used for dispatch inside kernels (position in the registry's family list).
-    domain : str
-        ``"box"`` (the parameter domain is a box: [-1, 1]^3) or ``"simplex"`` (ξ_i >= 0, Σξ_i <= 1):
-        how the validity check cuts it into cells.
     faces : (n_faces, 4, 3) float64
         Faces as affine maps of the parameter space: rows ``origin, a, b, outward_normal``;
         the face is ``ξ = origin + u a + v b`` and ``normal·(ξ - origin) > 0`` is outside.
     face_nodes : tuple of tuples
         Corner node ids of each face (VTK order; for output and tests), same order as ``faces``.
+    corners : (n_corners, 3) float64
+        Vertices of the parameter domain in VTK order (the nodes of the family's linear element).
     centre : (3,) float64
         Centre of the parameter domain (Newton start, expansion point of the bounds).
     outside_distance : numba dispatcher ``(xi) -> float``
         How far ξ lies outside the domain (<= 0 inside), in parameter units.
+    box_meets : numba dispatcher ``(m0, m1, m2, r, tol) -> bool``
+        Whether the box ``|ξ - m|∞ <= r`` meets ``{ξ : outside_distance(ξ) <= tol}`` (it may say
+        True for a box that misses, never False for one that meets).
     face_rule : callable ``() -> (points (q, 2), weights (q,))``
         Quadrature on a face's (u, v) parameters (surface loads).
+    cells : object
+        Cells of the validity check (:mod:`mortar1d3d.elements.validity`): ``jacobian_degree``,
+        ``lattice``, ``corner_rows``, ``whole``, ``points``, ``take``, ``children`` and, where the
+        Bernstein coefficients can be subdivided exactly, ``child_coefficients``.
+    cube_split : (n, n_corners, 3) int64
+        Corner offsets (lattice units) of the n elements that fill a unit cube of a structured
+        mesh (:func:`mortar1d3d.generate.box`).
     face_centre : float
         The face parameters u = v of a face's centroid (0 on a square face [-1, 1]², 1/3 on a
         triangle u, v >= 0, u + v <= 1).
@@ -43,12 +53,15 @@ class ElementFamily:
 
     name: str
     code: int
-    domain: str
     faces: np.ndarray = field(repr=False)
     face_nodes: tuple = field(repr=False)
+    corners: np.ndarray = field(repr=False)
     centre: np.ndarray = field(repr=False)
     outside_distance: object = field(repr=False)
+    box_meets: object = field(repr=False)
     face_rule: object = field(repr=False)
+    cells: object = field(repr=False)
+    cube_split: np.ndarray = field(repr=False)
     face_centre: float = 0.0
 
     @property
@@ -135,17 +148,9 @@ class SolidElementType:
 
     @property
     def jacobian_degree(self):
-        """Polynomial degree of det J: per direction for hexahedra (det J ∈ Q_p), total for tetrahedra (P_p).
-
-        A column ∂x/∂ξ_j of J has the degree of the monomials differentiated by ξ_j; det J takes
-        one factor from each column.
-        """
-        exps = self.monomials
-        if self.family_type.domain == "box":
-            # degree in ξ_i of column j: max of α_i - [i == j] over the monomials that ξ_j does not kill
-            return max(sum(int(max(exps[exps[:, j] > 0, i] - (i == j), default=0)) for j in range(3))
-                       for i in range(3))
-        return 3 * max(int(exps.sum(axis=1).max()) - 1, 0)
+        """Polynomial degree of det J for this element's shape functions: per direction on a box
+        (det J ∈ Q_p), total on a simplex (P_p); the family's validity cells say which."""
+        return self.family_type.cells.jacobian_degree(self.monomials)
 
     @property
     def n_faces(self):

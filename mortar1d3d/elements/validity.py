@@ -17,7 +17,6 @@ determined by those values), evaluated with the shape function gradients of the 
 monomial basis, in numpy: nothing is compiled here.
 """
 from functools import lru_cache
-from math import comb, factorial
 
 import numpy as np
 
@@ -49,80 +48,6 @@ def shape_gradients(descriptor, xi):
         d = np.where(e > 0, e * xi[:, None, i] ** np.maximum(e - 1, 0), 0.0)
         grad[..., i] = d * np.prod(np.delete(powers, i, axis=2), axis=2)
     return np.einsum("kmi,ma->kai", grad, inverse)
-
-
-# -------------------------------------------------------------------------------------- cells
-# A hexahedral cell is a box (lower, upper) in [-1, 1]^3; a tetrahedral cell a simplex (4 vertices).
-
-@lru_cache(maxsize=None)
-def _box_lattice(p):
-    """Lattice points t ∈ [0, 1]^3 ((p+1)^3, 3) of Q_p and the matrix from values there to Bernstein
-    coefficients (tensor product of the 1D inverse)."""
-    t = np.linspace(0.0, 1.0, p + 1) if p > 0 else np.array([0.5])
-    k = np.arange(p + 1)
-    basis = np.array([[comb(p, j) * x ** j * (1 - x) ** (p - j) for j in k] for x in t])
-    inverse = np.linalg.inv(basis)
-    grid = np.stack(np.meshgrid(t, t, t, indexing="ij"), axis=-1).reshape(-1, 3)
-    return grid, np.kron(np.kron(inverse, inverse), inverse)
-
-
-@lru_cache(maxsize=None)
-def _simplex_lattice(p):
-    """Barycentric lattice points ((p+1)(p+2)(p+3)/6, 4) of P_p on a tetrahedron and the matrix from
-    values there to Bernstein coefficients."""
-    if p == 0:
-        return np.full((1, 4), 0.25), np.ones((1, 1))
-    index = np.array([(i, j, k, p - i - j - k) for i in range(p + 1) for j in range(p + 1 - i)
-                      for k in range(p + 1 - i - j)])
-    lam = index / p
-    basis = np.array([[factorial(p) / np.prod([factorial(int(a)) for a in alpha]) * np.prod(lam_row ** alpha)
-                       for alpha in index] for lam_row in lam])
-    return lam, np.linalg.inv(basis)
-
-
-def _samples(descriptor, cells):
-    """Sample points (n_cells, n_samples, 3) of the cells and the matrix to Bernstein coefficients."""
-    p = descriptor.jacobian_degree
-    if descriptor.family == "hex":
-        grid, to_bernstein = _box_lattice(p)
-        lower, upper = cells
-        points = lower[:, None, :] + grid[None, :, :] * (upper - lower)[:, None, :]
-    else:
-        lam, to_bernstein = _simplex_lattice(p)
-        points = np.einsum("sv,cvi->csi", lam, cells)
-    return points, to_bernstein
-
-
-def _whole(descriptor, n):
-    if descriptor.family == "hex":
-        return np.full((n, 3), -1.0), np.full((n, 3), 1.0)
-    return np.broadcast_to(descriptor.reference_nodes[:4], (n, 4, 3)).copy()
-
-
-def _children(descriptor, cells):
-    """The 8 children of every cell (halved boxes; red refinement of simplices)."""
-    if descriptor.family == "hex":
-        lower, upper = cells
-        mid = 0.5 * (lower + upper)
-        lo, hi = [], []
-        for corner in range(8):
-            pick = np.array([(corner >> i) & 1 for i in range(3)], dtype=bool)
-            lo.append(np.where(pick, mid, lower))
-            hi.append(np.where(pick, upper, mid))
-        return np.concatenate(lo), np.concatenate(hi)
-    v = cells
-    m = {(i, j): 0.5 * (v[:, i] + v[:, j]) for i in range(4) for j in range(i + 1, 4)}
-    children = [(v[:, 0], m[0, 1], m[0, 2], m[0, 3]), (m[0, 1], v[:, 1], m[1, 2], m[1, 3]),
-                (m[0, 2], m[1, 2], v[:, 2], m[2, 3]), (m[0, 3], m[1, 3], m[2, 3], v[:, 3]),
-                (m[0, 1], m[0, 2], m[0, 3], m[1, 3]), (m[0, 1], m[0, 2], m[1, 2], m[1, 3]),
-                (m[0, 2], m[0, 3], m[1, 3], m[2, 3]), (m[0, 2], m[1, 2], m[1, 3], m[2, 3])]
-    return np.concatenate([np.stack(c, axis=1) for c in children])
-
-
-def _take(descriptor, cells, index):
-    if descriptor.family == "hex":
-        return cells[0][index], cells[1][index]
-    return cells[index]
 
 
 def _jacobian_determinant(X, dN):
@@ -178,35 +103,6 @@ def jacobian_validity(descriptor, X, h):
 
 
 @lru_cache(maxsize=None)
-def _halves_1d(p):
-    """Bernstein coefficients of a degree-p polynomial on [0, 1/2] and on [1/2, 1] from those on [0, 1]
-    (de Casteljau at 1/2): the lower and the upper (p+1, p+1) matrix."""
-    lower = np.array([[comb(i, j) * 0.5 ** i if j <= i else 0.0 for j in range(p + 1)] for i in range(p + 1)])
-    upper = np.array([[comb(p - i, j - i) * 0.5 ** (p - i) if j >= i else 0.0 for j in range(p + 1)]
-                      for i in range(p + 1)])
-    return lower, upper
-
-
-def _box_children(coefficients, p):
-    """Coefficients ((8 n), (p+1)^3) of the 8 half-boxes of n boxes (child k: upper half of axis i if bit i),
-    one axis at a time."""
-    n = len(coefficients)
-    c = coefficients.reshape(n, p + 1, p + 1, p + 1)
-    lower, upper = _halves_1d(p)
-    children = []
-    for child in range(8):
-        a, b, d = (upper if (child >> i) & 1 else lower for i in range(3))
-        children.append(np.einsum("ai,bj,ck,nijk->nabc", a, b, d, c, optimize=True).reshape(n, -1))
-    return np.concatenate(children)
-
-
-def _corner_rows(p):
-    """Rows of the (p+1)^3 lattice at the box corners (where a coefficient equals the value)."""
-    n = p + 1
-    return [i * n * n + j * n + k for i in (0, p) for j in (0, p) for k in (0, p)]
-
-
-@lru_cache(maxsize=None)
 def _centred_basis(descriptor):
     """Monomial degrees, the matrix from nodes to monomial coefficients about the centre ξ_c (in
     y = ξ - ξ_c) and the element's max-norm radius about ξ_c."""
@@ -253,27 +149,23 @@ def _classify(descriptor, X, zero):
 def _bernstein(descriptor, X, zero):
     m = len(X)
     out = np.full(m, VALID, dtype=np.int64)
-    points, to_bernstein = _samples(descriptor, _whole(descriptor, 1))
-    dN = shape_gradients(descriptor, points[0])
+    cells = descriptor.family_type.cells
+    p = descriptor.jacobian_degree
+    lattice, to_bernstein = cells.lattice(p)
+    corners = cells.corner_rows(p)
+    dN = shape_gradients(descriptor, cells.points(cells.whole(1), lattice)[0])
     det = _jacobian_determinant(X, dN)
     threshold = zero[:, None]
     # negative at a corner of the element: a node order that is not VTK's (or a corner folded over);
     # negative only inside: a fold
-    if descriptor.family == "hex":
-        corners = _corner_rows(descriptor.jacobian_degree)
-    else:
-        lam, _ = _simplex_lattice(descriptor.jacobian_degree)
-        corners = np.flatnonzero(lam.max(axis=1) == 1.0) if len(lam) > 1 else np.array([0])
     out[(det[:, corners] < -threshold).any(axis=1)] = INVERTED
     bad = (det <= threshold).any(axis=1) & (out == VALID)
     out[bad & (det < -threshold).any(axis=1)] = FOLDED
     out[bad & (out == VALID)] = DEGENERATE
     coefficients = det @ to_bernstein.T
     owner = np.arange(m)
-    cells = _whole(descriptor, m)
-    hexahedral = descriptor.family == "hex"
-    if hexahedral:
-        corners = _corner_rows(descriptor.jacobian_degree)
+    where = cells.whole(m)
+    subdivide = getattr(cells, "child_coefficients", None)
     for depth in range(MAX_DEPTH + 1):
         undecided = (coefficients.min(axis=1) <= zero[owner]) & (out[owner] == VALID)
         if not undecided.any():
@@ -283,14 +175,14 @@ def _bernstein(descriptor, X, zero):
             return out
         index = np.flatnonzero(undecided)
         owner = np.tile(owner[index], 8)
-        if hexahedral:
-            # children's coefficients by subdivision; their corner coefficients are values of det J
-            coefficients = _box_children(coefficients[index], descriptor.jacobian_degree)
+        if subdivide is not None:
+            # children's coefficients by exact subdivision; their corner coefficients are values of det J
+            coefficients = subdivide(coefficients[index], p)
             values = coefficients[:, corners]
         else:
-            cells = _children(descriptor, _take(descriptor, cells, index))
-            points, _ = _samples(descriptor, cells)
-            values = _determinants(descriptor, X[owner], points)
+            # children sampled afresh
+            where = cells.children(cells.take(where, index))
+            values = _determinants(descriptor, X[owner], cells.points(where, lattice))
             coefficients = values @ to_bernstein.T
         threshold = zero[owner][:, None]
         bad = (values <= threshold).any(axis=1) & (out[owner] == VALID)

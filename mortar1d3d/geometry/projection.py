@@ -211,16 +211,6 @@ def search_buffers():
 
 
 @njit
-def _box_in_region(code, m0, m1, m2, r, tol):
-    """Whether the box |ξ - m|∞ <= r meets {ξ : outside_distance(ξ) <= tol} (hex: always, by construction)."""
-    if not solid.SIMPLEX[code]:
-        return True
-    if m0 + r < -tol or m1 + r < -tol or m2 + r < -tol:
-        return False
-    return max(m0 - r, -tol) + max(m1 - r, -tol) + max(m2 - r, -tol) <= 1.0 + tol
-
-
-@njit
 def search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN):
     """Find ξ with x(ξ) = p and outside_distance(ξ) <= ``tol``, or prove that there is none.
 
@@ -257,7 +247,7 @@ def search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN):
     while top > 0:
         top -= 1
         m0, m1, m2, r = stack[top, 0], stack[top, 1], stack[top, 2], stack[top, 3]
-        if not _box_in_region(code, m0, m1, m2, r, tol):
+        if not solid.box_meets(code, m0, m1, m2, r, tol):
             continue
         trial[0], trial[1], trial[2] = m0, m1, m2
         x0, x1, x2 = map_point(code, X, trial, N)

@@ -16,7 +16,6 @@ from numba import literal_unroll, types
 from numba.extending import overload
 
 from ..._config import njit
-from .family import HEX, TET   # noqa: F401  (family codes, re-exported for kernels and tests)
 from .registry import FAMILIES, SOLID_TYPES
 
 SOLID_MODULES = {m.DESCRIPTOR.name: m for m in SOLID_TYPES}
@@ -32,8 +31,6 @@ MAX_FACES = max(f.n_faces for f in FAMILIES)
 N_NODES = np.array([BY_CODE[c].n_nodes for c in range(_N_CODES)], dtype=np.int64)
 FAMILY = np.array([BY_CODE[c].family_type.code for c in range(_N_CODES)], dtype=np.int64)
 N_FACES = np.array([BY_CODE[c].n_faces for c in range(_N_CODES)], dtype=np.int64)
-#: per code: whether the parameter domain is a simplex (else a box)
-SIMPLEX = np.array([BY_CODE[c].family_type.domain == "simplex" for c in range(_N_CODES)], dtype=np.bool_)
 LINE_DEGREE = np.array([BY_CODE[c].line_degree for c in range(_N_CODES)], dtype=np.int64)
 
 
@@ -205,6 +202,17 @@ def outside_distance(code, xi):
         if k == family:
             distance = _family_kernel(k, "outside_distance")(xi)
     return distance
+
+
+@njit
+def box_meets(code, m0, m1, m2, r, tol):
+    """Whether the box |ξ - m|∞ <= r may meet the reference element of type ``code`` grown by ``tol``."""
+    family = FAMILY[code]
+    meets = True
+    for k in literal_unroll(_FAMILY_CODES):
+        if k == family:
+            meets = _family_kernel(k, "box_meets")(m0, m1, m2, r, tol)
+    return meets
 
 
 @njit

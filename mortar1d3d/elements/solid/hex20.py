@@ -8,9 +8,9 @@ import numpy as np
 from ..._config import njit
 from ...quadrature import hexahedron_rule
 from ..descriptor import SolidElementType
-from .family import HEXAHEDRON, QUADRATIC_HEX_NODES, triquadratic_bernstein_matrix
+from .hex_family import HEXAHEDRON, QUADRATIC_NODES, triquadratic_bernstein_matrix
 
-REFERENCE_NODES = QUADRATIC_HEX_NODES[:20].copy()
+REFERENCE_NODES = QUADRATIC_NODES[:20].copy()
 
 
 @njit
@@ -64,7 +64,7 @@ def _bounding_matrix():
     # 27 lattice nodes, then take the triquadratic Bernstein control points (a convex-hull bound).
     values = np.empty((27, 20))
     for a in range(27):
-        shape.py_func(QUADRATIC_HEX_NODES[a], values[a])
+        shape.py_func(QUADRATIC_NODES[a], values[a])
     return triquadratic_bernstein_matrix() @ values
 
 

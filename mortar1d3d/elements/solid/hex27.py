@@ -9,10 +9,10 @@ import numpy as np
 from ..._config import njit
 from ...quadrature import hexahedron_rule
 from ..descriptor import SolidElementType
-from .family import HEXAHEDRON, QUADRATIC_HEX_LATTICE, QUADRATIC_HEX_NODES, triquadratic_bernstein_matrix
+from .hex_family import HEXAHEDRON, QUADRATIC_LATTICE, QUADRATIC_NODES, triquadratic_bernstein_matrix
 
-REFERENCE_NODES = QUADRATIC_HEX_NODES
-_LATTICE = QUADRATIC_HEX_LATTICE
+REFERENCE_NODES = QUADRATIC_NODES
+_LATTICE = QUADRATIC_LATTICE
 
 
 @njit

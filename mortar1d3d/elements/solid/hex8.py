@@ -16,12 +16,9 @@ import numpy as np
 from ..._config import njit
 from ...quadrature import hexahedron_rule
 from ..descriptor import SolidElementType
-from .family import HEXAHEDRON
+from .hex_family import CORNERS, HEXAHEDRON
 
-REFERENCE_NODES = np.array([
-    [-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
-    [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1],
-], dtype=np.float64)
+REFERENCE_NODES = CORNERS
 
 
 @njit

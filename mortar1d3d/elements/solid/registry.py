@@ -1,13 +1,15 @@
 """The solid element types and families, in code order.
 
 This is the list to extend: a new element type of a known family is its module (shape functions,
-derivatives and a ``DESCRIPTOR``) plus one line below; a new family is its
-:class:`~mortar1d3d.elements.descriptor.ElementFamily` plus one line in ``FAMILIES``.
-:mod:`~mortar1d3d.elements.solid.dispatch` derives every table and the kernels' dispatch from here,
-and ``tests/test_elements.py`` checks that codes are the positions in these lists.
+derivatives and a ``DESCRIPTOR``) plus one line below; a new family is its module (an
+:class:`~mortar1d3d.elements.descriptor.ElementFamily` with its kernels and validity cells, like
+:mod:`.hex_family`) plus one line in ``FAMILIES``. :mod:`~mortar1d3d.elements.solid.dispatch`
+derives every table and the kernels' dispatch from here, and ``tests/test_elements.py`` checks
+that codes are the positions in these lists.
 """
 from . import hex8, hex20, hex27, tet4, tet10
-from .family import HEXAHEDRON, TETRAHEDRON
+from .hex_family import HEXAHEDRON
+from .tet_family import TETRAHEDRON
 
 FAMILIES = (HEXAHEDRON, TETRAHEDRON)
 SOLID_TYPES = (hex8, hex20, hex27, tet4, tet10)

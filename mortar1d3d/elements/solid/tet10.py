@@ -8,10 +8,9 @@ import numpy as np
 from ..._config import njit
 from ...quadrature import tetrahedron_rule
 from ..descriptor import SolidElementType
-from .family import TETRAHEDRON
+from .tet_family import CORNERS as _CORNERS, TETRAHEDRON
 
 EDGES = np.array([[0, 1], [1, 2], [0, 2], [0, 3], [1, 3], [2, 3]], dtype=np.int64)
-_CORNERS = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
 REFERENCE_NODES = np.vstack([_CORNERS, 0.5 * (_CORNERS[EDGES[:, 0]] + _CORNERS[EDGES[:, 1]])])
 # ∂L_i/∂ξ_k
 _DL = np.array([[-1, -1, -1], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)

@@ -8,9 +8,9 @@ import numpy as np
 from ..._config import njit
 from ...quadrature import tetrahedron_rule
 from ..descriptor import SolidElementType
-from .family import TETRAHEDRON
+from .tet_family import CORNERS, TETRAHEDRON
 
-REFERENCE_NODES = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
+REFERENCE_NODES = CORNERS
 
 
 @njit
