@@ -45,6 +45,19 @@ def _error_time_grid(plt, matplotlib, scenes, kinds, ratios, error, ylabel, floo
     return fig
 
 
+def _scaling_panel(ax, points, values, ylabel, fitted, **style):
+    """One log-log panel of the scaling plot: ``values`` against ``points`` (``style``: of the
+    measured curve) and, if ``fitted``, their least-squares line in log-log."""
+    ax.loglog(points, values, "o-", **style)
+    if fitted:
+        c = np.polyfit(np.log10(points), np.log10(values), 1)
+        ax.loglog(points, 10 ** np.polyval(c, np.log10(points)), "k--", label=f"fit, slope {c[0]:.2f}")
+    ax.set_xlabel("integration points")
+    ax.set_ylabel(ylabel)
+    ax.legend(fontsize=8)
+    ax.grid(True, which="major", alpha=0.3)
+
+
 def _save(plt, fig, out, name):
     """Lay out, write ``out/name`` as PNG, close; returns ``name``."""
     fig.tight_layout()
@@ -105,25 +118,12 @@ def write_plots(results, out):
     fig, ax = plt.subplots(1, 2 if cfg["memory"] else 1, figsize=(10 if cfg["memory"] else 5.5, 3.8), squeeze=False)
     pts = np.array([r["points"] for r in rows], dtype=float)
     tt = np.array([r["time_s"] for r in rows])
-    ax[0, 0].loglog(pts, tt, "o-", label="measured")
     fit = results["scaling"]["fit"]
-    if fit.get("time_slope") is not None:
-        c = np.polyfit(np.log10(pts), np.log10(tt), 1)
-        ax[0, 0].loglog(pts, 10 ** np.polyval(c, np.log10(pts)), "k--", label=f"fit, slope {c[0]:.2f}")
-    ax[0, 0].set_xlabel("integration points")
-    ax[0, 0].set_ylabel("median time [s]")
-    ax[0, 0].legend(fontsize=8)
-    ax[0, 0].grid(True, which="major", alpha=0.3)
+    _scaling_panel(ax[0, 0], pts, tt, "median time [s]", fit.get("time_slope") is not None, label="measured")
     if cfg["memory"]:
         m = np.array([r["peak_bytes"] for r in rows], dtype=float) / 2 ** 20
-        ax[0, 1].loglog(pts, m, "o-", color="tab:red", label="tracemalloc peak")
-        if fit.get("memory_slope") is not None:
-            c = np.polyfit(np.log10(pts), np.log10(m), 1)
-            ax[0, 1].loglog(pts, 10 ** np.polyval(c, np.log10(pts)), "k--", label=f"fit, slope {c[0]:.2f}")
-        ax[0, 1].set_xlabel("integration points")
-        ax[0, 1].set_ylabel("peak memory [MiB]")
-        ax[0, 1].legend(fontsize=8)
-        ax[0, 1].grid(True, which="major", alpha=0.3)
+        _scaling_panel(ax[0, 1], pts, m, "peak memory [MiB]", fit.get("memory_slope") is not None,
+                       color="tab:red", label="tracemalloc peak")
     fig.suptitle("Scaling of segment-based assembly (fibre_cube(20, F, 20), n_gauss = 4)", fontsize=10)
     files["scaling"] = _save(plt, fig, out, "scaling.png")
     return files

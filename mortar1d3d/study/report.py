@@ -46,6 +46,21 @@ def _reach(records, integration, threshold, error):
     return _cheapest(records, integration, threshold, error), min(recs, key=error)
 
 
+def _clauses(records, threshold, error, reached, missed):
+    """One clause per integration on reaching ``threshold`` in ``error``.
+
+    ``reached(integration, best)`` words the cheapest record that reaches it,
+    ``missed(integration, closest)`` the most accurate one where none does; integrations without
+    records are left out.
+    """
+    out = []
+    for integration in INTEGRATIONS:
+        best, closest = _reach(records, integration, threshold, error)
+        if closest is not None:
+            out.append(missed(integration, closest) if best is None else reached(integration, best))
+    return out
+
+
 def _fmt_e(x):
     return "0" if x == 0 else f"{x:.1e}"
 
@@ -59,19 +74,13 @@ def sentences(results):
         if scene is None:
             continue
         for threshold in cfg["thresholds"]:
-            parts = []
-            for integration in INTEGRATIONS:
-                best, closest = _reach(scene["records"], integration, threshold, dm_error)
-                if closest is None:
-                    continue
-                if best is None:
-                    parts.append(f"{_LABEL[integration]} does not reach it with up to "
-                                 f"{max(cfg['gauss'][integration])} points per "
-                                 f"{'beam element' if integration == 'element' else 'segment'} "
-                                 f"(best {_fmt_e(dm_error(closest))} with n = {closest['n_gauss']})")
-                else:
-                    parts.append(f"{_LABEL[integration]} needs n = {best['n_gauss']} ({best['points']} points, "
-                                 f"{best['time_s'] * 1e3:.2f} ms)")
+            parts = _clauses(
+                scene["records"], threshold, dm_error,
+                reached=lambda i, best: f"{_LABEL[i]} needs n = {best['n_gauss']} ({best['points']} points, "
+                                        f"{best['time_s'] * 1e3:.2f} ms)",
+                missed=lambda i, closest: f"{_LABEL[i]} does not reach it with up to {max(cfg['gauss'][i])} points "
+                                          f"per {'beam element' if i == 'element' else 'segment'} "
+                                          f"(best {_fmt_e(dm_error(closest))} with n = {closest['n_gauss']})")
             out.append(f"To reach a D/M error of {threshold:.0e} on {kind} (h_B/h_S = {scene['ratio']:g}, "
                        f"{scene['embedding']}), " + "; ".join(parts) + ".")
     for kinds, label in ((["straight fibres, hex8"], "straight fibres in hex8"),
@@ -127,17 +136,12 @@ def monitor_sentences(results):
         scene = _headline_scene(scenes, kind)
         if scene is None:
             continue
-        parts = []
-        for integration in INTEGRATIONS:
-            best, closest = _reach(scene["records"], integration, threshold, u_error)
-            if closest is None:
-                continue
-            if best is None:
-                parts.append(f"{_LABEL[integration]} does not reach it (best {_fmt_e(closest['u_err'])} with "
-                             f"n = {closest['n_gauss']})")
-            else:
-                parts.append(f"{_LABEL[integration]} needs n = {best['n_gauss']} (D/M error there "
-                             f"{_fmt_e(dm_error(best))})")
+        parts = _clauses(
+            scene["records"], threshold, u_error,
+            reached=lambda i, best: f"{_LABEL[i]} needs n = {best['n_gauss']} (D/M error there "
+                                    f"{_fmt_e(dm_error(best))})",
+            missed=lambda i, closest: f"{_LABEL[i]} does not reach it (best {_fmt_e(closest['u_err'])} with "
+                                      f"n = {closest['n_gauss']})")
         out.append(f"To reach a monitor displacement error of {threshold:.0e} on {kind} (h_B/h_S = "
                    f"{scene['ratio']:g}, {scene['embedding']}), " + "; ".join(parts) + ".")
     pairs = [(r["u_err"], dm_error(r)) for sc in scenes for r in sc["records"] if r["u_err"] is not None
