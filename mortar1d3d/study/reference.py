@@ -13,6 +13,7 @@ from ..elements.solid.dispatch import BY_CODE, SOLID_MODULES
 from ..mesh import BeamMesh
 from ..mortar.assemble import assemble_mortar, lm_numbering
 
+
 def _hermite(eta, L):
     """Hermite functions and η-derivatives of design.md §2 (own formulas, numpy)."""
     H = np.array([(2 - 3 * eta + eta ** 3) / 4, L / 8 * (1 - eta - eta ** 2 + eta ** 3),

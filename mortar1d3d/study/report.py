@@ -17,7 +17,6 @@ from .scenes import MONITOR_KINDS
 from .timing import STAGES
 
 
-
 def _cheapest(records, integration, threshold, error=dm_error):
     """Record with the fewest Gauss points of one integration whose error (default: of D and M)
     is <= threshold (or None).
@@ -187,7 +186,6 @@ def monitor_sentences(results):
                        "and a flexibility column per coupled solid DOF each")
         out.append(f"The monitor ran on {len(scenes)} of {n_all} scenes ({'; '.join(why)}).")
     return out
-
 
 
 def write_report(results, out="report"):

@@ -23,7 +23,8 @@ from .monitor import MonitorProblem, monitor_error, solution_monitor
 from .reference import pair_reference_check
 from .report import write_report
 from .scenes import MONITOR_KINDS, build_scene
-from .timing import STAGES, stage_times, scaling, startup, time_assembly
+from .timing import STAGES, scaling, stage_times, startup, time_assembly
+
 
 def _set_threads(threads):
     default = numba.get_num_threads()
@@ -138,7 +139,6 @@ def auto_target(config, progress=None):
     return out
 
 
-
 def run_study(config, progress=print):
     """Run every part of the study; a JSON-able dict of all measured numbers."""
     progress = progress or (lambda *_: None)
@@ -195,7 +195,6 @@ def _machine(threads):
             "python": platform.python_version(), "numba": numba.__version__, "numpy": np.__version__,
             "platform": platform.platform(), "cpus": os.cpu_count(), "threads": threads,
             "load_average": list(load) if load else None, "commit": commit}
-
 
 
 def make_report(preset_name="full", out="report", progress=print, **overrides):

@@ -70,7 +70,6 @@ def time_assembly(beams, solid, integration, n_gauss, lm="line2", repeats=5, mem
     return record, ops
 
 
-
 def scaling(config, progress=None):
     """Time and memory of segment-based assembly (n_gauss 4) of fibre_cube(20, F, 20) vs points."""
     per_fibre = None
