@@ -16,6 +16,7 @@ from mortar1d3d.elements.solid.dispatch import (CONTROL_MATRIX, FACE_CONTROL, N_
 from mortar1d3d._schedule import workers
 from mortar1d3d.geometry.projection import linear_maps
 from mortar1d3d.mortar.assemble import KernelInput
+from mortar1d3d.study.reference import newton_projection
 
 SOLID_TYPES = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
 
@@ -90,18 +91,6 @@ def test_curved_elements_get_their_centre_linearisation(element):
     assert moved == (0 if element == "tetra" else solid.n_elements)
 
 
-def newton_parameters(element, X, x, xi):
-    """ξ with x(ξ) = x by Newton in numpy (the element module's shape functions), from ``xi``."""
-    module = SOLID_MODULES[element]
-    n = len(X)
-    N, dN = np.empty(n), np.empty((n, 3))
-    for _ in range(30):
-        module.shape(xi, N)
-        module.deriv(xi, dN)
-        xi = xi + np.linalg.solve(X.T @ dN, x - N @ X)
-    return xi
-
-
 @pytest.mark.parametrize("integration", ["segment", "element"])
 @pytest.mark.parametrize("element", SOLID_TYPES)
 def test_affine_location_gives_the_points_of_a_newton_projection(element, integration):
@@ -110,7 +99,8 @@ def test_affine_location_gives_the_points_of_a_newton_projection(element, integr
     n = SOLID_ELEMENTS[element].n_nodes
     for p in ops.points:
         X = solid.points[solid.connectivity[p["solid_element"], :n]]
-        np.testing.assert_allclose(p["xi"], newton_parameters(element, X, p["position"], p["xi"] * 0.9), atol=1e-13)
+        xi = newton_projection(SOLID_MODULES[element], X, p["position"], p["xi"] * 0.9, iterations=30)
+        np.testing.assert_allclose(p["xi"], xi, atol=1e-13)
     assert ops.constraint_residual < 1e-14
 
 

@@ -15,6 +15,7 @@ import mortar1d3d as m13
 from mortar1d3d import generate
 from mortar1d3d.elements.solid.dispatch import BY_CODE, SOLID_MODULES
 from mortar1d3d.geometry.search import beam_bounding_boxes, find_candidate_pairs, solid_bounding_boxes
+from mortar1d3d.study.reference import newton_projection
 
 SOLID_TYPES = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
 LM_TYPES = ["line2", "line3", "line4"]
@@ -84,17 +85,8 @@ def project(solid, s, p, iterations=40):
     """Newton for x(ξ) = p in element s (numpy, from the element centre); ξ and |x(ξ) - p| / h."""
     d, module, X = element_of(solid, s)
     h = np.linalg.norm(X.max(axis=0) - X.min(axis=0))
-    xi = d.centre.astype(float).copy()
-    N, dN = np.empty(d.n_nodes), np.empty((d.n_nodes, 3))
-    for _ in range(iterations):
-        module.shape.py_func(xi, N)
-        r = p - N @ X
-        if np.linalg.norm(r) <= 1e-15 * h:
-            break
-        module.deriv.py_func(xi, dN)
-        xi = xi + np.linalg.solve(X.T @ dN, r)
-        if np.abs(xi).max() > 1e3:
-            break
+    xi = newton_projection(module, X, p, d.centre, h, iterations, escape=1e3)
+    N = np.empty(d.n_nodes)
     module.shape.py_func(xi, N)
     return xi, np.linalg.norm(p - N @ X) / h
 
