@@ -12,16 +12,25 @@ from pathlib import Path
 import numba
 
 
-def _source_fingerprint(root=None):
-    """Hash of the package's source files (of the ``*.py`` files below ``root``, default: this package).
+#: subpackages without kernels, whose edits cannot change a compiled kernel (the study only calls
+#: the library): left out of the cache key, so editing them keeps the compiled kernels
+KERNEL_FREE = ("study",)
+
+
+def _source_fingerprint(root=None, skip=KERNEL_FREE):
+    """Hash of the package's source files (of the ``*.py`` files below ``root``, default: this package,
+    except the top-level folders named in ``skip``).
 
     Numba's cache checks only the file of the cached function itself, not of the kernels it
-    calls from other modules: after editing a callee, a stale caller would be loaded. Keying
-    the cache directory by the whole package's sources makes any edit start a fresh cache.
+    calls from other modules, nor the module-level tables (element data, quadrature) it froze in
+    as constants: after editing a callee or a table, a stale caller would be loaded. Keying the
+    cache directory by the package's sources makes any such edit start a fresh cache.
     """
     digest = hashlib.sha1()
     root = Path(__file__).resolve().parent if root is None else Path(root)
     for path in sorted(root.rglob("*.py")):
+        if path.relative_to(root).parts[0] in skip:
+            continue
         digest.update(str(path.relative_to(root)).encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()[:16]

@@ -22,6 +22,19 @@ def test_cache_directory_is_keyed_by_the_sources(tmp_path):
     assert _config._source_fingerprint(tmp_path) not in (before, edited)
 
 
+def test_kernel_free_subpackages_do_not_change_the_key(tmp_path):
+    (tmp_path / "study").mkdir()
+    (tmp_path / "a.py").write_text("x = 1\n")
+    (tmp_path / "study" / "report.py").write_text("text = 'one'\n")
+    before = _config._source_fingerprint(tmp_path)
+    (tmp_path / "study" / "report.py").write_text("text = 'two'\n")
+    assert _config._source_fingerprint(tmp_path) == before
+    assert _config._source_fingerprint(tmp_path, skip=()) != _config._source_fingerprint(tmp_path)
+    # the study holds no kernels: nothing it defines is compiled
+    study = _config.Path(_config.__file__).parent / "study"
+    assert all("njit" not in p.read_text() for p in study.rglob("*.py"))
+
+
 def test_prune_keeps_the_newest_other_versions(tmp_path):
     current = tmp_path / "mortar1d3d-0000000000000000"
     current.mkdir()
