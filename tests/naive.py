@@ -1,7 +1,8 @@
 """Slow, obvious reference implementations for the kernel tests.
 
 Each function recomputes something a kernel computes, the plain way: formulas written out,
-brute force over all pairs, closed forms, adaptive quadrature. None of them calls a Numba kernel unless its docstring says so (then the point of
+brute force over all pairs, dense sampling, scipy's general-purpose solvers and adaptive
+quadrature. None of them calls a Numba kernel unless its docstring says so (then the point of
 the reference is the summation or the bookkeeping around it, not the functions it evaluates).
 
 Contents, in the order of the data path:
@@ -10,10 +11,13 @@ Contents, in the order of the data path:
 - beams: centreline functions H, centrelines r(η), r'(η), arc lengths (fixed and adaptive
   Gauss), the functions as exact polynomials, multiplier functions Φ;
 - solids: shape functions from a monomial basis fitted to the reference nodes, the reference
-  element (lattice samples, distance outside), owners in structured grids;
-- search: brute-force box overlaps;
-- segmentation: the pieces of straight chords in unit-cell grids and in tets in closed form;
-- operators: D, M, κ summed point by point; the constraint residual by sparse products;
+  element (lattice samples, distance outside), point location by lattice search and
+  ``scipy.optimize.root``, owners in structured grids;
+- search: boxes from dense sampling, brute-force box overlaps, the pairs a beam really enters;
+- segmentation: the owner of densely sampled centreline points; the pieces of straight chords
+  in unit-cell grids and in tets in closed form;
+- operators: D, M, κ summed point by point, and by adaptive quadrature over segments; the
+  constraint residual by sparse products;
 - physics: quadrature rules on reference cells (tensor and collapsed Gauss) and surface loads
   (dead traction, follower pressure) face by face;
 - odds and ends: central differences, splitmix64.
@@ -24,7 +28,9 @@ The numpy Newton projections of the tests are not here: they stay where they are
 
 import numpy as np
 from numpy.polynomial import Polynomial
-from scipy.integrate import quad
+from scipy.integrate import quad, quad_vec
+from scipy.optimize import root
+from scipy.spatial import cKDTree
 
 from mortar1d3d.elements.solid.dispatch import BY_CODE, SOLID_MODULES
 
@@ -270,6 +276,111 @@ def cell_owners(p, lower, h, cells):
 
 
 # --------------------------------------------------------------------------------------------
+# point location: lattice search, then scipy.optimize.root
+# --------------------------------------------------------------------------------------------
+INSIDE_TOL = 1e-9      # parameter distance outside the element still counted inside (design.md §2)
+LATTICE = 25           # lattice points per direction of the search
+_LATTICES = {}
+
+
+def _lattice(name):
+    """Lattice ξ (g, 3) of the reference element, its spacing, N (g, n_nodes) and dN/dξ (g, n_nodes, 3)
+    there, once per type."""
+    if name not in _LATTICES:
+        family = descriptor(name).family
+        xi = reference_samples(family, LATTICE)
+        _LATTICES[name] = (xi, (2.0 if family == "hex" else 1.0) / (LATTICE - 1)) + shape_values(name, xi)
+    return _LATTICES[name]
+
+
+class Element:
+    """One solid element in its own frame (nodes minus the first node), for point location.
+
+    Attributes: ``descriptor``, ``origin`` (3,), ``X`` (n_nodes, 3) relative nodes, ``h`` (the
+    diagonal of the nodes' box), ``lattice`` (g, 3) ξ of the reference lattice, ``tree`` a
+    k-d tree of their images x(ξ) and ``reach``, how far the nearest image can be from a point
+    of the element.
+    """
+
+    def __init__(self, solid, s):
+        self.descriptor = d = BY_CODE[int(solid.element_codes[s])]
+        nodes = solid.points[solid.connectivity[s, : d.n_nodes]]
+        self.origin = nodes[0]
+        self.X = nodes - nodes[0]
+        self.h = float(np.linalg.norm(self.X.max(axis=0) - self.X.min(axis=0)))
+        self.lattice, spacing, N, dN = _lattice(d.name)
+        self.tree = cKDTree(N @ self.X)
+        # every ξ of the element has a lattice point within one lattice-cell diagonal √3·spacing
+        # (hex: round; tet: round down, which stays in the simplex), joined to it by a segment
+        # inside the element, so its image is within max|J| times that; |J| is taken at the
+        # lattice points (bounded by √(‖J‖₁ ‖J‖∞), the largest column sum times the largest row
+        # sum), with a quarter more for the parts between them
+        J = np.abs(np.matmul(self.X.T, dN))
+        norm = np.sqrt(J.sum(axis=1).max(axis=1) * J.sum(axis=2).max(axis=1))
+        self.reach = 1.25 * norm.max() * np.sqrt(3.0) * spacing
+
+    def map(self, xi):
+        """x(ξ) (relative to ``origin``) and J = dx/dξ at one ξ."""
+        N, dN = shape_values(self.descriptor.name, np.asarray(xi, float)[None])
+        return N[0] @ self.X, self.X.T @ dN[0]
+
+    def start(self, p):
+        """The lattice ξ whose image is nearest to p (relative to ``origin``), and that distance."""
+        dist, nearest = self.tree.query(p)
+        return self.lattice[nearest], dist
+
+    def solve(self, p, start):
+        """ξ with x(ξ) = p (p relative to ``origin``) by MINPACK's hybrid method from ``start``,
+        and the relative residual |x(ξ) - p| / h."""
+        def residual(xi):
+            x, J = self.map(xi)
+            return x - p, J
+        xi = root(residual, start, jac=True, method="hybr", options={"xtol": 1e-15}).x
+        return xi, float(np.linalg.norm(self.map(xi)[0] - p)) / self.h
+
+    def locate(self, P):
+        """ξ (m, 3) of the points P (m, 3, absolute coordinates) and whether each lies in the element.
+
+        A point whose nearest lattice image is farther than ``reach`` is not in the element;
+        the others are solved from that lattice point and count as inside when the residual is
+        below 1e-12 h and ξ lies in the reference element up to :data:`INSIDE_TOL`.
+        """
+        P = np.atleast_2d(np.asarray(P, float)) - self.origin
+        xi = np.full((len(P), 3), np.nan)
+        inside = np.zeros(len(P), dtype=bool)
+        dist, nearest = self.tree.query(P)
+        for i in np.flatnonzero(dist <= self.reach):
+            xi[i], res = self.solve(P[i], self.lattice[nearest[i]])
+            inside[i] = res <= 1e-12 and outside_distance(self.descriptor.family, xi[i]) <= INSIDE_TOL
+        return xi, inside
+
+
+def solid_elements(solid):
+    """An :class:`Element` for every solid element, in order."""
+    return [Element(solid, s) for s in range(solid.n_elements)]
+
+
+def containing(elements, P):
+    """Boolean (m, n_elements): point i lies in element s (:meth:`Element.locate`, every element).
+
+    ``elements``: :func:`solid_elements` of the mesh."""
+    P = np.atleast_2d(np.asarray(P, float))
+    return np.column_stack([element.locate(P)[1] for element in elements])
+
+
+def owners(elements, P):
+    """The lowest-index solid element containing each point (-1: none): (m,) int.
+
+    Elements are tried in ascending order; a point leaves the search at its first owner."""
+    P = np.atleast_2d(np.asarray(P, float))
+    owner = np.full(len(P), -1)
+    for s, element in enumerate(elements):
+        todo = np.flatnonzero(owner < 0)
+        owner[todo[element.locate(P[todo])[1]]] = s
+    return owner
+
+
+# --------------------------------------------------------------------------------------------
 # search
 # --------------------------------------------------------------------------------------------
 def brute_force_pairs(beam_boxes, solid_boxes):
@@ -278,9 +389,50 @@ def brute_force_pairs(beam_boxes, solid_boxes):
             & (solid_boxes[None, :, 0, :] <= beam_boxes[:, None, 1, :]).all(axis=2))
 
 
+def sampled_beam_boxes(beams, samples=101):
+    """(n_elements, 2, 3) [min, max] of r(η) over ``samples`` equidistant η of each beam element.
+
+    Inside the true box of the element (the points are on it), so never larger than a
+    conservative box."""
+    _, r = centreline_samples(beams, samples)
+    return np.stack([r.min(axis=1), r.max(axis=1)], axis=1)
+
+
+def sampled_solid_boxes(solid, n=11):
+    """(n_elements, 2, 3) [min, max] of x(ξ) over the n-per-direction lattice of each solid element."""
+    boxes = np.empty((solid.n_elements, 2, 3))
+    for s in range(solid.n_elements):
+        d = BY_CODE[int(solid.element_codes[s])]
+        N, _ = shape_values(d.name, reference_samples(d.family, n))
+        x = N @ solid.points[solid.connectivity[s, : d.n_nodes]]
+        boxes[s] = x.min(axis=0), x.max(axis=0)
+    return boxes
+
+
+def centreline_samples(beams, samples):
+    """η (samples,) equidistant on [-1, 1] and r(η) of every beam element: (n_elements, samples, 3)."""
+    eta = np.linspace(-1.0, 1.0, samples)
+    return eta, np.array([centreline(beams, e, eta)[0] for e in range(beams.n_elements)])
+
+
+def entered_pairs(beams, solid, samples=41):
+    """Boolean (n_beam_elements, n_solid_elements): a sample r(η) of the beam element lies in the
+    solid element (``samples`` equidistant η per beam element, every solid element tried)."""
+    _, r = centreline_samples(beams, samples)
+    inside = containing(solid_elements(solid), r.reshape(-1, 3))
+    return inside.reshape(beams.n_elements, samples, solid.n_elements).any(axis=1)
+
+
 # --------------------------------------------------------------------------------------------
 # segmentation
 # --------------------------------------------------------------------------------------------
+def sampled_owners(beams, solid, samples=41):
+    """η (samples,) equidistant on [-1, 1] and the owner of r(η) in every beam element:
+    (n_beam_elements, samples) int, -1 outside the solid (:func:`owners`)."""
+    eta, r = centreline_samples(beams, samples)
+    return eta, owners(solid_elements(solid), r.reshape(-1, 3)).reshape(beams.n_elements, samples)
+
+
 def grid_chord_pieces(a, b, cells=(2, 2, 2)):
     """Segments [(0, owner, η_a, η_b), ...] of the straight beam element a→b (η = -1 at a) in the grid of
     unit cells from the origin (:func:`cell_owners` numbering).
@@ -391,6 +543,59 @@ def constraint_residual(ops, q, x):
     """‖D q − M x‖ / ‖D q‖ with scipy products and numpy norms (the library uses its own kernel)."""
     Dq = ops.D @ q
     return np.linalg.norm(Dq - ops.M @ x) / np.linalg.norm(Dq)
+
+
+def segment_integrals(beams, element, e, a, b, lm="line2", epsrel=1e-13):
+    """κ_j, D_jk, M_ja of beam element e on [a, b] in the solid :class:`Element` ``element`` by
+    adaptive quadrature.
+
+    ``scipy.integrate.quad_vec`` of Φ_j [1, H_k, N_a(ξ(η))] |r'(η)| over η ∈ [a, b]
+    (ds = |r'(η)| dη on the reference centreline); ξ(η) solves x(ξ) = r(η) in the element by
+    ``scipy.optimize.root`` (:meth:`Element.solve`) from the nearest ξ found so far; N from
+    :func:`shape_values`. Nothing of the library's kernels is evaluated.
+
+    Returns
+    -------
+    kappa : (n_phi,), D : (n_phi, n_functions), M : (n_phi, n_nodes)
+    """
+    kind = beams.element_type.name
+    L = beams.lengths[e]
+    n_phi = len(LM_NODES[lm])
+    n_f = beams.element_type.n_functions
+
+    solved = {}          # η -> ξ found so far: the nearest one starts the next solve
+
+    def integrand(eta):
+        r, dr = centreline(beams, e, eta)
+        p = r[0] - element.origin
+        start = solved[min(solved, key=lambda t: abs(t - eta))] if solved else element.start(p)[0]
+        xi, res = element.solve(p, start)
+        # the segment lies in its element: a solution outside would be a fold of the extended map
+        assert res <= 1e-12 and outside_distance(element.descriptor.family, xi) <= INSIDE_TOL, (e, eta, xi, res)
+        solved[eta] = xi
+        N, _ = shape_values(element.descriptor.name, xi[None])
+        phi = multiplier_values(lm, eta) * np.linalg.norm(dr[0])
+        H = beam_shape(kind, eta, L)[0][:, 0]
+        return np.concatenate([phi, np.outer(phi, H).ravel(), np.outer(phi, N[0]).ravel()])
+
+    values, _ = quad_vec(integrand, a, b, epsabs=0.0, epsrel=epsrel, norm="max", limit=400)
+    return (values[:n_phi], values[n_phi:n_phi * (1 + n_f)].reshape(n_phi, n_f),
+            values[n_phi * (1 + n_f):].reshape(n_phi, -1))
+
+
+def adaptive_operators(beams, solid, segments, lm="line2", epsrel=1e-13):
+    """Scalar D, M (dense) and κ from :func:`segment_integrals` over every row of ``segments``
+    (structured array with beam_element, solid_element, eta_start, eta_end)."""
+    elements = {}
+
+    def pieces():
+        for row in segments:
+            e, s = int(row["beam_element"]), int(row["solid_element"])
+            if s not in elements:
+                elements[s] = Element(solid, s)
+            yield (e, s) + segment_integrals(beams, elements[s], e, row["eta_start"], row["eta_end"], lm, epsrel)
+
+    return _scatter(beams, solid, len(LM_NODES[lm]), pieces())
 
 
 # --------------------------------------------------------------------------------------------
