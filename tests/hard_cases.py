@@ -1,10 +1,10 @@
 """Hard geometric scenes and the independent checks shared by test_hard_cases.py and test_fuzz.py.
 
-Everything a check compares against is computed here without the library's kernels:
+Everything a check compares against is computed without the library's kernels:
 
-- centrelines from the formulas of design.md §2 (Hermite H1..H4 with the mesh's L, Lagrange);
-- solid shape functions from the descriptors' reference nodes and a monomial basis
-  (Vandermonde inverse), so that a wrong node order or shape function in the library would show;
+- centrelines from the formulas of design.md §2 (Hermite H1..H4 with the mesh's L, Lagrange) and
+  solid shape functions from the descriptors' reference nodes and a monomial basis (Vandermonde
+  inverse), both in tests/naive.py;
 - point-in-element by a vectorised numpy Newton from the element centre;
 - the embedded η-set of every beam element by dense sampling of the centreline, point-in-solid
   at every sample and bisection of every in/out change to 1e-13 in η.
@@ -20,50 +20,11 @@ import numpy as np
 import mortar1d3d as m13
 from mortar1d3d import BeamMesh, SolidMesh, generate
 from mortar1d3d.elements.solid.dispatch import BY_CODE
+from naive import arc_length, centreline, outside_distance, shape_values
 
 # --------------------------------------------------------------------------------------------
-# independent shape functions: monomial bases fitted to the reference nodes
+# point location (numpy Newton) on the shape functions of tests/naive.py
 # --------------------------------------------------------------------------------------------
-_HEX8 = [(i, j, k) for i in (0, 1) for j in (0, 1) for k in (0, 1)]
-_HEX27 = [(i, j, k) for i in range(3) for j in range(3) for k in range(3)]
-# serendipity: the hex27 monomials whose "superlinear degree" (degree counting only exponents 2) fits
-_HEX20 = [m for m in _HEX27 if sum(m) <= 3 or (sum(m) == 4 and max(m) == 2 and min(m) == 1)]
-_TET4 = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
-_TET10 = [m for m in _HEX27 if sum(m) <= 2]
-_BASES = {"hexahedron": _HEX8, "hexahedron20": _HEX20, "hexahedron27": _HEX27, "tetra": _TET4, "tetra10": _TET10}
-_COEFFICIENTS = {}
-
-
-def _basis(name):
-    if name not in _COEFFICIENTS:
-        d = next(d for d in BY_CODE.values() if d.name == name)
-        exps = np.array(_BASES[name], dtype=float)
-        assert len(exps) == d.n_nodes, name
-        V = np.prod(d.reference_nodes[:, None, :] ** exps[None, :, :], axis=2)   # (nodes, monomials)
-        _COEFFICIENTS[name] = (exps, np.linalg.inv(V))                             # N = m(ξ) V⁻¹
-    return _COEFFICIENTS[name]
-
-
-def shape_values(name, xi):
-    """N (m, n_nodes) and dN/dξ (m, n_nodes, 3) at the points ``xi`` (m, 3)."""
-    exps, C = _basis(name)
-    xi = np.asarray(xi, float)
-    pw = xi[:, None, :] ** exps[None]                                    # (m, monomials, 3)
-    mono = np.prod(pw, axis=2)
-    dmono = np.empty(mono.shape + (3,))
-    for i in range(3):
-        e = exps[:, i]
-        di = np.where(e > 0, e * xi[:, None, i] ** np.maximum(e - 1, 0), 0.0)
-        others = np.prod(np.delete(pw, i, axis=2), axis=2)
-        dmono[..., i] = di * others
-    return mono @ C, np.einsum("mpi,pa->mai", dmono, C)
-
-
-def outside_distance(family, xi):
-    """How far ξ (m, 3) lies outside the reference element (<= 0 inside)."""
-    if family == "hex":
-        return np.abs(xi).max(axis=1) - 1.0
-    return np.maximum(-xi.min(axis=1), xi.sum(axis=1) - 1.0)
 
 
 def element_nodes(solid, s):
@@ -149,50 +110,6 @@ def containment(solid, P):
             out[ip[ok], start + ie[ok]] = outside_distance(d.family, xi[ok])
         start += len(conn)
     return out
-
-
-# --------------------------------------------------------------------------------------------
-# independent centrelines (design.md §2)
-# --------------------------------------------------------------------------------------------
-def centreline(beams, e, eta):
-    """r(η) (m, 3) and r'(η) (m, 3) of beam element e."""
-    eta = np.atleast_1d(np.asarray(eta, float))
-    nodes = beams.elements[e]
-    kind = beams.element_type.name
-    if kind == "hermite":
-        L = beams.lengths[e]
-        q = [beams.positions[nodes[0]], beams.tangents[nodes[0]], beams.positions[nodes[1]], beams.tangents[nodes[1]]]
-        H = [(2 - 3 * eta + eta ** 3) / 4, L / 8 * (1 - eta - eta ** 2 + eta ** 3),
-             (2 + 3 * eta - eta ** 3) / 4, L / 8 * (-1 - eta + eta ** 2 + eta ** 3)]
-        dH = [(-3 + 3 * eta ** 2) / 4, L / 8 * (-1 - 2 * eta + 3 * eta ** 2),
-              (3 - 3 * eta ** 2) / 4, L / 8 * (-1 + 2 * eta + 3 * eta ** 2)]
-    elif kind == "line":
-        q = [beams.positions[nodes[0]], beams.positions[nodes[1]]]
-        H, dH = [(1 - eta) / 2, (1 + eta) / 2], [-0.5 + 0 * eta, 0.5 + 0 * eta]
-    else:
-        q = list(beams.positions[nodes])
-        H = [eta * (eta - 1) / 2, eta * (eta + 1) / 2, 1 - eta ** 2]
-        dH = [eta - 0.5, eta + 0.5, -2 * eta]
-    # sum relative to the first node: far-from-origin coordinates keep their digits
-    if kind == "hermite":
-        base = q[0]
-        r = base + H[2][:, None] * (q[2] - base) + H[1][:, None] * q[1] + H[3][:, None] * q[3]
-    else:
-        base = q[0]
-        r = base + sum(Hk[:, None] * (qk - base) for Hk, qk in zip(H[1:], q[1:]))
-    # the position functions' derivatives sum to zero: differences again, no cancellation
-    if kind == "hermite":
-        dr = dH[2][:, None] * (q[2] - base) + dH[1][:, None] * q[1] + dH[3][:, None] * q[3]
-    else:
-        dr = sum(dHk[:, None] * (qk - base) for dHk, qk in zip(dH[1:], q[1:]))
-    return r, dr
-
-
-def arc_length(beams, e, a, b, n=40):
-    x, w = np.polynomial.legendre.leggauss(n)
-    eta = 0.5 * (a + b) + 0.5 * (b - a) * x
-    _, dr = centreline(beams, e, eta)
-    return 0.5 * (b - a) * float(w @ np.linalg.norm(dr, axis=1))
 
 
 # --------------------------------------------------------------------------------------------

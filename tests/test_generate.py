@@ -1,8 +1,8 @@
 """Generators: the §5 fibre cube rebuilt independently, structured boxes, distortion, random beams.
 
-Reference values are computed here from the specification (design.md §5), not with the
-library's helpers: splitmix64 with Python integers, fibre axes and helix frames from scratch,
-volumes from the element modules' derivatives and Gauss rules.
+Reference values are computed from the specification (design.md §5), not with the library's
+helpers: splitmix64 with Python integers (tests/naive.py), fibre axes and helix frames from
+scratch, volumes from the element modules' derivatives and Gauss rules.
 """
 import math
 
@@ -14,6 +14,8 @@ from mortar1d3d.elements.solid import hex8, hex20, hex27, tet4, tet10
 from mortar1d3d.elements.solid.hex_family import HEXAHEDRON
 from mortar1d3d.elements.solid.tet_family import TETRAHEDRON
 
+from naive import gauss_rule, reference_splitmix64
+
 HEX_FACE_NODES, TET_FACE_NODES = HEXAHEDRON.face_nodes, TETRAHEDRON.face_nodes
 
 MODULES = {"hexahedron": hex8, "hexahedron20": hex20, "hexahedron27": hex27, "tetra": tet4, "tetra10": tet10}
@@ -22,21 +24,6 @@ L, R = 0.3, 0.03
 
 
 # -- independent reference of design.md §5 -----------------------------------------------------
-
-def reference_splitmix64(seed, count):
-    """Textbook splitmix64 with Python big ints, masked to 64 bits after every operation."""
-    mask = (1 << 64) - 1
-    state = seed & mask
-    out = []
-    for _ in range(count):
-        state = (state + 0x9E3779B97F4A7C15) & mask
-        z = state
-        z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & mask
-        z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & mask
-        z = z ^ (z >> 31)
-        out.append(z)
-    return out
-
 
 def reference_fibres(fibres, curved, seed=12345):
     """Per fibre: centre c, axis d, frame e1, e2 and phase, one fibre at a time (plain Python)."""
@@ -166,22 +153,6 @@ def test_fibre_cube_rejects_empty_scenes():
 
 LOWER, UPPER, CELLS = np.array([-1.0, 0.5, 2.0]), np.array([0.5, 1.5, 2.25]), (2, 3, 1)
 BOX_VOLUME = 1.5 * 1.0 * 0.25
-
-
-def gauss_rule(kind, n):
-    """Points (q, 3) and weights (q,): ``"hex"`` n^3 Gauss points on [-1, 1]^3, ``"tet4"`` the
-    classical 4-point rule (degree 2) or ``"tet"`` a collapsed (Duffy) n^3 rule on the unit tet."""
-    if kind == "tet4":
-        a, b = 0.5854101966249685, 0.1381966011250105
-        return np.array([[b, b, b], [a, b, b], [b, a, b], [b, b, a]]), np.full(4, 1 / 24)
-    x, w = np.polynomial.legendre.leggauss(n)
-    g = np.stack(np.meshgrid(x, x, x, indexing="ij"), axis=-1).reshape(-1, 3)
-    gw = np.einsum("i,j,k->ijk", w, w, w).ravel()
-    if kind == "hex":
-        return g, gw
-    u, v, t = ((g[:, k] + 1) / 2 for k in range(3))
-    pts = np.column_stack([u, v * (1 - u), t * (1 - u) * (1 - v)])
-    return pts, gw / 8 * (1 - u) ** 2 * (1 - v)
 
 
 def jacobian_determinants(solid, rule):

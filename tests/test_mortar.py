@@ -1,9 +1,9 @@
 """Mortar operators: certificates, invariance, broad phase, bounding boxes, threads, bad input.
 
-Reference values are computed here independently of the library's kernels wherever that is
-cheap: Hermite / Lagrange centreline derivatives from the formulas of design.md §2, Newton
-projections into solid elements in numpy (with the element modules' shape functions, which
-tests/test_elements.py checks), candidate pairs by numpy brute force.
+Reference values are computed independently of the library's kernels wherever that is
+cheap: arc lengths from the centreline formulas of design.md §2 and candidate pairs by numpy
+brute force (tests/naive.py), Newton projections into solid elements in numpy here (with the
+element modules' shape functions, which tests/test_elements.py checks).
 """
 import warnings
 
@@ -16,6 +16,8 @@ from mortar1d3d import generate
 from mortar1d3d.elements.solid.dispatch import BY_CODE, SOLID_MODULES
 from mortar1d3d.geometry.search import beam_bounding_boxes, find_candidate_pairs, solid_bounding_boxes
 from mortar1d3d.study.reference import newton_projection
+
+from naive import arc_length, brute_force_pairs, constraint_residual, outside_distance, reference_samples
 
 SOLID_TYPES = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
 LM_TYPES = ["line2", "line3", "line4"]
@@ -46,34 +48,6 @@ def lagrange_beams(kind, seed=3):
     return m13.BeamMesh.lagrange(positions, elements, "line3")
 
 
-# -- independent centreline derivative (design.md §2) ----------------------------------------------
-
-def centreline_speed(beams, e, eta):
-    """|r'(η)| of beam element ``e`` at the parameters ``eta`` (numpy, from the §2 formulas)."""
-    eta = np.asarray(eta, dtype=float)
-    nodes = beams.elements[e]
-    kind = beams.element_type.name
-    if kind == "hermite":
-        L = beams.lengths[e]
-        r1, r2 = beams.positions[nodes[0]], beams.positions[nodes[1]]
-        t1, t2 = beams.tangents[nodes[0]], beams.tangents[nodes[1]]
-        d = (np.outer(0.75 * (eta ** 2 - 1), r1) + np.outer(L / 8 * (-1 - 2 * eta + 3 * eta ** 2), t1)
-             + np.outer(0.75 * (1 - eta ** 2), r2) + np.outer(L / 8 * (-1 + 2 * eta + 3 * eta ** 2), t2))
-    elif kind == "line":
-        d = np.outer(np.ones_like(eta), 0.5 * (beams.positions[nodes[1]] - beams.positions[nodes[0]]))
-    else:
-        r1, r2, rm = beams.positions[nodes]
-        d = np.outer(eta - 0.5, r1) + np.outer(eta + 0.5, r2) + np.outer(-2 * eta, rm)
-    return np.linalg.norm(d, axis=1)
-
-
-def gauss_length(beams, e, a, b, n_gauss):
-    """n-point Gauss rule of ∫_a^b |r'(η)| dη on beam element ``e``."""
-    x, w = np.polynomial.legendre.leggauss(n_gauss)
-    eta = 0.5 * (a + b) + 0.5 * (b - a) * x
-    return 0.5 * (b - a) * float(w @ centreline_speed(beams, e, eta))
-
-
 # -- independent projection into a solid element ----------------------------------------------------
 
 def element_of(solid, s):
@@ -91,13 +65,6 @@ def project(solid, s, p, iterations=40):
     return xi, np.linalg.norm(p - N @ X) / h
 
 
-def outside_distance(family, xi):
-    """Distance of ξ outside the reference element (<= 0 inside), max norm / face-wise."""
-    if family == "hex":
-        return np.abs(xi).max() - 1.0
-    return max(-xi.min(), xi.sum() - 1.0)
-
-
 def lowest_containing_element(solid, p, tol=1e-9):
     for s in range(solid.n_elements):
         xi, res = project(solid, s, p)
@@ -107,12 +74,6 @@ def lowest_containing_element(solid, p, tol=1e-9):
 
 
 # -- checks shared by the certificate tests ---------------------------------------------------------
-
-def numpy_residual(ops, q, x):
-    """‖D q − M x‖ / ‖D q‖ with scipy products and numpy norms (the library uses its own kernel)."""
-    Dq = ops.D @ q
-    return np.linalg.norm(Dq - ops.M @ x) / np.linalg.norm(Dq)
-
 
 def assert_segments_tile(ops, beams):
     """Segments of every (fully embedded) beam element: disjoint, in order, tiling [-1, 1] exactly."""
@@ -192,20 +153,20 @@ def test_certificates_on_distorted_meshes(element, integration, lm):
     # the certificate with the tolerance the design's projection tolerance guarantees, as reported
     # and recomputed here from the matrices
     assert ops.constraint_residual < 2e-12
-    assert numpy_residual(ops, beams.centreline_dofs(), solid.points.ravel()) < 2e-12
+    assert constraint_residual(ops, beams.centreline_dofs(), solid.points.ravel()) < 2e-12
     np.testing.assert_allclose(ops.embedded_length, ops.points["weight"].sum(), rtol=1e-14)
     assert_partition_of_unity(ops, beams)
     if integration == "segment":
         assert_segments_tile(ops, beams)
         assert ops.n_integration_points == 6 * len(ops.segments)
-        reference = sum(gauss_length(beams, r["beam_element"], r["eta_start"], r["eta_end"], 6)
+        reference = sum(arc_length(beams, r["beam_element"], r["eta_start"], r["eta_end"], 6)
                         for r in ops.segments)
         np.testing.assert_allclose(ops.embedded_length, reference, rtol=1e-13)
         np.testing.assert_allclose(ops.embedded_length, ops.beam_length, rtol=1e-12)
     else:
         assert ops.diagnostics["points_uncoupled"] == 0
         assert ops.n_integration_points == 6 * beams.n_elements
-        reference = sum(gauss_length(beams, e, -1.0, 1.0, 6) for e in range(beams.n_elements))
+        reference = sum(arc_length(beams, e, -1.0, 1.0, 6) for e in range(beams.n_elements))
         np.testing.assert_allclose(ops.embedded_length, reference, rtol=1e-13)
         # segments of element-based integration: runs of points in one solid element, in η order
         seg = ops.segments
@@ -245,7 +206,7 @@ def test_constraint_residual_measures_a_violated_constraint(integration):
     rng = np.random.default_rng(3)
     for amplitude in (1e-9, 1e-3, 1.0):
         moved = x + amplitude * rng.uniform(-1, 1, x.shape)
-        expected = numpy_residual(ops, q, moved)
+        expected = constraint_residual(ops, q, moved)
         assert expected > 1e-3 * amplitude
         np.testing.assert_allclose(relative_residual(ops.D, q, ops.M, moved), expected, rtol=1e-12)
     # a rigid translation of the solid alone violates the constraint by κ t: ‖κ t‖ / ‖D q‖
@@ -287,12 +248,12 @@ def test_certificates_lagrange_beams(kind, integration):
         assert_partition_of_unity(ops, beams)
         if integration == "segment":
             assert_segments_tile(ops, beams)
-            reference = sum(gauss_length(beams, r["beam_element"], r["eta_start"], r["eta_end"], 6)
+            reference = sum(arc_length(beams, r["beam_element"], r["eta_start"], r["eta_end"], 6)
                             for r in ops.segments)
             np.testing.assert_allclose(ops.embedded_length, reference, rtol=1e-13)
             np.testing.assert_allclose(ops.embedded_length, ops.beam_length, rtol=1e-12)
         else:
-            reference = sum(gauss_length(beams, e, -1.0, 1.0, 6) for e in range(beams.n_elements))
+            reference = sum(arc_length(beams, e, -1.0, 1.0, 6) for e in range(beams.n_elements))
             np.testing.assert_allclose(ops.embedded_length, reference, rtol=1e-13)
     if kind == "line":   # straight pieces: the length is exact
         lengths = np.linalg.norm(np.diff(beams.positions[beams.elements], axis=1)[:, 0], axis=1)
@@ -480,12 +441,6 @@ def test_invariance_beam_renumbering(lm):
 
 # -- 3. broad phase = brute force ------------------------------------------------------------------
 
-def brute_force_pairs(beam_boxes, solid_boxes):
-    """Boolean (n_beam, n_solid): closed boxes overlap in every coordinate."""
-    return ((beam_boxes[:, None, 0, :] <= solid_boxes[None, :, 1, :]).all(axis=2)
-            & (solid_boxes[None, :, 0, :] <= beam_boxes[:, None, 1, :]).all(axis=2))
-
-
 def assert_pairs_equal_brute_force(beam_boxes, solid_boxes):
     offsets, solids = find_candidate_pairs(beam_boxes, solid_boxes)
     assert offsets.shape == (len(beam_boxes) + 1,) and offsets[0] == 0
@@ -579,15 +534,6 @@ def test_broad_phase_box_far_beyond_the_grid():
 
 
 # -- 4. bounding boxes are conservative ---------------------------------------------------------------
-
-def reference_samples(family, n=7):
-    t = np.linspace(-1.0, 1.0, n)
-    cube = np.stack(np.meshgrid(t, t, t, indexing="ij"), axis=-1).reshape(-1, 3)
-    if family == "hex":
-        return cube
-    simplex = 0.5 * (cube + 1.0)
-    return simplex[simplex.sum(axis=1) <= 1.0 + 1e-15]
-
 
 @pytest.mark.parametrize("element", SOLID_TYPES)
 def test_solid_boxes_contain_elements(element):
@@ -773,7 +719,7 @@ def test_fibre_cube_certificates(curved):
     assert_segments_tile(ops, beams)
     assert_partition_of_unity(ops, beams)
     # Σκ is the 6-point rule on the segments (independent reference) ...
-    reference = sum(gauss_length(beams, r["beam_element"], r["eta_start"], r["eta_end"], 6)
+    reference = sum(arc_length(beams, r["beam_element"], r["eta_start"], r["eta_end"], 6)
                     for r in ops.segments)
     np.testing.assert_allclose(ops.embedded_length, reference, rtol=1e-13)
     if curved:

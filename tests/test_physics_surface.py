@@ -6,9 +6,11 @@ import numpy as np
 import pytest
 
 from mortar1d3d import generate
-from mortar1d3d.elements.solid.dispatch import SOLID_ELEMENTS, SOLID_MODULES
+from mortar1d3d.elements.solid.dispatch import SOLID_ELEMENTS
 from mortar1d3d.physics.surface import FACE_DTYPE, Pressure, boundary_faces, face_nodes, traction_force
 from mortar1d3d.quadrature import quadrilateral_rule, triangle_rule
+
+from naive import surface_loads
 
 TYPES = list(SOLID_ELEMENTS)
 SIDES = {"x_min": (0, -1.0), "x_max": (0, 1.0), "y_min": (1, -1.0), "y_max": (1, 1.0),
@@ -229,42 +231,8 @@ def test_tangent_counter():
     assert np.array_equal(f, f2)
 
 
-# ---------------------------------------------------------------------------------------------
-# slow reference: all volume shape functions, higher-order quadrature (5 × 5 Gauss; collapsed
+# slow reference: tests/naive.py surface_loads (all volume shape functions, 5 × 5 Gauss; collapsed
 # Gauss on triangles), no tabulation
-
-
-def _reference_rule(family):
-    x, w = np.polynomial.legendre.leggauss(5)
-    if family == "hex":
-        return [(a, b, wa * wb) for a, wa in zip(x, w) for b, wb in zip(x, w)]
-    s, ws = (x + 1) / 2, w / 2       # Duffy: u = s, v = t (1 - s), dv du = (1 - s) ds dt
-    return [(a, b * (1 - a), wa * wb * (1 - a)) for a, wa in zip(s, ws) for b, wb in zip(s, ws)]
-
-
-def _reference_loads(solid, faces, u, t, p):
-    traction, pressure = np.zeros(solid.points.shape), np.zeros(solid.points.shape)
-    for element, f, code in faces.tolist():
-        d = SOLID_ELEMENTS[[k for k, v in SOLID_ELEMENTS.items() if v.code == code][0]]
-        module = SOLID_MODULES[d.name]
-        nodes = solid.connectivity[element, : d.n_nodes]
-        X = solid.points[nodes]
-        x = X + u[nodes]
-        origin, a, b, normal = d.faces[f]
-        for uq, vq, w in _reference_rule(d.family):
-            xi = origin + uq * a + vq * b
-            N, dN = np.empty(d.n_nodes), np.empty((d.n_nodes, 3))
-            module.shape.py_func(xi, N)
-            module.deriv.py_func(xi, dN)
-            J0, J = X.T @ dN, x.T @ dN
-            dA0 = np.linalg.norm(np.cross(J0 @ a, J0 @ b))
-            n_da = np.cross(J @ a, J @ b)
-            # orient by the physical outward normal of the (valid) reference element
-            if np.cross(J0 @ a, J0 @ b) @ (np.linalg.inv(J0).T @ normal) < 0:
-                n_da = -n_da
-            traction[nodes] += w * dA0 * np.outer(N, t)
-            pressure[nodes] += -p * w * np.outer(N, n_da)
-    return traction.ravel(), pressure.ravel()
 
 
 @pytest.mark.parametrize("name", TYPES)
@@ -280,7 +248,7 @@ def test_against_slow_reference(name):
         solid = type(box)(points, box.cells)
         faces = boundary_faces(solid)[::2]
         u = 0.1 * rng.standard_normal(points.shape)
-        ref_traction, ref_pressure = _reference_loads(solid, faces, u, t, p)
+        ref_traction, ref_pressure = surface_loads(solid, faces, u, t, p)
         f_pressure, _ = Pressure(solid, faces, p).evaluate(u, tangent=False)
         # the pressure integrand is a polynomial that both rules integrate exactly
         assert np.allclose(f_pressure, ref_pressure, rtol=0, atol=1e-13)

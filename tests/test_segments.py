@@ -19,8 +19,11 @@ from numpy.polynomial import Polynomial as P
 
 from mortar1d3d import BeamMesh, assemble_mortar, generate
 
+from naive import (LM_NODES, arc_length, cell_owners, grid_chord_pieces, hermite_curve, hermite_polys, integrate,
+                   lagrange_polys, tet_chord_pieces)
+
 # --------------------------------------------------------------------------------------------
-# helpers (independent of the library)
+# helpers (independent of the library; the polynomials and arc lengths are in tests/naive.py)
 # --------------------------------------------------------------------------------------------
 ETA = P([0.0, 1.0])
 
@@ -35,46 +38,6 @@ def straight_beam(a, b):
     a, b = np.asarray(a, float), np.asarray(b, float)
     d = unit(b - a)
     return BeamMesh.hermite([a, b], [d, d], [[0, 1]])
-
-
-def hermite_polys(L):
-    """H1..H4 of design.md §2 as numpy Polynomials in η."""
-    return [P([2.0, -3.0, 0.0, 1.0]) / 4, P([1.0, -1.0, -1.0, 1.0]) * (L / 8),
-            P([2.0, 3.0, 0.0, -1.0]) / 4, P([-1.0, -1.0, 1.0, 1.0]) * (L / 8)]
-
-
-def hermite_curve(r1, t1, r2, t2, L):
-    """(3,) list of Polynomials x(η), y(η), z(η)."""
-    H = hermite_polys(L)
-    return [H[0] * r1[i] + H[1] * t1[i] + H[2] * r2[i] + H[3] * t2[i] for i in range(3)]
-
-
-def arc_length(curve, a, b, n=60):
-    """∫_a^b |r'(η)| dη with an n-point Gauss rule (the speed is smooth)."""
-    x, w = np.polynomial.legendre.leggauss(n)
-    eta = 0.5 * (a + b) + 0.5 * (b - a) * x
-    d = np.array([c.deriv()(eta) for c in curve])
-    return 0.5 * (b - a) * w @ np.linalg.norm(d, axis=0)
-
-
-def lagrange_polys(nodes):
-    out = []
-    for j, xj in enumerate(nodes):
-        p = P([1.0])
-        for m, xm in enumerate(nodes):
-            if m != j:
-                p = p * P([-xm, 1.0]) / (xj - xm)
-        out.append(p)
-    return out
-
-
-LM_NODES = {"line2": [-1.0, 1.0], "line3": [-1.0, 1.0, 0.0], "line4": [-1.0, 1.0, -1.0 / 3.0, 1.0 / 3.0]}
-
-
-def integrate(p, a=-1.0, b=1.0):
-    """Exact integral of a Polynomial over [a, b]."""
-    q = p.integ()
-    return q(b) - q(a)
 
 
 def seg_list(ops):
@@ -99,19 +62,6 @@ def assert_no_overlap(ops):
         assert np.all(rows["eta_end"] > rows["eta_start"])
         assert np.all(rows["eta_end"][:-1] <= rows["eta_start"][1:])
         assert rows["eta_start"][0] >= -1.0 and rows["eta_end"][-1] <= 1.0
-
-
-def cell_owners(p, lower, h, cells):
-    """Indices of the structured-box hex cells (x fastest) whose closed box contains p."""
-    nx, ny, nz = cells
-    out = []
-    for k in range(nz):
-        for j in range(ny):
-            for i in range(nx):
-                lo = np.asarray(lower) + np.array([i, j, k]) * h
-                if np.all(p >= lo - 1e-12) and np.all(p <= lo + h + 1e-12):
-                    out.append(i + nx * (j + ny * k))
-    return out
 
 
 # --------------------------------------------------------------------------------------------
@@ -163,7 +113,7 @@ def test_curved_hermite_crossing_a_face():
     curve = hermite_curve(r1, t1, r2, t2, L)
     # L is the arc length of the curve it defines; the library's fixed point uses a 10-point
     # Gauss rule (design.md §2), which is 1.2e-12 off the exact integral for this curve
-    assert arc_length(curve, -1.0, 1.0) == pytest.approx(L, rel=1e-11)
+    assert arc_length(beams, 0, -1.0, 1.0, 60) == pytest.approx(L, rel=1e-11)
     # x(η) is a genuine cubic, increasing on [-1, 1], inside the slab in y and z
     x = curve[0]
     assert abs(x.coef[3]) > 1e-2
@@ -183,7 +133,7 @@ def test_curved_hermite_crossing_a_face():
         pts = ops.points
         for s, (lo, hi) in enumerate([(-1.0, eta_cut), (eta_cut, 1.0)]):
             w = pts["weight"][pts["solid_element"] == s].sum()
-            assert w == pytest.approx(arc_length(curve, lo, hi), rel=rtol)
+            assert w == pytest.approx(arc_length(beams, 0, lo, hi, 60), rel=rtol)
         assert ops.constraint_residual < 1e-13
 
 
@@ -193,7 +143,7 @@ def test_curved_hermite_crossing_a_face():
 NODE = np.array([1.0, 1.0, 1.0])
 D_NODE = unit([1.0, 0.8, 0.6])
 DEGENERATE_BEAMS = {
-    # name: (start, end) of a straight beam; expected pieces and owners: _expected_pieces
+    # name: (start, end) of a straight beam; expected pieces and owners: grid_chord_pieces
     "through_node": (NODE - 0.7 * D_NODE, NODE + 0.9 * D_NODE),
     "along_edge_z": ((1.0, 1.0, 0.3), (1.0, 1.0, 1.8)),         # edge x=y=1: 4 hexes each side of z=1
     "along_edge_x": ((0.25, 1.0, 1.0), (1.9, 1.0, 1.0)),        # edge y=z=1
@@ -205,35 +155,6 @@ DEGENERATE_BEAMS = {
 }
 
 
-def _expected_pieces(a, b, cells=(2, 2, 2)):
-    """Pieces of the straight chord a-b: cut at the grid planes, owner = lowest containing cell."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    cuts = {-1.0, 1.0}
-    for i in range(3):
-        if b[i] != a[i]:
-            for plane in range(cells[i] + 1):
-                eta = 2.0 * (plane - a[i]) / (b[i] - a[i]) - 1.0
-                if -1.0 < eta < 1.0:
-                    cuts.add(eta)
-    merged = []
-    for c in sorted(cuts):
-        if not merged or c > merged[-1] + 1e-9:
-            merged.append(c)
-    merged[-1] = 1.0
-    cuts = merged
-    pieces = []
-    for lo, hi in zip(cuts[:-1], cuts[1:]):
-        mid = a + (0.5 * (lo + hi) + 1.0) / 2.0 * (b - a)
-        owners = cell_owners(mid, (0, 0, 0), 1.0, cells)
-        assert owners
-        owner = min(owners)
-        if pieces and pieces[-1][1] == owner:
-            pieces[-1] = (0, owner, pieces[-1][2], hi)
-        else:
-            pieces.append((0, owner, lo, hi))
-    return pieces
-
-
 @pytest.mark.parametrize("name", list(DEGENERATE_BEAMS))
 def test_degenerate_positions_counted_once(name):
     solid = generate.box((0, 0, 0), (2, 2, 2), (2, 2, 2))
@@ -241,7 +162,7 @@ def test_degenerate_positions_counted_once(name):
     beams = straight_beam(a, b)
     L = np.linalg.norm(np.subtract(b, a))
     ops = assemble_mortar(beams, solid)
-    expected = _expected_pieces(a, b)
+    expected = grid_chord_pieces(a, b)
     assert_segments(ops, expected, tol=1e-12)
     assert_no_overlap(ops)
     assert ops.embedded_length == pytest.approx(L, rel=1e-13)
@@ -353,10 +274,10 @@ def test_touching_a_shared_face_counts_the_length_once():
     solid = generate.box((0, 0, 0), (2, 1, 1), (2, 1, 1))
     c = 0.6
     L = _arch_length(c)
-    beams, curve = _arch(1.0 + c * L / 4, "down", c)
+    beams, _ = _arch(1.0 + c * L / 4, "down", c)
     ops = assemble_mortar(beams, solid, n_gauss=20)
     assert_no_overlap(ops)
-    assert ops.embedded_length == pytest.approx(arc_length(curve, -1.0, 1.0), rel=1e-12)
+    assert ops.embedded_length == pytest.approx(arc_length(beams, 0, -1.0, 1.0, 60), rel=1e-12)
     assert ops.segments["eta_start"].min() == -1.0 and ops.segments["eta_end"].max() == 1.0
 
 
@@ -377,7 +298,7 @@ def test_a_shallow_excursion_through_a_face_follows_the_geometry(depth):
     half = np.sqrt(4 * depth / (0.6 * L))                 # x(±half) = 1
     assert abs(curve[0](half) - 1.0) < 1e-14
     ops = assemble_mortar(beams, solid, n_gauss=20)
-    inside = arc_length(curve, -1.0, -half) + arc_length(curve, half, 1.0)
+    inside = arc_length(beams, 0, -1.0, -half, 60) + arc_length(beams, 0, half, 1.0, 60)
     # the roots of a near-double root are determined to ~ round-off / (curvature · half-width)
     assert ops.embedded_length == pytest.approx(inside, rel=1e-12, abs=1e-14 / half)
     assert len(ops.segments) == 2
@@ -386,10 +307,10 @@ def test_a_shallow_excursion_through_a_face_follows_the_geometry(depth):
 @pytest.mark.parametrize("depth", [0.0, -1e-13, -1e-9])
 def test_an_arch_touching_a_face_from_inside_stays_whole(depth):
     solid = generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1))
-    beams, curve, L = _poking_arch(depth)
+    beams, _, L = _poking_arch(depth)
     ops = assemble_mortar(beams, solid, n_gauss=20)
     assert_segments(ops, [(0, 0, -1.0, 1.0)], tol=0.0)
-    assert ops.embedded_length == pytest.approx(arc_length(curve, -1.0, 1.0), rel=1e-13)
+    assert ops.embedded_length == pytest.approx(arc_length(beams, 0, -1.0, 1.0, 60), rel=1e-13)
 
 
 # --------------------------------------------------------------------------------------------
@@ -470,21 +391,21 @@ def _u_beam():
 
 def test_leaving_and_reentering_one_element():
     solid = generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1))
-    beams, curve, es = _u_beam()
+    beams, _, es = _u_beam()
     ops = assemble_mortar(beams, solid, n_gauss=20)
     assert_segments(ops, [(0, 0, -1.0, -es), (0, 0, es, 1.0)], tol=1e-10)
     # exact arc lengths (60-point Gauss); beams.lengths uses 10 points and is 2e-10 off here
-    inside = arc_length(curve, -1.0, -es) + arc_length(curve, es, 1.0)
+    inside = arc_length(beams, 0, -1.0, -es, 60) + arc_length(beams, 0, es, 1.0, 60)
     assert ops.embedded_length == pytest.approx(inside, rel=1e-12)
     assert ops.embedded_length < 0.3 * beams.lengths[0]
 
 
 def test_leaving_into_the_neighbour_and_back():
     solid = generate.box((0, 0, 0), (2, 1, 1), (2, 1, 1))
-    beams, curve, es = _u_beam()
+    beams, _, es = _u_beam()
     ops = assemble_mortar(beams, solid, n_gauss=20)
     assert_segments(ops, [(0, 0, -1.0, -es), (0, 1, -es, es), (0, 0, es, 1.0)], tol=1e-10)
-    assert ops.embedded_length == pytest.approx(arc_length(curve, -1.0, 1.0), rel=1e-12)
+    assert ops.embedded_length == pytest.approx(arc_length(beams, 0, -1.0, 1.0, 60), rel=1e-12)
     assert ops.embedded_length == pytest.approx(beams.lengths[0], rel=1e-9)
 
 
@@ -533,40 +454,13 @@ def test_partly_outside_crossing_through_the_solid():
 # --------------------------------------------------------------------------------------------
 # A (tets). straight beam through Kuhn-split cells
 # --------------------------------------------------------------------------------------------
-def _tet_pieces(solid, a, b):
-    """For each tet: the η interval where all barycentric coordinates of the chord are >= 0."""
-    pieces = []
-    conn = solid.cells["tetra"]
-    for s, nodes in enumerate(conn):
-        X = solid.points[nodes]
-        A = (X[1:] - X[0]).T
-        # p(η) = m + η h;  λ_{1..3} = A⁻¹ (p - X0), λ_0 = 1 - Σ
-        m, h = 0.5 * (a + b), 0.5 * (b - a)
-        l0 = np.linalg.solve(A, m - X[0])
-        l1 = np.linalg.solve(A, h)
-        alpha = np.concatenate([[1 - l0.sum()], l0])
-        beta = np.concatenate([[-l1.sum()], l1])
-        lo, hi = -1.0, 1.0
-        for al, be in zip(alpha, beta):
-            if abs(be) < 1e-15:
-                if al < 0:
-                    lo, hi = 1.0, -1.0
-            elif be > 0:
-                lo = max(lo, -al / be)
-            else:
-                hi = min(hi, -al / be)
-        if hi - lo > 1e-9:
-            pieces.append((0, s, lo, hi))
-    return sorted(pieces, key=lambda p: p[2])
-
-
 def test_straight_beam_through_tets():
     solid = generate.box((0, 0, 0), (2, 1, 1), (2, 1, 1), "tetra")
     a, b = np.array([0.1, 0.2, 0.3]), np.array([1.9, 0.75, 0.85])
     beams = straight_beam(a, b)
     L = np.linalg.norm(b - a)
     ops = assemble_mortar(beams, solid)
-    expected = _tet_pieces(solid, a, b)
+    expected = tet_chord_pieces(solid, a, b)
     assert len(expected) >= 4
     order = np.argsort(ops.segments["eta_start"])
     got = [seg_list(ops)[i] for i in order]
@@ -588,7 +482,7 @@ def test_straight_beam_partly_outside_tets():
     beams = straight_beam(a, b)
     L = np.linalg.norm(b - a)
     ops = assemble_mortar(beams, solid)
-    expected = _tet_pieces(solid, a, b)
+    expected = tet_chord_pieces(solid, a, b)
     order = np.argsort(ops.segments["eta_start"])
     got = [seg_list(ops)[i] for i in order]
     assert [g[1] for g in got] == [e[1] for e in expected]
