@@ -26,7 +26,8 @@ from .._config import CHUNK, njit, njit_parallel
 from .._schedule import n_chunks
 from ..elements.solid.dispatch import MAX_NODES, N_NODES
 from .fibre_material import add_fibres
-from .materials import VOIGT_INDEX, hooke, stress_tangent
+from .kinematics import det3, green_lagrange, small_strain
+from .materials import VOIGT_INDEX, hooke, hooke_stress, stress_tangent
 
 STATUS_OK = 0
 STATUS_INVERTED = 1      # det F <= 0 (or not finite) at a Gauss point
@@ -142,10 +143,7 @@ def _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam,
             F[2, 0] = h20
             F[2, 1] = h21
             F[2, 2] = 1.0 + h22
-            det = (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1])
-                   - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
-                   + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
-            if not det > 0.0:
+            if not det3(F) > 0.0:
                 status = STATUS_INVERTED
             # the material takes H = F - I (P is free until P = F S below)
             P[0, 0], P[0, 1], P[0, 2] = h00, h01, h02
@@ -260,6 +258,20 @@ def assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_ptr
                             data[pos + 2] += Ke[r + 2, b]
 
 
+@njit
+def _add_symmetric(out, e, w, s00, s11, s22, s01, s12, s02):
+    """``out[e] += w s`` for a symmetric tensor ``s`` given by its six components."""
+    out[e, 0, 0] += w * s00
+    out[e, 1, 1] += w * s11
+    out[e, 2, 2] += w * s22
+    out[e, 0, 1] += w * s01
+    out[e, 1, 0] += w * s01
+    out[e, 1, 2] += w * s12
+    out[e, 2, 1] += w * s12
+    out[e, 0, 2] += w * s02
+    out[e, 2, 0] += w * s02
+
+
 @njit_parallel
 def cell_fields_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam, mu, linear,
                        fibre_ptr, fibre_data, fibre_set, strain, stress, status):
@@ -292,18 +304,12 @@ def cell_fields_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_cod
                         for j in range(3):
                             F[i, j] += u[3 * v + i] * dNdX[x + j * n + a]      # ∇u for now
                 if linear:
+                    e00, e11, e22, e01, e12, e02 = small_strain(F)
+                    _add_symmetric(strain, e, w, e00, e11, e22, e01, e12, e02)
+                    hooke_stress(lam, mu, e00, e11, e22, e01, e12, e02, S)      # σ = C₀ : ε
                     for i in range(3):
                         for j in range(3):
-                            eps = 0.5 * (F[i, j] + F[j, i])
-                            strain[e, i, j] += w * eps
-                    # σ = λ tr ε I + 2μ ε (C₀ of :func:`hooke`)
-                    trace = F[0, 0] + F[1, 1] + F[2, 2]
-                    for i in range(3):
-                        for j in range(3):
-                            sigma = mu * (F[i, j] + F[j, i])
-                            if i == j:
-                                sigma += lam * trace
-                            stress[e, i, j] += w * sigma
+                            stress[e, i, j] += w * S[i, j]
                     if fibre_hi > fibre_lo:
                         S[:, :] = 0.0
                         add_fibres(fibre_data, fibre_lo, fibre_hi, F, True, S, Cv)
@@ -314,16 +320,11 @@ def cell_fields_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_cod
                 stress_tangent(mat_code, lam, mu, F, S, Cv)     # takes H = ∇u
                 if fibre_hi > fibre_lo:
                     add_fibres(fibre_data, fibre_lo, fibre_hi, F, False, S, Cv)
-                for i in range(3):
-                    for j in range(3):
-                        # E = (H + Hᵀ + HᵀH) / 2, without the cancellation of (FᵀF - I) / 2
-                        E = 0.5 * (F[i, j] + F[j, i] + F[0, i] * F[0, j] + F[1, i] * F[1, j] + F[2, i] * F[2, j])
-                        strain[e, i, j] += w * E
+                e00, e11, e22, e01, e12, e02 = green_lagrange(F)
+                _add_symmetric(strain, e, w, e00, e11, e22, e01, e12, e02)
                 for i in range(3):
                     F[i, i] += 1.0
-                det = (F[0, 0] * (F[1, 1] * F[2, 2] - F[1, 2] * F[2, 1])
-                       - F[0, 1] * (F[1, 0] * F[2, 2] - F[1, 2] * F[2, 0])
-                       + F[0, 2] * (F[1, 0] * F[2, 1] - F[1, 1] * F[2, 0]))
+                det = det3(F)
                 if not det > 0.0:
                     status[e] = STATUS_INVERTED
                 for i in range(3):
