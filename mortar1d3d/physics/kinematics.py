@@ -9,10 +9,17 @@ Symmetric tensors come back as six scalars in the Voigt order of
 :mod:`~mortar1d3d.physics.materials` (``11, 22, 33, 12, 23, 13``, tensor components, not
 engineering shears): no allocation in the Gauss point loops.
 """
-from .._config import njit
+import numba
+
+from .._config import JIT_OPTIONS
+
+#: :data:`~mortar1d3d._config.njit` that inlines at numba IR level: a helper called from a Gauss
+#: point loop with an array argument otherwise costs a reference count increment and decrement
+#: of that array per call (LLVM inlines the arithmetic but keeps the atomic refcount operations)
+njit_inline = numba.njit(inline="always", **JIT_OPTIONS)
 
 
-@njit
+@njit_inline
 def green_lagrange(H):
     """Green–Lagrange strain ``E = (H + Hᵀ + HᵀH) / 2`` of a displacement gradient.
 
@@ -37,13 +44,13 @@ def green_lagrange(H):
     return e00, e11, e22, e01, e12, e02
 
 
-@njit
+@njit_inline
 def small_strain(H):
     """Small (linearised) strain ``ε = (H + Hᵀ) / 2``: six scalars as :func:`green_lagrange`."""
     return H[0, 0], H[1, 1], H[2, 2], 0.5 * (H[0, 1] + H[1, 0]), 0.5 * (H[1, 2] + H[2, 1]), 0.5 * (H[0, 2] + H[2, 0])
 
 
-@njit
+@njit_inline
 def det3(A):
     """Determinant of a (3, 3) array by cofactors of the first row."""
     return (A[0, 0] * (A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1])

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._config import njit
-from .kinematics import det3, green_lagrange
+from .kinematics import det3, green_lagrange, njit_inline
 
 MATERIALS = ("linear_elastic", "saint_venant_kirchhoff", "neo_hooke")
 LINEAR_ELASTIC, SAINT_VENANT_KIRCHHOFF, NEO_HOOKE = 0, 1, 2
@@ -181,7 +181,7 @@ def stress_tangent(code, lam, mu, H, S, C):
     return 0.5 * lam * trace * trace + mu * EE
 
 
-@njit
+@njit_inline
 def hooke_stress(lam, mu, e00, e11, e22, e01, e12, e02, S):
     """Write Hooke's stress ``λ tr e I + 2μ e`` of a symmetric strain ``e`` (six components) into ``S``.
 

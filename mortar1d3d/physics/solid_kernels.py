@@ -26,7 +26,7 @@ from .._config import CHUNK, njit, njit_parallel
 from .._schedule import n_chunks
 from ..elements.solid.dispatch import MAX_NODES, N_NODES
 from .fibre_material import add_fibres
-from .kinematics import det3, green_lagrange, small_strain
+from .kinematics import det3, green_lagrange, njit_inline, small_strain
 from .materials import VOIGT_INDEX, hooke, hooke_stress, stress_tangent
 
 STATUS_OK = 0
@@ -258,7 +258,7 @@ def assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_ptr
                             data[pos + 2] += Ke[r + 2, b]
 
 
-@njit
+@njit_inline
 def _add_symmetric(out, e, w, s00, s11, s22, s01, s12, s02):
     """``out[e] += w s`` for a symmetric tensor ``s`` given by its six components."""
     out[e, 0, 0] += w * s00
