@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .elements.solid.dispatch import SOLID_ELEMENTS
+from .generate import FACE_SETS as BOX_FACES  # noqa: F401 (the face set names of a generated box)
 from .mesh import BeamMesh, SolidMesh
 
 MATERIAL_MODELS = ("linear_elastic", "saint_venant_kirchhoff", "neo_hooke")
@@ -20,7 +21,6 @@ BEAM_MODELS = ("torsion_free", "truss", "simo_reissner")
 IMPLEMENTED_BEAM_MODELS = ("torsion_free", "truss")
 LOAD_TYPES = ("point", "traction", "pressure", "body", "moment")
 SOLVERS = ("auto", "direct", "amg", "block")
-BOX_FACES = ("x_min", "x_max", "y_min", "y_max", "z_min", "z_max")
 
 
 #: every number of a scene is 0 or has a magnitude in [MIN_MAGNITUDE, MAX_MAGNITUDE]: physical data in

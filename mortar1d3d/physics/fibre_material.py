@@ -25,6 +25,7 @@ import math
 import numpy as np
 
 from .._config import njit
+from .kinematics import green_lagrange, small_strain
 from .materials import stress_tangent
 
 
@@ -63,18 +64,9 @@ def add_fibres(data, lo, hi, H, linear, S, C):
     ``a_I a_J E_IJ + a_J a_I E_JI`` of the tensor product.
     """
     if linear:
-        e00, e11, e22 = H[0, 0], H[1, 1], H[2, 2]
-        e01 = 0.5 * (H[0, 1] + H[1, 0])
-        e12 = 0.5 * (H[1, 2] + H[2, 1])
-        e02 = 0.5 * (H[0, 2] + H[2, 0])
+        e00, e11, e22, e01, e12, e02 = small_strain(H)
     else:
-        # E = (H + Hᵀ + HᵀH)/2 (no cancellation for small strains)
-        e00 = H[0, 0] + 0.5 * (H[0, 0] * H[0, 0] + H[1, 0] * H[1, 0] + H[2, 0] * H[2, 0])
-        e11 = H[1, 1] + 0.5 * (H[0, 1] * H[0, 1] + H[1, 1] * H[1, 1] + H[2, 1] * H[2, 1])
-        e22 = H[2, 2] + 0.5 * (H[0, 2] * H[0, 2] + H[1, 2] * H[1, 2] + H[2, 2] * H[2, 2])
-        e01 = 0.5 * (H[0, 1] + H[1, 0] + H[0, 0] * H[0, 1] + H[1, 0] * H[1, 1] + H[2, 0] * H[2, 1])
-        e12 = 0.5 * (H[1, 2] + H[2, 1] + H[0, 1] * H[0, 2] + H[1, 1] * H[1, 2] + H[2, 1] * H[2, 2])
-        e02 = 0.5 * (H[0, 2] + H[2, 0] + H[0, 0] * H[0, 2] + H[1, 0] * H[1, 2] + H[2, 0] * H[2, 2])
+        e00, e11, e22, e01, e12, e02 = green_lagrange(H)
     W = 0.0
     A = np.empty(6)
     for f in range(lo, hi):

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._config import njit
+from .kinematics import det3, green_lagrange, njit_inline
 
 MATERIALS = ("linear_elastic", "saint_venant_kirchhoff", "neo_hooke")
 LINEAR_ELASTIC, SAINT_VENANT_KIRCHHOFF, NEO_HOOKE = 0, 1, 2
@@ -125,22 +126,14 @@ def stress_tangent(code, lam, mu, H, S, C):
       ``C_IJKL = λ C⁻¹_IJ C⁻¹_KL + (μ - λ ln J)(C⁻¹_IK C⁻¹_JL + C⁻¹_IL C⁻¹_JK)``.
     """
     # Green–Lagrange strain from H (six scalars, no allocation in the hot loop), then C_g = I + 2E
-    e00 = H[0, 0] + 0.5 * (H[0, 0] * H[0, 0] + H[1, 0] * H[1, 0] + H[2, 0] * H[2, 0])
-    e11 = H[1, 1] + 0.5 * (H[0, 1] * H[0, 1] + H[1, 1] * H[1, 1] + H[2, 1] * H[2, 1])
-    e22 = H[2, 2] + 0.5 * (H[0, 2] * H[0, 2] + H[1, 2] * H[1, 2] + H[2, 2] * H[2, 2])
-    e01 = 0.5 * (H[0, 1] + H[1, 0] + H[0, 0] * H[0, 1] + H[1, 0] * H[1, 1] + H[2, 0] * H[2, 1])
-    e12 = 0.5 * (H[1, 2] + H[2, 1] + H[0, 1] * H[0, 2] + H[1, 1] * H[1, 2] + H[2, 1] * H[2, 2])
-    e02 = 0.5 * (H[0, 2] + H[2, 0] + H[0, 0] * H[0, 2] + H[1, 0] * H[1, 2] + H[2, 0] * H[2, 2])
+    e00, e11, e22, e01, e12, e02 = green_lagrange(H)
     c00, c11, c22 = 1.0 + 2.0 * e00, 1.0 + 2.0 * e11, 1.0 + 2.0 * e22
     c01, c12, c02 = 2.0 * e01, 2.0 * e12, 2.0 * e02
     if code == NEO_HOOKE:
         # J - 1 = tr H + (principal 2×2 minors of H) + det H, exact without cancellation
         minors = (H[0, 0] * H[1, 1] - H[0, 1] * H[1, 0] + H[1, 1] * H[2, 2] - H[1, 2] * H[2, 1]
                   + H[0, 0] * H[2, 2] - H[0, 2] * H[2, 0])
-        detH = (H[0, 0] * (H[1, 1] * H[2, 2] - H[1, 2] * H[2, 1])
-                - H[0, 1] * (H[1, 0] * H[2, 2] - H[1, 2] * H[2, 0])
-                + H[0, 2] * (H[1, 0] * H[2, 1] - H[1, 1] * H[2, 0]))
-        Jm1 = H[0, 0] + H[1, 1] + H[2, 2] + minors + detH
+        Jm1 = H[0, 0] + H[1, 1] + H[2, 2] + minors + det3(H)
         J = 1.0 + Jm1
         if not J > 0.0:
             S[:, :] = np.nan
@@ -181,6 +174,20 @@ def stress_tangent(code, lam, mu, H, S, C):
         S[0, 2] = S[2, 0] = 2.0 * mu * CE02 + lam * lnJ * i02
         return mu * (e00 + e11 + e22) - mu * lnJ + 0.5 * lam * lnJ * lnJ
     # saint_venant_kirchhoff and linear_elastic (Hooke's law between S and E)
+    hooke_stress(lam, mu, e00, e11, e22, e01, e12, e02, S)
+    hooke(lam, mu, C)
+    trace = e00 + e11 + e22
+    EE = e00 * e00 + e11 * e11 + e22 * e22 + 2.0 * (e01 * e01 + e12 * e12 + e02 * e02)
+    return 0.5 * lam * trace * trace + mu * EE
+
+
+@njit_inline
+def hooke_stress(lam, mu, e00, e11, e22, e01, e12, e02, S):
+    """Write Hooke's stress ``λ tr e I + 2μ e`` of a symmetric strain ``e`` (six components) into ``S``.
+
+    The stress of ``saint_venant_kirchhoff`` and ``linear_elastic`` (``e = E``) and the small
+    strain stress σ (``e = ε``) of the solid's cell fields.
+    """
     trace = e00 + e11 + e22
     S[0, 0] = lam * trace + 2.0 * mu * e00
     S[1, 1] = lam * trace + 2.0 * mu * e11
@@ -188,9 +195,6 @@ def stress_tangent(code, lam, mu, H, S, C):
     S[0, 1] = S[1, 0] = 2.0 * mu * e01
     S[1, 2] = S[2, 1] = 2.0 * mu * e12
     S[0, 2] = S[2, 0] = 2.0 * mu * e02
-    hooke(lam, mu, C)
-    EE = e00 * e00 + e11 * e11 + e22 * e22 + 2.0 * (e01 * e01 + e12 * e12 + e02 * e02)
-    return 0.5 * lam * trace * trace + mu * EE
 
 
 @njit

@@ -35,7 +35,7 @@ import numpy as np
 import scipy.sparse as sp
 from numba import prange
 
-from .._config import njit_parallel
+from .._config import njit, njit_parallel
 from ..elements.solid.dispatch import BY_CODE, MAX_FACES, deriv, shape
 from ..geometry.linalg import norm3
 
@@ -288,6 +288,25 @@ def _as_field(u, n_nodes, what):
 # kernels
 
 
+@njit
+def _face_tangents(x, conn, e, c, fc, q, m, nodes, dN_du, dN_dv):
+    """``x_,u`` and ``x_,v`` (six scalars) of face ``fc`` of element ``e`` (type ``c``) at point ``q``.
+
+    ``x`` are the node positions, reference (dead traction) or current (follower pressure).
+    """
+    xu0 = xu1 = xu2 = xv0 = xv1 = xv2 = 0.0
+    for k in range(m):
+        a = conn[e, nodes[c, fc, k]]
+        du, dv = dN_du[c, fc, q, k], dN_dv[c, fc, q, k]
+        xu0 += du * x[a, 0]
+        xu1 += du * x[a, 1]
+        xu2 += du * x[a, 2]
+        xv0 += dv * x[a, 0]
+        xv1 += dv * x[a, 1]
+        xv2 += dv * x[a, 2]
+    return xu0, xu1, xu2, xv0, xv1, xv2
+
+
 @njit_parallel
 def _traction_kernel(X, conn, element, code, face, t, nodes, n_face_nodes, n_points, weights, N, dN_du,
                      dN_dv, f_offsets, f_local):
@@ -299,16 +318,7 @@ def _traction_kernel(X, conn, element, code, face, t, nodes, n_face_nodes, n_poi
         for r in range(3 * m):
             f_local[o + r] = 0.0
         for q in range(n_points[c]):
-            xu0 = xu1 = xu2 = xv0 = xv1 = xv2 = 0.0
-            for k in range(m):
-                a = conn[e, nodes[c, fc, k]]
-                du, dv = dN_du[c, fc, q, k], dN_dv[c, fc, q, k]
-                xu0 += du * X[a, 0]
-                xu1 += du * X[a, 1]
-                xu2 += du * X[a, 2]
-                xv0 += dv * X[a, 0]
-                xv1 += dv * X[a, 1]
-                xv2 += dv * X[a, 2]
+            xu0, xu1, xu2, xv0, xv1, xv2 = _face_tangents(X, conn, e, c, fc, q, m, nodes, dN_du, dN_dv)
             dA = weights[c, q] * norm3(xu1 * xv2 - xu2 * xv1, xu2 * xv0 - xu0 * xv2, xu0 * xv1 - xu1 * xv0)
             for k in range(m):
                 g = dA * N[c, fc, q, k]
@@ -339,16 +349,7 @@ def _pressure_kernel(x, conn, element, code, face, p, nodes, n_face_nodes, n_poi
                 k_local[ko + r] = 0.0
         scale = -p * orientation[c, fc]
         for q in range(n_points[c]):
-            xu0 = xu1 = xu2 = xv0 = xv1 = xv2 = 0.0
-            for k in range(m):
-                a = conn[e, nodes[c, fc, k]]
-                du, dv = dN_du[c, fc, q, k], dN_dv[c, fc, q, k]
-                xu0 += du * x[a, 0]
-                xu1 += du * x[a, 1]
-                xu2 += du * x[a, 2]
-                xv0 += dv * x[a, 0]
-                xv1 += dv * x[a, 1]
-                xv2 += dv * x[a, 2]
+            xu0, xu1, xu2, xv0, xv1, xv2 = _face_tangents(x, conn, e, c, fc, q, m, nodes, dN_du, dN_dv)
             n0 = xu1 * xv2 - xu2 * xv1
             n1 = xu2 * xv0 - xu0 * xv2
             n2 = xu0 * xv1 - xu1 * xv0
