@@ -80,6 +80,10 @@ JIT_OPTIONS = dict(cache=True, nogil=True, fastmath=False, error_model="numpy")
 
 njit = numba.njit(**JIT_OPTIONS)
 njit_parallel = numba.njit(parallel=True, **JIT_OPTIONS)
+#: :data:`njit` that inlines at numba IR level: a helper called from a Gauss point loop with an
+#: array argument otherwise costs a reference count increment and decrement of that array per call
+#: (LLVM inlines the arithmetic but keeps the atomic refcount operations)
+njit_inline = numba.njit(inline="always", **JIT_OPTIONS)
 
 # Relative tolerances (design.md §2). Distances are relative to the element size h.
 NEWTON_RESIDUAL_TOL = 1e-12   # |x(xi) - p| <= tol * h

@@ -97,7 +97,7 @@ class SolidElementType:
         derivatives with them (point location, :mod:`mortar1d3d.geometry.projection`) and the
         mesh check bounds det J (:mod:`mortar1d3d.mesh`).
     quadrature : tuple of (points (q, 3), weights (q,))
-        The volume rule of the solid model (:mod:`mortar1d3d.physics.solid`), from
+        The volume rule of the solid model (:mod:`mortar1d3d.physics.solid_reference`), from
         :mod:`mortar1d3d.quadrature`.
     """
 

@@ -9,14 +9,7 @@ Symmetric tensors come back as six scalars in the Voigt order of
 :mod:`~mortar1d3d.physics.materials` (``11, 22, 33, 12, 23, 13``, tensor components, not
 engineering shears): no allocation in the Gauss point loops.
 """
-import numba
-
-from .._config import JIT_OPTIONS
-
-#: :data:`~mortar1d3d._config.njit` that inlines at numba IR level: a helper called from a Gauss
-#: point loop with an array argument otherwise costs a reference count increment and decrement
-#: of that array per call (LLVM inlines the arithmetic but keeps the atomic refcount operations)
-njit_inline = numba.njit(inline="always", **JIT_OPTIONS)
+from .._config import njit_inline
 
 
 @njit_inline

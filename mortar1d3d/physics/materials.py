@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._config import njit
-from .kinematics import det3, green_lagrange, njit_inline
+from .._config import njit, njit_inline
+from .kinematics import det3, green_lagrange
 
 MATERIALS = ("linear_elastic", "saint_venant_kirchhoff", "neo_hooke")
 LINEAR_ELASTIC, SAINT_VENANT_KIRCHHOFF, NEO_HOOKE = 0, 1, 2

@@ -22,11 +22,11 @@ strain and Cauchy stress over each element's Gauss points.
 import numpy as np
 from numba import prange
 
-from .._config import CHUNK, njit, njit_parallel
+from .._config import CHUNK, njit, njit_inline, njit_parallel
 from .._schedule import n_chunks
 from ..elements.solid.dispatch import MAX_NODES, N_NODES
 from .fibre_material import add_fibres
-from .kinematics import det3, green_lagrange, njit_inline, small_strain
+from .kinematics import det3, green_lagrange, small_strain
 from .materials import VOIGT_INDEX, hooke, hooke_stress, stress_tangent
 
 STATUS_OK = 0
