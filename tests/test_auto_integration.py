@@ -12,7 +12,7 @@ import scipy.sparse.linalg as spla
 
 import mortar1d3d as m13
 from mortar1d3d import generate
-from mortar1d3d.integration.rules import AFFINE_TOL, affine_inverse, beam_is_affine, exact_gauss_count
+from mortar1d3d.integration.points import AFFINE_TOL, affine_inverse, beam_is_affine, exact_gauss_count
 
 ROUND_OFF = 1e-13
 

@@ -26,8 +26,8 @@ from ..elements.solid import dispatch as solid_types
 from ..geometry.projection import linear_maps
 from ..geometry.search import beam_frames, find_candidate_pairs, solid_frames
 from ..geometry.segmentation import segment
-from ..integration.rules import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, auto_segments,
-                                 checked_segment_points, element_points, segment_points)
+from ..integration.points import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, auto_segments,
+                                  checked_segment_points, element_points, segment_points)
 from ..mesh import BeamMesh, SolidMesh
 from .sparse import gathered_block_csr, relative_residual, row_sources
 
