@@ -15,7 +15,7 @@ from mortar1d3d.elements.solid.dispatch import (CONTROL_MATRIX, FACE_CONTROL, N_
                                                 SOLID_MODULES, control_points)
 from mortar1d3d._schedule import workers
 from mortar1d3d.geometry.projection import linear_maps
-from mortar1d3d.mortar.assemble import KernelInput
+from mortar1d3d.geometry.context import KernelInput
 
 SOLID_TYPES = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
 

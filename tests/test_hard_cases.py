@@ -161,8 +161,8 @@ def test_shallow_excursion_is_coupled():
                                   "cubic_crossing_one_face_three_times", "distorted_hex8_straight", "sliver_tets_1e-8"])
 def test_bisection_fallback_reproduces_the_segments(name):
     """The last fallback (owner bisected along η, no face intersections) gives the same pieces."""
+    from mortar1d3d.geometry.context import KernelInput
     from mortar1d3d.geometry.segmentation import resegment, segment
-    from mortar1d3d.mortar.assemble import KernelInput
     case = CASES[name]
     ctx = KernelInput(case.beams, case.solid)
     diagnostics = {}

@@ -707,7 +707,7 @@ _BISECTION_SAMPLES = 65
 
 
 class _Beams:
-    """The kernel input of a subset of beam elements (all of them, or the ones being retried)."""
+    """The beam arrays of the kernel context for a subset of beam elements (all of them, or the ones being retried)."""
 
     def __init__(self, ctx, elements=None):
         if elements is None:
@@ -807,7 +807,7 @@ def splice(segments, replacement, elements):
 def segment(ctx, search_points, diagnostics=None):
     """Segments of all beam elements: (beam_element, solid_element, eta_start, eta_end) arrays.
 
-    ``ctx`` is the prepared kernel input of :mod:`mortar1d3d.mortar.assemble`. Also returns the
+    ``ctx`` is the kernel context (:class:`~mortar1d3d.geometry.context.KernelInput`). Also returns the
     number of face crossings found (a diagnostic).
 
     Every beam element's pieces are checked (``_check_tiling``). A beam element that fails is

@@ -23,8 +23,7 @@ from ..elements.beam import MAX_FUNCTIONS
 from ..elements.beam import n_functions as beam_n_functions
 from ..elements.beam import shape as beam_shape
 from ..elements.solid import dispatch as solid_types
-from ..geometry.projection import linear_maps
-from ..geometry.search import beam_frames, find_candidate_pairs, solid_frames
+from ..geometry.context import KernelInput
 from ..geometry.segmentation import segment
 from ..integration.points import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, auto_segments,
                                   checked_segment_points, element_points, segment_points)
@@ -117,23 +116,6 @@ class MortarOperators:
                 f"{len(self.segments)} segments, {self.n_integration_points} points, "
                 f"embedded length {self.embedded_length:.6g} of {self.beam_length:.6g}, "
                 f"residual {self.constraint_residual:.2e})")
-
-
-class KernelInput:
-    """Flat arrays the geometry kernels work on (local frames: see geometry.projection)."""
-
-    def __init__(self, beams, solid):
-        self.points = solid.points
-        self.codes = solid.element_codes
-        self.conn = solid.connectivity
-        self.solid_boxes, self.solid_h, self.solid_origin = solid_frames(solid)
-        # per element: the map linearised at the centre, inverted (exact for affine elements)
-        self.linear = np.empty((solid.n_elements, 5, 3))
-        linear_maps(self.points, self.conn, self.codes, self.solid_origin, self.solid_h, self.linear, workers())
-        self.Q, self.beam_origin, self.beam_boxes, _ = beam_frames(beams)
-        self.lengths = beams.lengths
-        self.beam_code = beams.element_type.code
-        self.pair_offsets, self.pair_solid = find_candidate_pairs(self.beam_boxes, self.solid_boxes)
 
 
 @njit_parallel
