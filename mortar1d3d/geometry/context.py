@@ -20,8 +20,8 @@ class KernelInput:
     Coordinates are local where round-off matters: every solid element's nodes relative to its
     first node (``solid_origin``), every beam element's coefficients relative to its first node
     (``beam_origin``); kernels shift between the two frames by the difference of the origins
-    (see :mod:`~mortar1d3d.geometry.projection`). n = solid elements, m = beam elements,
-    n_pairs = candidate pairs.
+    (see :mod:`~mortar1d3d.geometry.projection`). n = solid elements, m = beam elements (of this
+    context: all of them, or the subset of :meth:`beam_subset`), n_pairs = candidate pairs.
 
     Attributes
     ----------
@@ -56,6 +56,8 @@ class KernelInput:
         beam element e's are ``pair_solid[pair_offsets[e]:pair_offsets[e + 1]]``...
     pair_solid : (n_pairs,) int64
         ...ascending within each beam element (the lowest-index ownership rule relies on it).
+    beam_ids : (m,) int64
+        The global index of each beam element of this context (``arange(m)`` unless a subset).
 
     Notes
     -----
@@ -75,3 +77,33 @@ class KernelInput:
         self.lengths = beams.lengths
         self.beam_code = beams.element_type.code
         self.pair_offsets, self.pair_solid = find_candidate_pairs(self.beam_boxes, self.solid_boxes)
+        self.beam_ids = np.arange(beams.n_elements)
+
+    @property
+    def n_beam(self):
+        """Beam elements of this context (m)."""
+        return len(self.pair_offsets) - 1
+
+    def pair_beam(self):
+        """(n_pairs,) the beam element (of this context) of every candidate pair."""
+        return np.repeat(np.arange(self.n_beam), np.diff(self.pair_offsets))
+
+    def beam_subset(self, elements):
+        """The context of the beam elements ``elements`` (sorted indices into this one, not empty).
+
+        The solid arrays are shared; the beam arrays and the candidate pairs are those of
+        ``elements``, renumbered 0..len(elements)-1, and ``beam_ids`` maps back to the global
+        index (for segments of re-segmented beam elements, :func:`~.segmentation.resegment`).
+        """
+        sub = object.__new__(KernelInput)
+        sub.__dict__.update(self.__dict__)
+        sub.beam_ids = self.beam_ids[elements]
+        counts = self.pair_offsets[elements + 1] - self.pair_offsets[elements]
+        sub.pair_offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        sub.pair_solid = np.concatenate([self.pair_solid[self.pair_offsets[e]:self.pair_offsets[e + 1]]
+                                         for e in elements]).astype(np.int64)
+        sub.Q = np.ascontiguousarray(self.Q[elements])
+        sub.lengths = np.ascontiguousarray(self.lengths[elements])
+        sub.beam_origin = np.ascontiguousarray(self.beam_origin[elements])
+        sub.beam_boxes = np.ascontiguousarray(self.beam_boxes[elements])
+        return sub

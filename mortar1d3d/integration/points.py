@@ -26,7 +26,7 @@ from ..geometry.linalg import norm3
 from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse, affine_parameters,
                                    first_containing, is_affine, linear_parameters, load_element, locate_point,
                                    point_buffers, polish, project_point, search_buffers)
-from ..geometry.segmentation import resegment, splice
+from ..geometry.segmentation import pair_crossings, resegment, tile
 from ..quadrature import gauss_legendre, gauss_tables
 
 #: point outcome codes (as stored in ``status``)
@@ -153,30 +153,51 @@ def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):
     return np.repeat(seg_beam, counts), np.repeat(seg_solid, counts), eta, xi, weight, position, status
 
 
-def checked_segment_points(ctx, segments, n_gauss, search_points, diagnostics):
-    """Integration points of the segments; beam elements with a point outside its owner are re-segmented.
+def _splice(rows, replacement, elements):
+    """``rows`` (arrays whose first holds each row's beam element, ascending) with the rows of beam
+    ``elements`` replaced by those of ``replacement`` (same layout); every beam element's rows stay
+    together and in their order."""
+    replaced = np.isin(rows[0], elements)
+    parts = [np.concatenate([a[~replaced], b]) for a, b in zip(rows, replacement)]
+    order = np.argsort(parts[0], kind="stable")
+    return tuple(a[order] for a in parts)
 
-    A point of a segment that does not lie in (or does not converge in) its owning element
-    means a missed face crossing. Such beam elements are segmented again (more search points,
-    then bisection of the owner, :func:`~mortar1d3d.geometry.segmentation.resegment`) and their
-    points recomputed, so that no result is built on such a point when the fallback resolves
-    it; the counts go to ``diagnostics`` (``segmentation_fallbacks``,
-    ``segmentation_bisections``, ``segmentation_unresolved``).
+
+def checked_segment_points(ctx, segments, bad, n_gauss, search_points, diagnostics):
+    """Integration points of the segments; beam elements whose pieces fail are segmented again.
+
+    ``segments`` and ``bad`` are those of :func:`~mortar1d3d.geometry.segmentation.segment`: a
+    beam element fails when its pieces fail the tiling check (``bad``) or when one of its
+    integration points does not lie in (or does not converge in) its owning element (a missed
+    face crossing). Such beam elements are segmented again, with more search points and then,
+    those still failing, by bisection of the owner
+    (:func:`~mortar1d3d.geometry.segmentation.resegment`), and only their points recomputed, so
+    that no result is built on such a point when the fallback resolves it. ``diagnostics``
+    receives ``segmentation_fallbacks`` (beam elements segmented again),
+    ``segmentation_bisections`` (of those, the ones that needed the bisection) and
+    ``segmentation_unresolved`` (still failing afterwards).
 
     Returns the (possibly new) segments and the points of :func:`segment_points`.
     """
+    segments = tuple(segments)
     points = segment_points(ctx, *segments, n_gauss)
-    for bisection in (False, True):
-        bad = np.unique(points[0][points[6] != INSIDE])
-        if not len(bad):
+    failed = bad.copy()
+    failed[points[0][points[6] != INSIDE]] = True
+    counts = {"segmentation_fallbacks": 0, "segmentation_bisections": 0, "segmentation_unresolved": 0}
+    for key, bisection in (("segmentation_fallbacks", False), ("segmentation_bisections", True)):
+        elements = np.flatnonzero(failed)
+        if not len(elements):
             break
-        key = "segmentation_bisections" if bisection else "segmentation_fallbacks"
-        diagnostics[key] = diagnostics.get(key, 0) + len(bad)
-        segments = splice(segments, resegment(ctx, bad, search_points, bisection), bad)
-        points = segment_points(ctx, *segments, n_gauss)
+        counts[key] = len(elements)
+        *again, still = resegment(ctx, elements, search_points, bisection)
+        again_points = segment_points(ctx, *again, n_gauss)
+        still |= np.isin(elements, again_points[0][again_points[6] != INSIDE])
+        segments = _splice(segments, again, elements)
+        points = _splice(points, again_points, elements)
+        failed[elements] = still
     else:
-        left = len(np.unique(points[0][points[6] != INSIDE]))
-        diagnostics["segmentation_unresolved"] = diagnostics.get("segmentation_unresolved", 0) + left
+        counts["segmentation_unresolved"] = int(np.count_nonzero(failed))
+    diagnostics.update(counts)
     return segments, points
 
 
@@ -416,8 +437,6 @@ def auto_segments(ctx, search_points, n_gauss, n_phi):
     info : dict
         Counts for the diagnostics: face crossings, numeric pairs, beam elements left uncut.
     """
-    from ..geometry.segmentation import _compact_index, _tile, pair_crossings
-
     pair_offsets, pair_solid = ctx.pair_offsets, ctx.pair_solid
     n_beam = len(pair_offsets) - 1
     n_pairs = len(pair_solid)
@@ -433,9 +452,8 @@ def auto_segments(ctx, search_points, n_gauss, n_phi):
     numeric = np.flatnonzero(state == PAIR_NUMERIC)
     crossing_eta, crossing_face = closed, closed_face
     if len(numeric):
-        pair_beam = np.repeat(np.arange(n_beam), np.diff(pair_offsets))
-        found, found_face, found_count, _ = pair_crossings(ctx, pair_beam[numeric], pair_solid[numeric], ctx.Q,
-                                                           ctx.lengths, ctx.beam_origin, ctx.beam_boxes, search_points)
+        found, found_face, found_count, _ = pair_crossings(ctx, ctx.pair_beam()[numeric], pair_solid[numeric],
+                                                           search_points)
         width = max(2, int(found_count.max()))
         crossing_eta = np.empty((n_pairs, width))
         crossing_face = np.empty((n_pairs, width), dtype=np.int64)
@@ -444,24 +462,11 @@ def auto_segments(ctx, search_points, n_gauss, n_phi):
         crossing_eta[numeric, :width] = found[:, :width]
         crossing_face[numeric, :width] = found_face[:, :width]
         count[numeric] = found_count
-    # the segmentation's second stage, unchanged: sort and merge the crossings, owners by the
-    # lowest-index rule, merge neighbours with the same owner (same as segmentation.segment)
-    cumulative = np.concatenate([[0], np.cumsum(count)])
-    seg_offsets = np.concatenate([[0], np.cumsum(cumulative[pair_offsets[1:]] - cumulative[pair_offsets[:-1]] + 1)])
-    total = int(seg_offsets[-1])
-    all_solid, all_start, all_end = np.empty(total, dtype=np.int64), np.empty(total), np.empty(total)
-    seg_count = np.zeros(n_beam, dtype=np.int64)
-    _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, count, ctx.codes, ctx.conn, ctx.points,
-          ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, seg_offsets,
-          all_solid, all_start, all_end, seg_count, workers())
-    keep = _compact_index(seg_offsets, seg_count)
-    seg_beam = np.repeat(np.arange(n_beam), seg_count)
-    seg_solid, seg_start, seg_end = all_solid[keep], all_start[keep], all_end[keep]
+    seg_beam, seg_solid, seg_start, seg_end, per_beam = tile(ctx, crossing_eta, crossing_face, count)
     counts = np.empty(len(seg_beam), dtype=np.int64)
     exact = np.empty(len(seg_beam), dtype=np.bool_)
     _auto_gauss_counts(seg_beam, seg_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h,
                        beam_affine, ctx.beam_code, n_phi, n_gauss, counts, exact, workers())
-    per_beam = np.bincount(seg_beam, minlength=n_beam)
     whole = (per_beam == 1)[seg_beam] & (seg_start == -1.0) & (seg_end == 1.0)
     info = {"face_crossings": int(count.sum()), "numeric_pairs": int(len(numeric)),
             "certified_inside": int(np.count_nonzero(beam_inside >= 0)),

@@ -303,12 +303,12 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
         p_beam, p_solid, eta, xi, weight, position, status = segment_points(
             ctx, seg_beam, seg_solid, seg_start, seg_end, counts)
     elif integration == "segment":
-        seg_beam, seg_solid, seg_start, seg_end, n_cross = segment(ctx, search_points, diagnostics)
-        diagnostics["face_crossings"] = n_cross
+        *segments, bad = segment(ctx, search_points, diagnostics)
         t2 = time.perf_counter()
         timings["segmentation"] = t2 - t1
+        # the fallback (beam elements whose pieces or points fail are segmented again) runs with the points
         (seg_beam, seg_solid, seg_start, seg_end), (p_beam, p_solid, eta, xi, weight, position, status) = \
-            checked_segment_points(ctx, (seg_beam, seg_solid, seg_start, seg_end), n_gauss, search_points, diagnostics)
+            checked_segment_points(ctx, segments, bad, n_gauss, search_points, diagnostics)
     else:
         t2 = t1
         timings["segmentation"] = 0.0
