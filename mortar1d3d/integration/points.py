@@ -386,6 +386,18 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
             begin, stop = claim(claims, n_beam, worker)
 
 
+@njit
+def exact_gauss_count(beam_code, solid_code, n_phi):
+    """Gauss points that integrate Φ·H, Φ·N and Φ exactly on a straight beam in an affine element.
+
+    Degrees in η: Φ_j ``n_phi - 1``, H_k ``BEAM_DEGREE``, N_a(ξ(η)) ``LINE_DEGREE`` (ξ affine in η),
+    |r'| constant; an n-point Gauss rule is exact to degree 2n - 1. The one formula: the kernel
+    ``_auto_gauss_counts`` calls it, and it can be called from Python.
+    """
+    degree = n_phi - 1 + max(BEAM_DEGREE[beam_code], LINE_DEGREE[solid_code])
+    return degree // 2 + 1
+
+
 @njit_parallel
 def _auto_gauss_counts(seg_beam, seg_solid, codes, conn, points, solid_origin, solid_h, beam_affine, beam_code,
                        n_phi, n_gauss, counts, exact, workers):
@@ -405,20 +417,9 @@ def _auto_gauss_counts(seg_beam, seg_solid, codes, conn, points, solid_origin, s
                 if beam_affine[seg_beam[g]]:
                     load_element(points, conn, s, code, solid_origin, X)
                     if affine_inverse(code, X, solid_h[s], AFFINE_TOL, Ainv):
-                        degree = n_phi - 1 + max(BEAM_DEGREE[beam_code], LINE_DEGREE[code])
-                        counts[g] = degree // 2 + 1
+                        counts[g] = exact_gauss_count(beam_code, code, n_phi)
                         exact[g] = True
             begin, stop = claim(claims, n_seg, worker)
-
-
-def exact_gauss_count(beam_code, solid_code, n_phi):
-    """Gauss points that integrate Φ·H, Φ·N and Φ exactly on a straight beam in an affine element.
-
-    Degrees in η: Φ_j ``n_phi - 1``, H_k ``BEAM_DEGREE``, N_a(ξ(η)) ``LINE_DEGREE`` (ξ affine in η),
-    |r'| constant; an n-point Gauss rule is exact to degree 2n - 1.
-    """
-    degree = n_phi - 1 + max(int(BEAM_DEGREE[beam_code]), int(LINE_DEGREE[solid_code]))
-    return degree // 2 + 1
 
 
 def auto_segments(ctx, search_points, n_gauss, n_phi):
