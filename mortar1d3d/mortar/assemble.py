@@ -23,10 +23,11 @@ from ..elements.beam import MAX_FUNCTIONS
 from ..elements.beam import n_functions as beam_n_functions
 from ..elements.beam import shape as beam_shape
 from ..elements.solid import dispatch as solid_types
+from ..geometry.auto_segments import auto_segments
 from ..geometry.context import KernelInput
 from ..geometry.segmentation import segment
-from ..integration.points import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, auto_segments,
-                                  checked_segment_points, element_points, segment_points)
+from ..integration.points import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, checked_segment_points,
+                                  element_points, exact_rule_counts, segment_points)
 from ..mesh import BeamMesh, SolidMesh
 from .sparse import gathered_block_csr, relative_residual, row_sources
 
@@ -295,8 +296,9 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     diagnostics = {"candidate_pairs": len(ctx.pair_solid)}
 
     if integration == "auto":
-        seg_beam, seg_solid, seg_start, seg_end, counts, auto_info = auto_segments(ctx, search_points, n_gauss,
-                                                                                   lm_type.n_functions)
+        seg_beam, seg_solid, seg_start, seg_end, beam_affine, auto_info = auto_segments(ctx, search_points)
+        counts, auto_info["exact_rule_segments"] = exact_rule_counts(ctx, seg_beam, seg_solid, beam_affine,
+                                                                     lm_type.n_functions, n_gauss)
         diagnostics.update(auto_info)
         t2 = time.perf_counter()
         timings["segmentation"] = t2 - t1
