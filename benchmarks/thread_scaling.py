@@ -19,8 +19,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # measure this checkout's package
 
 import mortar1d3d as m13                                          # noqa: E402
-from mortar1d3d.integration.rules import element_points          # noqa: E402
-from mortar1d3d.mortar.assemble import KernelInput                # noqa: E402
+from mortar1d3d.geometry.context import KernelInput               # noqa: E402
+from mortar1d3d.integration.points import element_points         # noqa: E402
 
 
 def _times(f, repeats):

@@ -12,7 +12,9 @@ import scipy.sparse.linalg as spla
 
 import mortar1d3d as m13
 from mortar1d3d import generate
-from mortar1d3d.integration.rules import AFFINE_TOL, affine_inverse, beam_is_affine, exact_gauss_count
+from mortar1d3d.geometry.auto_segments import AFFINE_TOL, beam_is_affine
+from mortar1d3d.geometry.projection import affine_inverse
+from mortar1d3d.integration.points import exact_gauss_count
 
 ROUND_OFF = 1e-13
 

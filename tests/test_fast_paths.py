@@ -15,7 +15,7 @@ from mortar1d3d.elements.solid.dispatch import (CONTROL_MATRIX, FACE_CONTROL, N_
                                                 SOLID_MODULES, control_points)
 from mortar1d3d._schedule import workers
 from mortar1d3d.geometry.projection import linear_maps
-from mortar1d3d.mortar.assemble import KernelInput
+from mortar1d3d.geometry.context import KernelInput
 from mortar1d3d.study.reference import newton_projection
 
 SOLID_TYPES = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
@@ -193,8 +193,7 @@ def test_crossing_table_overflow_is_searched_again(monkeypatch, element):
     monkeypatch.setattr(segmentation, "_FIRST_CAPACITY", 1)     # nearly every crossing pair overflows
     ctx = KernelInput(beams, solid)
     pair_beam = np.repeat(np.arange(beams.n_elements), np.diff(ctx.pair_offsets))
-    crossing_eta, crossing_face, crossing_count, _ = segmentation.pair_crossings(
-        ctx, pair_beam, ctx.pair_solid, ctx.Q, ctx.lengths, ctx.beam_origin, ctx.beam_boxes, 6)
+    crossing_eta, crossing_face, crossing_count, _ = segmentation.pair_crossings(ctx, pair_beam, ctx.pair_solid, 6)
     assert crossing_count.max() > 1 and crossing_eta.shape[1] == crossing_count.max()   # the second pass ran
     assert crossing_face.shape == crossing_eta.shape
     for p, count in enumerate(crossing_count):          # every crossing names a face of its element

@@ -661,16 +661,16 @@ def test_documented_defaults():
 def test_points_that_fail_are_reported_and_never_silently_dropped(small_scene, monkeypatch, outcome):
     """A projection that failed leaves its point out, with a warning and a count; a point outside its
     segment's element is kept (its ξ is still exact) but flagged the same way."""
-    from mortar1d3d.integration import rules
+    from mortar1d3d.integration import points
     from mortar1d3d.mortar import assemble as module
     beams, solid = small_scene
     ref = m13.assemble_mortar(beams, solid, integration="element", n_gauss=4)
     marked = np.array([1, 5, 6])
 
     def element_points(ctx, n_gauss):
-        out = list(rules.element_points(ctx, n_gauss))
+        out = list(points.element_points(ctx, n_gauss))
         out[-1] = out[-1].copy()
-        out[-1][marked] = rules.POINT_NOT_CONVERGED if outcome == "not_converged" else rules.POINT_OUTSIDE
+        out[-1][marked] = points.POINT_NOT_CONVERGED if outcome == "not_converged" else points.POINT_OUTSIDE
         return tuple(out)
 
     monkeypatch.setattr(module, "element_points", element_points)

@@ -1,1 +1,5 @@
-"""Geometry kernels: broad phase, projection into solid elements, beam-face intersection, segmentation."""
+"""Geometry of the coupling, in pipeline order.
+
+search (candidate pairs) -> context (the kernel context) -> segmentation, auto_segments (segments);
+projection, intersection, beam and linalg are the kernels they share.
+"""

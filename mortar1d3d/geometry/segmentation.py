@@ -17,6 +17,13 @@ Two stages, both parallel over independent items with pre-sized output slots:
 
 By construction the segments of a beam element never overlap, and together with the uncoupled
 intervals they tile [-1, 1] exactly.
+
+The stages are :func:`pair_crossings` and :func:`tile` (``integration="auto"`` finds most
+crossings in closed form and shares the second stage); :func:`segment` runs both on every beam
+element of a kernel context (:mod:`~mortar1d3d.geometry.context`) and flags the beam elements
+whose pieces fail :func:`check_tiling`; :func:`resegment` cuts such beam elements again (more
+search points, or bisection of the owner along η), for the one fallback loop of
+:func:`mortar1d3d.integration.points.checked_segment_points`.
 """
 import numpy as np
 from numba import prange
@@ -62,16 +69,16 @@ def _record(eta, face, out_eta, out_face, p, count, overflow):
     return count
 
 
-def pair_crossings(ctx, pair_beam, pair_solid, Q, lengths, beam_origin, beam_boxes, search_points):
-    """Face crossings of the candidate pairs (pair_beam indexes ``Q``, ``lengths``, ...).
+def pair_crossings(ctx, pair_beam, pair_solid, search_points):
+    """The first stage: face crossings of the given pairs (``pair_beam`` indexes the beam elements of ``ctx``).
 
     Returns ``crossing_eta`` (n_pairs, width), ``crossing_face`` (n_pairs, width: the face of the
     solid element each crossing lies on), ``crossing_count`` (n_pairs,) and ``no_face`` (n_pairs,):
     the pairs whose beam element reaches no face of the solid element.
     """
     n = len(pair_solid)
-    args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.linear, ctx.beam_code, Q, lengths,
-            beam_origin, beam_boxes, search_points)
+    args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.linear, ctx.beam_code, ctx.Q,
+            ctx.lengths, ctx.beam_origin, ctx.beam_boxes, search_points)
     full = crossings_capacity(search_points)
     width = min(_FIRST_CAPACITY, full)
     crossing_eta, crossing_face, crossing_count, no_face, overflow = carve(
@@ -706,142 +713,6 @@ _RETRY_SEARCH_POINTS = 4
 _BISECTION_SAMPLES = 65
 
 
-class _Beams:
-    """The kernel input of a subset of beam elements (all of them, or the ones being retried)."""
-
-    def __init__(self, ctx, elements=None):
-        if elements is None:
-            self.ids = np.arange(len(ctx.pair_offsets) - 1)
-            self.pair_offsets, self.pair_solid = ctx.pair_offsets, ctx.pair_solid
-            self.Q, self.lengths, self.beam_origin = ctx.Q, ctx.lengths, ctx.beam_origin
-            self.beam_boxes = ctx.beam_boxes
-        else:
-            self.ids = elements
-            counts = ctx.pair_offsets[elements + 1] - ctx.pair_offsets[elements]
-            self.pair_offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-            self.pair_solid = np.concatenate([ctx.pair_solid[ctx.pair_offsets[e]:ctx.pair_offsets[e + 1]]
-                                              for e in elements]).astype(np.int64)
-            self.Q = np.ascontiguousarray(ctx.Q[elements])
-            self.lengths = np.ascontiguousarray(ctx.lengths[elements])
-            self.beam_origin = np.ascontiguousarray(ctx.beam_origin[elements])
-            self.beam_boxes = np.ascontiguousarray(ctx.beam_boxes[elements])
-        # beam elements that reach no face of any candidate (set by ``crossings``)
-        self.certain = np.zeros(len(self.ids), dtype=np.bool_)
-
-    def crossings(self, ctx, search_points):
-        pair_beam = np.repeat(np.arange(len(self.ids)), np.diff(self.pair_offsets))
-        crossing_eta, crossing_face, crossing_count, no_face = pair_crossings(
-            ctx, pair_beam, self.pair_solid, self.Q, self.lengths, self.beam_origin, self.beam_boxes, search_points)
-        reaching = np.concatenate([[0], np.cumsum(~no_face)])
-        self.certain = reaching[self.pair_offsets[1:]] == reaching[self.pair_offsets[:-1]]
-        self.pairs_out_of_reach = int(no_face.sum())
-        return crossing_eta, crossing_face, crossing_count
-
-    def bisection_crossings(self, ctx):
-        """Owner changes found by bisection, stored as the crossings of each element's first pair."""
-        n = len(self.ids)
-        cap = 4 * _BISECTION_SAMPLES
-        cuts = np.empty((n, cap))
-        count = np.zeros(n, dtype=np.int64)
-        _bisection_cuts(self.pair_offsets, self.pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-                        ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, self.Q, self.lengths,
-                        self.beam_origin, _BISECTION_SAMPLES, cuts, count, workers())
-        crossing_eta = np.zeros((len(self.pair_solid), cap))
-        crossing_face = np.full((len(self.pair_solid), cap), -1, dtype=np.int64)     # not a face crossing
-        crossing_count = np.zeros(len(self.pair_solid), dtype=np.int64)
-        has_pairs = np.diff(self.pair_offsets) > 0
-        first = self.pair_offsets[:-1][has_pairs]
-        crossing_eta[first] = cuts[has_pairs]
-        crossing_count[first] = count[has_pairs]
-        return crossing_eta, crossing_face, crossing_count
-
-    def tile(self, ctx, crossing_eta, crossing_face, crossing_count):
-        """Segments from the crossings, and which beam elements fail the tiling check.
-
-        Returns (beam_element (global ids), solid_element, eta_start, eta_end, bad (per element)).
-        """
-        pair_offsets = self.pair_offsets
-        n_beam = len(self.ids)
-        # at most (crossings + 1) intervals per beam element
-        cumulative = np.concatenate([[0], np.cumsum(crossing_count)])
-        per_beam = cumulative[pair_offsets[1:]] - cumulative[pair_offsets[:-1]] + 1
-        seg_offsets = np.concatenate([[0], np.cumsum(per_beam)]).astype(np.int64)
-        total = seg_offsets[-1]
-        seg_solid = np.empty(total, dtype=np.int64)
-        seg_start = np.empty(total)
-        seg_end = np.empty(total)
-        seg_count = np.zeros(n_beam, dtype=np.int64)
-        args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear,
-                ctx.beam_code, self.Q, self.lengths, self.beam_origin)
-        _tile(pair_offsets, self.pair_solid, crossing_eta, crossing_face, crossing_count, *args,
-              seg_offsets, seg_solid, seg_start, seg_end, seg_count, workers())
-        bad = np.zeros(n_beam, dtype=np.bool_)
-        _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, self.pair_solid,
-                      *args, self.certain, bad, workers())
-        keep = _compact_index(seg_offsets, seg_count)
-        beam_element = np.repeat(self.ids, seg_count)
-        return beam_element, seg_solid[keep], seg_start[keep], seg_end[keep], bad
-
-
-def resegment(ctx, elements, search_points, bisection=False):
-    """Segment the beam elements ``elements`` (sorted ids) again: the fallback of :func:`segment`.
-
-    With ``4 * search_points`` search points, or (``bisection=True``) by bisection of the owner
-    along η, which does not rely on the face intersections at all. Returns (beam_element,
-    solid_element, eta_start, eta_end, bad), ``bad`` (len(elements),) from the tiling check.
-    """
-    sub = _Beams(ctx, np.asarray(elements, dtype=np.int64))
-    if bisection:
-        return sub.tile(ctx, *sub.bisection_crossings(ctx))
-    return sub.tile(ctx, *sub.crossings(ctx, min(64, _RETRY_SEARCH_POINTS * search_points)))
-
-
-def splice(segments, replacement, elements):
-    """Segments with those of beam ``elements`` replaced, ordered by beam element and η."""
-    replaced = np.isin(segments[0], elements)
-    parts = [np.concatenate([a[~replaced], b]) for a, b in zip(segments[:4], replacement[:4])]
-    order = np.lexsort((parts[2], parts[0]))
-    return tuple(a[order] for a in parts)
-
-
-def segment(ctx, search_points, diagnostics=None):
-    """Segments of all beam elements: (beam_element, solid_element, eta_start, eta_end) arrays.
-
-    ``ctx`` is the prepared kernel input of :mod:`mortar1d3d.mortar.assemble`. Also returns the
-    number of face crossings found (a diagnostic).
-
-    Every beam element's pieces are checked (``_check_tiling``). A beam element that fails is
-    segmented again (:func:`resegment`) with ``4 * search_points`` search points, and if it
-    still fails, by bisection of its owner along η. ``diagnostics`` (a dict), if given, receives
-    the counts ``segmentation_fallbacks`` (beam elements segmented again),
-    ``segmentation_bisections`` (of those, the ones that needed the bisection),
-    ``segmentation_unresolved`` (still failing the check afterwards), ``pairs_out_of_reach``
-    (candidate pairs whose beam element reaches no face of the solid element: not searched) and
-    ``beam_elements_out_of_reach`` (beam elements all of whose pairs are such).
-    """
-    everything = _Beams(ctx)
-    crossing_eta, crossing_face, crossing_count = everything.crossings(ctx, search_points)
-    segments = everything.tile(ctx, crossing_eta, crossing_face, crossing_count)
-    bad = segments[4]
-    counts = {"segmentation_fallbacks": int(bad.sum()), "segmentation_bisections": 0, "segmentation_unresolved": 0,
-              "pairs_out_of_reach": everything.pairs_out_of_reach,
-              "beam_elements_out_of_reach": int(everything.certain.sum())}
-    if bad.any():
-        elements = np.flatnonzero(bad)
-        retry = resegment(ctx, elements, search_points)
-        if retry[4].any():
-            elements = elements[retry[4]]
-            counts["segmentation_bisections"] = len(elements)
-            last = resegment(ctx, elements, search_points, bisection=True)
-            counts["segmentation_unresolved"] = int(last[4].sum())
-            retry = splice(retry, last, elements)
-        segments = splice(segments, retry, np.flatnonzero(bad))
-    if diagnostics is not None:
-        for key, value in counts.items():
-            diagnostics[key] = diagnostics.get(key, 0) + value
-    return (*segments[:4], int(crossing_count.sum()))
-
-
 @njit
 def _compact_index(offsets, counts):
     out = np.empty(counts.sum(), dtype=np.int64)
@@ -851,3 +722,111 @@ def _compact_index(offsets, counts):
             out[m] = offsets[e] + q
             m += 1
     return out
+
+
+def tile(ctx, crossing_eta, crossing_face, crossing_count):
+    """The second stage: the segments of every beam element of ``ctx`` from the crossings of its pairs.
+
+    Per beam element, its pairs' crossings (rows of the (n_pairs, width) tables, ``crossing_count``
+    used; face -1: a cut that is no face crossing) and η = ±1 cut [-1, 1] into intervals; each
+    goes to the lowest-index candidate containing its midpoint, neighbours with the same owner
+    are merged (see the module docstring).
+
+    Returns
+    -------
+    seg_beam, seg_solid, seg_start, seg_end : (n_segments,) arrays
+        Beam element (global index: ``ctx.beam_ids``), owning solid element and η range of every
+        segment, ordered by beam element and η.
+    seg_count : (m,) int64
+        Segments per beam element of ``ctx``.
+    """
+    pair_offsets = ctx.pair_offsets
+    # at most (crossings + 1) intervals per beam element
+    cumulative = np.concatenate([[0], np.cumsum(crossing_count)])
+    per_beam = cumulative[pair_offsets[1:]] - cumulative[pair_offsets[:-1]] + 1
+    seg_offsets = np.concatenate([[0], np.cumsum(per_beam)]).astype(np.int64)
+    total = seg_offsets[-1]
+    seg_solid = np.empty(total, dtype=np.int64)
+    seg_start = np.empty(total)
+    seg_end = np.empty(total)
+    seg_count = np.zeros(ctx.n_beam, dtype=np.int64)
+    _tile(pair_offsets, ctx.pair_solid, crossing_eta, crossing_face, crossing_count, ctx.codes, ctx.conn, ctx.points,
+          ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths,
+          ctx.beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count, workers())
+    keep = _compact_index(seg_offsets, seg_count)
+    return np.repeat(ctx.beam_ids, seg_count), seg_solid[keep], seg_start[keep], seg_end[keep], seg_count
+
+
+def check_tiling(ctx, seg_solid, seg_start, seg_end, seg_count, certain):
+    """(m,) bool: the beam elements of ``ctx`` whose segments (of :func:`tile`) fail the tiling check.
+
+    ``certain`` (m,) bool: beam elements that reach no face of any candidate (not probed when
+    they are one piece [-1, 1], see ``_check_tiling``).
+    """
+    seg_offsets = np.concatenate([[0], np.cumsum(seg_count)]).astype(np.int64)
+    bad = np.zeros(ctx.n_beam, dtype=np.bool_)
+    _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, ctx.pair_offsets, ctx.pair_solid, ctx.codes,
+                  ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code,
+                  ctx.Q, ctx.lengths, ctx.beam_origin, certain, bad, workers())
+    return bad
+
+
+def _bisected(ctx):
+    """Both stages with the owner changes found by bisection as cuts: (seg_beam, ..., seg_end, bad).
+
+    The cuts are stored as the crossings (face -1) of each beam element's first pair.
+    """
+    n = ctx.n_beam
+    cap = 4 * _BISECTION_SAMPLES
+    cuts = np.empty((n, cap))
+    count = np.zeros(n, dtype=np.int64)
+    _bisection_cuts(ctx.pair_offsets, ctx.pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h,
+                    ctx.solid_boxes, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin,
+                    _BISECTION_SAMPLES, cuts, count, workers())
+    crossing_eta = np.zeros((len(ctx.pair_solid), cap))
+    crossing_face = np.full((len(ctx.pair_solid), cap), -1, dtype=np.int64)     # not a face crossing
+    crossing_count = np.zeros(len(ctx.pair_solid), dtype=np.int64)
+    has_pairs = np.diff(ctx.pair_offsets) > 0
+    first = ctx.pair_offsets[:-1][has_pairs]
+    crossing_eta[first] = cuts[has_pairs]
+    crossing_count[first] = count[has_pairs]
+    *segments, seg_count = tile(ctx, crossing_eta, crossing_face, crossing_count)
+    # every beam element is probed: without face crossings no element is known to be one piece
+    return (*segments, check_tiling(ctx, *segments[1:], seg_count, np.zeros(n, dtype=np.bool_)))
+
+
+def segment(ctx, search_points, diagnostics=None):
+    """Segments of all beam elements of ``ctx``, and which of them fail the tiling check.
+
+    Returns (beam_element, solid_element, eta_start, eta_end, bad): the segments of :func:`tile`
+    and ``bad`` (m,) bool from :func:`check_tiling`. A beam element that fails is to be segmented
+    again (:func:`resegment`); :func:`mortar1d3d.integration.points.checked_segment_points` does
+    that, for these and for the beam elements whose integration points miss their owner.
+    ``diagnostics`` (a dict), if given, receives ``face_crossings``, ``pairs_out_of_reach``
+    (candidate pairs whose beam element reaches no face of the solid element: not searched) and
+    ``beam_elements_out_of_reach`` (beam elements all of whose pairs are such).
+    """
+    crossing_eta, crossing_face, crossing_count, no_face = pair_crossings(ctx, ctx.pair_beam(), ctx.pair_solid,
+                                                                          search_points)
+    reaching = np.concatenate([[0], np.cumsum(~no_face)])
+    certain = reaching[ctx.pair_offsets[1:]] == reaching[ctx.pair_offsets[:-1]]
+    *segments, seg_count = tile(ctx, crossing_eta, crossing_face, crossing_count)
+    bad = check_tiling(ctx, *segments[1:], seg_count, certain)
+    if diagnostics is not None:
+        diagnostics["face_crossings"] = int(crossing_count.sum())
+        diagnostics["pairs_out_of_reach"] = int(no_face.sum())
+        diagnostics["beam_elements_out_of_reach"] = int(certain.sum())
+    return (*segments, bad)
+
+
+def resegment(ctx, elements, search_points, bisection=False):
+    """Segment the beam elements ``elements`` (sorted indices) of ``ctx`` again: the fallback of :func:`segment`.
+
+    With ``4 * search_points`` search points, or (``bisection=True``) by bisection of the owner
+    along η, which does not rely on the face intersections at all. Returns (beam_element,
+    solid_element, eta_start, eta_end, bad), ``bad`` (len(elements),) from the tiling check.
+    """
+    sub = ctx.beam_subset(np.asarray(elements, dtype=np.int64))
+    if bisection:
+        return _bisected(sub)
+    return segment(sub, min(64, _RETRY_SEARCH_POINTS * search_points))

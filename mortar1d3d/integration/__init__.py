@@ -1,1 +1,1 @@
-"""Quadrature and integration points (element-based and segment-based)."""
+"""Integration points of the coupling integrals: segment-based, element-based and auto (points.py)."""

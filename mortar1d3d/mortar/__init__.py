@@ -1,1 +1,1 @@
-"""Assembly of the mortar operators D, M and κ."""
+"""Assembly of the mortar operators D, M and κ from the integration points (assemble), deterministic CSR (sparse)."""

@@ -23,11 +23,11 @@ from ..elements.beam import MAX_FUNCTIONS
 from ..elements.beam import n_functions as beam_n_functions
 from ..elements.beam import shape as beam_shape
 from ..elements.solid import dispatch as solid_types
-from ..geometry.projection import linear_maps
-from ..geometry.search import beam_frames, find_candidate_pairs, solid_frames
+from ..geometry.auto_segments import auto_segments
+from ..geometry.context import KernelInput
 from ..geometry.segmentation import segment
-from ..integration.rules import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, auto_segments,
-                                 checked_segment_points, element_points, segment_points)
+from ..integration.points import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, checked_segment_points,
+                                  element_points, exact_rule_counts, segment_points)
 from ..mesh import BeamMesh, SolidMesh
 from .sparse import gathered_block_csr, relative_residual, row_sources
 
@@ -117,23 +117,6 @@ class MortarOperators:
                 f"{len(self.segments)} segments, {self.n_integration_points} points, "
                 f"embedded length {self.embedded_length:.6g} of {self.beam_length:.6g}, "
                 f"residual {self.constraint_residual:.2e})")
-
-
-class KernelInput:
-    """Flat arrays the geometry kernels work on (local frames: see geometry.projection)."""
-
-    def __init__(self, beams, solid):
-        self.points = solid.points
-        self.codes = solid.element_codes
-        self.conn = solid.connectivity
-        self.solid_boxes, self.solid_h, self.solid_origin = solid_frames(solid)
-        # per element: the map linearised at the centre, inverted (exact for affine elements)
-        self.linear = np.empty((solid.n_elements, 5, 3))
-        linear_maps(self.points, self.conn, self.codes, self.solid_origin, self.solid_h, self.linear, workers())
-        self.Q, self.beam_origin, self.beam_boxes, _ = beam_frames(beams)
-        self.lengths = beams.lengths
-        self.beam_code = beams.element_type.code
-        self.pair_offsets, self.pair_solid = find_candidate_pairs(self.beam_boxes, self.solid_boxes)
 
 
 @njit_parallel
@@ -313,20 +296,21 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     diagnostics = {"candidate_pairs": len(ctx.pair_solid)}
 
     if integration == "auto":
-        seg_beam, seg_solid, seg_start, seg_end, counts, auto_info = auto_segments(ctx, search_points, n_gauss,
-                                                                                   lm_type.n_functions)
+        seg_beam, seg_solid, seg_start, seg_end, beam_affine, auto_info = auto_segments(ctx, search_points)
+        counts, auto_info["exact_rule_segments"] = exact_rule_counts(ctx, seg_beam, seg_solid, beam_affine,
+                                                                     lm_type.n_functions, n_gauss)
         diagnostics.update(auto_info)
         t2 = time.perf_counter()
         timings["segmentation"] = t2 - t1
         p_beam, p_solid, eta, xi, weight, position, status = segment_points(
             ctx, seg_beam, seg_solid, seg_start, seg_end, counts)
     elif integration == "segment":
-        seg_beam, seg_solid, seg_start, seg_end, n_cross = segment(ctx, search_points, diagnostics)
-        diagnostics["face_crossings"] = n_cross
+        *segments, bad = segment(ctx, search_points, diagnostics)
         t2 = time.perf_counter()
         timings["segmentation"] = t2 - t1
+        # the fallback (beam elements whose pieces or points fail are segmented again) runs with the points
         (seg_beam, seg_solid, seg_start, seg_end), (p_beam, p_solid, eta, xi, weight, position, status) = \
-            checked_segment_points(ctx, (seg_beam, seg_solid, seg_start, seg_end), n_gauss, search_points, diagnostics)
+            checked_segment_points(ctx, segments, bad, n_gauss, search_points, diagnostics)
     else:
         t2 = t1
         timings["segmentation"] = 0.0
