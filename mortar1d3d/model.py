@@ -1238,26 +1238,14 @@ def solve(scene, *, progress=False):
     import time as _time
 
     from .result import Result
-    from .solvers.newton import StepRecord, solve_load_steps
+    from .solvers.newton import solve_linear_step, solve_load_steps
     start = _time.perf_counter()
     model = Model(_as_scene(scene)).prepare()
     callback = _print_step if progress is True else (progress or None)
     z0 = np.zeros(model.n_unknowns)
     if model.linear:
         model.counts["solver.linear"] += 1
-        r0, K0 = model.residual(z0, 1.0)
-        z = z0.copy()
-        z[model.fixed] = model.prescribed(1.0)
-        free = model.free
-        rhs = -(r0 + K0 @ z)[free]
-        z[free] += model.solve_linear(K0[free][:, free], rhs)
-        model.last_residual = r0 + K0 @ z
-        note = model.last_linear_info.get("note")
-        record = StepRecord(load_factor=1.0, iterations=1,
-                            residuals=[float(np.linalg.norm(r0[free] + (K0 @ z0)[free])),
-                                       float(np.linalg.norm(model.last_residual[free]))],
-                            increments=[float(np.linalg.norm(z[free]))], time=_time.perf_counter() - start,
-                            notes=[note] if note else [])
+        z, record, model.last_residual = solve_linear_step(model, z0, started=start)
         records, history = [record], [z.copy()]
         model.check_linear_displacements(z)
         if callback:

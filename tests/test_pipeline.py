@@ -4,7 +4,43 @@ and the linear step of the Newton module."""
 import numpy as np
 import pytest
 
+import mortar1d3d as m13
 from mortar1d3d.elements.beam import BEAM_ELEMENTS, MAX_FUNCTIONS, deriv, evaluate, shape
+from mortar1d3d.model import Model
+from mortar1d3d.scene import Scene
+from mortar1d3d.solvers.newton import solve_linear_step
+
+
+def coupled_scene(**analysis):
+    """Two beam types in one solid: a torsion-free beam and two trusses (two groups)."""
+    return Scene(solid={"mesh": {"box": [[0, 0, 0], [1, 0.4, 0.4]], "cells": [3, 1, 1]},
+                        "material": {"model": "linear_elastic", "E": 100.0, "nu": 0.3}},
+                 beams=[{"curve": {"line": [[0.1, 0.2, 0.2], [0.9, 0.2, 0.2]]}, "elements": 3,
+                         "section": {"EA": 5.0, "EI": 0.1}},
+                        {"curve": {"line": [[0.1, 0.1, 0.1], [0.9, 0.3, 0.3]]}, "elements": 2, "model": "truss",
+                         "section": {"EA": 2.0}},
+                        {"curve": {"line": [[0.1, 0.3, 0.1], [0.9, 0.1, 0.3]]}, "elements": 4, "model": "truss",
+                         "section": {"EA": 3.0}}],
+                 dirichlet=[{"on": "solid:x_min"}],
+                 load=[{"type": "traction", "on": "solid:x_max", "value": [0, 0, -0.1]}],
+                 analysis={"kinematics": "linear", **analysis})
+
+
+def test_linear_step_of_the_newton_module_solves_the_linear_system():
+    model = Model(coupled_scene()).prepare()
+    z0 = np.zeros(model.n_unknowns)
+    z, record, r = solve_linear_step(model, z0)
+    r0, K0 = model.residual(z0, 1.0)            # the system linearised at z0
+    free = model.free
+    assert r.tobytes() == (r0 + K0 @ z).tobytes()      # z0 = 0
+    assert np.linalg.norm(r[free]) <= 1e-9 * record.residuals[0]
+    np.testing.assert_array_equal(z[model.fixed], model.prescribed(1.0))
+    assert record.iterations == 1 and record.load_factor == 1.0
+    # solve() takes the same step: bit for bit
+    result = m13.solve(coupled_scene())
+    assert result.z.tobytes() == model.basis.to_physical(z).tobytes()
+    assert result.steps[0].residuals == record.residuals
+
 
 
 # --------------------------------------------------------------------------------------------
