@@ -7,7 +7,9 @@ import pytest
 import mortar1d3d as m13
 from mortar1d3d.elements.beam import BEAM_ELEMENTS, MAX_FUNCTIONS, deriv, evaluate, shape
 from mortar1d3d.model import Model
-from mortar1d3d.scene import Scene
+from mortar1d3d.physics.beam import BeamModel
+from mortar1d3d.physics.beam_types import BEAM_TYPES, PLANNED_BEAM_TYPES, beam_type
+from mortar1d3d.scene import BEAM_MODELS, IMPLEMENTED_BEAM_MODELS, Scene
 from mortar1d3d.solvers.newton import solve_linear_step
 
 
@@ -41,6 +43,25 @@ def test_linear_step_of_the_newton_module_solves_the_linear_system():
     assert result.z.tobytes() == model.basis.to_physical(z).tobytes()
     assert result.steps[0].residuals == record.residuals
 
+
+
+# --------------------------------------------------------------------------------------------
+# beam types
+# --------------------------------------------------------------------------------------------
+def test_beam_types_take_their_dofs_from_the_element_type():
+    for t in BEAM_TYPES.values():
+        assert t.dofs_per_node == t.element.dofs_per_node
+        assert t.element is BEAM_ELEMENTS[t.element.name]
+        assert t.physics_class() is BeamModel
+    assert BEAM_TYPES["torsion_free"].element.has_tangents and not BEAM_TYPES["truss"].element.has_tangents
+    # the scene validates against the registry (planned types are named, not run)
+    assert IMPLEMENTED_BEAM_MODELS == tuple(BEAM_TYPES)
+    assert BEAM_MODELS == tuple(BEAM_TYPES) + PLANNED_BEAM_TYPES
+    with pytest.raises(NotImplementedError, match=r"'simo_reissner' is not implemented yet; use 'torsion_free' "
+                                                  r"\(Hermite centreline\) or 'truss' \(line\)"):
+        beam_type("simo_reissner")
+    with pytest.raises(ValueError, match="unknown beam model 'cable'; known models: torsion_free, truss"):
+        beam_type("cable")
 
 
 # --------------------------------------------------------------------------------------------

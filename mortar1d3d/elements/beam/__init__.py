@@ -37,6 +37,11 @@ class BeamElementType:
     function_node: tuple
     function_offset: tuple
 
+    @property
+    def has_tangents(self):
+        """True when some coefficients are nodal tangents (DOF offset 3 in their node's block)."""
+        return any(offset > 0 for offset in self.function_offset)
+
 
 BEAM_ELEMENTS = {
     "hermite": BeamElementType("hermite", 0, 2, 4, 6, (0, 0, 1, 1), (0, 3, 0, 3)),
