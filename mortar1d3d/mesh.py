@@ -9,7 +9,7 @@ from numba import prange
 
 from ._config import njit, njit_parallel
 from .elements.beam import BEAM_ELEMENTS, beam_element
-from .elements.beam import hermite as _hermite
+from .elements.beam import evaluate as _beam_functions
 from .elements.solid.dispatch import MAX_NODES, N_NODES, SOLID_ELEMENTS, solid_element
 from .elements.validity import DEGENERATE, FOLDED, INVERTED, jacobian_validity
 from .errors import MeshError, format_ids
@@ -353,7 +353,7 @@ class BeamMesh:
         Q = self.coefficients()
         if self.element_type.name == "line":
             return np.linalg.norm(Q[:, 1] - Q[:, 0], axis=1)
-        dH = np.stack([x - 0.5, x + 0.5, -2 * x], axis=1)             # (q, 3)
+        dH = np.ascontiguousarray(_beam_functions(self.element_type, x, derivative=True)[:, :3])   # (q, 3)
         d = np.einsum("qk,mki->qmi", dH, Q[:, :3])
         return w @ np.linalg.norm(d, axis=2)
 
@@ -362,15 +362,7 @@ class BeamMesh:
         eta = np.atleast_1d(np.asarray(eta, dtype=float))
         Q = self.coefficients(element)[0]
         L = self.lengths[element]
-        if self.element_type.name == "hermite":
-            H = np.empty((len(eta), 4))
-            for i, e in enumerate(eta):
-                _hermite.shape.py_func(e, L, H[i])
-        elif self.element_type.name == "line":
-            H = np.column_stack([0.5 * (1 - eta), 0.5 * (1 + eta), 0 * eta, 0 * eta])
-        else:
-            H = np.column_stack([0.5 * eta * (eta - 1), 0.5 * eta * (eta + 1), 1 - eta * eta, 0 * eta])
-        return H @ Q
+        return _beam_functions(self.element_type, eta, L) @ Q
 
     def __repr__(self):
         return (f"BeamMesh({self.element_type.name}: {self.n_nodes} nodes, {self.n_elements} elements, "

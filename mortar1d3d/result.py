@@ -46,9 +46,9 @@ class Result:
         for entry in range(len(self.scene.beams)):
             g = model.entry_group[entry]
             nodes = self._entry_nodes(g, entry)
-            q = z[g.dof_offset: g.dof_offset + g.mesh.n_centreline_dofs].reshape(g.mesh.n_nodes, -1)
+            q = z[g.dofs.slice].reshape(g.mesh.n_nodes, -1)
             pos.append(q[nodes, :3])
-            tan.append(q[nodes, 3:6] if g.model == "torsion_free" else np.zeros((len(nodes), 3)))
+            tan.append(q[nodes, 3:6] if g.type.element.has_tangents else np.zeros((len(nodes), 3)))
         self.beam_displacement = np.vstack(pos) if pos else np.zeros((0, 3))
         self.beam_tangent_displacement = np.vstack(tan) if tan else np.zeros((0, 3))
         self.line_load = self._line_load(z)
@@ -142,7 +142,7 @@ class Result:
                 lm_start = 0
                 for gi, g in enumerate(model.groups):
                     suffix = f"{gi}_" if len(model.groups) > 1 else ""
-                    d = z[g.dof_offset: g.dof_offset + g.mesh.n_centreline_dofs]
+                    d = z[g.dofs.slice]
                     data = self._beam_samples(g, d, samples_per_element)
                     if g.coupling is not None:
                         data["line_load"] = self._line_load_samples(g, lam_all[lm_start: lm_start + g.coupling.n_lm],
@@ -167,7 +167,7 @@ class Result:
         eta = np.linspace(-1.0, 1.0, s)
         sample = g.physics.sample(d, eta)
         out = {}
-        for key in ("displacement", "axial_force", "curvature"):
+        for key in g.type.output_fields:
             if key in sample:
                 v = np.asarray(sample[key])
                 out[key] = v.reshape(g.mesh.n_elements * s, *v.shape[2:])

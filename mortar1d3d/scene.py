@@ -15,10 +15,12 @@ import numpy as np
 from .elements.solid.dispatch import SOLID_ELEMENTS
 from .generate import FACE_SETS as BOX_FACES  # noqa: F401 (the face set names of a generated box)
 from .mesh import BeamMesh, SolidMesh
+from .physics.beam_types import BEAM_TYPES, DEFAULT_BEAM_TYPE, PLANNED_BEAM_TYPES
 
 MATERIAL_MODELS = ("linear_elastic", "saint_venant_kirchhoff", "neo_hooke")
-BEAM_MODELS = ("torsion_free", "truss", "simo_reissner")
-IMPLEMENTED_BEAM_MODELS = ("torsion_free", "truss")
+#: beam models a scene may name (the registry's, then the planned ones) and those that run
+IMPLEMENTED_BEAM_MODELS = tuple(BEAM_TYPES)
+BEAM_MODELS = IMPLEMENTED_BEAM_MODELS + PLANNED_BEAM_TYPES
 LOAD_TYPES = ("point", "traction", "pressure", "body", "moment")
 SOLVERS = ("auto", "direct", "amg", "block")
 
@@ -232,10 +234,11 @@ def _curve(value, path):
 def _beam(value, i, base_dir):
     path = f"beams[{i}]"
     _table(value, path, ("curve", "mesh", "elements", "model", "section"), required=("section",))
-    model = _choice(value.get("model", "torsion_free"), f"{path}.model", BEAM_MODELS)
+    model = _choice(value.get("model", DEFAULT_BEAM_TYPE), f"{path}.model", BEAM_MODELS)
     if model not in IMPLEMENTED_BEAM_MODELS:
         _fail(f"{path}.model", f"{model!r} beams are not implemented yet; use one of "
                                f"{', '.join(map(repr, IMPLEMENTED_BEAM_MODELS))}")
+    kind = BEAM_TYPES[model]
     if ("curve" in value) == ("mesh" in value):
         _fail(path, "give exactly one of curve or mesh")
     out = {"model": model}
@@ -254,7 +257,7 @@ def _beam(value, i, base_dir):
         if "elements" in value:
             _fail(f"{path}.elements", "the mesh defines the elements; leave elements out")
         if isinstance(mesh, BeamMesh):
-            wanted = "hermite" if model == "torsion_free" else "line"
+            wanted = kind.element.name
             if mesh.element_type.name != wanted:
                 _fail(f"{path}.mesh", f"{model} beams need a {wanted!r} BeamMesh, got {mesh.element_type.name!r}")
             out["mesh"] = mesh
@@ -273,15 +276,15 @@ def _beam(value, i, base_dir):
         E = _number(_required(s, "E", f"{path}.section"), f"{path}.section.E", low=0.0, low_open=True)
         r = _number(_required(s, "radius", f"{path}.section"), f"{path}.section.radius", low=0.0,
                     low_open=True)
-        # a truss has no bending stiffness: EI derived from the radius would only be ignored
-        EI = 0.0 if model == "truss" else E * math.pi * r ** 4 / 4.0
+        # a beam without bending stiffness (truss): EI derived from the radius would only be ignored
+        EI = E * math.pi * r ** 4 / 4.0 if kind.bending else 0.0
         out["section"] = {"EA": E * math.pi * r * r, "EI": EI, "E": E, "radius": r}
     else:
         EA = _number(_required(s, "EA", f"{path}.section"), f"{path}.section.EA", low=0.0, low_open=True)
-        if model == "truss":
-            EI = _number(s.get("EI", 0.0), f"{path}.section.EI", low=0.0)
-        else:
+        if kind.bending:
             EI = _number(_required(s, "EI", f"{path}.section"), f"{path}.section.EI", low=0.0, low_open=True)
+        else:
+            EI = _number(s.get("EI", 0.0), f"{path}.section.EI", low=0.0)
         out["section"] = {"EA": EA, "EI": EI}
     return out
 
@@ -426,7 +429,7 @@ class Scene:
                 _fail(f"load[{i}]", "a body force needs a solid")
             if item["type"] == "moment":
                 beam = int(item["on"].split(":")[1])
-                if beam < len(self.beams) and self.beams[beam]["model"] != "torsion_free":
+                if beam < len(self.beams) and not BEAM_TYPES[self.beams[beam]["model"]].bending:
                     _fail(f"load[{i}].on", f"a moment needs a beam with bending stiffness; beam {beam} is a "
                                            f"{self.beams[beam]['model']}")
 

@@ -218,7 +218,7 @@ def test_free_rigid_body_motion_is_reported_before_solving(monkeypatch):
 
 
 def test_scenes_run_only_what_they_declare(monkeypatch):
-    import mortar1d3d.model as model_module
+    import mortar1d3d.model.model as model_module
     calls = []
     real = model_module.assemble_mortar
     monkeypatch.setattr(model_module, "assemble_mortar", lambda *a, **k: calls.append(1) or real(*a, **k))

@@ -20,6 +20,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from ..elements.beam import evaluate as beam_functions
 from ..mesh import BeamMesh, SolidMesh
 from ..quadrature import gauss_legendre
 
@@ -39,47 +40,16 @@ __all__ = ["write_solid", "write_beams", "write_segments", "write_integration_po
 # --------------------------------------------------------------------------------------------
 # curve evaluation (vectorised over elements)
 # --------------------------------------------------------------------------------------------
-def _basis(kind, eta):
-    """Centreline functions of ``kind`` at ``eta`` (any shape): ``eta.shape + (4,)``.
-
-    Hermite functions H2, H4 are given for L = 1; the element length is folded into the
-    coefficients instead (see :func:`_scaled_coefficients`).
-    """
-    e = np.asarray(eta, dtype=np.float64)
-    z = np.zeros_like(e)
-    if kind == "hermite":
-        e2 = e * e
-        e3 = e2 * e
-        return np.stack([0.25 * (2.0 - 3.0 * e + e3), 0.125 * (1.0 - e - e2 + e3),
-                         0.25 * (2.0 + 3.0 * e - e3), 0.125 * (-1.0 - e + e2 + e3)], axis=-1)
-    if kind == "line":
-        return np.stack([0.5 * (1.0 - e), 0.5 * (1.0 + e), z, z], axis=-1)
-    if kind == "line3":
-        return np.stack([0.5 * e * (e - 1.0), 0.5 * e * (e + 1.0), 1.0 - e * e, z], axis=-1)
-    raise ValueError(f"unknown beam element type {kind!r}")
-
-
-def _basis_deriv(kind, eta):
-    """d/dη of :func:`_basis`: ``eta.shape + (4,)`` (Hermite H2', H4' for L = 1)."""
-    e = np.asarray(eta, dtype=np.float64)
-    z = np.zeros_like(e)
-    if kind == "hermite":
-        e2 = e * e
-        return np.stack([0.75 * (e2 - 1.0), 0.125 * (-1.0 - 2.0 * e + 3.0 * e2),
-                         0.75 * (1.0 - e2), 0.125 * (-1.0 + 2.0 * e + 3.0 * e2)], axis=-1)
-    if kind == "line":
-        return np.stack([z - 0.5, z + 0.5, z, z], axis=-1)
-    if kind == "line3":
-        return np.stack([e - 0.5, e + 0.5, -2.0 * e, z], axis=-1)
-    raise ValueError(f"unknown beam element type {kind!r}")
-
-
 def _scaled_coefficients(beams):
-    """(m, 4, 3) coefficients with the Hermite length folded in: ``r(η) = Σ_k B_k(η) Q̃_k``."""
+    """(m, 4, 3) coefficients with the element length folded in: ``r(η) = Σ_k B_k(η) Q̃_k``, where
+    ``B`` are the centreline functions for L = 1 (:func:`~mortar1d3d.elements.beam.evaluate`).
+
+    Only the tangent coefficients' functions (Hermite H2, H4) carry the length, as a factor.
+    """
     Q = beams.coefficients()
-    if beams.element_type.name == "hermite":
-        Q[:, 1] *= beams.lengths[:, None]
-        Q[:, 3] *= beams.lengths[:, None]
+    for k, offset in enumerate(beams.element_type.function_offset):
+        if offset > 0:
+            Q[:, k] *= beams.lengths[:, None]
     return Q
 
 
@@ -94,7 +64,7 @@ def _apply(basis, Q):
     return np.einsum("rnk,rki->rni", basis, Q)
 
 
-def _speed_integrals(kind, Q, a, b):
+def _speed_integrals(element, Q, a, b):
     """∫_a^b |r'(η)| dη for every row of ``Q`` (r, 4, 3) and interval, by Gauss quadrature.
 
     ``a``, ``b``: shared intervals (n,) or per-row intervals (r, n). Returns (r, n).
@@ -106,12 +76,12 @@ def _speed_integrals(kind, Q, a, b):
     shared = a.ndim == 1
     out = np.empty((len(Q),) + a.shape[-1:])
     if shared:
-        dB = _basis_deriv(kind, eta.reshape(-1))                        # (n q, 4)
+        dB = beam_functions(element, eta.reshape(-1), derivative=True)  # (n q, 4)
     for start in range(0, len(Q), _CHUNK_ROWS):
         rows = slice(start, start + _CHUNK_ROWS)
         Qc = Q[rows]
         if not shared:
-            dB = _basis_deriv(kind, eta[rows].reshape(len(Qc), -1))     # (r, n q, 4)
+            dB = beam_functions(element, eta[rows].reshape(len(Qc), -1), derivative=True)  # (r, n q, 4)
         speed = np.linalg.norm(_apply(dB, Qc), axis=2).reshape(len(Qc), -1, len(t))
         out[rows] = (speed @ w) * (half if shared else half[rows])
     return out
@@ -174,16 +144,16 @@ def sample_beams(beams, samples_per_element=8):
     if not isinstance(beams, BeamMesh):
         raise TypeError(f"beams must be a BeamMesh, got {type(beams).__name__}")
     s = _check_samples("samples_per_element", samples_per_element)
-    kind = beams.element_type.name
+    element = beams.element_type
     Q = _scaled_coefficients(beams)
     m = len(Q)
     eta = np.linspace(-1.0, 1.0, s)
-    points = _apply(_basis(kind, eta), Q).reshape(-1, 3)
-    d = _apply(_basis_deriv(kind, eta), Q).reshape(-1, 3)
+    points = _apply(beam_functions(element, eta), Q).reshape(-1, 3)
+    d = _apply(beam_functions(element, eta, derivative=True), Q).reshape(-1, 3)
     norm = np.linalg.norm(d, axis=1, keepdims=True)
     tangent = d / np.where(norm > 0.0, norm, 1.0)
     arc = np.zeros((m, s))
-    np.cumsum(_speed_integrals(kind, Q, eta[:-1], eta[1:]), axis=1, out=arc[:, 1:])
+    np.cumsum(_speed_integrals(element, Q, eta[:-1], eta[1:]), axis=1, out=arc[:, 1:])
     return BeamSamples(points=points, beam_element=np.repeat(np.arange(m, dtype=np.int64), s),
                        eta=np.tile(eta, m), arc_length=arc.reshape(-1), tangent=tangent,
                        samples_per_element=s)
@@ -362,7 +332,7 @@ def write_segments(path, beams, ops, samples_per_segment=4, *, compression="zlib
     k = _check_samples("samples_per_segment", samples_per_segment)
     seg = ops.segments
     n_seg = len(seg)
-    kind = beams.element_type.name
+    element = beams.element_type
     if n_seg and seg["beam_element"].max() >= beams.n_elements:
         raise ValueError("ops.segments refers to beam elements beyond the beam mesh: "
                          "were the operators assembled for these beams?")
@@ -370,8 +340,8 @@ def write_segments(path, beams, ops, samples_per_segment=4, *, compression="zlib
     a, b = seg["eta_start"], seg["eta_end"]
     eta = a[:, None] + (b - a)[:, None] * np.linspace(0.0, 1.0, k)        # (n_seg, k)
     eta[:, -1] = b                                                        # exact end point
-    points = _apply(_basis(kind, eta), Q).reshape(-1, 3) if n_seg else np.zeros((0, 3))
-    length = _speed_integrals(kind, Q, a[:, None], b[:, None])[:, 0] if n_seg else np.zeros(0)
+    points = _apply(beam_functions(element, eta), Q).reshape(-1, 3) if n_seg else np.zeros((0, 3))
+    length = _speed_integrals(element, Q, a[:, None], b[:, None])[:, 0] if n_seg else np.zeros(0)
     first = (np.arange(n_seg, dtype=np.int64)[:, None] * k + np.arange(k - 1)).reshape(-1)
     cells = np.column_stack([first, first + 1])
     owner = first // k

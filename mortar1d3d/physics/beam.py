@@ -40,12 +40,11 @@ from numba import prange
 from .._config import CHUNK, njit, njit_parallel
 from ..quadrature import gauss_legendre
 from ..mesh import BeamMesh
+from .beam_types import beam_type
 
 __all__ = ["Section", "section", "BeamModel", "end_moment", "reference_curvature", "curved_elements",
-           "MODELS", "N_GAUSS", "AXIAL_GAUSS"]
+           "N_GAUSS", "AXIAL_GAUSS"]
 
-#: beam models known to :class:`BeamModel` and the centreline element each one needs
-MODELS = {"torsion_free": "hermite", "truss": "line"}
 #: Gauss points per Hermite element (see :class:`BeamModel`)
 N_GAUSS = 6
 #: Gauss points of the axial term per Hermite element: reduced against membrane locking
@@ -503,25 +502,24 @@ class BeamModel:
     def __init__(self, beams, EA, EI=None, model="torsion_free", *, n_gauss=N_GAUSS, axial_gauss=AXIAL_GAUSS):
         if not isinstance(beams, BeamMesh):
             raise TypeError(f"BeamModel: expected a BeamMesh, got {type(beams).__name__}")
-        if model == "simo_reissner":
-            raise NotImplementedError("beam model 'simo_reissner' is not implemented yet; "
-                                      "use 'torsion_free' (Hermite centreline) or 'truss' (line)")
-        if model not in MODELS:
-            raise ValueError(f"unknown beam model {model!r}; known models: {', '.join(MODELS)}")
-        needed = MODELS[model]
+        kind = beam_type(model)         # NotImplementedError (planned) or ValueError (unknown)
+        needed = kind.element.name
         if beams.element_type.name != needed:
             raise ValueError(f"beam model {model!r} needs a {needed!r} BeamMesh, got "
                              f"{beams.element_type.name!r} elements")
         self.beams = beams
         self.model = model
+        self.type = kind
         n_el = beams.n_elements
         self.EA = _stiffness(EA, "EA", n_el)
-        if model == "torsion_free":
-            curved, curvature = curved_elements(beams)
-            if curved.size:
-                raise ValueError(curved_torsion_free_message(curved, curvature, n_el))
+        # this class implements the straight torsion-free beam (bending, Hermite) and the truss
+        if kind.bending:
+            if not kind.curved_reference:
+                curved, curvature = curved_elements(beams)
+                if curved.size:
+                    raise ValueError(curved_torsion_free_message(curved, curvature, n_el))
             if EI is None:
-                raise ValueError("the torsion_free model needs the bending stiffness EI")
+                raise ValueError(f"the {model} model needs the bending stiffness EI")
             self.EI = _stiffness(EI, "EI", n_el)
             n_gauss = int(n_gauss)
             axial_gauss = n_gauss if axial_gauss is None else int(axial_gauss)
@@ -540,7 +538,7 @@ class BeamModel:
             n_f = 4
         else:
             if EI is not None and np.any(np.asarray(EI, dtype=float) != 0.0):
-                warnings.warn("truss model: EI is ignored (no bending)", stacklevel=2)
+                warnings.warn(f"{model} model: EI is ignored (no bending)", stacklevel=2)
             self.EI = np.zeros(n_el)
             eta, w = gauss_legendre(1)
             w_axial, w_bending = w, 0.0 * w
@@ -563,7 +561,7 @@ class BeamModel:
         self._J = np.ascontiguousarray(np.linalg.norm(a0, axis=2))
         self._EA_w = np.ascontiguousarray(self.EA[:, None] * w_axial[None, :] * self._J)
         self._EI_w = np.ascontiguousarray(self.EI[:, None] * w_bending[None, :] * self._J)
-        kappa0 = _curvature(a0, b0) if model == "torsion_free" else np.zeros_like(self._J)
+        kappa0 = _curvature(a0, b0) if kind.bending else np.zeros_like(self._J)
         kappa0[kappa0 <= _STRAIGHT / beams.lengths[:, None]] = 0.0
         self._kappa0 = np.ascontiguousarray(kappa0)
         self._pattern = None
@@ -682,7 +680,7 @@ class BeamModel:
             raise ValueError("eta: expected a 1D array of finite parameters")
         Q = self._current(d)
         Q0 = self._coefficients(self._q0)
-        if self.model == "torsion_free":
+        if self.type.bending:
             H, dH, ddH = _hermite_tables(eta, self.beams.lengths)
         else:
             H, dH, ddH = _line_tables(eta, self.beams.n_elements)
@@ -690,7 +688,7 @@ class BeamModel:
         a, b = _curve_derivatives(dH, ddH, self._local(Q))
         a0, _ = _curve_derivatives(dH, ddH, self._local(Q0))
         strain = np.linalg.norm(a, axis=2) / np.linalg.norm(a0, axis=2) - 1.0
-        curvature = _curvature(a, b) if self.model == "torsion_free" else np.zeros_like(strain)
+        curvature = _curvature(a, b) if self.type.bending else np.zeros_like(strain)
         return {"position": position, "displacement": position - np.einsum("egk,eki->egi", H, Q0),
                 "axial_force": self.EA[:, None] * strain, "curvature": curvature, "strain": strain}
 

@@ -1,13 +1,15 @@
-"""Newton–Raphson with load steps and automatic step cutting.
+"""Newton–Raphson with load steps and automatic step cutting, and the one step of a linear analysis.
 
-The nonlinear system is any object with
+:func:`solve_load_steps` solves a nonlinear system, :func:`solve_linear_step` a linear one (one
+exactly solved step, no Newton loop). The system is any object with
 
 * ``fixed`` (int array): unknowns prescribed by Dirichlet conditions, ``free`` the others;
 * ``prescribed(t)``: values of the fixed unknowns at load factor ``t``;
 * ``residual(z, t, tangent=True)``: ``(r, K)``, the full residual vector (internal minus external
   forces, plus constraint rows if any) and its Jacobian (scipy sparse) or None;
 * ``solve_linear(K_ff, b, z_f, rtol=...)``: solution of the reduced linear system to the relative
-  residual ``rtol`` (or its round-off level);
+  residual ``rtol`` (or its round-off level); :func:`solve_linear_step` passes neither ``z_f`` nor
+  ``rtol``: the system's own target for its one solve;
 
 and optionally
 
@@ -223,3 +225,47 @@ def solve_load_steps(system, z0, steps, *, rtol=1e-8, increment_rtol=1e-8, max_i
             dt = min(base, 2.0 * dt)
         cuts = 0
     return z, records, history
+
+
+def solve_linear_step(system, z0, *, t=1.0, started=None):
+    """Solve a linear analysis in one step at load factor ``t``: the system linearised at ``z0``.
+
+    The residual and its Jacobian ``K`` are evaluated once, at ``z0``; the fixed unknowns get
+    their prescribed values and the free ones the solution of the reduced system, so that the
+    linearised residual ``r(z0) + K (z - z0)`` vanishes on the free unknowns.
+
+    Parameters
+    ----------
+    system : object
+        See the module docstring.
+    z0 : (n,) float64
+        Start vector (the reference state, usually zeros); not modified.
+    t : float
+        Load factor.
+    started : float, optional
+        ``time.perf_counter()`` at which the step's wall time starts (default: now).
+
+    Returns
+    -------
+    z : (n,) float64
+        The solution.
+    record : StepRecord
+        One iteration: ``residuals`` ‖r_free‖ at ``z0`` and at ``z``, ``increments`` ‖(z - z0)_free‖.
+    residual : (n,) float64
+        The linearised residual ``r(z0) + K (z - z0)`` over all unknowns (its fixed entries are
+        the reactions).
+    """
+    started = time.perf_counter() if started is None else started
+    r0, K0 = system.residual(z0, t)
+    z = z0.copy()
+    z[system.fixed] = system.prescribed(t)
+    free = system.free
+    rhs = -(r0 + K0 @ (z - z0))[free]
+    z[free] += system.solve_linear(K0[free][:, free], rhs)
+    residual = r0 + K0 @ (z - z0)
+    note = (getattr(system, "last_linear_info", None) or {}).get("note")
+    record = StepRecord(load_factor=t, iterations=1,
+                        residuals=[float(np.linalg.norm(r0[free])), float(np.linalg.norm(residual[free]))],
+                        increments=[float(np.linalg.norm((z - z0)[free]))], time=time.perf_counter() - started,
+                        notes=[note] if note else [])
+    return z, record, residual

@@ -14,6 +14,8 @@ Only the Hermite functions depend on the element length ``L``.
 """
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..._config import njit
 from . import hermite, lagrange
 
@@ -34,6 +36,11 @@ class BeamElementType:
     dofs_per_node: int
     function_node: tuple
     function_offset: tuple
+
+    @property
+    def has_tangents(self):
+        """True when some coefficients are nodal tangents (DOF offset 3 in their node's block)."""
+        return any(offset > 0 for offset in self.function_offset)
 
 
 BEAM_ELEMENTS = {
@@ -72,6 +79,38 @@ def deriv(code, eta, length, dH):
         lagrange.line2_deriv(eta, dH)
     else:
         lagrange.line3_deriv(eta, dH)
+
+
+def evaluate(element, eta, length=1.0, derivative=False):
+    """Centreline functions (or their η-derivatives) of ``element`` at every ``eta``, in numpy.
+
+    The vectorised counterpart of :func:`shape` and :func:`deriv` for code outside kernels (VTU
+    sampling, arc lengths): it runs the kernels' own Python functions on arrays, whose
+    arithmetic is elementwise, so every value has the bits a kernel computes at that point.
+
+    Parameters
+    ----------
+    element : BeamElementType
+    eta : array_like of float, any shape
+    length : float
+        Element length (enters the Hermite tangent functions only).
+    derivative : bool
+        d/dη instead of the functions.
+
+    Returns
+    -------
+    eta.shape + (MAX_FUNCTIONS,) float64
+        Zero beyond the element's ``n_functions``.
+    """
+    e = np.asarray(eta, dtype=np.float64)
+    H = np.zeros((MAX_FUNCTIONS,) + e.shape)
+    if element.code == 0:
+        (hermite.deriv if derivative else hermite.shape).py_func(e, length, H)
+    elif element.code == 1:
+        (lagrange.line2_deriv if derivative else lagrange.line2_shape).py_func(e, H)
+    else:
+        (lagrange.line3_deriv if derivative else lagrange.line3_shape).py_func(e, H)
+    return np.ascontiguousarray(np.moveaxis(H, 0, -1))
 
 
 @njit

@@ -1,0 +1,112 @@
+"""The plan of effects: what :func:`~mortar1d3d.model.solve` will compute for a scene, in order.
+
+:func:`plan` builds the scene and its :class:`~mortar1d3d.model.Model` (meshes, sets, supports:
+everything that can be wrong with a scene is reported here, as ``solve`` would) and lists the
+:class:`Effect` s that ``solve`` runs; it assembles nothing. The names are those that
+``Model.counts`` (and ``Result.counts``) record when the effect runs.
+"""
+from dataclasses import dataclass
+
+from .build import build
+from .model import Model
+
+
+@dataclass(frozen=True)
+class Effect:
+    """One thing :func:`solve` will compute: a stable ``name`` and how often/what exactly."""
+
+    name: str
+    when: str
+    detail: str = ""
+
+    def __str__(self):
+        return f"{self.name:<28} {self.when:<22} {self.detail}"
+
+
+def plan(scene):
+    """The effects :func:`solve` will run for ``scene`` (Scene or TOML file), in order (list of
+    :class:`Effect`).
+
+    Builds the meshes and resolves every set (supports, loads, fibre regions: a set that is
+    unknown or selects nothing is reported here, as :func:`solve` would), assembles nothing.
+    """
+    return effects(Model(build(scene)))
+
+
+def effects(model):
+    """The list of :class:`Effect` that :func:`solve` will run for ``model`` (a Model)."""
+    sc, nonlinear = model.scene, not model.linear
+    every = "every iteration" if nonlinear else "once"
+    out = []
+    if model.solid_mesh is not None:
+        m = model.solid_mesh
+        kinds = ", ".join(f"{len(c)} {d.name}" for d, c in m.blocks)
+        out.append(Effect("solid.mesh", "once", f"{kinds}; {m.n_nodes} nodes"))
+    for g in model.groups:
+        out.append(Effect("beams.mesh", "once", f"{g.model}: {len(g.entries)} beam(s), {g.mesh.n_elements} "
+                                                f"{g.mesh.element_type.name} elements"))
+    if sc.coupled:
+        c = sc.coupling
+        out.append(Effect("mortar.search", "once", "broad phase, reference configuration"))
+        if c["integration"] == "segment":
+            out.append(Effect("mortar.segmentation", "once", f"beam–face intersections, {c['search_points']} "
+                                                             "search points"))
+        elif c["integration"] == "auto":
+            out.append(Effect("mortar.segmentation", "once", "only beam elements that cross element faces "
+                                                             f"({c['search_points']} search points)"))
+        out.append(Effect("mortar.integration_points", "once", f"{c['integration']}-based, n_gauss={c['n_gauss']}"))
+        out.append(Effect("mortar.assembly", "once", f"D, M, kappa (lm={c['lm']})"))
+        if c["enforcement"] == "lagrange":
+            out.append(Effect("coupling.lagrange", "once", f"constraint rows B = [-M, D] ({c['constraint']})"))
+        else:
+            out.append(Effect(f"coupling.{c['constraint']}_penalty", "once",
+                              f"constant stiffness, penalty {model.penalty:.4g}"))
+    out.append(Effect("check.rigid_body_modes", "once", "before any solve"))
+    if model.groups:
+        out.append(Effect("check.zero_energy_modes", "once", "beam mechanisms, before any solve"))
+    if model.solid_mesh is not None:
+        mat = sc.solid["material"]["model"]
+        if sc.solid["material"].get("fibres"):
+            mat += f" + {len(sc.solid['material']['fibres'])} fibre families"
+        if nonlinear:
+            out.append(Effect("solid.internal_force", every, f"total Lagrangian, {mat}"))
+            out.append(Effect("solid.tangent", every, "consistent tangent"))
+        else:
+            out.append(Effect("solid.stiffness", "once", f"small strain, {mat}"))
+    if model.groups:
+        if nonlinear:
+            out.append(Effect("beam.internal_force", every, ", ".join(g.model for g in model.groups)))
+            out.append(Effect("beam.tangent", every, "consistent tangent"))
+        else:
+            out.append(Effect("beam.stiffness", "once", "linearised at the reference configuration"))
+    kinds = {item["type"] for item in sc.loads}
+    for kind, when, detail in (("point", "once", "dead nodal forces"),
+                               ("traction", "once", "dead surface traction"),
+                               ("body", "once", "dead body force")):
+        if kind in kinds:
+            out.append(Effect(f"load.{kind}", when, detail))
+    if "pressure" in kinds:
+        if nonlinear:
+            out.append(Effect("load.pressure", every, "follower pressure on the current surface"))
+            out.append(Effect("load.pressure_tangent", every, "load stiffness of the follower pressure"))
+        else:
+            out.append(Effect("load.pressure", "once", "pressure on the reference surface (linear kinematics)"))
+    if "moment" in kinds:
+        out.append(Effect("load.moment", every, "beam end moment"))
+    if nonlinear:
+        a = sc.analysis
+        out.append(Effect("solver.newton", "every load step", f"{a['steps']} load steps, rtol {a['rtol']:g}, "
+                                                              f"at most {a['max_iterations']} iterations"))
+    else:
+        out.append(Effect("solver.linear", "once", "one linear solve, no Newton loop"))
+    method = model.linear_solver_method()
+    amg = ("CG + auxiliary-space preconditioner (AMG on the solid carrying its beams, beam blocks "
+           "factorised)" if model._auxiliary_space() else "CG + smoothed aggregation AMG (rigid-body modes)")
+    detail = {"direct": "sparse LU (scipy)", "amg": amg,
+              "block": "MINRES + block preconditioner (auxiliary space on the augmented stiffness, Schur "
+                       "from kappa)"}[method]
+    out.append(Effect(f"linear_solver.{method}", every, detail))
+    if (method == "amg" and model._auxiliary_space()) or (method == "block" and model._auxiliary_space(True)):
+        out.append(Effect("linear_solver.follow_operator", "once", "beam DOFs following the solid "
+                                                                    "(prolongation of the auxiliary space)"))
+    return out

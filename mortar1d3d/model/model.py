@@ -1,0 +1,603 @@
+"""The Model: the physics of a built scene, and nothing else.
+
+A :class:`Model` takes what :func:`~mortar1d3d.model.build.build` made of a scene (meshes, beam
+groups, named sets, the DOF map) and adds the physics: prescribed values and supports, loads,
+the solid and beam models, the coupling (after :meth:`Model.prepare`), and the nonlinear system
+that :mod:`mortar1d3d.solvers.newton` solves (``fixed``, ``free``, ``prescribed``, ``residual``,
+``solve_linear``). Global unknowns follow the DOF map (:mod:`.dofmap`): solid displacements,
+the centreline DOFs of each beam group (Hermite ``[r, t]`` per node for ``torsion_free``,
+positions for ``truss``), rotations (none yet), then Lagrange multipliers (coupled LM rows) when
+the coupling is enforced with Lagrange multipliers.
+
+Every stage that does work increments ``Model.counts[<effect>]`` with the names that
+:func:`~mortar1d3d.model.plan` lists, so that tests can prove what ran.
+"""
+import warnings
+from collections import Counter
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import AccuracyWarning, CouplingWarning, format_ids
+from ..mortar.assemble import assemble_mortar
+from ..scene import Scene, SceneError
+from ..supports import RotatedBasis, clamp_frame
+from . import checks
+from .build import BuiltScene, build
+
+DEFAULT_PENALTY_FACTOR = 1e3     # ε = 1e3 E_solid when the scene gives no penalty
+AUTO_DIRECT_LIMIT = 3_000        # unknowns up to which solver = "auto" factorises (measured crossover,
+                                 # solvers.linear.DIRECT_MAX_DOFS: SuperLU fill grows fast in 3D)
+PENALTY_ROUNDOFF_LIMIT = 1e8     # ε / E_solid above which round-off beats the penalty error (AccuracyWarning)
+
+
+class Model:
+    """The physics of a built scene: supports, loads, solid and beam models, coupling.
+
+    Parameters
+    ----------
+    built : BuiltScene or Scene
+        What :func:`~mortar1d3d.model.build.build` made of a scene. A :class:`Scene` is built
+        first (a convenience: ``Model(scene)`` is ``Model(build(scene))``).
+
+    Construction is cheap (meshes, sets, prescribed values); :meth:`prepare` assembles what the
+    scene needs. ``counts`` records every stage that ran.
+    """
+
+    def __init__(self, built):
+        if isinstance(built, Scene):
+            built = build(built)
+        elif not isinstance(built, BuiltScene):
+            raise TypeError(f"expected a Scene, got {type(built).__name__}")
+        scene = built.scene
+        self.scene = scene
+        self.counts = Counter()
+        self.linear = scene.analysis["kinematics"] == "linear"
+        self.solid_mesh = built.solid_mesh
+        self.n_solid_nodes = self.solid_mesh.n_nodes if self.solid_mesh is not None else 0
+        self.groups, self.entry_group = built.groups, built.entry_group
+        self.sets = built.sets
+        self.dofmap = built.dofmap
+        self.n_displacement_dofs = self.dofmap.n_displacement
+        self.n_multipliers = 0
+        c = scene.coupling
+        self.penalty = None
+        if scene.coupled:
+            self.penalty = c["penalty"] if c["penalty"] is not None else DEFAULT_PENALTY_FACTOR * scene.solid["material"]["E"]
+            ratio = self.penalty / scene.solid["material"]["E"]
+            if c["enforcement"] == "penalty" and ratio > PENALTY_ROUNDOFF_LIMIT:
+                # the penalty error falls like E/ε, the round-off of the penalty terms grows like
+                # eps_mach ε/E: past ~1/sqrt(eps_mach) the result gets worse, not better
+                # (tests/test_solver_stress.py: best at 1e6 E, 2 % error at 1e12 E)
+                warnings.warn(f"coupling.penalty: {self.penalty:.3g} is {ratio:.1e} × solid.material.E; above "
+                              f"{PENALTY_ROUNDOFF_LIMIT:.0e} × E round-off of the penalty terms costs accuracy "
+                              "(about machine epsilon × penalty / E relative). Use 1e2..1e6 × E, or "
+                              "enforcement = \"lagrange\"", AccuracyWarning, stacklevel=3)
+        self._check_solver()
+        self.fixed_dofs, self.fixed_values, self.dirichlet_dofs, self.basis = self._dirichlet()
+        # every set is resolved here, so that plan() reports what solve() would
+        self.load_sets = self._load_sets()
+        families = scene.solid["material"].get("fibres", ()) if self.solid_mesh is not None else ()
+        self.fibre_regions = self.sets.fibre_regions(families)
+        self.prepared = False
+        self._follow = None          # auxiliary-space split, built on first use (_follow_split)
+
+    # -- sets -----------------------------------------------------------------------------------
+    def select(self, spec, path):
+        """Resolve a set spec to ``("solid", node ids)`` or ``("beam", group, node ids)``
+        (:meth:`~.sets.NamedSets.select`)."""
+        return self.sets.select(spec, path)
+
+    def _set_dofs(self, sel, components):
+        """Unknowns of ``components`` at the nodes of a resolved set ``sel``."""
+        block = self.dofmap.solid if sel[0] == "solid" else sel[1].dofs
+        return block.dofs(sel[-1], components)
+
+    def _dirichlet(self):
+        """Fixed DOFs and their values in the basis of the unknowns, the position DOFs of each entry
+        (for its reaction), and that basis (:class:`~mortar1d3d.supports.RotatedBasis` of the clamps)."""
+        dofs, values, per_entry = [], [], []
+        clamps = {}
+        for i, d in enumerate(self.scene.dirichlet):
+            sel = self.select(d["on"], f"dirichlet[{i}].on")
+            idx = self._set_dofs(sel, d["components"])
+            val = np.tile(d["value"][d["components"]], len(idx) // len(d["components"]))
+            dofs.append(idx)
+            values.append(val)
+            if d["clamp"]:
+                g = sel[1]
+                if not g.type.element.has_tangents:
+                    raise SceneError(f"dirichlet[{i}].clamp: beam {d['on']!r} has no tangent DOFs ({g.model})")
+                starts, frames = self._clamp_frames(g, sel[2])
+                clamps.update(zip(starts.tolist(), frames))
+                t_idx = (starts[:, None] + np.arange(2)).ravel()      # e1·Δt, e2·Δt in the rotated frame
+                dofs.append(t_idx)
+                values.append(np.zeros(len(t_idx)))
+            per_entry.append(idx)     # position DOFs only: their reactions are forces
+        starts = sorted(clamps)
+        basis = RotatedBasis(starts, [clamps[s] for s in starts])
+        if not dofs:
+            return np.zeros(0, np.int64), np.zeros(0), per_entry, basis
+        dofs, values = np.concatenate(dofs), np.concatenate(values)
+        order = np.argsort(dofs, kind="stable")
+        dofs, values = dofs[order], values[order]
+        same = dofs[1:] == dofs[:-1]
+        if same.any():
+            clash = same & (values[1:] != values[:-1])
+            if clash.any():
+                raise SceneError(f"dirichlet: DOFs {format_ids(dofs[1:][clash])} are prescribed twice with "
+                                 "different values")
+            keep = np.concatenate([[True], ~same])
+            dofs, values = dofs[keep], values[keep]
+        return dofs, values, per_entry, basis
+
+    @staticmethod
+    def _clamp_frames(g, nodes):
+        """First tangent DOF of each clamped node and its frame ``(e1, e2, t0)``.
+
+        At a Hermite node the tangent's length is the local stretch: a clamp fixes only its
+        direction, the components along ``e1`` and ``e2`` (see :mod:`mortar1d3d.supports`), so
+        that a clamped beam behaves the same in every orientation.
+        """
+        starts = g.dofs.dofs(nodes, [3])                # a Hermite node's block: [r, t]
+        return starts, [clamp_frame(g.mesh.tangents[node]) for node in nodes]
+
+    def _check_solver(self):
+        solver, enforcement = self.scene.analysis["solver"], self.scene.coupling["enforcement"]
+        lagrange = self.scene.coupled and enforcement == "lagrange"
+        if solver == "block" and not lagrange:
+            raise SceneError("analysis.solver: 'block' is the saddle-point solver of Lagrange-multiplier coupling; "
+                             "use 'auto', 'direct' or 'amg'")
+        if solver == "amg" and lagrange:
+            raise SceneError("analysis.solver: Lagrange-multiplier coupling gives a saddle point; use 'auto', "
+                             "'direct' or 'block' (MINRES, the auxiliary-space AMG inside a block preconditioner)")
+
+    # -- solver choice --------------------------------------------------------------------------
+    @property
+    def lagrange(self):
+        return self.scene.coupled and self.scene.coupling["enforcement"] == "lagrange"
+
+    def linear_solver_method(self, n_unknowns=None):
+        """The linear solver that ``analysis.solver`` resolves to for this model."""
+        solver = self.scene.analysis["solver"]
+        if solver != "auto":
+            return solver
+        n = self.n_displacement_dofs if n_unknowns is None else n_unknowns
+        if n <= AUTO_DIRECT_LIMIT:
+            return "direct"
+        return "block" if self.lagrange else "amg"
+
+    # -- operators ------------------------------------------------------------------------------
+    def prepare(self, operators=None):
+        """Assemble everything that is constant: mortar operators, coupling, dead loads; check supports.
+
+        Parameters
+        ----------
+        operators : sequence of MortarOperators, optional
+            Precomputed mortar operators, one per beam group (group order, see ``groups``), for
+            this scene's meshes and ``coupling.lm``: they are used instead of calling
+            :func:`~mortar1d3d.assemble_mortar` (no ``mortar.*`` counts). For callers that
+            already hold the operators, e.g. the trade-off study, which solves one scene with
+            the operators of several integration variants. Default: assemble them.
+
+        Returns
+        -------
+        self
+        """
+        if self.prepared:
+            return self
+        if operators is not None:
+            operators = self._check_operators(operators)
+        from ..physics.coupling import Coupling
+        from ..physics.materials import material
+        from ..physics.solid import SolidModel
+        sc = self.scene
+        n = self.n_displacement_dofs
+        if self.solid_mesh is not None:
+            mat = sc.solid["material"]
+            try:
+                self.solid_physics = SolidModel(self.solid_mesh, material(mat["model"], mat["E"], mat["nu"]),
+                                                kinematics="linear" if self.linear else "nonlinear",
+                                                fibres=self._fibre_field(mat.get("fibres", ())))
+            except ValueError as exc:
+                raise SceneError(f"solid.material: {exc}") from None
+        for g in self.groups:
+            EA = np.concatenate([np.full(b - a, sc.beams[i]["section"]["EA"]) for i, (a, b) in zip(g.entries, g.entry_elements)])
+            EI = np.concatenate([np.full(b - a, sc.beams[i]["section"]["EI"]) for i, (a, b) in zip(g.entries, g.entry_elements)])
+            g.physics = g.type.physics_class()(g.mesh, EA, EI, model=g.model)
+        if sc.coupled:
+            c = sc.coupling
+            for k, g in enumerate(self.groups):
+                if operators is not None:
+                    g.operators = operators[k]
+                else:
+                    g.operators = assemble_mortar(g.mesh, self.solid_mesh, integration=c["integration"],
+                                                  n_gauss=c["n_gauss"], lm=c["lm"], search_points=c["search_points"])
+                    self.counts["mortar.search"] += 1
+                    if c["integration"] in ("segment", "auto"):
+                        self.counts["mortar.segmentation"] += 1
+                    self.counts["mortar.integration_points"] += 1
+                    self.counts["mortar.assembly"] += 1
+                g.coupling = Coupling(g.operators, g.mesh, self.solid_mesh, g.dof_offset, n,
+                                      constraint=c["constraint"], enforcement=c["enforcement"], penalty=self.penalty)
+                self.counts["coupling.lagrange" if self.lagrange else f"coupling.{c['constraint']}_penalty"] += 1
+                coupled = np.unique(g.operators.point_fields["beam_element"])
+                for entry, (a, b) in zip(g.entries, g.entry_elements):
+                    if not np.any((coupled >= a) & (coupled < b)):
+                        warnings.warn(f"beams[{entry}]: no part of this beam lies inside the solid, so it is not "
+                                      "coupled (check the units: a mm/m mix-up moves a beam out of the solid)",
+                                      CouplingWarning, stacklevel=3)
+            if self.lagrange:
+                self.constraint_matrix = sp.vstack([g.coupling.constraint_matrix() for g in self.groups], format="csr")
+                self.n_multipliers = self.constraint_matrix.shape[0]
+            else:
+                K = self.groups[0].coupling.K
+                for g in self.groups[1:]:
+                    K = K + g.coupling.K
+                self.coupling_stiffness = K.tocsr()
+        self._prepare_loads()
+        self.dofmap = self.dofmap.with_multipliers(self.n_multipliers)
+        self.n_unknowns = self.dofmap.n_unknowns
+        self.free = np.setdiff1d(np.arange(self.n_unknowns), self.fixed_dofs)
+        self.fixed = self.fixed_dofs
+        self.check_supports()
+        self.prepared = True
+        return self
+
+    def _check_operators(self, operators):
+        """Validate precomputed operators against the groups' meshes and the scene's LM type."""
+        if not self.scene.coupled:
+            raise ValueError("prepare(operators=...): the scene has no coupling (it needs a solid and beams)")
+        operators = list(operators)
+        if len(operators) != len(self.groups):
+            raise ValueError(f"prepare(operators=...): expected {len(self.groups)} operator set(s), one per beam "
+                             f"group ({', '.join(g.model for g in self.groups)}), got {len(operators)}")
+        from ..elements.multiplier import multiplier
+        from ..mortar.assemble import lm_numbering
+        lm = self.scene.coupling["lm"]
+        for k, (g, ops) in enumerate(zip(self.groups, operators)):
+            if not all(hasattr(ops, a) for a in ("D", "M", "kappa", "lm", "n_lm")):
+                raise TypeError(f"prepare(operators=...): operators[{k}] must be MortarOperators, "
+                                f"got {type(ops).__name__}")
+            if ops.lm != lm:
+                raise ValueError(f"prepare(operators=...): operators[{k}] use lm={ops.lm!r}, the scene "
+                                 f"coupling.lm={lm!r}")
+            n_lm = lm_numbering(g.mesh, multiplier(lm))[1]
+            want_D = (3 * n_lm, g.mesh.n_centreline_dofs)
+            want_M = (3 * n_lm, 3 * self.n_solid_nodes)
+            if ops.D.shape != want_D or ops.M.shape != want_M or np.shape(ops.kappa) != (n_lm,):
+                raise ValueError(f"prepare(operators=...): operators[{k}] do not fit beam group {k} and the solid: "
+                                 f"D {ops.D.shape} (expected {want_D}), M {ops.M.shape} (expected {want_M}), "
+                                 f"kappa {np.shape(ops.kappa)} (expected ({n_lm},))")
+        return operators
+
+    def _fibre_field(self, families):
+        """FibreField of ``solid.material.fibres``: a family without ``inside`` reinforces every
+        element, one with ``inside`` the elements of its region (:meth:`~.sets.NamedSets.fibre_regions`)."""
+        from ..physics.fibre_material import FibreField, fibre_family
+        rows = []
+        for i, (f, elements) in enumerate(zip(families, self.fibre_regions)):
+            row = fibre_family(f["direction"], f["E"], f["volume_fraction"], f"solid.material.fibres[{i}]")
+            rows.append((row, elements))
+        return FibreField(self.solid_mesh.n_elements, rows)
+
+    def _load_sets(self):
+        """Per ``load`` entry: its resolved set (None for a body force) and, for surface loads,
+        its boundary faces."""
+        from ..physics.surface import boundary_faces
+        out = []
+        for i, item in enumerate(self.scene.loads):
+            if item["type"] == "body":
+                out.append((None, None))
+                continue
+            path = f"load[{i}].on"
+            sel = self.select(item["on"], path)
+            faces = None
+            if item["type"] in ("traction", "pressure"):
+                faces = boundary_faces(self.solid_mesh, sel[1])
+                if len(faces) == 0:
+                    raise SceneError(f"{path}: {item['on']!r} contains no boundary face of the solid")
+            out.append((sel, faces))
+        return out
+
+    def _prepare_loads(self):
+        from ..physics.surface import Pressure, traction_force
+        n = self.n_displacement_dofs
+        self.dead_load = np.zeros(n)
+        self.pressures, self.moments = [], []
+        for item, (sel, faces) in zip(self.scene.loads, self.load_sets):
+            kind = item["type"]
+            if kind == "body":
+                self.dead_load[: 3 * self.n_solid_nodes] += self.solid_physics.body_force(item["value"])
+                self.counts["load.body"] += 1
+                continue
+            if kind == "point":
+                self.dead_load[self._set_dofs(sel, [0, 1, 2])] += np.tile(item["value"], len(self._set_dofs(sel, [0, 1, 2])) // 3)
+                self.counts["load.point"] += 1
+            elif kind in ("traction", "pressure"):
+                if kind == "traction":
+                    self.dead_load[: 3 * self.n_solid_nodes] += traction_force(self.solid_mesh, faces, item["value"])
+                    self.counts["load.traction"] += 1
+                else:
+                    self.pressures.append(Pressure(self.solid_mesh, faces, item["value"]))
+            else:   # moment on a Hermite beam end: acts on the node's tangent DOFs
+                g, nodes = sel[1], sel[2]
+                dofs = g.dofs.dofs(nodes[:1], [3, 4, 5])
+                self.moments.append((dofs, item["value"]))
+        if self.linear:
+            # linear kinematics: pressure and moments are evaluated once, on the reference configuration
+            for p in self.pressures:
+                f, _ = p.evaluate(np.zeros(3 * self.n_solid_nodes), tangent=False)
+                self.dead_load[: 3 * self.n_solid_nodes] += f
+                self.counts["load.pressure"] += 1
+            for dofs, moment in self.moments:
+                from ..physics.beam import end_moment
+                f, _ = end_moment(self._reference[dofs] if hasattr(self, "_reference") else self.reference()[dofs], moment)
+                self.dead_load[dofs] += f
+                self.counts["load.moment"] += 1
+            self.pressures, self.moments = [], []
+
+    def reference(self):
+        """Reference values of the displacement unknowns' base configuration (positions/tangents)."""
+        if not hasattr(self, "_reference"):
+            ref = np.zeros(self.n_displacement_dofs)
+            if self.solid_mesh is not None:
+                ref[: 3 * self.n_solid_nodes] = self.solid_mesh.points.ravel()
+            for g in self.groups:
+                ref[g.dofs.slice] = g.mesh.centreline_dofs()
+            self._reference = ref
+        return self._reference
+
+    # -- supports -------------------------------------------------------------------------------
+    def _tangent_triplets(self):
+        """(n_displacement_dofs // 3,) bool: which DOF triplets are Hermite tangents."""
+        is_tangent = np.zeros(self.n_displacement_dofs // 3, dtype=bool)
+        for g in self.groups:
+            if g.type.element.has_tangents:
+                first = g.dof_offset // 3
+                is_tangent[first + 1: first + 2 * g.mesh.n_nodes: 2] = True
+        return is_tangent
+
+    def _mode_frame(self, dofs, is_tangent):
+        """Centre and length scale of :meth:`rigid_body_modes`: the centroid and the largest extent
+        of the positions among ``dofs`` (all when None)."""
+        X = self.reference().reshape(-1, 3)
+        triplets = np.arange(len(X)) if dofs is None else np.unique(dofs // 3)
+        pos = triplets[~is_tangent[triplets]]
+        centre = X[pos].mean(axis=0) if len(pos) else np.zeros(3)
+        size = float(np.ptp(X[pos], axis=0).max()) if len(pos) > 1 else 1.0
+        return centre, (size if size > 0 else 1.0)
+
+    def rigid_body_modes(self, dofs=None):
+        """(n_dofs, 6) rigid-body modes of the displacement DOFs (translations, rotations about the
+        centroid of ``dofs``); tangent DOFs of Hermite beams rotate, never translate. In the basis of
+        the unknowns (clamped tangents in their rotated frames), like ``fixed`` and ``free``."""
+        ref = self.reference()
+        n = self.n_displacement_dofs
+        is_tangent = self._tangent_triplets()
+        X = ref.reshape(-1, 3)
+        centre, size = self._mode_frame(dofs, is_tangent)
+        R = np.zeros((n // 3, 3, 6))
+        P = (X - centre) / size
+        P[is_tangent] = X[is_tangent] / size     # a tangent turns with the body: ω × t, same scale
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = 1.0
+            R[~is_tangent, k, k] = 1.0
+            R[:, :, 3 + k] = np.cross(e, P)
+        return self.basis.to_unknowns(R.reshape(n, 6))
+
+    def check_supports(self):
+        """Raise SceneError if a body can move as a rigid body or a beam has a zero-energy mode
+        (:func:`~.checks.check_supports`; before any solve)."""
+        checks.check_supports(self)
+
+    def check_zero_energy_modes(self):
+        """Raise SceneError if a beam has a zero-energy mode (:func:`~.checks.check_zero_energy_modes`)."""
+        checks.check_zero_energy_modes(self)
+
+    def check_linear_displacements(self, z):
+        """Warn if the linear solution ``z`` moves a body by more than
+        ``LINEAR_DISPLACEMENT_LIMIT`` of its size (:func:`~.checks.check_linear_displacements`)."""
+        checks.check_linear_displacements(self, z, stacklevel=4)
+
+    # -- the nonlinear system (see solvers.newton) ---------------------------------------------
+    def prescribed(self, t):
+        return t * self.fixed_values
+
+    def _embed(self, K, offset):
+        """Place a square block at (offset, offset) of an (n_displacement_dofs)² matrix."""
+        n = self.n_displacement_dofs
+        K = K.tocoo()
+        return sp.csr_matrix((K.data, (K.row + offset, K.col + offset)), shape=(n, n))
+
+    def _count(self, part, tangent):
+        if self.linear:
+            self.counts[f"{part}.stiffness"] += 1
+        else:
+            self.counts[f"{part}.internal_force"] += 1
+            if tangent:
+                self.counts[f"{part}.tangent"] += 1
+
+    def internal(self, d, tangent=True):
+        """Internal forces and tangent of solid + beams + penalty coupling at displacements ``d``."""
+        n = self.n_displacement_dofs
+        r = np.zeros(n)
+        blocks = []
+        if self.solid_mesh is not None:
+            nS = 3 * self.n_solid_nodes
+            f, K = self.solid_physics.evaluate(d[:nS], tangent=tangent)
+            self._count("solid", tangent)
+            r[:nS] = f
+            blocks.append(K)
+        for g in self.groups:
+            sl = g.dofs.slice
+            f, K = g.physics.evaluate(d[sl], tangent=tangent)
+            self._count("beam", tangent)
+            r[sl] = f
+            blocks.append(K)
+        K = sp.block_diag(blocks, format="csr") if tangent else None
+        if self.scene.coupled and not self.lagrange:
+            r += self.coupling_stiffness @ d
+            if tangent:
+                K = K + self.coupling_stiffness
+        return r, K
+
+    def residual(self, z, t, tangent=True):
+        """Residual ``r = f_int + (coupling) − t f_ext`` over all unknowns, and its Jacobian.
+
+        ``z``, ``r`` and the Jacobian are in the basis of the unknowns (``self.basis``: clamped
+        tangents in their rotated frames); the physics is evaluated on physical components.
+        """
+        n = self.n_displacement_dofs
+        d = self.basis.to_physical(z[:n])
+        r, K = self.internal(d, tangent)
+        r -= t * self.dead_load
+        nS = 3 * self.n_solid_nodes
+        for p in self.pressures:
+            f, Kp = p.evaluate(d[:nS], tangent=tangent)
+            self.counts["load.pressure"] += 1
+            r[:nS] -= t * f
+            if tangent:
+                self.counts["load.pressure_tangent"] += 1
+                K = K - t * self._embed(Kp, 0)
+        if self.moments:
+            from ..physics.beam import end_moment
+            q = self.reference() + d
+            for dofs, moment in self.moments:
+                f, Km = end_moment(q[dofs], t * moment)
+                self.counts["load.moment"] += 1
+                r[dofs] -= f
+                if tangent:
+                    K = K - sp.csr_matrix((Km.ravel(), (np.repeat(dofs, 3), np.tile(dofs, 3))), shape=K.shape)
+        if self.lagrange:
+            B, lam = self.constraint_matrix, z[n:]
+            r = np.concatenate([r + B.T @ lam, B @ d])
+            if tangent:
+                K = sp.bmat([[K, B.T], [B, None]], format="csr")
+        r, K = self.basis.to_unknowns(r), self.basis.matrix(K)
+        self.last_residual = r
+        return r, (K.tocsr() if tangent else None)
+
+    def _auxiliary_space(self, lagrange=False):
+        """True when the AMG path uses the auxiliary-space preconditioner: beams penalty-coupled
+        to a solid (plain AMG on the penalty system needs hundreds of iterations at ε = 1e3 E),
+        or with ``lagrange=True``, coupled by multipliers (the block solver's augmented stiffness
+        is such a penalty system)."""
+        return (self.solid_mesh is not None and bool(self.groups) and self.scene.coupled
+                and self.lagrange == lagrange)
+
+    def _follow_split(self):
+        """``solid``, ``beam`` (positions among the free DOFs) and the prolongation ``P`` (free
+        beam DOFs × free solid DOFs) of :func:`~mortar1d3d.physics.coupling.follow_operator`;
+        built once, since the coupling operators are constant."""
+        if self._follow is None:
+            from ..physics.coupling import follow_operator
+            nS = 3 * self.n_solid_nodes
+            free = self.free[self.free < self.n_displacement_dofs]
+            blocks = [follow_operator(g.operators, g.mesh) for g in self.groups]
+            P = sp.vstack(blocks, format="csr")           # groups are contiguous after the solid
+            P = self.basis.to_unknowns(P, offset=nS)      # rows of clamped tangents: rotated frames
+            solid = np.flatnonzero(free < nS)
+            beam = np.flatnonzero(free >= nS)
+            P = P[free[beam] - nS][:, free[solid]].tocsr()
+            self._follow = dict(solid=solid, beam=beam, prolongation=P)
+            self.counts["linear_solver.follow_operator"] += 1
+        return self._follow
+
+    def _dependent_multipliers(self, B, beam):
+        """Dependent rows of the constraint block ``B`` (free columns), found once per model.
+
+        Warns (CouplingWarning) naming the beams and LM nodes whose rows are left out; raises
+        SceneError if prescribed values contradict them (the constraints then have no solution).
+        """
+        if getattr(self, "_dependent", None) is None:
+            from ..elements.multiplier import multiplier
+            from ..mortar.assemble import lm_numbering
+            from ..solvers.linear import DEPENDENT_ROW_TOLERANCE, dependent_rows
+            dep = dependent_rows(B, beam)
+            if len(dep):
+                # each row of B: (beam entry, LM node as a row of Result.line_load, component)
+                entry, lm_node, comp, first = [], [], [], 0
+                for g in self.groups:
+                    index, n_lm = lm_numbering(g.mesh, multiplier(self.scene.coupling["lm"]))
+                    owner = np.zeros(n_lm, dtype=np.int64)
+                    for k, (start, stop) in enumerate(g.entry_elements):
+                        owner[index[start:stop][index[start:stop] >= 0]] = g.entries[k]
+                    rows = g.coupling.coupled_rows
+                    entry.append(owner[rows // 3])
+                    lm_node.append(first + rows // 3)
+                    comp.append(rows % 3)
+                    first += n_lm
+                entry, lm_node, comp = (np.concatenate(v)[dep.rows] for v in (entry, lm_node, comp))
+                parts = []
+                for e in np.unique(entry):
+                    nodes = [f"{j} ({', '.join('xyz'[c] for c in comp[(entry == e) & (lm_node == j)])})"
+                             for j in np.unique(lm_node[entry == e])]
+                    parts.append(f"beams[{e}] LM nodes {', '.join(nodes)}")
+                what = "; ".join(parts)
+                # prescribed values must satisfy the dropped rows through the kept ones
+                # (fixed DOFs and values are in the unknowns' basis: clamped tangents in rotated frames)
+                Bu = self.constraint_matrix @ self.basis.matrix_T(self.n_displacement_dofs) if self.basis \
+                    else self.constraint_matrix
+                Bf, v, C = Bu.tocsc()[:, self.fixed_dofs], self.fixed_values, dep.combinations
+                gap = np.abs(C @ (Bf @ v))
+                size = abs(C) @ (abs(Bf) @ np.abs(v))
+                if np.any(gap > DEPENDENT_ROW_TOLERANCE * size):
+                    raise SceneError(f"dirichlet: the prescribed values contradict the coupling: the rows of {what} "
+                                     "are combinations of other coupling rows, and the prescribed displacements "
+                                     "satisfy those but not these (prescribe values the embedded beams can follow)")
+                warnings.warn(f"coupling.lm: the coupling rows of {what} are combinations of the other rows (the "
+                              f"multipliers, lm = {self.scene.coupling['lm']!r}, are richer than what the solid mesh "
+                              "resolves along the beam, or supports fixed what they act on); they are left out, and "
+                              "λ there is the least-norm line load transferring the same forces. A lower lm "
+                              "(line2) or a finer solid mesh avoids this", CouplingWarning, stacklevel=4)
+            self._dependent = dep
+        return self._dependent
+
+    def solve_linear(self, A, b, x0=None, rtol=None):
+        """Solve a reduced (Dirichlet DOFs removed) linear system of this model.
+
+        ``rtol``: relative residual to reach (iterative solvers; default ``analysis.rtol``, what
+        a linear analysis needs of its one solve). The solver's info dict is kept in
+        ``last_linear_info`` (its ``note``, if any, says that a solver broke down and which one
+        took over).
+        """
+        from ..solvers.linear import solve_linear, solve_saddle
+        rtol = self.scene.analysis["rtol"] if rtol is None else rtol
+        method = self.linear_solver_method(len(b))
+        self.counts[f"linear_solver.{method}"] += 1
+        free = self.free
+        # AMG aggregates 3×3 blocks only when every node keeps all or none of its components
+        triplets = np.bincount(free // 3, minlength=self.n_unknowns // 3 + 1)
+        block = 3 if np.isin(triplets, (0, 3)).all() else 1
+        if not self.lagrange:
+            options = dict(method=method, rtol=rtol)
+            if method == "amg":
+                options.update(near_nullspace=self.rigid_body_modes()[free], block_size=block)
+                if self._auxiliary_space():
+                    options.update(method="aux", **self._follow_split())
+            x, info = solve_linear(A, b, **options)
+            self.last_linear_info = info
+            return x
+        n = self.n_displacement_dofs
+        primal = free < n
+        p_idx = np.flatnonzero(primal)
+        m_idx = np.flatnonzero(~primal)
+        K = A[p_idx][:, p_idx]
+        B = A[m_idx][:, p_idx]
+        kappa = np.concatenate([np.repeat(g.operators.kappa[g.coupling.coupled], 3) for g in self.groups])
+        solid = np.flatnonzero(free[p_idx] < 3 * self.n_solid_nodes)
+        beam = np.flatnonzero(free[p_idx] >= 3 * self.n_solid_nodes)
+        R = self.rigid_body_modes()[free[p_idx]]
+        options = dict(method="direct" if method == "direct" else "block", solid=solid, beam=beam, near_nullspace=R,
+                       rtol=rtol, block_size=block, dependent=self._dependent_multipliers(B, beam))
+        if method != "direct" and self._auxiliary_space(lagrange=True) and len(solid) and len(beam):
+            options["prolongation"] = self._follow_split()["prolongation"]
+        # γ (augmentation and scaling of the constraint rows) from the operators, never the penalty
+        x, lam, info = solve_saddle(K, B, kappa, b[p_idx], b[m_idx], **options)
+        self.last_linear_info = info
+        out = np.empty(len(b))
+        out[p_idx], out[m_idx] = x, lam
+        return out
+

@@ -1,0 +1,96 @@
+"""Beam types: what a scene's ``beams[i].model`` names, one frozen descriptor per type.
+
+The registry :data:`BEAM_TYPES` is the only place that knows which models exist. The scene
+validates ``model`` against it, the build step looks a beam's model up once
+(:func:`beam_type`), and everything downstream asks the descriptor: the centreline element type
+and its DOFs per node, whether the beam bends (needs EI, takes end moments), whether its
+reference centreline may be curved, the class that implements its physics, and the fields
+written to ``beams_<k>.vtu``.
+
+Adding a beam type is its own module(s) (physics, and the centreline element if it is new) and
+one line here. :data:`PLANNED_BEAM_TYPES` lists models a scene may name but that are not
+implemented yet (the scene says so instead of calling the name unknown).
+"""
+import importlib
+from dataclasses import dataclass
+
+from ..elements.beam import BEAM_ELEMENTS, BeamElementType
+
+__all__ = ["BeamType", "BEAM_TYPES", "PLANNED_BEAM_TYPES", "DEFAULT_BEAM_TYPE", "beam_type"]
+
+
+@dataclass(frozen=True, eq=False)
+class BeamType:
+    """Descriptor of a beam model.
+
+    Attributes
+    ----------
+    name : str
+        The scene's ``beams[i].model``.
+    element : BeamElementType
+        Centreline interpolation (its ``dofs_per_node`` are the beam's centreline DOFs per node).
+    label : str
+        How messages name the centreline (``"Hermite centreline"``).
+    bending : bool
+        The beam has bending stiffness: ``section.EI`` is required (derived from a radius),
+        ``moment`` loads act on it. Without it ``EI`` is 0 and ignored.
+    curved_reference : bool
+        Whether the reference centreline may be curved (the torsion-free beam needs it straight).
+    physics : str
+        ``"module:Class"`` of the physics, imported on first use (:meth:`physics_class`) so that
+        the physics may consult this registry: called as ``Class(mesh, EA, EI, model=name)``,
+        with ``evaluate(d, tangent)`` (internal force, tangent) and ``sample(d, eta)``.
+    output_fields : tuple of str
+        Keys of ``sample`` written per sample point to ``beams_<k>.vtu``.
+    rotations_per_node : int
+        DOFs per node in the rotations block of the DOF map (0: a centreline-only beam).
+    """
+
+    name: str
+    element: BeamElementType
+    label: str
+    bending: bool
+    curved_reference: bool
+    physics: str
+    output_fields: tuple = ("displacement", "axial_force", "curvature")
+    rotations_per_node: int = 0
+
+    @property
+    def dofs_per_node(self):
+        """Centreline DOFs per node: the element type's."""
+        return self.element.dofs_per_node
+
+    def physics_class(self):
+        """The class implementing this beam's physics."""
+        module, name = self.physics.split(":")
+        return getattr(importlib.import_module(module), name)
+
+
+BEAM_TYPES = {t.name: t for t in (
+    BeamType("torsion_free", BEAM_ELEMENTS["hermite"], "Hermite centreline", bending=True, curved_reference=False,
+             physics="mortar1d3d.physics.beam:BeamModel"),
+    BeamType("truss", BEAM_ELEMENTS["line"], "line", bending=False, curved_reference=True,
+             physics="mortar1d3d.physics.beam:BeamModel"),
+)}
+PLANNED_BEAM_TYPES = ("simo_reissner",)
+DEFAULT_BEAM_TYPE = "torsion_free"
+
+
+def beam_type(name):
+    """The :class:`BeamType` registered as ``name``.
+
+    Raises
+    ------
+    NotImplementedError
+        ``name`` is planned (:data:`PLANNED_BEAM_TYPES`), not implemented yet.
+    ValueError
+        ``name`` is unknown.
+    """
+    try:
+        return BEAM_TYPES[name]
+    except (KeyError, TypeError):
+        pass
+    if name in PLANNED_BEAM_TYPES:
+        known = " or ".join(f"{t.name!r} ({t.label})" for t in BEAM_TYPES.values())
+        raise NotImplementedError(f"beam model {name!r} is not implemented yet; use {known}")
+    raise ValueError(f"unknown beam model {name!r}; known models: {', '.join(BEAM_TYPES)}")
