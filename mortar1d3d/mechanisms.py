@@ -109,11 +109,9 @@ def _node_scale(mesh):
 
 def _dof_layout(mesh):
     """Per centreline DOF: its node and whether it is a tangent component."""
-    if mesh.element_type.name == "hermite":
-        triplet = np.arange(2 * mesh.n_nodes)
-        node, tangent = triplet // 2, triplet % 2 == 1
-    else:
-        node, tangent = np.arange(mesh.n_nodes), np.zeros(mesh.n_nodes, dtype=bool)
+    per_node = mesh.element_type.dofs_per_node // 3          # vectors per node: [r] or [r, t]
+    triplet = np.arange(per_node * mesh.n_nodes)
+    node, tangent = triplet // per_node, triplet % per_node > 0
     return np.repeat(node, 3), np.repeat(tangent, 3)
 
 
@@ -134,7 +132,7 @@ def _element_projectors(mesh, scale):
     n_el, n_f = cols.shape
     dofs = (3 * cols[:, :, None] + np.arange(3)).reshape(n_el, 3 * n_f)
     # per DOF triplet: the vector a rigid motion acts on, and the length its positions are measured in
-    if mesh.element_type.name == "hermite":
+    if mesh.element_type.has_tangents:
         vectors = np.empty((2 * mesh.n_nodes, 3))
         vectors[0::2], vectors[1::2] = mesh.positions, mesh.tangents
         unit = np.zeros(2 * mesh.n_nodes)                  # 0 marks a tangent triplet
@@ -333,7 +331,7 @@ def find_mechanisms(mesh, coupling_rows=None, fixed=None, tolerance=MECHANISM_TO
         v /= np.abs(v).max()
         motion = np.sqrt(np.bincount(dof_node, weights=np.where(dof_tangent, 0.0, (w * w)), minlength=mesh.n_nodes))
         motion[label != c] = 0.0
-        if mesh.element_type.name == "hermite" and motion.max() == 0.0:     # tangents only: rank by them
+        if mesh.element_type.has_tangents and motion.max() == 0.0:     # tangents only: rank by them
             motion = np.sqrt(np.bincount(dof_node, weights=w * w, minlength=mesh.n_nodes))
             motion[label != c] = 0.0
         moving = np.flatnonzero(motion >= 0.1 * motion.max())

@@ -8,7 +8,7 @@ import numpy as np
 from numba import prange
 
 from ._config import njit, njit_parallel
-from .elements.beam import BEAM_ELEMENTS, beam_element
+from .elements.beam import BEAM_ELEMENTS, MAX_FUNCTIONS, beam_element
 from .elements.beam import evaluate as _beam_functions
 from .elements.solid.dispatch import MAX_NODES, N_NODES, SOLID_ELEMENTS, solid_element
 from .elements.validity import DEGENERATE, FOLDED, INVERTED, jacobian_validity
@@ -229,7 +229,7 @@ class BeamMesh:
         short = zero_length_elements(self.positions, self.elements)
         if short.size:
             raise MeshError(f"zero-length beam elements: {format_ids(short)}")
-        if self.element_type.name == "hermite":
+        if self.element_type.has_tangents:
             if tangents is None:
                 raise MeshError("Hermite beams need one tangent per node")
             t = _as_points(tangents, "beam tangents")
@@ -295,7 +295,7 @@ class BeamMesh:
         offsets = np.cumsum([0] + [m.n_nodes for m in meshes[:-1]])
         positions = np.vstack([m.positions for m in meshes])
         elements = np.vstack([m.elements + o for m, o in zip(meshes, offsets)])
-        tangents = np.vstack([m.tangents for m in meshes]) if kinds == {"hermite"} else None
+        tangents = np.vstack([m.tangents for m in meshes]) if meshes[0].element_type.has_tangents else None
         return cls(kinds.pop(), positions, elements, tangents=tangents)
 
     # -- derived data -------------------------------------------------------------------------
@@ -325,19 +325,15 @@ class BeamMesh:
         return self.positions.ravel().copy()
 
     def coefficients(self, elements=None):
-        """Vector coefficients ``q_k`` of ``r(η) = Σ H_k q_k`` per element: (m, 4, 3), zero-padded.
+        """Vector coefficients ``q_k`` of ``r(η) = Σ H_k q_k`` per element: (m, MAX_FUNCTIONS, 3), zero-padded.
 
         ``elements``: optional element ids (default: all).
         """
         e = self.elements if elements is None else self.elements[np.atleast_1d(elements)]
-        m = len(e)
-        Q = np.zeros((m, 4, 3))
-        if self.element_type.name == "hermite":
-            Q[:, 0], Q[:, 1], Q[:, 2], Q[:, 3] = (self.positions[e[:, 0]], self.tangents[e[:, 0]],
-                                                  self.positions[e[:, 1]], self.tangents[e[:, 1]])
-        else:
-            for k in range(e.shape[1]):
-                Q[:, k] = self.positions[e[:, k]]
+        et = self.element_type
+        Q = np.zeros((len(e), MAX_FUNCTIONS, 3))
+        for k, (node, offset) in enumerate(zip(et.function_node, et.function_offset)):
+            Q[:, k] = (self.tangents if offset else self.positions)[e[:, node]]
         return Q
 
     def function_columns(self):
@@ -351,10 +347,12 @@ class BeamMesh:
     def _lagrange_lengths(self):
         x, w = gauss_legendre(10)
         Q = self.coefficients()
-        if self.element_type.name == "line":
+        et = self.element_type
+        if et.degree == 1:                                  # straight: the chord
             return np.linalg.norm(Q[:, 1] - Q[:, 0], axis=1)
-        dH = np.ascontiguousarray(_beam_functions(self.element_type, x, derivative=True)[:, :3])   # (q, 3)
-        d = np.einsum("qk,mki->qmi", dH, Q[:, :3])
+        n = et.n_functions
+        dH = np.ascontiguousarray(_beam_functions(et, x, derivative=True)[:, :n])   # (q, n)
+        d = np.einsum("qk,mki->qmi", dH, Q[:, :n])
         return w @ np.linalg.norm(d, axis=2)
 
     def evaluate(self, element, eta):

@@ -11,7 +11,7 @@ import pytest
 from meshio.gmsh.common import _gmsh_to_meshio_order
 
 from mortar1d3d.elements import beam
-from mortar1d3d.elements.beam import hermite, lagrange
+from mortar1d3d.elements.beam import hermite, line2, line3, registry as beam_registry
 from mortar1d3d.elements.solid import dispatch, hex8, hex20, hex27, tet4, tet10
 from mortar1d3d.elements.solid import registry
 
@@ -612,55 +612,95 @@ def test_lagrange_kronecker_and_derivatives():
     H = np.empty(3)
     dH = np.empty(3)
     for k, eta in enumerate((-1.0, 1.0)):
-        lagrange.line2_shape(eta, H)
+        line2.shape(eta, 1.0, H)
         np.testing.assert_array_equal(H[:2], np.eye(2)[k])
     for k, eta in enumerate((-1.0, 1.0, 0.0)):
-        lagrange.line3_shape(eta, H)
+        line3.shape(eta, 1.0, H)
         np.testing.assert_array_equal(H, np.eye(3)[k])
     h = 1e-6
     Hp, Hm = np.empty(3), np.empty(3)
     for eta in np.linspace(-1, 1, 9):
-        lagrange.line2_deriv(eta, dH)
-        lagrange.line2_shape(eta + h, Hp)
-        lagrange.line2_shape(eta - h, Hm)
+        line2.deriv(eta, 1.0, dH)
+        line2.shape(eta + h, 1.0, Hp)
+        line2.shape(eta - h, 1.0, Hm)
         np.testing.assert_allclose(dH[:2], (Hp[:2] - Hm[:2]) / (2 * h), rtol=0, atol=1e-8)
-        lagrange.line3_deriv(eta, dH)
-        lagrange.line3_shape(eta + h, Hp)
-        lagrange.line3_shape(eta - h, Hm)
+        line3.deriv(eta, 1.0, dH)
+        line3.shape(eta + h, 1.0, Hp)
+        line3.shape(eta - h, 1.0, Hm)
         np.testing.assert_allclose(dH, (Hp - Hm) / (2 * h), rtol=0, atol=1e-8)
-        lagrange.line3_shape(eta, H)
+        line3.shape(eta, 1.0, H)
         assert H.sum() == pytest.approx(1.0, abs=1e-15)
 
 
-@pytest.mark.parametrize("name", ["hermite", "line", "line3"])
+BEAM_NAMES = list(beam.BEAM_ELEMENTS)
+
+
+@pytest.mark.parametrize("name", BEAM_NAMES)
+def test_beam_second_derivatives_against_central_differences(name):
+    et = beam.beam_element(name)
+    n = et.n_functions
+    h = 1e-5
+    dHp, dHm, ddH = np.empty(n), np.empty(n), np.empty(n)
+    for L in (0.3, 2.1):
+        for eta in np.linspace(-1, 1, 7):
+            beam.deriv2(et.code, eta, L, ddH)
+            beam.deriv(et.code, eta + h, L, dHp)
+            beam.deriv(et.code, eta - h, L, dHm)
+            np.testing.assert_allclose(ddH, (dHp - dHm) / (2 * h), rtol=0, atol=1e-8 * max(L, 1))
+
+
+@pytest.mark.parametrize("name", BEAM_NAMES)
+def test_beam_degree_matches_the_functions(name):
+    # the exact Gauss counts of integration="auto" take the centreline degree from the descriptor:
+    # fit the functions (L = 1.7) with polynomials and find the smallest degree that reproduces them
+    et = beam.beam_element(name)
+    eta = np.linspace(-1.0, 1.0, 11)
+    H = beam.evaluate(et, eta, 1.7)[:, : et.n_functions]
+    degree = next(p for p in range(10)
+                  if np.abs(np.polynomial.polynomial.polyval(eta, np.polynomial.polynomial.polyfit(eta, H, p)).T
+                            - H).max() < 1e-13)
+    assert degree == et.degree == beam.DEGREE[et.code]
+
+
+@pytest.mark.parametrize("name", BEAM_NAMES)
+@pytest.mark.parametrize("order", [0, 1, 2])
+def test_beam_evaluate_has_the_kernels_bits(name, order):
+    et = beam.beam_element(name)
+    eta = np.linspace(-1.0, 1.0, 13)
+    lengths = np.array([0.4, 1.0, 2.7])
+    table = beam.evaluate(et, eta[None, :], lengths[:, None], derivative=order)
+    assert table.shape == (3, 13, beam.MAX_FUNCTIONS)
+    kernel = (beam.shape, beam.deriv, beam.deriv2)[order]
+    out = np.empty(beam.MAX_FUNCTIONS)
+    for i, L in enumerate(lengths):
+        for q, e in enumerate(eta):
+            out[:] = 0.0
+            kernel(et.code, e, L, out)
+            np.testing.assert_array_equal(table[i, q], out)
+
+
+@pytest.mark.parametrize("name", BEAM_NAMES)
 def test_beam_dispatch_equals_modules(name):
     et = beam.beam_element(name)
+    module = beam_registry.BEAM_TYPES[et.code]
+    assert module.DESCRIPTOR is et
     assert beam.n_functions(et.code) == et.n_functions
     assert len(et.function_node) == len(et.function_offset) == et.n_functions <= beam.MAX_FUNCTIONS
     L = 1.3
     for eta in (-1.0, -0.4, 0.25, 1.0):
-        H = np.full(beam.MAX_FUNCTIONS, np.nan)
-        dH = np.full(beam.MAX_FUNCTIONS, np.nan)
-        beam.shape(et.code, eta, L, H)
-        beam.deriv(et.code, eta, L, dH)
-        Hm = np.empty(et.n_functions)
-        dHm = np.empty(et.n_functions)
-        if name == "hermite":
-            hermite.shape(eta, L, Hm)
-            hermite.deriv(eta, L, dHm)
-        elif name == "line":
-            lagrange.line2_shape(eta, Hm)
-            lagrange.line2_deriv(eta, dHm)
-        else:
-            lagrange.line3_shape(eta, Hm)
-            lagrange.line3_deriv(eta, dHm)
-        np.testing.assert_array_equal(H[:et.n_functions], Hm)
-        np.testing.assert_array_equal(dH[:et.n_functions], dHm)
-        assert np.all(np.isnan(H[et.n_functions:]))
+        for kernel, own in ((beam.shape, module.shape), (beam.deriv, module.deriv), (beam.deriv2, module.deriv2)):
+            H = np.full(beam.MAX_FUNCTIONS, np.nan)
+            Hm = np.empty(et.n_functions)
+            kernel(et.code, eta, L, H)
+            own(eta, L, Hm)
+            np.testing.assert_array_equal(H[:et.n_functions], Hm)
+            assert np.all(np.isnan(H[et.n_functions:]))
 
 
 def test_beam_element_registry():
     assert {n: e.code for n, e in beam.BEAM_ELEMENTS.items()} == {"hermite": 0, "line": 1, "line3": 2}
+    assert [m.DESCRIPTOR.code for m in beam_registry.BEAM_TYPES] == [0, 1, 2]
+    assert beam.MAX_FUNCTIONS == 4
     assert beam.beam_element("hermite").dofs_per_node == 6
     with pytest.raises(ValueError, match="unknown beam element type 'line4'"):
         beam.beam_element("line4")

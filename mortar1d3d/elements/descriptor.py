@@ -155,3 +155,42 @@ class SolidElementType:
     @property
     def n_faces(self):
         return self.faces.shape[0]
+
+
+@dataclass(frozen=True)
+class BeamElementType:
+    """Descriptor of a beam centreline interpolation ``r(η) = Σ_k H_k(η; L) q_k``, η ∈ [-1, 1].
+
+    Attributes
+    ----------
+    name : str
+        ``"hermite"``, ``"line"``, ``"line3"`` (meshio's names for the Lagrange lines).
+    code : int
+        Integer code used for dispatch inside kernels (position in
+        :mod:`mortar1d3d.elements.beam.registry`).
+    n_nodes : int
+        Nodes per element.
+    n_functions : int
+        Vector coefficients q_k per element.
+    dofs_per_node : int
+        Centreline DOFs per node (3 per vector a node carries).
+    function_node, function_offset : tuple of int
+        Coefficient k belongs to local node ``function_node[k]`` and starts at DOF offset
+        ``function_offset[k]`` within that node's block (offset 3: a tangent).
+    degree : int
+        Polynomial degree of the functions in η (exact Gauss counts of ``integration="auto"``).
+    """
+
+    name: str
+    code: int
+    n_nodes: int
+    n_functions: int
+    dofs_per_node: int
+    function_node: tuple
+    function_offset: tuple
+    degree: int
+
+    @property
+    def has_tangents(self):
+        """True when some coefficients are nodal tangents (DOF offset 3 in their node's block)."""
+        return any(offset > 0 for offset in self.function_offset)

@@ -19,6 +19,7 @@ from numba import prange
 from .._config import PARAMETER_TOL, njit, njit_parallel
 from .._memory import carve
 from .._schedule import claim, new_claims, workers
+from ..elements import beam as beam_elements
 from ..elements.solid import dispatch as solid
 from ..geometry.auto_segments import AFFINE_TOL
 from ..geometry.beam import beam_point
@@ -223,8 +224,8 @@ def element_points(ctx, n_gauss):
 #: degree along a straight line of the solid shape functions N(ξ(η)) when ξ(η) is affine in η, per
 #: element code (hex8 trilinear: 3, hex20 serendipity: 4, hex27 triquadratic: 6, tet4: 1, tet10: 2)
 LINE_DEGREE = solid.LINE_DEGREE
-#: polynomial degree of the centreline functions per beam code (hermite, line, line3)
-BEAM_DEGREE = np.array([3, 1, 2], dtype=np.int64)
+#: polynomial degree of the centreline functions per beam code (from the beam element descriptors)
+BEAM_DEGREE = beam_elements.DEGREE
 
 
 @njit

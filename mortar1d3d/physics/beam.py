@@ -38,6 +38,7 @@ import scipy.sparse as sp
 from numba import prange
 
 from .._config import CHUNK, njit, njit_parallel
+from ..elements.beam import evaluate
 from ..quadrature import gauss_legendre
 from ..mesh import BeamMesh
 from .beam_types import beam_type
@@ -325,26 +326,13 @@ def _element_chunks(dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want, energy, fe
 
 # -- reference geometry (numpy) --------------------------------------------------------------------
 
-def _hermite_tables(eta, lengths):
-    """H, dH/dη, d²H/dη² of the Hermite functions: each (n_el, len(eta), 4)."""
-    e = np.asarray(eta, dtype=float)[None, :]
-    L = np.asarray(lengths, dtype=float)[:, None]
-    e2, e3 = e * e, e * e * e
-    one = np.ones_like(L)
-    H = np.stack([one * 0.25 * (2 - 3 * e + e3), 0.125 * L * (1 - e - e2 + e3),
-                  one * 0.25 * (2 + 3 * e - e3), 0.125 * L * (-1 - e + e2 + e3)], axis=2)
-    dH = np.stack([one * 0.75 * (e2 - 1), 0.125 * L * (-1 - 2 * e + 3 * e2),
-                   one * 0.75 * (1 - e2), 0.125 * L * (-1 + 2 * e + 3 * e2)], axis=2)
-    ddH = np.stack([one * 1.5 * e, 0.125 * L * (-2 + 6 * e),
-                    one * -1.5 * e, 0.125 * L * (2 + 6 * e)], axis=2)
-    return H, dH, ddH
-
-
-def _line_tables(eta, n_elements):
-    e = np.broadcast_to(np.asarray(eta, dtype=float)[None, :], (n_elements, len(eta)))
-    H = np.stack([0.5 * (1 - e), 0.5 * (1 + e)], axis=2)
-    dH = np.stack([np.full_like(e, -0.5), np.full_like(e, 0.5)], axis=2)
-    return H, dH, np.zeros_like(dH)
+def _tables(element, eta, lengths):
+    """H, dH/dη, d²H/dη² of the centreline functions at ``eta`` per element: each (n_el, len(eta), n_f),
+    from the element's own kernels (:func:`mortar1d3d.elements.beam.evaluate`)."""
+    eta = np.asarray(eta, dtype=float)[None, :]
+    lengths = np.asarray(lengths, dtype=float)[:, None]
+    return tuple(np.ascontiguousarray(evaluate(element, eta, lengths, derivative=k)[..., : element.n_functions])
+                 for k in range(3))
 
 
 def _curve_derivatives(dH, ddH, Q):
@@ -377,9 +365,9 @@ def reference_curvature(beams):
         a straight element. A kink between two elements shows at the shared node, where the
         nodal tangent is not the chord direction (a polyline with averaged tangents).
     """
-    if beams.element_type.name != "hermite":
+    if not beams.element_type.has_tangents:
         return np.zeros(beams.n_elements)
-    _, dH, ddH = _hermite_tables(_CURVATURE_SAMPLES, beams.lengths)
+    _, dH, ddH = _tables(beams.element_type, _CURVATURE_SAMPLES, beams.lengths)
     Q = beams.coefficients()                  # r1, t1, r2, t2 per element
     # r0' and r0'' from the difference of the positions (dH1 = -dH3): no cancellation against |X|
     Q[:, 2] -= Q[:, 0]
@@ -401,7 +389,7 @@ def curved_elements(beams):
     values : (k,) float64
     """
     value = reference_curvature(beams)
-    if beams.element_type.name != "hermite":
+    if not beams.element_type.has_tangents:
         return np.zeros(0, np.int64), value[:0]
     X = np.abs(beams.positions[beams.elements[:, :2]]).max(axis=(1, 2))
     tolerance = np.maximum(_STRAIGHT, 64.0 * np.finfo(float).eps * X / beams.lengths)
@@ -534,7 +522,7 @@ class BeamModel:
                 eta = np.concatenate([eta, eta_a])
                 w_axial = np.concatenate([np.zeros(n_gauss), w_a])
                 w_bending = np.concatenate([w, np.zeros(axial_gauss)])
-            _, dH, ddH = _hermite_tables(eta, beams.lengths)
+            _, dH, ddH = _tables(beams.element_type, eta, beams.lengths)
             n_f = 4
         else:
             if EI is not None and np.any(np.asarray(EI, dtype=float) != 0.0):
@@ -542,7 +530,7 @@ class BeamModel:
             self.EI = np.zeros(n_el)
             eta, w = gauss_legendre(1)
             w_axial, w_bending = w, 0.0 * w
-            _, dH, ddH = _line_tables(eta, n_el)
+            _, dH, ddH = _tables(beams.element_type, eta, beams.lengths)
             n_f = 2
         self.n_gauss = len(eta)
         self._dH = np.ascontiguousarray(dH)
@@ -680,10 +668,7 @@ class BeamModel:
             raise ValueError("eta: expected a 1D array of finite parameters")
         Q = self._current(d)
         Q0 = self._coefficients(self._q0)
-        if self.type.bending:
-            H, dH, ddH = _hermite_tables(eta, self.beams.lengths)
-        else:
-            H, dH, ddH = _line_tables(eta, self.beams.n_elements)
+        H, dH, ddH = _tables(self.beams.element_type, eta, self.beams.lengths)
         position = np.einsum("egk,eki->egi", H, Q)
         a, b = _curve_derivatives(dH, ddH, self._local(Q))
         a0, _ = _curve_derivatives(dH, ddH, self._local(Q0))

@@ -109,7 +109,7 @@ def follow_operator(ops, beams):
     scale = np.divide(1.0, kappa, out=np.zeros_like(kappa), where=kappa > 0)
     M = ops.M.tocsr()[0:3 * n_nodes:3, 0::3]                 # scalar rows/columns (3×3 identity blocks)
     positions = (sp.diags(scale) @ M).tocsr()
-    if beams.element_type.name != "hermite":
+    if not beams.element_type.has_tangents:
         return _expand3(positions)
     X = beams.positions
     a, b = beams.elements[:, 0], beams.elements[:, 1]

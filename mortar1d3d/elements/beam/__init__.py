@@ -1,4 +1,4 @@
-"""Beam centreline interpolations: cubic Hermite (positions + unit tangents) and Lagrange.
+"""Beam centreline interpolations: cubic Hermite (positions + unit tangents) and Lagrange lines.
 
 Every centreline is ``r(η) = Σ_k H_k(η; L) q_k`` with vector coefficients ``q_k``:
 
@@ -10,48 +10,38 @@ line       1     r1, r2                                      3
 line3      2     r1, r2, r_mid (meshio ``line3`` order)      3
 =========  ====  ==========================================  =========================
 
-Only the Hermite functions depend on the element length ``L``.
+Only the Hermite functions depend on the element length ``L``. Each type is one module with its
+kernels and a :class:`~mortar1d3d.elements.descriptor.BeamElementType`; :mod:`.registry` lists
+them, and everything here (tables by code, the kernels' dispatch, the vectorised evaluator) is
+derived from that list.
 """
-from dataclasses import dataclass
-
 import numpy as np
+from numba import literal_unroll
 
 from ..._config import njit
-from . import hermite, lagrange
+from ..descriptor import BeamElementType
+from ..selector import kernel_selector
+from .registry import BEAM_TYPES
 
+__all__ = ["BeamElementType", "BEAM_ELEMENTS", "BY_CODE", "MAX_FUNCTIONS", "beam_element", "shape", "deriv",
+           "deriv2", "n_functions", "evaluate"]
 
-@dataclass(frozen=True)
-class BeamElementType:
-    """Descriptor of a beam centreline interpolation.
+BEAM_ELEMENTS = {m.DESCRIPTOR.name: m.DESCRIPTOR for m in BEAM_TYPES}
+BY_CODE = {d.code: d for d in BEAM_ELEMENTS.values()}
+if sorted(BY_CODE) != list(range(len(BEAM_TYPES))):
+    raise ImportError("beam element registry: codes must be 0, 1, 2, ... in registry order")
+#: most coefficients of any centreline type (size of the kernels' scratch arrays)
+MAX_FUNCTIONS = max(d.n_functions for d in BEAM_ELEMENTS.values())
+#: per code: coefficients per element, polynomial degree in η
+N_FUNCTIONS = np.array([BY_CODE[c].n_functions for c in range(len(BY_CODE))], dtype=np.int64)
+DEGREE = np.array([BY_CODE[c].degree for c in range(len(BY_CODE))], dtype=np.int64)
 
-    ``n_nodes`` nodes per element, ``n_functions`` vector coefficients, ``dofs_per_node``
-    centreline DOFs per node; coefficient k belongs to local node ``function_node[k]`` and
-    starts at DOF offset ``function_offset[k]`` within that node's block.
-    """
-
-    name: str
-    code: int
-    n_nodes: int
-    n_functions: int
-    dofs_per_node: int
-    function_node: tuple
-    function_offset: tuple
-
-    @property
-    def has_tangents(self):
-        """True when some coefficients are nodal tangents (DOF offset 3 in their node's block)."""
-        return any(offset > 0 for offset in self.function_offset)
-
-
-BEAM_ELEMENTS = {
-    "hermite": BeamElementType("hermite", 0, 2, 4, 6, (0, 0, 1, 1), (0, 3, 0, 3)),
-    "line": BeamElementType("line", 1, 2, 2, 3, (0, 1), (0, 0)),
-    "line3": BeamElementType("line3", 2, 3, 3, 3, (0, 1, 2), (0, 0, 0)),
-}
-MAX_FUNCTIONS = 4
+_CODES = tuple(range(len(BEAM_TYPES)))
+_kernel = kernel_selector(BEAM_TYPES)
 
 
 def beam_element(name):
+    """Descriptor of the centreline type called ``name``."""
     try:
         return BEAM_ELEMENTS[name]
     except KeyError:
@@ -62,61 +52,62 @@ def beam_element(name):
 @njit
 def shape(code, eta, length, H):
     """Centreline functions of type ``code`` at ``eta`` into ``H``."""
-    if code == 0:
-        hermite.shape(eta, length, H)
-    elif code == 1:
-        lagrange.line2_shape(eta, H)
-    else:
-        lagrange.line3_shape(eta, H)
+    for k in literal_unroll(_CODES):
+        if k == code:
+            _kernel(k, "shape")(eta, length, H)
 
 
 @njit
 def deriv(code, eta, length, dH):
     """d/dη of the centreline functions of type ``code`` at ``eta`` into ``dH``."""
-    if code == 0:
-        hermite.deriv(eta, length, dH)
-    elif code == 1:
-        lagrange.line2_deriv(eta, dH)
-    else:
-        lagrange.line3_deriv(eta, dH)
+    for k in literal_unroll(_CODES):
+        if k == code:
+            _kernel(k, "deriv")(eta, length, dH)
 
 
-def evaluate(element, eta, length=1.0, derivative=False):
+@njit
+def deriv2(code, eta, length, ddH):
+    """d²/dη² of the centreline functions of type ``code`` at ``eta`` into ``ddH``."""
+    for k in literal_unroll(_CODES):
+        if k == code:
+            _kernel(k, "deriv2")(eta, length, ddH)
+
+
+@njit
+def n_functions(code):
+    return N_FUNCTIONS[code]
+
+
+_KERNELS = ("shape", "deriv", "deriv2")
+
+
+def evaluate(element, eta, length=1.0, derivative=0):
     """Centreline functions (or their η-derivatives) of ``element`` at every ``eta``, in numpy.
 
-    The vectorised counterpart of :func:`shape` and :func:`deriv` for code outside kernels (VTU
-    sampling, arc lengths): it runs the kernels' own Python functions on arrays, whose
-    arithmetic is elementwise, so every value has the bits a kernel computes at that point.
+    The vectorised counterpart of :func:`shape`, :func:`deriv` and :func:`deriv2` for code outside
+    kernels (VTU sampling, arc lengths, the beam model's reference geometry): it runs the kernels'
+    own Python functions on arrays, whose arithmetic is elementwise, so every value has the bits a
+    kernel computes at that point.
 
     Parameters
     ----------
     element : BeamElementType
     eta : array_like of float, any shape
-    length : float
-        Element length (enters the Hermite tangent functions only).
-    derivative : bool
-        d/dη instead of the functions.
+    length : float or array_like
+        Element length(s), broadcast against ``eta`` (it enters the Hermite tangent functions only).
+    derivative : {0, 1, 2} (or bool)
+        Order of the η-derivative.
 
     Returns
     -------
-    eta.shape + (MAX_FUNCTIONS,) float64
+    broadcast(eta, length).shape + (MAX_FUNCTIONS,) float64
         Zero beyond the element's ``n_functions``.
     """
     e = np.asarray(eta, dtype=np.float64)
-    H = np.zeros((MAX_FUNCTIONS,) + e.shape)
-    if element.code == 0:
-        (hermite.deriv if derivative else hermite.shape).py_func(e, length, H)
-    elif element.code == 1:
-        (lagrange.line2_deriv if derivative else lagrange.line2_shape).py_func(e, H)
-    else:
-        (lagrange.line3_deriv if derivative else lagrange.line3_shape).py_func(e, H)
+    L = np.asarray(length, dtype=np.float64)
+    shape_ = np.broadcast_shapes(e.shape, L.shape)
+    e = np.broadcast_to(e, shape_)
+    H = np.zeros((MAX_FUNCTIONS,) + shape_)
+    kernel = getattr(BEAM_TYPES[element.code], _KERNELS[int(derivative)])
+    kernel.py_func(e, L, H)
     return np.ascontiguousarray(np.moveaxis(H, 0, -1))
-
-
-@njit
-def n_functions(code):
-    if code == 0:
-        return 4
-    if code == 1:
-        return 2
-    return 3

@@ -1,4 +1,4 @@
-"""Cubic Hermite centreline on η ∈ [-1, 1] (design.md §2).
+"""Cubic Hermite centreline on η ∈ [-1, 1]: positions and unit tangents at the two end nodes.
 
 ``r(η) = H1 r1 + H2 t1 + H3 r2 + H4 t2`` with unit tangents t and the element length L
 entering H2, H4, so that dr/dη = L/2 · t at the nodes:
@@ -7,8 +7,10 @@ entering H2, H4, so that dr/dη = L/2 · t at the nodes:
     H3 = (2 + 3η - η³)/4        H4 = L/8 (-1 - η + η² + η³)
 
 L is the arc length of the curve it defines (see :func:`mortar1d3d.mesh.hermite_lengths`).
+Coefficients per element: r1, t1, r2, t2; 6 centreline DOFs per node ``[r, t]``.
 """
 from ..._config import njit
+from ..descriptor import BeamElementType
 
 
 @njit
@@ -28,3 +30,15 @@ def deriv(eta, length, dH):
     dH[1] = 0.125 * length * (-1.0 - 2.0 * eta + 3.0 * e2)
     dH[2] = 0.75 * (1.0 - e2)
     dH[3] = 0.125 * length * (-1.0 + 2.0 * eta + 3.0 * e2)
+
+
+@njit
+def deriv2(eta, length, ddH):
+    ddH[0] = 1.5 * eta
+    ddH[1] = 0.125 * length * (-2.0 + 6.0 * eta)
+    ddH[2] = -1.5 * eta
+    ddH[3] = 0.125 * length * (2.0 + 6.0 * eta)
+
+
+DESCRIPTOR = BeamElementType("hermite", code=0, n_nodes=2, n_functions=4, dofs_per_node=6,
+                             function_node=(0, 0, 1, 1), function_offset=(0, 3, 0, 3), degree=3)

@@ -8,14 +8,14 @@ functions (or a family's inside test) by code. Nothing names a type or a family 
 
 Dispatching on an integer inside the kernels (rather than compiling one kernel per element
 type) keeps one compiled version of every kernel, which Numba's on-disk cache can store. The
-branches are unrolled over the registry's tuple of (code, kernel) pairs at compile time
-(``numba.literal_unroll``): the same code as a hand-written ``if`` chain, generated from the list.
+branches are unrolled over the registry's codes at compile time (:mod:`..selector`): the same
+code as a hand-written ``if`` chain, generated from the list.
 """
 import numpy as np
-from numba import literal_unroll, types
-from numba.extending import overload
+from numba import literal_unroll
 
 from ..._config import njit
+from ..selector import kernel_selector
 from .registry import FAMILIES, SOLID_TYPES
 
 SOLID_MODULES = {m.DESCRIPTOR.name: m for m in SOLID_TYPES}
@@ -148,28 +148,10 @@ _CODES = tuple(range(len(SOLID_TYPES)))
 _FAMILY_CODES = tuple(range(len(FAMILIES)))
 
 
-def _type_kernel(k, name):
-    """Stand-in, inside njit code, for the kernel ``name`` of the element type with literal code k."""
-
-
-def _family_kernel(k, name):
-    """Stand-in, inside njit code, for the kernel ``name`` of the family with literal code k."""
-
-
-@overload(_type_kernel)
-def _type_kernel_impl(k, name):
-    # resolved at compile time: a literal code and name give one registry module's kernel, called
-    # directly (no function pointers), exactly like a hand-written if chain
-    if isinstance(k, types.IntegerLiteral) and isinstance(name, types.StringLiteral):
-        kernel = getattr(SOLID_TYPES[k.literal_value], name.literal_value)
-        return lambda k, name: kernel
-
-
-@overload(_family_kernel)
-def _family_kernel_impl(k, name):
-    if isinstance(k, types.IntegerLiteral) and isinstance(name, types.StringLiteral):
-        kernel = getattr(FAMILIES[k.literal_value], name.literal_value)
-        return lambda k, name: kernel
+#: ``_type_kernel(k, name)``: kernel ``name`` of the type with literal code k; ``_family_kernel``
+#: likewise for families (resolved when a kernel is compiled, see :mod:`..selector`)
+_type_kernel = kernel_selector(SOLID_TYPES)
+_family_kernel = kernel_selector(FAMILIES)
 
 
 @njit

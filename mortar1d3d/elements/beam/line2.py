@@ -1,0 +1,29 @@
+"""Two-node Lagrange line (meshio ``line``) on η ∈ [-1, 1]: nodes at -1, +1.
+
+Coefficients per element: r1, r2; 3 centreline DOFs per node. ``length`` is unused (the
+functions do not depend on it) and kept for one signature across centreline types.
+"""
+from ..._config import njit
+from ..descriptor import BeamElementType
+
+
+@njit
+def shape(eta, length, H):
+    H[0] = 0.5 * (1.0 - eta)
+    H[1] = 0.5 * (1.0 + eta)
+
+
+@njit
+def deriv(eta, length, dH):
+    dH[0] = -0.5
+    dH[1] = 0.5
+
+
+@njit
+def deriv2(eta, length, ddH):
+    ddH[0] = 0.0
+    ddH[1] = 0.0
+
+
+DESCRIPTOR = BeamElementType("line", code=1, n_nodes=2, n_functions=2, dofs_per_node=3,
+                             function_node=(0, 1), function_offset=(0, 0), degree=1)

@@ -1,0 +1,9 @@
+"""The beam centreline element types, in code order.
+
+A new centreline interpolation is its module (``shape``, ``deriv``, ``deriv2`` with the signature
+``(eta, length, out)`` and a ``DESCRIPTOR``) plus one line below; :mod:`mortar1d3d.elements.beam`
+derives the tables and the kernels' dispatch from this list.
+"""
+from . import hermite, line2, line3
+
+BEAM_TYPES = (hermite, line2, line3)
