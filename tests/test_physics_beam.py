@@ -358,3 +358,21 @@ def test_single_bar_axial_load():
     zero = sp.csr_matrix((6, 6))
     d = newton(model, [0, 1, 2, 4, 5], lambda d, factor: (factor * F, zero), steps=1)
     assert abs(d[3] - P * L / EA) < 1e-12          # exact for N = EA ε, even at ε = 0.5
+
+
+@pytest.mark.parametrize("model", ["torsion_free", "truss"])
+def test_sampled_axial_force_of_a_tiny_stretch_is_exact(model):
+    # the sampled N = EA ε takes the kernels' cancellation-free strain: for a uniform stretch of 1e-12
+    # the ratio |a|/|a0| - 1 would carry about 1e-4 relative error (round-off of 1 + 1e-12)
+    EA, strain = 3.0e7, 1.0e-12
+    beams = oblique_beam(5)
+    if model == "truss":
+        beams = BeamMesh.lagrange(beams.positions, beams.elements)
+    m = BeamModel(beams, EA, 1.0 if model == "torsion_free" else None, model=model)
+    d = np.zeros(m.n_dofs)
+    per_node = m.n_dofs // beams.n_nodes
+    d.reshape(-1, per_node)[:, :3] = strain * (beams.positions - beams.positions[0])
+    if per_node == 6:                    # the Hermite tangent coefficients stretch with the beam
+        d.reshape(-1, per_node)[:, 3:] = strain * beams.tangents
+    fields = m.sample(d, np.linspace(-1.0, 1.0, 5))
+    np.testing.assert_allclose(fields["axial_force"], EA * strain, rtol=1e-9)

@@ -672,7 +672,11 @@ class BeamModel:
         position = np.einsum("egk,eki->egi", H, Q)
         a, b = _curve_derivatives(dH, ddH, self._local(Q))
         a0, _ = _curve_derivatives(dH, ddH, self._local(Q0))
-        strain = np.linalg.norm(a, axis=2) / np.linalg.norm(a0, axis=2) - 1.0
+        # the kernels' cancellation-free axial strain (see _gauss_point), from the displacements
+        da = np.einsum("egk,eki->egi", dH, self._coefficients(self._displacement(d)))
+        J = np.linalg.norm(a0, axis=2)
+        strain = (2.0 * np.einsum("egi,egi->eg", a0, da) + np.einsum("egi,egi->eg", da, da)) / (
+            J * (np.linalg.norm(a, axis=2) + J))
         curvature = _curvature(a, b) if self.type.bending else np.zeros_like(strain)
         return {"position": position, "displacement": position - np.einsum("egk,eki->egi", H, Q0),
                 "axial_force": self.EA[:, None] * strain, "curvature": curvature, "strain": strain}
