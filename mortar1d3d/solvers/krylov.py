@@ -113,6 +113,79 @@ def _minres(A, b, x, apply_preconditioner, reduction, maxiter):
     return x, maxiter, "maxiter"
 
 
+# ---- experiment: scipy's CG and MINRES behind the same interface (MORTAR1D3D_KRYLOV=scipy)
+import os  # noqa: E402
+
+import scipy.sparse.linalg as spla  # noqa: E402
+
+_BACKEND = os.environ.get("MORTAR1D3D_KRYLOV", "own")
+
+
+class _Stop(Exception):
+    def __init__(self, status):
+        self.status = status
+
+
+def _cg_scipy(A, b, x, apply_preconditioner, reduction, maxiter, residual=None):
+    """scipy's CG; the operator and the preconditioner check the curvature CG needs."""
+    n = len(b)
+    r0 = b - A @ x if x.any() else b
+    state = dict(x=x, it=0, started=False)
+
+    def matvec(p):
+        q = A @ p
+        if state["started"] and not (p @ q if _BACKEND == "scipy" else (p * q).sum()) > 0:
+            state["it"] += 1
+            raise _Stop("breakdown")
+        return q
+
+    def psolve(r):
+        state["started"] = True
+        z = apply_preconditioner(r)
+        if not (r @ z if _BACKEND == "scipy" else (r * z).sum()) > 0:
+            raise _Stop("breakdown")
+        return z
+
+    def callback(xk):
+        state["x"] = xk
+        state["it"] += 1
+
+    try:
+        _, info = spla.cg(spla.LinearOperator((n, n), matvec=matvec, dtype=float), b, x, rtol=0.0,
+                          atol=reduction * np.linalg.norm(r0), maxiter=maxiter,
+                          M=spla.LinearOperator((n, n), matvec=psolve, dtype=float), callback=callback)
+        status = "maxiter" if info else "tolerance"
+    except _Stop as stop:
+        status = stop.status
+    return state["x"], state["it"], status
+
+
+def _minres_scipy(A, b, x, apply_preconditioner, reduction, maxiter, residual=None):
+    goal = reduction * residual(x)
+    state = dict(x=x, it=0)
+
+    def callback(xk):
+        state["x"] = xk
+        state["it"] += 1
+        if residual(xk) <= goal:
+            raise _Stop("tolerance")
+
+    n = len(b)
+    try:
+        y, info = spla.minres(A, b, x if x.any() else None, rtol=0.0, maxiter=maxiter,
+                              M=spla.LinearOperator((n, n), matvec=apply_preconditioner, dtype=float),
+                              callback=callback)
+        status = "maxiter" if info else "tolerance"
+        state["x"] = y
+    except _Stop as stop:
+        status = stop.status
+    except ValueError as error:          # "indefinite preconditioner", "non-symmetric matrix"
+        if "indefinite" not in str(error) and "non-symmetric" not in str(error):
+            raise
+        status = "breakdown"
+    return state["x"], state["it"], status
+
+
 def roundoff_level(A, y, rhs, scale=None):
     """Relative round-off level of the residual ``‖scale (rhs − A y)‖ / ‖scale rhs‖``.
 
@@ -144,7 +217,12 @@ def run_krylov(kind, A, rhs, x, apply_preconditioner, rtol, maxiter, residual, f
     (stalled at the round-off level above ``rtol``), ``"breakdown"`` (see :func:`_cg`) or
     ``"maxiter"``.
     """
-    method = _cg if kind == "cg" else _minres
+    if _BACKEND.startswith("scipy"):
+        method = _cg_scipy if kind == "cg" else _minres_scipy
+        extra = dict(residual=residual)
+    else:
+        method = _cg if kind == "cg" else _minres
+        extra = {}
     total = 0
     res = residual(x)
     for _ in range(_MAX_RESTARTS + 1):
@@ -152,7 +230,7 @@ def run_krylov(kind, A, rhs, x, apply_preconditioner, rtol, maxiter, residual, f
             return x, total, res, "converged"
         reduction = rtol / res if total == 0 else 0.5 * rtol / res
         previous = res
-        x, it, status = method(A, rhs, x, apply_preconditioner, reduction, maxiter - total)
+        x, it, status = method(A, rhs, x, apply_preconditioner, reduction, maxiter - total, **extra)
         total += it
         res = residual(x)
         if rtol < res <= floor(x) and (res > 0.5 * previous or status != "tolerance" or total >= maxiter):
