@@ -6,8 +6,30 @@ a breakdown of CG on an indefinite matrix handed on to MINRES and then to a spar
 shows; :func:`cg_with_fallback` is what :func:`~mortar1d3d.solvers.linear.solve_linear` runs
 on an SPD system, :func:`run_krylov` with ``"minres"`` what
 :func:`~mortar1d3d.solvers.saddle.solve_saddle` runs on a saddle point.
+
+**Whose CG and MINRES** (measured with ``benchmarks/krylov_paths.py``, scipy 1.17, see
+benchmarks/README.md, "Krylov methods: scipy's or our own"):
+
+- CG is :func:`scipy.sparse.linalg.cg`, with the curvature checks (``pᵀAp``, ``rᵀz``) in the
+  operator and preconditioner handed to it (:func:`_cg`). Its iterations are those of the
+  hand-written loop it replaced, on every CG path of the tests and benchmarks (23, 18, 18, 103 on
+  the test box, 15 and 20 in penalty_solve n = 10, 20, 23/38/65/129 in scene_solve n = 20, 1447
+  CG + MINRES in the ν = 0.4999 breakdown case), with residuals equal to round-off; solve time
+  equal within noise (medians of 6 runs alternating with the old loop: ratio 0.99).
+- MINRES stays our own (:func:`_minres`): scipy's stops on tests that cannot be switched off
+  (``‖r‖ <= eps ‖A‖ ‖x‖`` and ``‖A‖ ‖x‖ eps >= ‖b‖``, in the norms of the preconditioned
+  system), which fire on the saddle point of ``scene_solve`` (λ dominates ``‖x‖``): Lagrange,
+  traction, n = 20 raised LinearSolverError (residual 1.1e-7 after 90 iterations, restarts
+  included) where ours converges in 99. Its preconditioned residual, the quantity our
+  stopping test and round-off stall detection need, is not exposed: a callback has to compute the
+  true residual (one more product with the saddle matrix per iteration). With both (the system
+  also scaled by ``diag(1, γ)``) it converged everywhere, but took 5 % longer on that scene
+  (54.0 against 51.4 s, medians of 4 alternating runs) and 1403 against 1333 iterations on the
+  four Lagrange scene_solve runs (214 against 144 to recognise the round-off stall at rtol 1e-12).
+- GMRES is not needed: every system here is symmetric.
 """
 import numpy as np
+import scipy.sparse.linalg as spla
 
 from ._common import LinearSolverError
 from .direct import factorize
@@ -19,39 +41,57 @@ __all__ = ["run_krylov", "cg_with_fallback", "roundoff_level", "raise_not_conver
 _MAX_RESTARTS = 4
 
 
+class _Breakdown(Exception):
+    """Raised from inside scipy's CG: the operator or the preconditioner is not positive definite."""
+
+
 def _cg(A, b, x, apply_preconditioner, reduction, maxiter):
-    """Preconditioned conjugate gradients from ``x``.
+    """Preconditioned conjugate gradients from ``x``: :func:`scipy.sparse.linalg.cg`.
 
     Stops when the recursive residual norm has dropped by ``reduction`` relative to the
     starting residual. Returns ``(x, iterations, status)``, status ``"tolerance"``,
     ``"maxiter"`` or ``"breakdown"`` (``pᵀAp <= 0`` or ``rᵀz <= 0``: ``A`` or the
     preconditioner is not positive definite, CG cannot go on).
+
+    Notes
+    -----
+    scipy's CG neither checks nor exposes the curvature ``pᵀAp`` and ``rᵀz``; the operator and
+    the preconditioner handed to it check them and end the run (:class:`_Breakdown`) before
+    scipy divides by them. The first preconditioner call comes before any search direction
+    (scipy's first operator call, if ``x`` is not zero, is the initial residual). The two checks
+    sum with numpy (pairwise) rather than a BLAS dot: on the shared 2-core machine a threaded
+    BLAS dot of 152k entries took 16 ms against 0.07 ms, and with BLAS dots the wrapper made CG
+    11 % slower on ``scene_solve`` (penalty, weight, n = 20, 8 alternating pairs at load 5-6).
     """
-    r = b - A @ x
-    target = reduction * np.linalg.norm(r)
-    z = apply_preconditioner(r)
-    p = z.copy()
-    rz = r @ z
-    if not rz > 0:
-        return x, 0, "breakdown"
-    for it in range(1, maxiter + 1):
+    n = len(b)
+    state = dict(x=x, iterations=0, started=False)
+
+    def operator(p):
         q = A @ p
-        pq = p @ q
-        if not pq > 0:
-            return x, it, "breakdown"
-        alpha = rz / pq
-        x += alpha * p
-        r -= alpha * q
-        if np.linalg.norm(r) <= target:
-            return x, it, "tolerance"
+        if state["started"] and not (p * q).sum() > 0:
+            state["iterations"] += 1             # counted as the iteration it broke down in
+            raise _Breakdown
+        return q
+
+    def preconditioner(r):
+        state["started"] = True
         z = apply_preconditioner(r)
-        rz_new = r @ z
-        if not rz_new > 0:
-            return x, it, "breakdown"
-        p *= rz_new / rz
-        p += z
-        rz = rz_new
-    return x, maxiter, "maxiter"
+        if not (r * z).sum() > 0:
+            raise _Breakdown
+        return z
+
+    def count(xk):                               # scipy updates x in place and calls this once per iteration
+        state["x"] = xk
+        state["iterations"] += 1
+
+    start = b - A @ x if x.any() else b
+    try:
+        _, info = spla.cg(spla.LinearOperator((n, n), matvec=operator, dtype=float), b, x, rtol=0.0,
+                          atol=reduction * np.linalg.norm(start), maxiter=maxiter,
+                          M=spla.LinearOperator((n, n), matvec=preconditioner, dtype=float), callback=count)
+    except _Breakdown:
+        return state["x"], state["iterations"], "breakdown"
+    return state["x"], state["iterations"], "maxiter" if info else "tolerance"
 
 
 def _minres(A, b, x, apply_preconditioner, reduction, maxiter):
@@ -65,7 +105,9 @@ def _minres(A, b, x, apply_preconditioner, reduction, maxiter):
     -----
     Lanczos in the ``P⁻¹`` inner product plus Givens QR of the tridiagonal matrix, after
     Elman, Silvester & Wathen, *Finite Elements and Fast Iterative Solvers* (2014), the
-    preconditioned MINRES algorithm; ``|η|`` is ``‖r_j‖_{P⁻¹}``.
+    preconditioned MINRES algorithm; ``|η|`` is ``‖r_j‖_{P⁻¹}``. Our own rather than
+    :func:`scipy.sparse.linalg.minres`, which does not expose ``|η|`` and stops early on the
+    saddle points here (see the module's docstring).
     """
     v = b - A @ x
     z = apply_preconditioner(v)
@@ -113,79 +155,6 @@ def _minres(A, b, x, apply_preconditioner, reduction, maxiter):
     return x, maxiter, "maxiter"
 
 
-# ---- experiment: scipy's CG and MINRES behind the same interface (MORTAR1D3D_KRYLOV=scipy)
-import os  # noqa: E402
-
-import scipy.sparse.linalg as spla  # noqa: E402
-
-_BACKEND = os.environ.get("MORTAR1D3D_KRYLOV", "own")
-
-
-class _Stop(Exception):
-    def __init__(self, status):
-        self.status = status
-
-
-def _cg_scipy(A, b, x, apply_preconditioner, reduction, maxiter, residual=None):
-    """scipy's CG; the operator and the preconditioner check the curvature CG needs."""
-    n = len(b)
-    r0 = b - A @ x if x.any() else b
-    state = dict(x=x, it=0, started=False)
-
-    def matvec(p):
-        q = A @ p
-        if state["started"] and not (p @ q if _BACKEND == "scipy" else (p * q).sum()) > 0:
-            state["it"] += 1
-            raise _Stop("breakdown")
-        return q
-
-    def psolve(r):
-        state["started"] = True
-        z = apply_preconditioner(r)
-        if not (r @ z if _BACKEND == "scipy" else (r * z).sum()) > 0:
-            raise _Stop("breakdown")
-        return z
-
-    def callback(xk):
-        state["x"] = xk
-        state["it"] += 1
-
-    try:
-        _, info = spla.cg(spla.LinearOperator((n, n), matvec=matvec, dtype=float), b, x, rtol=0.0,
-                          atol=reduction * np.linalg.norm(r0), maxiter=maxiter,
-                          M=spla.LinearOperator((n, n), matvec=psolve, dtype=float), callback=callback)
-        status = "maxiter" if info else "tolerance"
-    except _Stop as stop:
-        status = stop.status
-    return state["x"], state["it"], status
-
-
-def _minres_scipy(A, b, x, apply_preconditioner, reduction, maxiter, residual=None):
-    goal = reduction * residual(x)
-    state = dict(x=x, it=0)
-
-    def callback(xk):
-        state["x"] = xk
-        state["it"] += 1
-        if residual(xk) <= goal:
-            raise _Stop("tolerance")
-
-    n = len(b)
-    try:
-        y, info = spla.minres(A, b, x if x.any() else None, rtol=0.0, maxiter=maxiter,
-                              M=spla.LinearOperator((n, n), matvec=apply_preconditioner, dtype=float),
-                              callback=callback)
-        status = "maxiter" if info else "tolerance"
-        state["x"] = y
-    except _Stop as stop:
-        status = stop.status
-    except ValueError as error:          # "indefinite preconditioner", "non-symmetric matrix"
-        if "indefinite" not in str(error) and "non-symmetric" not in str(error):
-            raise
-        status = "breakdown"
-    return state["x"], state["it"], status
-
-
 def roundoff_level(A, y, rhs, scale=None):
     """Relative round-off level of the residual ``‖scale (rhs − A y)‖ / ‖scale rhs‖``.
 
@@ -217,12 +186,7 @@ def run_krylov(kind, A, rhs, x, apply_preconditioner, rtol, maxiter, residual, f
     (stalled at the round-off level above ``rtol``), ``"breakdown"`` (see :func:`_cg`) or
     ``"maxiter"``.
     """
-    if _BACKEND.startswith("scipy"):
-        method = _cg_scipy if kind == "cg" else _minres_scipy
-        extra = dict(residual=residual)
-    else:
-        method = _cg if kind == "cg" else _minres
-        extra = {}
+    method = _cg if kind == "cg" else _minres
     total = 0
     res = residual(x)
     for _ in range(_MAX_RESTARTS + 1):
@@ -230,7 +194,7 @@ def run_krylov(kind, A, rhs, x, apply_preconditioner, rtol, maxiter, residual, f
             return x, total, res, "converged"
         reduction = rtol / res if total == 0 else 0.5 * rtol / res
         previous = res
-        x, it, status = method(A, rhs, x, apply_preconditioner, reduction, maxiter - total, **extra)
+        x, it, status = method(A, rhs, x, apply_preconditioner, reduction, maxiter - total)
         total += it
         res = residual(x)
         if rtol < res <= floor(x) and (res > 0.5 * previous or status != "tolerance" or total >= maxiter):

@@ -359,17 +359,8 @@ def solve_saddle(K, B, kappa, b, c, method="auto", *, solid=None, beam=None, pen
         rhs_aug = np.concatenate([b + gamma * (Bc.T @ (W @ cc)), cc])
         t = time.perf_counter()
         # the augmented system has the same solution; the residual is checked on the original
-        import os
-        if os.environ.get("MORTAR1D3D_SCALED") == "1":
-            D = sp.diags(scale)
-            y, info["iterations"], info["residual"], info["status"] = run_krylov(
-                "minres", (D @ augmented @ D).tocsr(), scale * rhs_aug, np.zeros(size),
-                lambda r: apply_preconditioner(r / scale) / scale, rtol, maxiter,
-                lambda yh: residual(scale * yh), lambda yh: floor(scale * yh))
-            y = scale * y
-        else:
-            y, info["iterations"], info["residual"], info["status"] = run_krylov(
-                "minres", augmented, rhs_aug, np.zeros(size), apply_preconditioner, rtol, maxiter, residual, floor)
+        y, info["iterations"], info["residual"], info["status"] = run_krylov(
+            "minres", augmented, rhs_aug, np.zeros(size), apply_preconditioner, rtol, maxiter, residual, floor)
         info["solve_time"] = time.perf_counter() - t
         if info["status"] == "breakdown":
             # the preconditioner is not positive definite: K_γ is not (an indefinite tangent), so
