@@ -12,7 +12,7 @@ import scipy.sparse as sp
 
 from mortar1d3d.solvers.linear import (AuxiliarySpacePreconditioner, LinearSolverError, rigid_body_modes,
                                        solve_linear, solve_saddle)
-from mortar1d3d.solvers.linear import _minres
+from mortar1d3d.solvers.krylov import _minres
 _HEX8_CORNERS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
                           [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], dtype=float)
 
@@ -181,6 +181,34 @@ def test_rigid_body_modes_tangents_rotate_only():
     assert np.abs(Bfull @ Rfull).max() < 1e-13
 
 
+def test_rigid_body_modes_about_a_centre_and_scaled():
+    """The form Model.rigid_body_modes uses: rotations about the body's centre, divided by its size."""
+    points = np.array([[1.0, 2.0, 3.0], [0.0, 0.0, 1.0], [4.0, -1.0, 2.0]])
+    tangent = np.array([False, True, False])
+    centre, size = np.array([0.5, 0.5, 0.5]), 4.0
+    R = rigid_body_modes(points, tangent, centre=centre, scale=size)
+    arm = np.where(tangent[:, None], points, points - centre) / size
+    for k in range(3):
+        np.testing.assert_array_equal(R[:, 3 + k].reshape(-1, 3), np.cross(np.eye(3)[k], arm))
+        np.testing.assert_array_equal(R[:, k].reshape(-1, 3), np.where(tangent[:, None], 0.0, np.eye(3)[k]))
+    # the default centre is the centroid of the positions, the default scale 1
+    np.testing.assert_array_equal(rigid_body_modes(points, tangent),
+                                  rigid_body_modes(points, tangent, centre=points[~tangent].mean(axis=0)))
+
+
+def test_linear_module_keeps_every_name_it_exported():
+    """solvers.linear was split into one module per idea; what it exported still imports from it."""
+    import mortar1d3d.solvers.linear as linear
+    from mortar1d3d.solvers import amg, dependent, direct, preconditioners, rigid, saddle
+    for module in (amg, dependent, direct, preconditioners, rigid, saddle):
+        for name in module.__all__:
+            assert getattr(linear, name) is getattr(module, name), name
+    assert set(linear.__all__) >= {"LinearSolverError", "rigid_body_modes", "build_amg", "AuxiliarySpacePreconditioner",
+                                   "solve_linear", "solve_saddle", "dependent_rows", "DependentRows", "DIRECT_MAX_DOFS",
+                                   "SADDLE_DIRECT_MAX_DOFS", "AUGMENTATION_FACTOR", "AUXILIARY_AUGMENTATION_FACTOR"}
+    assert linear._factorize is direct.factorize
+
+
 # ----------------------------------------------------------------------------- SPD systems
 
 def test_direct_and_amg_agree(medium):
@@ -212,7 +240,7 @@ def test_auto_picks_direct_for_small_systems(small):
 
 
 def test_amg_warm_start_and_prebuilt_hierarchy(medium):
-    from mortar1d3d.solvers.linear import build_amg
+    from mortar1d3d.solvers.amg import build_amg
     A = penalty_matrix(medium, 20.0)
     ml = build_amg(A, medium["R"])
     x, info = solve_linear(A, medium["b"], preconditioner=ml)

@@ -16,6 +16,7 @@ from mortar1d3d.mesh import BeamMesh
 from mortar1d3d.model import Model
 from mortar1d3d.physics.beam import BeamModel
 from mortar1d3d.scene import Scene, SceneError
+from mortar1d3d.solvers.direct import DIRECT_MAX_DOFS
 from mortar1d3d.solvers.linear import LinearSolverError, solve_linear, solve_saddle
 from test_linear_solvers import coupled_problem, penalty_matrix
 
@@ -62,7 +63,7 @@ def test_lagrange_prism_above_the_direct_limit_converges_with_operator_gamma():
     operators and the auxiliary space on the augmented stiffness: 76 iterations."""
     block = m13.solve(rebar_prism((26, 4, 4), "auto"))
     info = block.model.last_linear_info
-    assert len(block.model.free) > m13.model.AUTO_DIRECT_LIMIT
+    assert len(block.model.free) > DIRECT_MAX_DOFS
     assert info["method"] == "block" and info["converged"] and info["residual"] <= 1e-8
     assert info["iterations"] <= 110                                 # measured 76
     # γ is of the stiffness scale of the operators (E h / h), far below the penalty default
@@ -140,7 +141,7 @@ def test_dependent_rows_finds_rows_that_depend_across_beams():
     """Rows of different beams can only depend on each other through combinations whose beam part
     vanishes: a row with no beam columns (its beam fully held) that is a combination of another
     such row and of the left null vector of a third beam's block is found, and nothing else."""
-    from mortar1d3d.solvers.linear import dependent_rows
+    from mortar1d3d.solvers.dependent import dependent_rows
     rng = np.random.default_rng(1)
     M = rng.standard_normal((8, 20)) * (rng.random((8, 20)) < 0.4)     # 20 solid columns
     D = np.zeros((8, 6))
@@ -166,7 +167,7 @@ def test_singular_saddle_point_raises_instead_of_returning_multipliers():
     """Without the dependent rows removed the saddle point is singular; partial pivoting left no
     pivot below 3e-13 of the largest here and the old code returned λ up to 9e10 (true: 4.5e6).
     Now the condition estimate (about 1e23) reports it."""
-    from mortar1d3d.solvers.linear import DependentRows
+    from mortar1d3d.solvers.dependent import DependentRows
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", CouplingWarning)
         model = Model(coarse_bar(cells=(8, 2, 2), elements=8)).prepare()
@@ -313,9 +314,9 @@ def test_cg_stall_at_round_off_is_convergence():
     A = penalty_matrix(prob, 1e3)
     x_direct, _ = solve_linear(A, prob["b"], "direct")
     x, info = solve_linear(A, prob["b"], "amg", near_nullspace=prob["R"], rtol=1e-17)
-    from mortar1d3d.solvers.linear import _roundoff
+    from mortar1d3d.solvers.krylov import roundoff_level
     assert info["status"] == "roundoff" and info["converged"]
-    assert info["residual"] <= _roundoff(A, x, prob["b"])
+    assert info["residual"] <= roundoff_level(A, x, prob["b"])
     assert _rel(x, x_direct) < 1e-10
     with pytest.raises(LinearSolverError, match="did not converge"):  # far from round-off it still fails
         solve_linear(A, prob["b"], "amg", near_nullspace=prob["R"], rtol=1e-17, maxiter=3)

@@ -19,7 +19,7 @@ from .checks import LINEAR_DISPLACEMENT_LIMIT, free_rigid_motions
 from .curves import chord_tangents
 from .dofmap import Block, DofMap
 from .effects import Effect, plan
-from .model import AUTO_DIRECT_LIMIT, DEFAULT_PENALTY_FACTOR, PENALTY_ROUNDOFF_LIMIT, Model
+from .model import DEFAULT_PENALTY_FACTOR, PENALTY_ROUNDOFF_LIMIT, Model
 from .readers import READERS, read_mesh_file
 from .sets import NamedSets
 from .solve import solve
@@ -28,4 +28,4 @@ _chord_tangents = chord_tangents        # the name before the split (tests use i
 
 __all__ = ["Effect", "Model", "plan", "solve", "build", "BuiltScene", "BeamGroup", "DofMap", "Block", "NamedSets",
            "READERS", "read_mesh_file", "as_scene", "chord_tangents", "free_rigid_motions",
-           "AUTO_DIRECT_LIMIT", "DEFAULT_PENALTY_FACTOR", "PENALTY_ROUNDOFF_LIMIT", "LINEAR_DISPLACEMENT_LIMIT"]
+           "DEFAULT_PENALTY_FACTOR", "PENALTY_ROUNDOFF_LIMIT", "LINEAR_DISPLACEMENT_LIMIT"]

@@ -26,8 +26,6 @@ from . import checks
 from .build import BuiltScene, build
 
 DEFAULT_PENALTY_FACTOR = 1e3     # ε = 1e3 E_solid when the scene gives no penalty
-AUTO_DIRECT_LIMIT = 3_000        # unknowns up to which solver = "auto" factorises (measured crossover,
-                                 # solvers.linear.DIRECT_MAX_DOFS: SuperLU fill grows fast in 3D)
 PENALTY_ROUNDOFF_LIMIT = 1e8     # ε / E_solid above which round-off beats the penalty error (AccuracyWarning)
 
 
@@ -162,8 +160,9 @@ class Model:
         solver = self.scene.analysis["solver"]
         if solver != "auto":
             return solver
+        from ..solvers.direct import DIRECT_MAX_DOFS
         n = self.n_displacement_dofs if n_unknowns is None else n_unknowns
-        if n <= AUTO_DIRECT_LIMIT:
+        if n <= DIRECT_MAX_DOFS:
             return "direct"
         return "block" if self.lagrange else "amg"
 
@@ -372,20 +371,11 @@ class Model:
         """(n_dofs, 6) rigid-body modes of the displacement DOFs (translations, rotations about the
         centroid of ``dofs``); tangent DOFs of Hermite beams rotate, never translate. In the basis of
         the unknowns (clamped tangents in their rotated frames), like ``fixed`` and ``free``."""
-        ref = self.reference()
-        n = self.n_displacement_dofs
+        from ..solvers.rigid import rigid_body_modes
         is_tangent = self._tangent_triplets()
-        X = ref.reshape(-1, 3)
         centre, size = self._mode_frame(dofs, is_tangent)
-        R = np.zeros((n // 3, 3, 6))
-        P = (X - centre) / size
-        P[is_tangent] = X[is_tangent] / size     # a tangent turns with the body: ω × t, same scale
-        for k in range(3):
-            e = np.zeros(3)
-            e[k] = 1.0
-            R[~is_tangent, k, k] = 1.0
-            R[:, :, 3 + k] = np.cross(e, P)
-        return self.basis.to_unknowns(R.reshape(n, 6))
+        R = rigid_body_modes(self.reference().reshape(-1, 3), is_tangent, centre=centre, scale=size)
+        return self.basis.to_unknowns(R)
 
     def check_supports(self):
         """Raise SceneError if a body can move as a rigid body or a beam has a zero-energy mode

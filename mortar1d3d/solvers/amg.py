@@ -1,0 +1,61 @@
+"""Smoothed-aggregation AMG (pyamg) for elasticity-like SPD matrices, with rigid-body modes
+(:func:`~mortar1d3d.solvers.rigid.rigid_body_modes`) as near null space."""
+import numpy as np
+import pyamg
+
+from ._common import check_square
+
+__all__ = ["build_amg"]
+
+
+def _block_size(n, block_size):
+    if block_size is None:
+        return 3 if n % 3 == 0 else 1
+    if block_size not in (1, 3) or n % block_size:
+        raise ValueError(f"block_size must be 1 or 3 and divide the size {n}, got {block_size}")
+    return block_size
+
+
+def build_amg(A, near_nullspace=None, *, block_size=None, weighting="diagonal"):
+    """Smoothed-aggregation AMG hierarchy for an SPD elasticity-like matrix.
+
+    Parameters
+    ----------
+    A : (n, n) scipy.sparse matrix, SPD
+    near_nullspace : (n, k) array_like of float, optional
+        Vectors ``A`` should map to (almost) zero, e.g. ``rigid_body_modes(...)[free]``.
+        Default: the constant vector (pyamg's default; poor for elasticity).
+    block_size : {None, 1, 3}
+        Aggregate by DOF triplets (BSR with 3x3 blocks) when 3: right when DOFs ``3i..3i+2``
+        belong to one node, i.e. Dirichlet conditions fix whole nodes. Default: 3 if ``n`` is a
+        multiple of 3, else 1.
+    weighting : {"diagonal", "local"}
+        Damping of the Jacobi-smoothed prolongation (pyamg's ``weighting``): ``"diagonal"``
+        estimates the spectral radius of ``D⁻¹A`` with a few Arnoldi/Lanczos steps, ``"local"``
+        bounds it row by row (no eigenvalue estimate, a slightly more damped prolongation).
+
+    Returns
+    -------
+    pyamg.multilevel.MultilevelSolver
+        Use ``ml.aspreconditioner()`` as a symmetric positive V-cycle preconditioner.
+
+    Notes
+    -----
+    Settings: symmetric strength of connection with ``θ = 0`` (block norms for BSR), standard
+    aggregation, Jacobi-smoothed prolongation (ω = 4/3), symmetric block Gauss–Seidel pre- and
+    post-smoothing (so the V-cycle is symmetric and CG may use it), coarse levels down to
+    500 unknowns solved directly. Energy-minimising prolongation was tried: fewer iterations,
+    but a setup several times slower, which does not pay off in a Newton loop.
+    """
+    A = check_square(A, "A")
+    n = A.shape[0]
+    bs = _block_size(n, block_size)
+    B = None
+    if near_nullspace is not None:
+        B = np.ascontiguousarray(near_nullspace, dtype=np.float64)
+        if B.ndim != 2 or B.shape[0] != n:
+            raise ValueError(f"near_nullspace must have shape ({n}, k), got {B.shape}")
+    matrix = A.tobsr(blocksize=(bs, bs)) if bs > 1 else A
+    return pyamg.smoothed_aggregation_solver(
+        matrix, B=B, symmetry="hermitian", strength=("symmetric", {"theta": 0.0}),
+        smooth=("jacobi", {"omega": 4.0 / 3.0, "weighting": weighting}), max_coarse=500, coarse_solver="splu")
