@@ -1,8 +1,25 @@
-"""Exceptions raised at the API boundary."""
+"""Every exception and warning the library raises, in one place.
 
+Errors (all raised at the API boundary or by the solvers, with messages that name the key path,
+ids or values at fault and what to try):
 
-class MeshError(ValueError):
-    """Invalid mesh input: the message names the problem and the offending ids."""
+- :class:`MeshError` (``ValueError``): invalid mesh input;
+- :class:`SceneError` (``ValueError``): invalid scene; the message starts with the key path;
+- :class:`LinearSolverError` (``RuntimeError``): a linear solve failed;
+- :class:`ConvergenceError` (``RuntimeError``): Newton's method gave up;
+- :class:`InvertedElementsError` (``FloatingPointError``): det F <= 0 in solid elements (a Newton
+  solver catches it to cut its step).
+
+Warnings (``UserWarning`` subclasses): :class:`AccuracyWarning`, :class:`CouplingWarning`,
+:class:`LargeDeformationWarning`.
+
+The modules that raise them re-export them under their old names (``mortar1d3d.scene.SceneError``,
+``mortar1d3d.solvers.newton.ConvergenceError``, ...).
+"""
+import numpy as np
+
+__all__ = ["MeshError", "SceneError", "LinearSolverError", "ConvergenceError", "InvertedElementsError",
+           "AccuracyWarning", "CouplingWarning", "LargeDeformationWarning", "format_ids"]
 
 
 def format_ids(ids, limit=10):
@@ -12,6 +29,36 @@ def format_ids(ids, limit=10):
     return head + (f" (and {len(ids) - limit} more)" if len(ids) > limit else "")
 
 
+# ------------------------------------------------------------------------------------- errors
+class MeshError(ValueError):
+    """Invalid mesh input: the message names the problem and the offending ids."""
+
+
+class SceneError(ValueError):
+    """Invalid scene: the message starts with the key path of the offending entry."""
+
+
+class LinearSolverError(RuntimeError):
+    """A linear solve failed: the message says what was reached and what to try."""
+
+
+class ConvergenceError(RuntimeError):
+    """Newton's method gave up: the message says where, what was seen and what to try."""
+
+
+class InvertedElementsError(FloatingPointError):
+    """``det F <= 0`` at a Gauss point of the listed elements (``.elements``, int64 array).
+
+    A Newton solver catches this to cut its step: the deformation is not admissible.
+    """
+
+    def __init__(self, elements):
+        self.elements = np.asarray(elements, dtype=np.int64)
+        super().__init__(f"det F <= 0 (or not finite) at a Gauss point of {len(self.elements)} solid "
+                         f"elements: {format_ids(self.elements)}")
+
+
+# ----------------------------------------------------------------------------------- warnings
 class AccuracyWarning(UserWarning):
     """The inputs are valid but round-off will cost accuracy (e.g. a penalty far above E_solid)."""
 

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .elements.solid.dispatch import SOLID_ELEMENTS
+from .errors import SceneError  # noqa: F401 (raised here; mortar1d3d.scene.SceneError stays importable)
 from .generate import FACE_SETS as BOX_FACES  # noqa: F401 (the face set names of a generated box)
 from .mesh import BeamMesh, SolidMesh
 from .physics.beam_types import BEAM_TYPES, DEFAULT_BEAM_TYPE, PLANNED_BEAM_TYPES
@@ -35,10 +36,6 @@ MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-30, 1e30
 #: generated meshes stay allocatable: a fuzzed ``cells = [1e6, 1e6, 1e6]`` must not exhaust memory
 MAX_BOX_CELLS = 2_000_000
 MAX_BEAM_ELEMENTS = 1_000_000
-
-
-class SceneError(ValueError):
-    """Invalid scene: the message starts with the key path of the offending entry."""
 
 
 _MISSING = object()

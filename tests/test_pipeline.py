@@ -210,3 +210,30 @@ def test_the_pipeline_modules_import_only_earlier_stages():
                 names = [node.module] if node.module else [a.name for a in node.names]
                 for name in names:
                     assert rank[name] < rank[path.stem], f"{path.stem} imports {name}"
+
+
+# --------------------------------------------------------------------------------------------
+# one place for every exception and warning
+# --------------------------------------------------------------------------------------------
+def test_every_public_exception_and_warning_is_defined_in_errors_py():
+    import ast
+    from pathlib import Path
+
+    from mortar1d3d import errors
+    package = Path(m13.__file__).parent
+    elsewhere = []
+    for path in package.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if (isinstance(node, ast.ClassDef) and not node.name.startswith("_")
+                    and any(getattr(b, "id", getattr(b, "attr", "")).endswith(("Error", "Warning", "Exception"))
+                            for b in node.bases)):
+                if path.name != "errors.py":
+                    elsewhere.append(f"{path.relative_to(package)}:{node.name}")
+    assert elsewhere == []
+    # the modules that raise them still export them under the names users import
+    from mortar1d3d.physics.solid import InvertedElementsError
+    from mortar1d3d.solvers.linear import LinearSolverError
+    from mortar1d3d.solvers.newton import ConvergenceError
+    assert (SceneError, LinearSolverError, ConvergenceError, InvertedElementsError) == (
+        errors.SceneError, errors.LinearSolverError, errors.ConvergenceError, errors.InvertedElementsError)
+    assert set(errors.__all__) >= {"MeshError", "AccuracyWarning", "CouplingWarning", "LargeDeformationWarning"}

@@ -17,7 +17,7 @@ With ``kinematics="linear"`` K is constant: it is assembled once, and ``f_int = 
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import format_ids
+from ..errors import InvertedElementsError  # noqa: F401 (raised here; importable from here as before)
 from ..mesh import SolidMesh
 from .assembly_graph import assembly_graph
 from .fibre_material import FibreField
@@ -29,18 +29,6 @@ KINEMATICS = ("nonlinear", "linear")
 
 #: consecutive elements per block of the coloured assembly (:mod:`~mortar1d3d.physics.assembly_graph`)
 ASSEMBLY_BLOCK = 64
-
-
-class InvertedElementsError(FloatingPointError):
-    """``det F <= 0`` at a Gauss point of the listed elements (``.elements``, int64 array).
-
-    A Newton solver catches this to cut its step: the deformation is not admissible.
-    """
-
-    def __init__(self, elements):
-        self.elements = np.asarray(elements, dtype=np.int64)
-        super().__init__(f"det F <= 0 (or not finite) at a Gauss point of {len(self.elements)} solid "
-                         f"elements: {format_ids(self.elements)}")
 
 
 class SolidModel:

@@ -2,11 +2,9 @@
 import numpy as np
 import scipy.sparse as sp
 
+from ..errors import LinearSolverError  # noqa: F401 (raised by every solver module)
+
 __all__ = ["LinearSolverError", "check_square", "check_vector", "split_dofs"]
-
-
-class LinearSolverError(RuntimeError):
-    """A linear solve failed: the message says what was reached and what to try."""
 
 
 def check_square(A, name):

@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import ConvergenceError  # noqa: F401 (raised here; importable from here as before)
+
 
 #: the round-off floor of a residual is taken as this many machine epsilons times ‖|K| (|z| + |X|)‖
 #: (the size of the force terms that cancel in it); see :func:`_newton_step`
@@ -33,10 +35,6 @@ ROUNDOFF_FACTOR = 1e3
 #: times the Newton tolerance ``rtol``: one exactly solved step from the start of a load step then
 #: already meets the residual target, and quadratic convergence is not held back
 LINEAR_RTOL_FACTOR = 0.1
-
-
-class ConvergenceError(RuntimeError):
-    """Newton's method gave up: the message says where, what was seen and what to try."""
 
 
 @dataclass
