@@ -456,3 +456,20 @@ def test_scene_amg_uses_auxiliary_space_at_default_penalty():
     for rows in (positions, tangents):
         np.testing.assert_allclose(follow[rows, 3:], expected[rows, 3:], atol=1e-12)
     assert np.abs(follow[:, 3:] - expected[:, 3:]).max() > 1e-3
+
+
+def test_amg_setup_is_repeatable_and_leaves_the_callers_random_stream_alone():
+    from mortar1d3d.solvers.amg import build_amg
+    A = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(3000, 3000), format="csr") + 1e-3 * sp.eye(3000)
+    np.random.seed(1)
+    first = build_amg(A, block_size=1)
+    after = np.random.rand()
+    np.random.seed(1)
+    np.random.rand()                       # another draw in between: pyamg would start elsewhere
+    second = build_amg(A, block_size=1)
+    for a, b in zip(first.levels, second.levels):
+        if hasattr(a, "P"):
+            assert (a.P != b.P).nnz == 0
+    np.random.seed(1)
+    build_amg(A, block_size=1)
+    assert np.random.rand() == after       # the caller's stream continues as if nothing happened

@@ -5,7 +5,10 @@ import pyamg
 
 from ._common import check_square
 
-__all__ = ["build_amg"]
+__all__ = ["build_amg", "AMG_SEED"]
+
+#: seed of the random start vectors of pyamg's spectral-radius estimates (repeatable set-up)
+AMG_SEED = 20241125
 
 
 def _block_size(n, block_size):
@@ -56,6 +59,14 @@ def build_amg(A, near_nullspace=None, *, block_size=None, weighting="diagonal"):
         if B.ndim != 2 or B.shape[0] != n:
             raise ValueError(f"near_nullspace must have shape ({n}, k), got {B.shape}")
     matrix = A.tobsr(blocksize=(bs, bs)) if bs > 1 else A
-    return pyamg.smoothed_aggregation_solver(
-        matrix, B=B, symmetry="hermitian", strength=("symmetric", {"theta": 0.0}),
-        smooth=("jacobi", {"omega": 4.0 / 3.0, "weighting": weighting}), max_coarse=500, coarse_solver="splu")
+    # pyamg starts its spectral-radius estimate (weighting="diagonal") from numpy's global random
+    # generator: the hierarchy, and the iteration counts, changed from one process to the next.
+    # A fixed seed makes the set-up repeatable; the caller's random stream is put back afterwards.
+    state = np.random.get_state()
+    try:
+        np.random.seed(AMG_SEED)
+        return pyamg.smoothed_aggregation_solver(
+            matrix, B=B, symmetry="hermitian", strength=("symmetric", {"theta": 0.0}),
+            smooth=("jacobi", {"omega": 4.0 / 3.0, "weighting": weighting}), max_coarse=500, coarse_solver="splu")
+    finally:
+        np.random.set_state(state)
