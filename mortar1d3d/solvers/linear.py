@@ -36,7 +36,7 @@ import time
 import numpy as np
 
 from ._common import LinearSolverError, check_square, check_vector, split_dofs
-from .amg import build_amg
+from .amg import AMG_SEED, build_amg
 from .dependent import DEPENDENT_ROW_TOLERANCE, DependentRows, dependent_rows
 from .direct import DIRECT_MAX_DOFS, factorize
 from .krylov import cg_with_fallback, raise_not_converged, roundoff_level
@@ -44,7 +44,7 @@ from .preconditioners import AuxiliarySpacePreconditioner
 from .rigid import rigid_body_modes
 from .saddle import AUGMENTATION_FACTOR, AUXILIARY_AUGMENTATION_FACTOR, SADDLE_DIRECT_MAX_DOFS, solve_saddle
 
-__all__ = ["LinearSolverError", "rigid_body_modes", "build_amg", "AuxiliarySpacePreconditioner",
+__all__ = ["LinearSolverError", "rigid_body_modes", "build_amg", "AMG_SEED", "AuxiliarySpacePreconditioner",
            "solve_linear", "solve_saddle", "dependent_rows", "DependentRows", "DEPENDENT_ROW_TOLERANCE",
            "DIRECT_MAX_DOFS", "SADDLE_DIRECT_MAX_DOFS", "AUGMENTATION_FACTOR", "AUXILIARY_AUGMENTATION_FACTOR"]
 
