@@ -1,6 +1,7 @@
 """Standalone throughput of assemble_mortar outside pytest (best and median of repeated calls).
 
     .venv/bin/python benchmarks/throughput.py [--repeats 9] [--distort 0.1] [--drop] [--no-reuse]
+                                              [--package CHECKOUT]
 
 Same scene as the pytest-benchmark harness (fibre_cube(20, 1000, 20), n_gauss=4, straight
 fibres). Every round times each integration with 1 and then 2 threads back to back, and the
@@ -13,6 +14,11 @@ each CPU in turn (pinned): on a VM one vCPU is often slower than the other, whic
 threads can give at 1 + t_fast / t_slow (two vCPUs that are equally fast alone may still slow each
 other down when both are busy; only the 2-thread control shows that). The per-stage times are
 those of the fastest call.
+
+To compare two versions of the library on a shared machine, run this script alternately with
+``--package`` naming each checkout and compare the lines ``per control``: each call's time divided
+by the 1-thread control's time of the same round (median over the rounds), a figure in which the
+machine's speed of the moment cancels.
 """
 import argparse
 import resource
@@ -23,7 +29,20 @@ from pathlib import Path
 import numba
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # measure this checkout's package
+
+def _package_root(argv):
+    """The checkout whose package is measured: ``--package DIR`` if given, else this one."""
+    argv = sys.argv[1:] if argv is None else argv
+    for i, a in enumerate(argv):
+        if a == "--package" and i + 1 < len(argv):
+            return Path(argv[i + 1]).resolve()
+        if a.startswith("--package="):
+            return Path(a.split("=", 1)[1]).resolve()
+    return Path(__file__).resolve().parents[1]
+
+
+# the package must be imported from the chosen checkout before anything imports it
+sys.path.insert(0, str(_package_root(None)))
 
 import mortar1d3d as m13  # noqa: E402
 from control import control_times, core_times  # noqa: E402
@@ -58,6 +77,9 @@ def main(argv=None):
     parser.add_argument("--no-reuse", action="store_true",
                         help="every big block fresh from the allocator (mortar1d3d._memory.POOL_LIMIT = 0); with "
                              "--drop: the memory regime before the engine reused its blocks")
+    parser.add_argument("--package", metavar="CHECKOUT", default=None,
+                        help="measure the mortar1d3d package of another checkout (a directory holding mortar1d3d/) "
+                             "with this harness, e.g. an older commit in a git worktree")
     parser.add_argument("--full", type=float, default=1.85, metavar="X",
                         help="also report the speed-up over the rounds whose control reached X (default 1.85)")
     args = parser.parse_args(argv)
@@ -68,6 +90,7 @@ def main(argv=None):
         from mortar1d3d import _memory
         _memory.POOL_LIMIT = 0
     m13.warmup()
+    print(f"package {Path(m13.__file__).resolve().parent}")
     print(f"threading layer {numba.threading_layer()}, NUMBA_NUM_THREADS {numba.config.NUMBA_NUM_THREADS}"
           + (f", cube distorted by {args.distort} cells" if args.distort else ""))
     integrations = ("element", "segment")
@@ -114,6 +137,12 @@ def main(argv=None):
              for i in integrations}
     control_ratio = np.array(control[1]) / np.array(control[2])
     claimed_ratio = np.array(claimed[1]) / np.array(claimed[2])
+    # each call against the 1-thread control of its round: comparable between runs and versions
+    for integration in integrations:
+        for nt in THREADS:
+            per = np.array([t for t, _, _ in calls[integration, nt]]) / np.array(control[1])
+            print(f"{integration:8s} {nt} thread(s) per control: median {np.median(per):.3f} "
+                  f"(range {per.min():.3f}-{per.max():.3f})")
     for integration in integrations:
         print(f"{integration:8s} speed-up / the claimed control's of the same round: median "
               f"{np.median(ratio[integration] / claimed_ratio):.2f}")
