@@ -440,6 +440,35 @@ def estimated_conditioning(beams, solid, delta=1e-4):
     return worst
 
 
+def estimated_gradient(beams, solid, samples=33):
+    """cond(J) = σ_max / σ_min of the solid's Jacobian where the beams are inside, at least 1.
+
+    The local form of ``Case.gradient`` (h / thinnest element for a sliver): a shift δ of the beam
+    moves ξ by J⁻¹ δ, so N(ξ(x)), and with it M, changes up to cond(J) times faster than in a
+    well-shaped element of the same size. Curved elements near their validity limit have det J
+    small somewhere; there this is large.
+    """
+    worst = 1.0
+    etas = np.linspace(-1.0, 1.0, samples)
+    for e in range(beams.n_elements):
+        P = centreline(beams, e, etas)[0]
+        for d, conn in solid.blocks:
+            X = solid.points[conn]
+            lo, hi = X.min(axis=1), X.max(axis=1)
+            pad = 0.5 * (hi - lo).max(axis=1)[:, None]
+            near = np.all((P[:, None, :] >= (lo - pad)[None]) & (P[:, None, :] <= (hi + pad)[None]), axis=2)
+            ip, ie = np.nonzero(near)
+            if len(ip):
+                xi, ok = locate_points(d.name, X[ie], P[ip])
+                inside = ok & (outside_distance(d.family, xi) <= 1e-9)
+                if inside.any():
+                    _, dN = shape_values(d.name, xi[inside])
+                    J = np.einsum("kai,kaj->kij", X[ie[inside]], dN)
+                    sv = np.linalg.svd(J, compute_uv=False)
+                    worst = max(worst, float(np.max(sv[:, 0] / np.maximum(sv[:, -1], 1e-300))))
+    return min(worst, 1e12)
+
+
 def check_finite(ops):
     assert np.isfinite(ops.kappa).all()
     assert np.isfinite(ops.D.data).all() and np.isfinite(ops.M.data).all()
