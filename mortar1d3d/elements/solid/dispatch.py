@@ -40,8 +40,7 @@ def _face_tables():
     centroids = np.zeros((_N_CODES, MAX_FACES, 3))
     for c, d in BY_CODE.items():
         faces[c, : d.n_faces] = d.faces
-        u = d.family_type.face_centre
-        centroids[c, : d.n_faces] = d.faces[:, 0] + u * (d.faces[:, 1] + d.faces[:, 2])
+        centroids[c, : d.n_faces] = d.family_type.face_centroids
     return faces, centroids
 
 
