@@ -20,7 +20,7 @@ import numpy as np
 import mortar1d3d as m13
 from mortar1d3d import BeamMesh, SolidMesh, generate
 from mortar1d3d.elements.solid.dispatch import BY_CODE
-from naive import arc_length, centreline, outside_distance, shape_values
+from naive import arc_length, centreline, outside_distance, reference_samples, shape_values
 
 # --------------------------------------------------------------------------------------------
 # point location (numpy Newton) on the shape functions of tests/naive.py
@@ -53,13 +53,9 @@ def _newton(name, X, P, xi, h, iterations):
 
 
 def _starts(d):
-    """Newton starts spread over the reference element: a 3x3x3 lattice (hex) or the 10 lattice
-    points of a quadratic tet pulled towards the centroid."""
-    if d.family == "hex":
-        g = np.array([-0.75, 0.0, 0.75])
-        return np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
-    tet10 = next(t for t in BY_CODE.values() if t.name == "tetra10")
-    return 0.25 + 0.8 * (tet10.reference_nodes - 0.25)
+    """Newton starts spread over the reference element: the points of the 3-per-direction lattice
+    in it (hex: 3x3x3; tet: the 10 lattice points of a quadratic tet) pulled towards the centre."""
+    return d.centre + 0.75 * (reference_samples(d.family, 3) - d.centre)
 
 
 def locate_points(name, X, P, iterations=40):

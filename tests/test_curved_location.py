@@ -17,7 +17,7 @@ from mortar1d3d.geometry.projection import (CONVERGED, INSIDE, linear_maps, line
 from mortar1d3d.geometry.search import solid_frames
 
 import hard_cases as hc
-from naive import outside_distance
+from naive import outside_distance, reference_samples
 
 # corners of the unit cube (VTK order); mid-side nodes moved by up to 5 % of the size: det J lies
 # between 0.53 and 1.60 times that of the straight element
@@ -139,7 +139,7 @@ def test_element_folded_between_sample_points_is_rejected(name):
         m13.SolidMesh(points, {name: cells})
 
 
-@pytest.mark.parametrize("name", ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"])
+@pytest.mark.parametrize("name", list(SOLID_ELEMENTS))
 def test_validity_bound_agrees_with_dense_sampling(name):
     """Random perturbations of every node (and of the mid-side nodes far beyond validity): every element
     the Bernstein bound accepts has det J > 0 at 11³ sample points, and every element with a non-positive
@@ -150,12 +150,10 @@ def test_validity_bound_agrees_with_dense_sampling(name):
     rng = np.random.default_rng(4)
     X = np.tile(d.reference_nodes, (400, 1, 1)).astype(float)
     X += 0.1 * rng.uniform(-1, 1, X.shape)
-    X[:, (8 if d.family == "hex" else 4):] += 0.3 * rng.uniform(-1, 1, X[:, (8 if d.family == "hex" else 4):].shape)
+    n_corners = len(d.family_type.corners)
+    X[:, n_corners:] += 0.3 * rng.uniform(-1, 1, X[:, n_corners:].shape)
     outcome = jacobian_validity(d, X, np.full(len(X), 3.0))
-    g = np.linspace(-1, 1, 11) if d.family == "hex" else np.linspace(0, 1, 11)
-    pts = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
-    if d.family == "tet":
-        pts = pts[pts.sum(axis=1) <= 1 + 1e-12]
+    pts = reference_samples(d.family, 11)
     det = np.linalg.det(np.einsum("mai,saj->msij", X, shape_gradients(d, pts)))
     bad = (det <= 0).any(axis=1)
     assert not np.any(bad & (outcome == VALID))

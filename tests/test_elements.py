@@ -15,6 +15,8 @@ from mortar1d3d.elements.beam import hermite, line2, line3, registry as beam_reg
 from mortar1d3d.elements.solid import dispatch, hex8, hex20, hex27, tet4, tet10
 from mortar1d3d.elements.solid import registry
 
+import naive
+
 # ``mortar1d3d.elements.multiplier`` (the attribute) is the function re-exported by the package
 # ``__init__``, which shadows the submodule of the same name: fetch the module itself.
 multiplier = importlib.import_module("mortar1d3d.elements.multiplier")
@@ -31,9 +33,7 @@ def descriptor(name):
 
 def random_points(d, n, rng):
     """n points uniformly distributed inside the reference element of ``d``."""
-    if d.family == "hex":
-        return rng.uniform(-1.0, 1.0, size=(n, 3))
-    return rng.dirichlet(np.ones(4), size=n)[:, 1:]
+    return naive.random_parameters(d.family, rng, n)
 
 
 def shape_values(code, points):
@@ -225,12 +225,12 @@ def test_quadratic_nodes_extend_linear_nodes():
 # --------------------------------------------------------------------------------------------
 # reference geometry: inside test, faces
 # --------------------------------------------------------------------------------------------
-def _face_corner_params(d):
-    return [(-1, -1), (1, -1), (1, 1), (-1, 1)] if d.family == "hex" else [(0, 0), (1, 0), (0, 1)]
+def _face_corner_params(d, f):
+    return d.family_type.face_shapes[f].corners
 
 
-def _face_centre(d, face):
-    return face[0] if d.family == "hex" else face[0] + (face[1] + face[2]) / 3.0
+def _face_centre(d, f):
+    return dispatch.FACE_CENTROIDS[d.code, f]
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -242,9 +242,9 @@ def test_is_inside(name):
         assert dispatch.outside_distance(code, xi) <= 1e-15
     assert dispatch.is_inside(code, d.centre.copy(), TOL)
     assert dispatch.outside_distance(code, d.centre.copy()) < -0.2
-    for face in d.faces:
+    for f, face in enumerate(d.faces):
         n = face[3] / np.linalg.norm(face[3])
-        c = _face_centre(d, face)
+        c = _face_centre(d, f)
         assert dispatch.is_inside(code, c, TOL)
         assert dispatch.is_inside(code, c - 1e-6 * n, TOL)
         assert not dispatch.is_inside(code, c + 1e-6 * n, TOL), (face, c + 1e-6 * n)
@@ -263,7 +263,7 @@ def test_centre(name):
     dispatch.centre(d.code, xi)
     np.testing.assert_array_equal(xi, d.centre)
     # the centre is the centroid of the corner nodes
-    n_corners = 8 if d.family == "hex" else 4
+    n_corners = len(d.family_type.corners)
     np.testing.assert_allclose(d.centre, d.reference_nodes[:n_corners].mean(axis=0), atol=1e-15)
 
 
@@ -272,13 +272,14 @@ def test_faces(name):
     d = descriptor(name)
     faces = dispatch.faces(d.code)
     np.testing.assert_array_equal(faces, d.faces)
-    assert d.n_faces == (6 if d.family == "hex" else 4) == len(d.face_nodes)
+    assert d.n_faces == len(d.family_type.face_shapes) == len(d.face_nodes)
     assert d.faces.shape == (d.n_faces, 4, 3)
     corner_sets = set()
-    for face, nodes in zip(d.faces, d.face_nodes):
+    for f, (face, nodes) in enumerate(zip(d.faces, d.face_nodes)):
         origin, a, b, n = face
+        shape = d.family_type.face_shapes[f]
         hits = []
-        for u, v in _face_corner_params(d):
+        for u, v in _face_corner_params(d, f):
             p = origin + u * a + v * b
             match = np.flatnonzero(np.all(d.reference_nodes == p, axis=1))
             assert len(match) == 1, (face, p)
@@ -292,11 +293,22 @@ def test_faces(name):
         # every reference node is on the inner side or on the face
         side = (d.reference_nodes - origin) @ n
         assert np.all(side <= 1e-15)
-        # the nodes on the face plane are those of that face (corners + mid-edge/face nodes)
+        # the nodes on the face plane are those of that face (corners + mid-edge/face nodes): their
+        # face parameters lie in the face's shape (on its corners, edges or inside), the functions of
+        # the other nodes vanish on the face and those of the face's nodes are independent there
+        # (the face is determined by its own nodes: conforming neighbours)
         on = np.flatnonzero(np.abs(side) <= 1e-15)
         assert set(nodes) <= set(on.tolist())
-        expected_on = {"hexahedron": 4, "hexahedron20": 8, "hexahedron27": 9, "tetra": 3, "tetra10": 6}
-        assert len(on) == expected_on[name]
+        uv = np.linalg.lstsq(np.column_stack([a, b]), (d.reference_nodes[on] - origin).T, rcond=None)[0].T
+        corners = shape.corners
+        for k in range(len(corners)):
+            edge, to = corners[(k + 1) % len(corners)] - corners[k], uv - corners[k]
+            assert np.all(edge[0] * to[:, 1] - edge[1] * to[:, 0] >= -1e-15)     # left of every edge
+        weights = np.random.default_rng(f).dirichlet(np.ones(len(corners)), 40)   # points of the face
+        N = shape_values(d.code, origin + (weights @ corners) @ np.stack([a, b]))
+        off = np.setdiff1d(np.arange(d.n_nodes), on)
+        assert np.abs(N[:, off]).max(initial=0.0) <= 1e-14
+        assert np.linalg.matrix_rank(N[:, on], tol=1e-10) == len(on)
     assert len(corner_sets) == d.n_faces    # all faces distinct
 
 
@@ -410,11 +422,10 @@ def test_line_degree_table_matches_the_shape_functions(name):
 
 
 def _monomial_integral(d, alpha):
-    """Exact integral of ξ^alpha over the family's domain (box [-1, 1]^3 or the unit simplex)."""
-    from math import factorial
-    if d.family == "hex":
-        return np.prod([0.0 if a % 2 else 2.0 / (a + 1) for a in alpha])
-    return np.prod([factorial(int(a)) for a in alpha]) / factorial(int(sum(alpha)) + 3)
+    """Integral of ξ^alpha over the family's domain, exact to round-off for degrees up to 13
+    (:func:`naive.domain_rule`)."""
+    points, weights = naive.domain_rule(d.family)
+    return weights @ np.prod(points ** np.asarray(alpha), axis=1)
 
 
 @pytest.mark.parametrize("name", NAMES)

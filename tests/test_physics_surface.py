@@ -30,6 +30,21 @@ def side_areas(lower, upper):
     return {"x": e[1] * e[2], "y": e[0] * e[2], "z": e[0] * e[1]}
 
 
+def faces_per_cube_side(family):
+    """(3,) faces of the elements that fill one grid cell of ``generate.box`` (the family's
+    ``cube_split``) lying on the cell's side normal to each axis (hex 1, 1, 1; tet 2, 2, 2)."""
+    count = np.zeros(3, dtype=np.int64)
+    for corners in family.cube_split:
+        for nodes in family.face_nodes:
+            count += (corners[list(nodes)] == 0).all(axis=0)
+    return count
+
+
+def polygon_area(X):
+    """Area of the flat polygon with corners X (k, 3) in cyclic order (a fan of triangles)."""
+    return sum(0.5 * np.linalg.norm(np.cross(X[k] - X[0], X[k + 1] - X[0])) for k in range(1, len(X) - 1))
+
+
 # ---------------------------------------------------------------------------------------------
 # quadrature
 
@@ -80,9 +95,8 @@ def test_boundary_face_count_and_outward_normals(name):
     lower, upper = np.array([0.0, -1.0, 0.5]), np.array([1.0, 1.0, 2.0])
     solid = generate.box(lower, upper, cells, name)
     faces = boundary_faces(solid)
-    nx, ny, nz = cells
-    per_quad = 1 if SOLID_ELEMENTS[name].family == "hex" else 2
-    assert len(faces) == per_quad * 2 * (nx * ny + ny * nz + nx * nz)
+    per_side = faces_per_cube_side(SOLID_ELEMENTS[name].family_type)
+    assert len(faces) == 2 * sum(per_side[axis] * np.prod(np.delete(cells, axis)) for axis in range(3))
     assert faces.dtype == FACE_DTYPE
     assert (faces["code"] == SOLID_ELEMENTS[name].code).all()
     assert len(np.unique(faces[["element", "face"]])) == len(faces)
@@ -92,7 +106,7 @@ def test_boundary_face_count_and_outward_normals(name):
     for side, (axis, sign) in SIDES.items():
         selected = boundary_faces(solid, solid.point_sets[side])
         on_a_side += len(selected)
-        assert len(selected) == per_quad * np.prod(np.delete(cells, axis))
+        assert len(selected) == per_side[axis] * np.prod(np.delete(cells, axis))
         # p = -1 turns -p ∫ N n da into ∫ N n da: the summed force of a face is its area-weighted
         # normal, which must point out of the box on every face
         for one in selected:
@@ -145,7 +159,8 @@ def test_consistent_nodal_forces_of_one_face(name, share):
     f = traction_force(solid, faces, [0.0, 0.0, 3.0]).reshape(-1, 3)
     element, face = faces["element"][0], faces["face"][0]
     local = face_nodes(faces["code"][0], face)
-    total = 3.0 * (1.0 if SOLID_ELEMENTS[name].family == "hex" else 0.5)   # area of the face × t
+    corners = solid.connectivity[element, list(SOLID_ELEMENTS[name].face_nodes[face])]
+    total = 3.0 * polygon_area(solid.points[corners])                      # area of the face × t
     for a in local:
         expected = next(s for r, s in share.items() if a in r)
         node = solid.connectivity[element, a]
