@@ -191,7 +191,9 @@ _HEX27 = [(i, j, k) for i in range(3) for j in range(3) for k in range(3)]
 _HEX20 = [m for m in _HEX27 if sum(m) <= 3 or (sum(m) == 4 and max(m) == 2 and min(m) == 1)]
 _TET4 = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
 _TET10 = [m for m in _HEX27 if sum(m) <= 2]
-_BASES = {"hexahedron": _HEX8, "hexahedron20": _HEX20, "hexahedron27": _HEX27, "tetra": _TET4, "tetra10": _TET10}
+_WEDGE6 = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (0, 1, 1)]    # P1(ξ1, ξ2) ⊗ P1(ζ)
+_BASES = {"hexahedron": _HEX8, "hexahedron20": _HEX20, "hexahedron27": _HEX27, "tetra": _TET4, "tetra10": _TET10,
+          "wedge": _WEDGE6}
 _COEFFICIENTS = {}
 
 

@@ -139,6 +139,20 @@ def test_element_folded_between_sample_points_is_rejected(name):
         m13.SolidMesh(points, {name: cells})
 
 
+def test_wedge_folded_between_its_nodes_is_rejected():
+    """A wedge6 has no mid-side nodes but is not affine: det J is quadratic in ζ along its vertical edges
+    (here positive at the six nodes and the centre, negative on the edge between nodes 2 and 5)."""
+    d = SOLID_ELEMENTS["wedge"]
+    X = np.array([[0.283, 0.277, -0.14], [1.019, 0.403, -0.123], [-0.281, 0.554, 0.401],
+                  [-0.447, 0.446, 0.638], [1.344, -0.325, 1.226], [0.433, 0.86, 1.227]])
+    samples = np.vstack([d.reference_nodes, d.centre[None]])
+    assert min(det_j("wedge", X, xi) for xi in samples) > 0.04
+    assert det_j("wedge", X, [0.0, 1.0, -0.2708]) == pytest.approx(-0.0152, abs=1e-4)
+    assert jacobian_validity(d, X[None], np.array([1.7]))[0] == FOLDED
+    with pytest.raises(m13.MeshError, match=r"^folded wedge elements .*: 0$"):
+        m13.SolidMesh(X, {"wedge": np.arange(6)[None]})
+
+
 @pytest.mark.parametrize("name", list(SOLID_ELEMENTS))
 def test_validity_bound_agrees_with_dense_sampling(name):
     """Random perturbations of every node (and of the mid-side nodes far beyond validity): every element

@@ -12,7 +12,7 @@ from meshio.gmsh.common import _gmsh_to_meshio_order
 
 from mortar1d3d.elements import beam
 from mortar1d3d.elements.beam import hermite, line2, line3, registry as beam_registry
-from mortar1d3d.elements.solid import dispatch, hex8, hex20, hex27, tet4, tet10
+from mortar1d3d.elements.solid import dispatch, hex8, hex20, hex27, tet4, tet10, wedge6
 from mortar1d3d.elements.solid import registry
 
 import naive
@@ -166,6 +166,9 @@ def test_linear_elements_do_not_reproduce_quadratics(name):
     ("hexahedron20", (2, 2, 0), False),   # ξ²η² is not
     ("hexahedron27", (2, 2, 2), True),    # triquadratic
     ("tetra10", (1, 1, 1), False),        # ξηζ (cubic) is not
+    ("wedge", (0, 1, 1), True),           # ξ2 ζ: linear on the triangle times linear in ζ
+    ("wedge", (1, 1, 0), False),          # ξ1 ξ2 is not
+    ("wedge", (0, 0, 2), False),          # nor ζ²
 ])
 def test_interpolation_space(name, monomial, exact):
     d = descriptor(name)
@@ -184,11 +187,13 @@ _GMSH_HEX_EDGES = [(0, 1), (0, 3), (0, 4), (1, 2), (1, 5), (2, 3), (2, 6), (3, 7
                    (5, 6), (6, 7)]
 _GMSH_HEX_FACES = [(0, 1, 2, 3), (0, 1, 5, 4), (0, 3, 7, 4), (1, 2, 6, 5), (2, 3, 7, 6), (4, 5, 6, 7)]
 _GMSH_TET_EDGES = [(0, 1), (1, 2), (0, 2), (0, 3), (2, 3), (1, 3)]
+# gmsh's prism: the triangle u, v >= 0, u + v <= 1 at w = -1, then at w = +1
+_PRISM_CORNERS = np.array([[0, 0, -1], [1, 0, -1], [0, 1, -1], [0, 0, 1], [1, 0, 1], [0, 1, 1]], dtype=np.float64)
 
 
 def _gmsh_reference_nodes(name):
-    if name in ("hexahedron", "tetra"):
-        return (_HEX_CORNERS if name == "hexahedron" else _TET_CORNERS).copy()
+    if name in ("hexahedron", "tetra", "wedge"):
+        return {"hexahedron": _HEX_CORNERS, "tetra": _TET_CORNERS, "wedge": _PRISM_CORNERS}[name].copy()
     if name == "tetra10":
         sets = [(i,) for i in range(4)] + _GMSH_TET_EDGES
         corners = _TET_CORNERS
@@ -370,7 +375,7 @@ def test_registry_codes_and_sizes():
     assert codes == list(range(len(dispatch.SOLID_ELEMENTS)))
     assert set(dispatch.BY_CODE) == set(codes)
     assert dispatch.MAX_NODES == max(d.n_nodes for d in dispatch.SOLID_ELEMENTS.values()) == 27
-    assert set(NAMES) == {"hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"}
+    assert set(NAMES) == {"hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10", "wedge"}
     for name, d in dispatch.SOLID_ELEMENTS.items():
         assert d.name == name
         assert dispatch.SOLID_MODULES[name].DESCRIPTOR is d
@@ -381,14 +386,14 @@ def test_registry_codes_and_sizes():
         assert dispatch.solid_element(name) is d
         assert d.dim == 3
     expected = {"hexahedron": (8, 1, "hex"), "hexahedron20": (20, 2, "hex"), "hexahedron27": (27, 2, "hex"),
-                "tetra": (4, 1, "tet"), "tetra10": (10, 2, "tet")}
+                "tetra": (4, 1, "tet"), "tetra10": (10, 2, "tet"), "wedge": (6, 1, "wedge")}
     assert {n: (d.n_nodes, d.degree, d.family) for n, d in dispatch.SOLID_ELEMENTS.items()} == expected
 
 
 def test_registry_lists_are_in_code_order():
     assert [m.DESCRIPTOR.code for m in registry.SOLID_TYPES] == list(range(len(registry.SOLID_TYPES)))
     assert [f.code for f in registry.FAMILIES] == list(range(len(registry.FAMILIES)))
-    assert {f.name for f in registry.FAMILIES} == {"hex", "tet"}
+    assert {f.name for f in registry.FAMILIES} == {"hex", "tet", "wedge"}
     for d in dispatch.SOLID_ELEMENTS.values():
         assert d.family_type in registry.FAMILIES
         np.testing.assert_array_equal(d.reference_nodes[: len(d.family_type.corners)], d.family_type.corners)
@@ -482,8 +487,8 @@ def test_box_meets_never_misses_the_domain(name):
 
 
 def test_solid_element_unknown_name():
-    with pytest.raises(ValueError, match="unknown solid element type 'wedge'.*hexahedron"):
-        dispatch.solid_element("wedge")
+    with pytest.raises(ValueError, match="unknown solid element type 'pyramid'.*hexahedron"):
+        dispatch.solid_element("pyramid")
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -520,6 +525,38 @@ def test_hex8_closed_form():
     hex8.shape(xi, N)
     assert N[6] == pytest.approx(0.125 * 1.3 * 0.3 * 1.1, abs=1e-16)
     assert N[0] == pytest.approx(0.125 * 0.7 * 1.7 * 0.9, abs=1e-16)
+
+
+def test_wedge6_closed_form():
+    # N_a = L_a (1 - ζ)/2, N_a+3 = L_a (1 + ζ)/2 with L = (1 - ξ1 - ξ2, ξ1, ξ2), written out
+    xi = np.array([0.2, 0.5, -0.4])
+    N, dN = np.empty(6), np.empty((6, 3))
+    wedge6.shape(xi, N)
+    wedge6.deriv(xi, dN)
+    np.testing.assert_allclose(N, [0.3 * 0.7, 0.2 * 0.7, 0.5 * 0.7, 0.3 * 0.3, 0.2 * 0.3, 0.5 * 0.3],
+                               rtol=0, atol=1e-16)
+    np.testing.assert_allclose(dN, [[-0.7, -0.7, -0.15], [0.7, 0, -0.1], [0, 0.7, -0.25],
+                                    [-0.3, -0.3, 0.15], [0.3, 0, 0.1], [0, 0.3, 0.25]], rtol=0, atol=1e-16)
+
+
+def test_wedge_family_by_hand():
+    d = dispatch.SOLID_ELEMENTS["wedge"]
+    f = d.family_type
+    # two triangles (ζ = ∓1) and three quadrilaterals, each face's shape and node count its own
+    assert [s.name for s in f.face_shapes] == ["triangle"] * 2 + ["quadrilateral"] * 3
+    np.testing.assert_allclose(dispatch.FACE_CENTROIDS[d.code, :5], [[1 / 3, 1 / 3, -1], [1 / 3, 1 / 3, 1],
+                                                                     [0.5, 0, 0], [0.5, 0.5, 0], [0, 0.5, 0]])
+    # spans of the affine check differ per axis: ξ1, ξ2 from 0 to 1, ζ from -1 to 1
+    np.testing.assert_array_equal(dispatch.AXIS_NODES[d.code], [1, 2, 3])
+    np.testing.assert_array_equal(dispatch.AXIS_SPAN[d.code], [1.0, 1.0, 2.0])
+    # det J: columns ∂x/∂ξ1, ∂x/∂ξ2 ∈ P0 ⊗ P1 and ∂x/∂ζ ∈ P1 ⊗ P0, so det J ∈ P1(ξ1, ξ2) ⊗ P2(ζ)
+    assert d.jacobian_degree == (1, 2)
+    assert d.line_degree == 2
+    assert dispatch.outside_distance(d.code, np.array([0.5, 0.5, 0.0])) == 0.0
+    assert dispatch.outside_distance(d.code, np.array([0.2, 0.2, 1.5])) == 0.5
+    assert dispatch.outside_distance(d.code, np.array([0.7, 0.5, 0.0])) == pytest.approx(0.2, abs=1e-15)
+    # two wedges fill a grid cell, over the halves of its bottom square
+    np.testing.assert_array_equal(f.cube_split[:, :3, :2], [[[0, 0], [1, 0], [1, 1]], [[0, 0], [1, 1], [0, 1]]])
 
 
 def test_tet10_closed_form():

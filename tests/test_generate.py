@@ -182,7 +182,9 @@ def expected_counts(name, nx, ny, nz):
             "hexahedron27": (lattice, cells), "tetra": (corners, 6 * cells),
             # the Kuhn split uses one diagonal per grid face and the body diagonal of every cell:
             # its mid-edge nodes fill the whole half-cell lattice
-            "tetra10": (lattice, 6 * cells)}[name]
+            "tetra10": (lattice, 6 * cells),
+            # two wedges per cell over the halves of its bottom square
+            "wedge": (corners, 2 * cells)}[name]
 
 
 @pytest.mark.parametrize("name", TYPES)
@@ -269,8 +271,8 @@ def test_box_rejects_bad_input():
                  ((0, 0, 0), (1, 1, 1), (1.5, 1, 1))]:
         with pytest.raises(ValueError):
             generate.box(*args)
-    with pytest.raises(ValueError, match="wedge"):
-        generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1), element="wedge")
+    with pytest.raises(ValueError, match="pyramid"):
+        generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1), element="pyramid")
 
 
 # -- distort -------------------------------------------------------------------------------------

@@ -348,10 +348,23 @@ def test_from_meshio_round_trip_skips_triangles():
     np.testing.assert_array_equal(again.element_codes, solid.element_codes)
 
 
-def test_from_meshio_rejects_wedges():
+def test_from_meshio_hexahedron_and_wedge_sharing_a_face():
+    from mortar1d3d.physics.surface import boundary_faces
     points = np.vstack([HEX_POINTS, [[2, 0, 0], [2, 0, 1]]])
     mesh = meshio.Mesh(points, [("hexahedron", np.arange(8)[None]), ("wedge", [[1, 8, 2, 5, 9, 6]])])
-    with pytest.raises(MeshError, match="unsupported cell type 'wedge'"):
+    solid = SolidMesh.from_meshio(mesh)
+    assert solid.n_elements == 2 and list(solid.cells) == ["hexahedron", "wedge"]
+    # the hexahedron's face x = 1 is the wedge's face ξ1 = 0: interior, on neither boundary list
+    faces = boundary_faces(solid)
+    assert len(faces) == 5 + 4
+    on_boundary = {(int(e), int(f)) for e, f in zip(faces["element"], faces["face"])}
+    assert (0, 1) not in on_boundary and (1, 4) not in on_boundary
+
+
+def test_from_meshio_rejects_pyramids():
+    points = np.vstack([HEX_POINTS, [[0.5, 0.5, 2.0]]])
+    mesh = meshio.Mesh(points, [("hexahedron", np.arange(8)[None]), ("pyramid", [[4, 5, 6, 7, 8]])])
+    with pytest.raises(MeshError, match="unsupported cell type 'pyramid'"):
         SolidMesh.from_meshio(mesh)
 
 
