@@ -265,16 +265,17 @@ def _corner_weights(name):
 def box(lower, upper, cells, element="hexahedron"):
     """Structured mesh of the box ``[lower, upper]`` with ``cells = (nx, ny, nz)`` grid cells.
 
-    Every grid cell is one hexahedron (``hexahedron``, ``hexahedron20``, ``hexahedron27``) or six
-    tetrahedra (``tetra``, ``tetra10``: the Kuhn split along the cell diagonal from its lower to
-    its upper corner, the same in every cell, so neighbours conform). Nodes are shared, never
-    duplicated. Quadratic elements take their nodes from the lattice of
-    ``(2nx+1) x (2ny+1) x (2nz+1)`` points (half the cell size); lattice points no element uses
-    (face and cell centres for ``hexahedron20``) are left out.
+    Every grid cell is filled by the elements of the family's ``cube_split``
+    (:class:`~mortar1d3d.elements.descriptor.ElementFamily`), the same in every cell, so that
+    neighbours conform: e.g. one hexahedron, or six tetrahedra (the Kuhn split along the cell
+    diagonal from its lower to its upper corner). Nodes are shared, never duplicated. Quadratic
+    elements take their nodes from the lattice of ``(2nx+1) x (2ny+1) x (2nz+1)`` points (half the
+    cell size); lattice points no element uses (face and cell centres for ``hexahedron20``) are
+    left out.
 
-    Node numbering: lattice order, x fastest, then y, then z (compacted for ``hexahedron20``).
-    Element numbering: cells in the same order (x fastest), the six tetrahedra of a cell
-    consecutive. Node counts: hex8 and tetra ``(nx+1)(ny+1)(nz+1)``; hex27 and tetra10
+    Node numbering: lattice order, x fastest, then y, then z (compacted where points are left
+    out). Element numbering: cells in the same order (x fastest), the elements of a cell
+    consecutive. Node counts, e.g.: hex8 and tetra ``(nx+1)(ny+1)(nz+1)``; hex27 and tetra10
     ``(2nx+1)(2ny+1)(2nz+1)`` (the Kuhn split uses every lattice point: a face diagonal per
     face, the body diagonal per cell); hex20 ``(nx+1)(ny+1)(nz+1) + nx(ny+1)(nz+1) +
     (nx+1)ny(nz+1) + (nx+1)(ny+1)nz``.
@@ -306,9 +307,9 @@ def box(lower, upper, cells, element="hexahedron"):
     size = scale * np.array([nx, ny, nz]) + 1
 
     # Every cell is meshed alike, so the nodes' lattice offsets from the cell's lower corner are
-    # computed once, for the 1 (hex) or 6 (tet) elements of one cell: linear interpolation of the
-    # element corners at the reference nodes. The weights are multiples of 1/8 (products of at
-    # most three 1/2's), so integer arithmetic on 8 W is exact.
+    # computed once, for the elements of one cell (1 hex, 6 tets, ...): linear interpolation of
+    # the element corners at the reference nodes. The weights are multiples of 1/8 (products of
+    # at most three 1/2's), so integer arithmetic on 8 W is exact.
     family = descriptor.family_type
     corners = family.cube_split                            # (elements per cube, n_corners, 3)
     W = _corner_weights(element)

@@ -2,8 +2,8 @@
 
 - :func:`gauss_legendre`: n-point Gauss–Legendre on [-1, 1] (beam integrals, coupling segments,
   arc lengths);
-- :func:`hexahedron_rule`, :func:`tetrahedron_rule`: volume rules of the solid elements (each
-  element descriptor names its own, see :mod:`mortar1d3d.elements.descriptor`);
+- :func:`hexahedron_rule`, :func:`tetrahedron_rule`, :func:`wedge_rule`: volume rules of the solid
+  elements (each element descriptor names its own, see :mod:`mortar1d3d.elements.descriptor`);
 - :func:`quadrilateral_rule`, :func:`triangle_rule`: face rules (surface loads).
 
 Every rule returns read-only arrays, so that a cached rule cannot be changed by a caller.
@@ -51,27 +51,60 @@ def tetrahedron_rule(n):
     return _frozen(points, np.full(4, 1.0 / 24.0))
 
 
-# 6-point degree-4 triangle rule (Strang & Fix 1973; Dunavant 1985): orbits (a, a, 1 - 2a) with
+# symmetric triangle rules (Strang & Fix 1973; Dunavant 1985) by degree: orbits (a, a, 1 - 2a) with
 # weights per unit area
-_TRIANGLE_ORBITS = ((0.44594849091596488632, 0.22338158967801146570),
-                    (0.09157621350977074346, 0.10995174365532186764))
+_TRIANGLE_ORBITS = {2: ((1.0 / 6.0, 1.0 / 3.0),),
+                    4: ((0.44594849091596488632, 0.22338158967801146570),
+                        (0.09157621350977074346, 0.10995174365532186764))}
 
 
 @lru_cache(maxsize=None)
-def triangle_rule():
-    """The 6-point degree-4 rule on the triangle ``u, v >= 0, u + v <= 1``.
+def triangle_rule(degree=4):
+    """A symmetric rule on the triangle ``u, v >= 0, u + v <= 1``, exact for polynomials of ``degree``.
+
+    Parameters
+    ----------
+    degree : {2, 4}
+        2: three points (the wedges' volume rule); 4: six points (face loads).
 
     Returns
     -------
-    points : (6, 2) float64
-    weights : (6,) float64, summing to the area 1/2
+    points : (3, 2) or (6, 2) float64
+    weights : (3,) or (6,) float64, summing to the area 1/2
     """
+    if degree not in _TRIANGLE_ORBITS:
+        raise ValueError(f"triangle rules have degree 2 or 4, got {degree}")
     points, weights = [], []
-    for a, w in _TRIANGLE_ORBITS:
+    for a, w in _TRIANGLE_ORBITS[degree]:
         b = 1.0 - 2.0 * a
         points += [(a, a), (a, b), (b, a)]
         weights += [0.5 * w] * 3
     return _frozen(np.array(points), np.array(weights))
+
+
+@lru_cache(maxsize=None)
+def wedge_rule(triangle_degree, n):
+    """The product of a triangle rule and the n-point Gauss–Legendre rule on the prism
+    ``ξ1, ξ2 >= 0, ξ1 + ξ2 <= 1, ζ ∈ [-1, 1]``.
+
+    Parameters
+    ----------
+    triangle_degree : {2, 4}
+        Degree of the rule in (ξ1, ξ2) (:func:`triangle_rule`).
+    n : int
+        Gauss points in ζ (exact to degree 2n - 1).
+
+    Returns
+    -------
+    points : (q, 3) float64
+        The triangle's points fastest, then ζ.
+    weights : (q,) float64, summing to the volume 1
+    """
+    tri, tri_w = triangle_rule(triangle_degree)
+    x, w = gauss_legendre(n)
+    points = np.array([[t[0], t[1], z] for z in x for t in tri])
+    weights = np.array([wz * wt for wz in w for wt in tri_w])
+    return _frozen(points, weights)
 
 
 @lru_cache(maxsize=None)

@@ -20,7 +20,7 @@ import numpy as np
 import mortar1d3d as m13
 from mortar1d3d import BeamMesh, SolidMesh, generate
 from mortar1d3d.elements.solid.dispatch import BY_CODE
-from naive import arc_length, centreline, outside_distance, shape_values
+from naive import arc_length, centreline, outside_distance, reference_samples, shape_values
 
 # --------------------------------------------------------------------------------------------
 # point location (numpy Newton) on the shape functions of tests/naive.py
@@ -53,13 +53,9 @@ def _newton(name, X, P, xi, h, iterations):
 
 
 def _starts(d):
-    """Newton starts spread over the reference element: a 3x3x3 lattice (hex) or the 10 lattice
-    points of a quadratic tet pulled towards the centroid."""
-    if d.family == "hex":
-        g = np.array([-0.75, 0.0, 0.75])
-        return np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
-    tet10 = next(t for t in BY_CODE.values() if t.name == "tetra10")
-    return 0.25 + 0.8 * (tet10.reference_nodes - 0.25)
+    """Newton starts spread over the reference element: the points of the 3-per-direction lattice
+    in it (hex: 3x3x3; tet: the 10 lattice points of a quadratic tet) pulled towards the centre."""
+    return d.centre + 0.75 * (reference_samples(d.family, 3) - d.centre)
 
 
 def locate_points(name, X, P, iterations=40):
@@ -231,9 +227,10 @@ def sliver_mesh(eps):
     return SolidMesh(P, {"tetra": _orient(P, tets)})
 
 
-def distorted_hex8(amplitude=0.3, seed=3):
-    """2x2x2 hex8 on [0,2]^3 with *every* node moved (non-planar faces, also on the boundary)."""
-    solid = cube()
+def distorted_hex8(amplitude=0.3, seed=3, element="hexahedron"):
+    """2x2x2 hex8 (or the cells of another linear ``element``) on [0,2]^3 with *every* node moved
+    (non-planar faces, also on the boundary)."""
+    solid = cube(element=element)
     rng = np.random.default_rng(seed)
     P = solid.points + amplitude * rng.uniform(-1, 1, solid.points.shape)
     return SolidMesh(P, solid.cells)
@@ -320,6 +317,18 @@ def catalogue():
     e1 = unit([1, -1, 0])
     add(Case("grazing_curved_tet10_outside", straight(top - 0.4 * e1, top + 0.4 * e1), curved_tet10(0.1),
              expected_length=0.0, touch=True))
+    # wedges (two per grid cell, split along the cell's diagonal plane x - y = const): through a node
+    # of 12 wedges, along a vertical edge of 6, in a slanted face, across the triangles, partly outside
+    add(Case("through_node_wedges", straight(node - 0.7 * d, node + 0.9 * d, 2), cube(element="wedge"),
+             expected_length=1.6))
+    add(Case("along_edge_6_wedges", straight((1.0, 1.0, 0.3), (1.0, 1.0, 1.8), 2), cube(element="wedge"),
+             expected_length=1.5))
+    add(Case("in_slanted_face_wedges", straight((0.2, 0.2, 0.3), (1.7, 1.7, 1.6), 2), cube(element="wedge"),
+             expected_length=float(np.linalg.norm([1.5, 1.5, 1.3]))))
+    add(Case("across_triangle_faces_wedges", straight((0.7, 0.2, 0.1), (0.7, 0.2, 1.9), 2), cube(element="wedge"),
+             expected_length=1.8))
+    add(Case("both_ends_outside_wedges", straight((0.3, 1.2, -0.5), (1.4, 0.4, 2.5), 2), cube(element="wedge"),
+             expected_length=2.0 / 3.0 * float(np.linalg.norm([1.1, -0.8, 3.0]))))
     # nearly parallel to a shared face (two hexes) and to the outer face, angle θ
     for k in (4, 8, 12):
         theta = 10.0 ** -k
@@ -366,6 +375,9 @@ def catalogue():
                   lambda t: (-0.5 * np.sin(t), 0.5 * np.cos(t), 0.12), 0.0, 4 * np.pi, 10)
     add(Case("distorted_hex8_helix", helix, distorted_hex8(), n_gauss=12))
     add(Case("distorted_hex8_straight", straight((-0.4, 0.5, 0.6), (2.3, 1.4, 1.5), 3), distorted_hex8()))
+    add(Case("distorted_wedge_helix", helix, distorted_hex8(element="wedge"), n_gauss=12))
+    add(Case("distorted_wedge_straight", straight((-0.4, 0.5, 0.6), (2.3, 1.4, 1.5), 3),
+             distorted_hex8(element="wedge")))
     for k in (4, 8):
         add(Case(f"sliver_tets_1e-{k}", straight((0.6, 0.3, -0.8), (0.6, 0.3, 0.8), 2), sliver_mesh(10.0 ** -k),
                  gradient=10.0 ** k))

@@ -11,8 +11,9 @@ Contents, in the order of the data path:
 - beams: centreline functions H, centrelines r(η), r'(η), arc lengths (fixed and adaptive
   Gauss), the functions as exact polynomials, multiplier functions Φ;
 - solids: shape functions from a monomial basis fitted to the reference nodes, the reference
-  element (lattice samples, distance outside), point location by lattice search and
-  ``scipy.optimize.root``, owners in structured grids;
+  element of any family from its face planes (distance outside, lattice samples, random points,
+  exact integrals by collapsed Gauss rules on a split into tetrahedra), point location by lattice
+  search and ``scipy.optimize.root``, owners in structured grids;
 - search: boxes from dense sampling, brute-force box overlaps, the pairs a beam really enters;
 - segmentation: the owner of densely sampled centreline points; the pieces of straight chords
   in unit-cell grids and in tets in closed form;
@@ -33,6 +34,7 @@ from scipy.optimize import root
 from scipy.spatial import cKDTree
 
 from mortar1d3d.elements.solid.dispatch import BY_CODE, SOLID_MODULES
+from mortar1d3d.elements.solid.registry import FAMILIES
 
 # --------------------------------------------------------------------------------------------
 # numbering (design.md §2)
@@ -189,7 +191,9 @@ _HEX27 = [(i, j, k) for i in range(3) for j in range(3) for k in range(3)]
 _HEX20 = [m for m in _HEX27 if sum(m) <= 3 or (sum(m) == 4 and max(m) == 2 and min(m) == 1)]
 _TET4 = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
 _TET10 = [m for m in _HEX27 if sum(m) <= 2]
-_BASES = {"hexahedron": _HEX8, "hexahedron20": _HEX20, "hexahedron27": _HEX27, "tetra": _TET4, "tetra10": _TET10}
+_WEDGE6 = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (0, 1, 1)]    # P1(ξ1, ξ2) ⊗ P1(ζ)
+_BASES = {"hexahedron": _HEX8, "hexahedron20": _HEX20, "hexahedron27": _HEX27, "tetra": _TET4, "tetra10": _TET10,
+          "wedge": _WEDGE6}
 _COEFFICIENTS = {}
 
 
@@ -240,26 +244,72 @@ def solid_functions(solid, element, xi):
     return N, solid.connectivity[element, : d.n_nodes]
 
 
-def outside_distance(family, xi):
-    """How far ξ (..., 3) lies outside the reference element (<= 0 inside): max norm beyond the
-    cube [-1, 1]³ (hex) or the largest violated barycentric coordinate (tet)."""
+def family(name):
+    """The :class:`~mortar1d3d.elements.descriptor.ElementFamily` called ``name`` (``"hex"``, ...)."""
+    return next(f for f in FAMILIES if f.name == name)
+
+
+def outside_distance(name, xi):
+    """How far ξ (..., 3) lies outside the reference element of family ``name`` (<= 0 inside): the
+    largest n·(ξ - o) over the face planes (origin o, outward normal n), e.g. the max norm beyond
+    [-1, 1]³ on a hexahedron, the largest violated barycentric coordinate on a tetrahedron."""
+    faces = family(name).faces
     xi = np.asarray(xi, float)
-    if family == "hex":
-        return np.abs(xi).max(axis=-1) - 1.0
-    return np.maximum(-xi.min(axis=-1), xi.sum(axis=-1) - 1.0)
+    return np.max(np.einsum("...i,fi->...f", xi, faces[:, 3]) - np.einsum("fi,fi->f", faces[:, 0], faces[:, 3]),
+                  axis=-1)
 
 
-def reference_samples(family, n=7):
-    """The lattice of n points per direction over the closed reference element: (m, 3).
+def parameter_box(name):
+    """(2, 3) lower and upper corner of the box around the reference element of family ``name``."""
+    corners = family(name).corners
+    return np.stack([corners.min(axis=0), corners.max(axis=0)])
 
-    hex: the tensor lattice on [-1, 1]³; tet: the lattice points of [0, 1]³ with ξ1 + ξ2 + ξ3 <= 1.
-    """
-    t = np.linspace(-1.0, 1.0, n)
-    cube = np.stack(np.meshgrid(t, t, t, indexing="ij"), axis=-1).reshape(-1, 3)
-    if family == "hex":
-        return cube
-    simplex = 0.5 * (cube + 1.0)
-    return simplex[simplex.sum(axis=1) <= 1.0 + 1e-15]
+
+def reference_samples(name, n=7):
+    """The lattice of n points per direction over the box of the reference element of family
+    ``name``, the points in the closed element: (m, 3) (e.g. the tensor lattice on [-1, 1]³, the
+    lattice points of [0, 1]³ with ξ1 + ξ2 + ξ3 <= 1)."""
+    lower, upper = parameter_box(name)
+    axes = [np.linspace(lower[i], upper[i], n) for i in range(3)]
+    box = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    return box[outside_distance(name, box) <= 1e-15]
+
+
+def random_parameters(name, rng, n, low=-np.inf, high=0.0, grow=0.0):
+    """n points uniformly distributed over the part of the reference element's box (grown by ``grow``)
+    where ``low <= outside_distance <= high`` (rejection sampling): by default the element itself."""
+    lower, upper = parameter_box(name)
+    out = np.empty((0, 3))
+    while len(out) < n:
+        xi = rng.uniform(lower - grow, upper + grow, (4 * n, 3))
+        g = outside_distance(name, xi)
+        out = np.vstack([out, xi[(g >= low) & (g <= high)]])
+    return out[:n]
+
+
+def _tetrahedra(name):
+    """(k, 4, 3) a split of the reference element of family ``name`` into tetrahedra: its centroid
+    joined to the triangles of a fan over each face (the corners of the face, ``face_nodes``)."""
+    f = family(name)
+    centre = f.corners.mean(axis=0)
+    out = []
+    for nodes in f.face_nodes:
+        for k in range(1, len(nodes) - 1):
+            out.append([centre, f.corners[nodes[0]], f.corners[nodes[k]], f.corners[nodes[k + 1]]])
+    return np.array(out)
+
+
+def domain_rule(name, n=8):
+    """Points (q, 3) and weights (q,) integrating over the reference element of family ``name``: the
+    collapsed n³ Gauss rule (:func:`simplex_rule`) on every tetrahedron of a split of the element,
+    exact for polynomials of degree 2n - 3 (13 with n = 8)."""
+    points, weights = simplex_rule(3, n)
+    P, W = [], []
+    for t in _tetrahedra(name):
+        A = (t[1:] - t[0]).T
+        P.append(t[0] + points @ A.T)
+        W.append(weights * abs(np.linalg.det(A)))
+    return np.vstack(P), np.concatenate(W)
 
 
 def cell_owners(p, lower, h, cells):
@@ -287,9 +337,10 @@ def _lattice(name):
     """Lattice ξ (g, 3) of the reference element, its spacing, N (g, n_nodes) and dN/dξ (g, n_nodes, 3)
     there, once per type."""
     if name not in _LATTICES:
-        family = descriptor(name).family
-        xi = reference_samples(family, LATTICE)
-        _LATTICES[name] = (xi, (2.0 if family == "hex" else 1.0) / (LATTICE - 1)) + shape_values(name, xi)
+        family_name = descriptor(name).family
+        xi = reference_samples(family_name, LATTICE)
+        spacing = np.ptp(parameter_box(family_name), axis=0).max() / (LATTICE - 1)
+        _LATTICES[name] = (xi, spacing) + shape_values(name, xi)
     return _LATTICES[name]
 
 
@@ -311,7 +362,7 @@ class Element:
         self.lattice, spacing, N, dN = _lattice(d.name)
         self.tree = cKDTree(N @ self.X)
         # every ξ of the element has a lattice point within one lattice-cell diagonal √3·spacing
-        # (hex: round; tet: round down, which stays in the simplex), joined to it by a segment
+        # (a corner of its lattice cell that lies in the element), joined to it by a segment
         # inside the element, so its image is within max|J| times that; |J| is taken at the
         # lattice points (bounded by √(‖J‖₁ ‖J‖∞), the largest column sum times the largest row
         # sum), with a quarter more for the parts between them
@@ -625,20 +676,10 @@ def simplex_rule(dim, n):
     return points, weights
 
 
-def gauss_rule(kind, n=None):
-    """Points (q, 3) and weights (q,) on the reference solids: ``"hex"`` the n^3 Gauss rule on
-    [-1, 1]^3, ``"tet"`` the collapsed n^3 rule on the unit tet, ``"tet4"`` the classical 4-point
-    rule (degree 2)."""
-    if kind == "tet4":
-        a, b = 0.5854101966249685, 0.1381966011250105
-        return np.array([[b, b, b], [a, b, b], [b, a, b], [b, b, a]]), np.full(4, 1 / 24)
-    return cube_rule(3, n) if kind == "hex" else simplex_rule(3, n)
-
-
-def face_rule(family, n=5):
-    """[(u, v, w), ...] on a face of the reference element: the n × n Gauss rule on the square
-    (hex) or the collapsed one on the triangle u, v >= 0, u + v <= 1 (tet)."""
-    points, weights = cube_rule(2, n) if family == "hex" else simplex_rule(2, n)
+def face_rule(shape, n=5):
+    """[(u, v, w), ...] on a face of shape ``shape`` (a face shape's name): the n × n Gauss rule on
+    the square ``"quadrilateral"`` or the collapsed one on the ``"triangle"`` u, v >= 0, u + v <= 1."""
+    points, weights = {"quadrilateral": cube_rule, "triangle": simplex_rule}[shape](2, n)
     return [(u, v, w) for (u, v), w in zip(points, weights)]
 
 
@@ -659,7 +700,7 @@ def surface_loads(solid, faces, u, t, p):
         X = solid.points[nodes]
         x = X + u[nodes]
         origin, a, b, normal = d.faces[f]
-        for uq, vq, w in face_rule(d.family):
+        for uq, vq, w in face_rule(d.family_type.face_shapes[f].name):
             xi = origin + uq * a + vq * b
             N, dN = np.empty(d.n_nodes), np.empty((d.n_nodes, 3))
             module.shape.py_func(xi, N)

@@ -17,7 +17,7 @@ from mortar1d3d.geometry.projection import (CONVERGED, INSIDE, linear_maps, line
 from mortar1d3d.geometry.search import solid_frames
 
 import hard_cases as hc
-from naive import outside_distance
+from naive import outside_distance, reference_samples
 
 # corners of the unit cube (VTK order); mid-side nodes moved by up to 5 % of the size: det J lies
 # between 0.53 and 1.60 times that of the straight element
@@ -139,7 +139,21 @@ def test_element_folded_between_sample_points_is_rejected(name):
         m13.SolidMesh(points, {name: cells})
 
 
-@pytest.mark.parametrize("name", ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"])
+def test_wedge_folded_between_its_nodes_is_rejected():
+    """A wedge6 has no mid-side nodes but is not affine: det J is quadratic in ζ along its vertical edges
+    (here positive at the six nodes and the centre, negative on the edge between nodes 2 and 5)."""
+    d = SOLID_ELEMENTS["wedge"]
+    X = np.array([[0.283, 0.277, -0.14], [1.019, 0.403, -0.123], [-0.281, 0.554, 0.401],
+                  [-0.447, 0.446, 0.638], [1.344, -0.325, 1.226], [0.433, 0.86, 1.227]])
+    samples = np.vstack([d.reference_nodes, d.centre[None]])
+    assert min(det_j("wedge", X, xi) for xi in samples) > 0.04
+    assert det_j("wedge", X, [0.0, 1.0, -0.2708]) == pytest.approx(-0.0152, abs=1e-4)
+    assert jacobian_validity(d, X[None], np.array([1.7]))[0] == FOLDED
+    with pytest.raises(m13.MeshError, match=r"^folded wedge elements .*: 0$"):
+        m13.SolidMesh(X, {"wedge": np.arange(6)[None]})
+
+
+@pytest.mark.parametrize("name", list(SOLID_ELEMENTS))
 def test_validity_bound_agrees_with_dense_sampling(name):
     """Random perturbations of every node (and of the mid-side nodes far beyond validity): every element
     the Bernstein bound accepts has det J > 0 at 11³ sample points, and every element with a non-positive
@@ -150,12 +164,10 @@ def test_validity_bound_agrees_with_dense_sampling(name):
     rng = np.random.default_rng(4)
     X = np.tile(d.reference_nodes, (400, 1, 1)).astype(float)
     X += 0.1 * rng.uniform(-1, 1, X.shape)
-    X[:, (8 if d.family == "hex" else 4):] += 0.3 * rng.uniform(-1, 1, X[:, (8 if d.family == "hex" else 4):].shape)
+    n_corners = len(d.family_type.corners)
+    X[:, n_corners:] += 0.3 * rng.uniform(-1, 1, X[:, n_corners:].shape)
     outcome = jacobian_validity(d, X, np.full(len(X), 3.0))
-    g = np.linspace(-1, 1, 11) if d.family == "hex" else np.linspace(0, 1, 11)
-    pts = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
-    if d.family == "tet":
-        pts = pts[pts.sum(axis=1) <= 1 + 1e-12]
+    pts = reference_samples(d.family, 11)
     det = np.linalg.det(np.einsum("mai,saj->msij", X, shape_gradients(d, pts)))
     bad = (det <= 0).any(axis=1)
     assert not np.any(bad & (outcome == VALID))

@@ -12,8 +12,10 @@ from meshio.gmsh.common import _gmsh_to_meshio_order
 
 from mortar1d3d.elements import beam
 from mortar1d3d.elements.beam import hermite, line2, line3, registry as beam_registry
-from mortar1d3d.elements.solid import dispatch, hex8, hex20, hex27, tet4, tet10
+from mortar1d3d.elements.solid import dispatch, hex8, hex20, hex27, tet4, tet10, wedge6
 from mortar1d3d.elements.solid import registry
+
+import naive
 
 # ``mortar1d3d.elements.multiplier`` (the attribute) is the function re-exported by the package
 # ``__init__``, which shadows the submodule of the same name: fetch the module itself.
@@ -31,9 +33,7 @@ def descriptor(name):
 
 def random_points(d, n, rng):
     """n points uniformly distributed inside the reference element of ``d``."""
-    if d.family == "hex":
-        return rng.uniform(-1.0, 1.0, size=(n, 3))
-    return rng.dirichlet(np.ones(4), size=n)[:, 1:]
+    return naive.random_parameters(d.family, rng, n)
 
 
 def shape_values(code, points):
@@ -166,6 +166,9 @@ def test_linear_elements_do_not_reproduce_quadratics(name):
     ("hexahedron20", (2, 2, 0), False),   # ξ²η² is not
     ("hexahedron27", (2, 2, 2), True),    # triquadratic
     ("tetra10", (1, 1, 1), False),        # ξηζ (cubic) is not
+    ("wedge", (0, 1, 1), True),           # ξ2 ζ: linear on the triangle times linear in ζ
+    ("wedge", (1, 1, 0), False),          # ξ1 ξ2 is not
+    ("wedge", (0, 0, 2), False),          # nor ζ²
 ])
 def test_interpolation_space(name, monomial, exact):
     d = descriptor(name)
@@ -184,11 +187,13 @@ _GMSH_HEX_EDGES = [(0, 1), (0, 3), (0, 4), (1, 2), (1, 5), (2, 3), (2, 6), (3, 7
                    (5, 6), (6, 7)]
 _GMSH_HEX_FACES = [(0, 1, 2, 3), (0, 1, 5, 4), (0, 3, 7, 4), (1, 2, 6, 5), (2, 3, 7, 6), (4, 5, 6, 7)]
 _GMSH_TET_EDGES = [(0, 1), (1, 2), (0, 2), (0, 3), (2, 3), (1, 3)]
+# gmsh's prism: the triangle u, v >= 0, u + v <= 1 at w = -1, then at w = +1
+_PRISM_CORNERS = np.array([[0, 0, -1], [1, 0, -1], [0, 1, -1], [0, 0, 1], [1, 0, 1], [0, 1, 1]], dtype=np.float64)
 
 
 def _gmsh_reference_nodes(name):
-    if name in ("hexahedron", "tetra"):
-        return (_HEX_CORNERS if name == "hexahedron" else _TET_CORNERS).copy()
+    if name in ("hexahedron", "tetra", "wedge"):
+        return {"hexahedron": _HEX_CORNERS, "tetra": _TET_CORNERS, "wedge": _PRISM_CORNERS}[name].copy()
     if name == "tetra10":
         sets = [(i,) for i in range(4)] + _GMSH_TET_EDGES
         corners = _TET_CORNERS
@@ -225,12 +230,12 @@ def test_quadratic_nodes_extend_linear_nodes():
 # --------------------------------------------------------------------------------------------
 # reference geometry: inside test, faces
 # --------------------------------------------------------------------------------------------
-def _face_corner_params(d):
-    return [(-1, -1), (1, -1), (1, 1), (-1, 1)] if d.family == "hex" else [(0, 0), (1, 0), (0, 1)]
+def _face_corner_params(d, f):
+    return d.family_type.face_shapes[f].corners
 
 
-def _face_centre(d, face):
-    return face[0] if d.family == "hex" else face[0] + (face[1] + face[2]) / 3.0
+def _face_centre(d, f):
+    return dispatch.FACE_CENTROIDS[d.code, f]
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -242,9 +247,9 @@ def test_is_inside(name):
         assert dispatch.outside_distance(code, xi) <= 1e-15
     assert dispatch.is_inside(code, d.centre.copy(), TOL)
     assert dispatch.outside_distance(code, d.centre.copy()) < -0.2
-    for face in d.faces:
+    for f, face in enumerate(d.faces):
         n = face[3] / np.linalg.norm(face[3])
-        c = _face_centre(d, face)
+        c = _face_centre(d, f)
         assert dispatch.is_inside(code, c, TOL)
         assert dispatch.is_inside(code, c - 1e-6 * n, TOL)
         assert not dispatch.is_inside(code, c + 1e-6 * n, TOL), (face, c + 1e-6 * n)
@@ -263,7 +268,7 @@ def test_centre(name):
     dispatch.centre(d.code, xi)
     np.testing.assert_array_equal(xi, d.centre)
     # the centre is the centroid of the corner nodes
-    n_corners = 8 if d.family == "hex" else 4
+    n_corners = len(d.family_type.corners)
     np.testing.assert_allclose(d.centre, d.reference_nodes[:n_corners].mean(axis=0), atol=1e-15)
 
 
@@ -272,13 +277,14 @@ def test_faces(name):
     d = descriptor(name)
     faces = dispatch.faces(d.code)
     np.testing.assert_array_equal(faces, d.faces)
-    assert d.n_faces == (6 if d.family == "hex" else 4) == len(d.face_nodes)
+    assert d.n_faces == len(d.family_type.face_shapes) == len(d.face_nodes)
     assert d.faces.shape == (d.n_faces, 4, 3)
     corner_sets = set()
-    for face, nodes in zip(d.faces, d.face_nodes):
+    for f, (face, nodes) in enumerate(zip(d.faces, d.face_nodes)):
         origin, a, b, n = face
+        shape = d.family_type.face_shapes[f]
         hits = []
-        for u, v in _face_corner_params(d):
+        for u, v in _face_corner_params(d, f):
             p = origin + u * a + v * b
             match = np.flatnonzero(np.all(d.reference_nodes == p, axis=1))
             assert len(match) == 1, (face, p)
@@ -292,11 +298,22 @@ def test_faces(name):
         # every reference node is on the inner side or on the face
         side = (d.reference_nodes - origin) @ n
         assert np.all(side <= 1e-15)
-        # the nodes on the face plane are those of that face (corners + mid-edge/face nodes)
+        # the nodes on the face plane are those of that face (corners + mid-edge/face nodes): their
+        # face parameters lie in the face's shape (on its corners, edges or inside), the functions of
+        # the other nodes vanish on the face and those of the face's nodes are independent there
+        # (the face is determined by its own nodes: conforming neighbours)
         on = np.flatnonzero(np.abs(side) <= 1e-15)
         assert set(nodes) <= set(on.tolist())
-        expected_on = {"hexahedron": 4, "hexahedron20": 8, "hexahedron27": 9, "tetra": 3, "tetra10": 6}
-        assert len(on) == expected_on[name]
+        uv = np.linalg.lstsq(np.column_stack([a, b]), (d.reference_nodes[on] - origin).T, rcond=None)[0].T
+        corners = shape.corners
+        for k in range(len(corners)):
+            edge, to = corners[(k + 1) % len(corners)] - corners[k], uv - corners[k]
+            assert np.all(edge[0] * to[:, 1] - edge[1] * to[:, 0] >= -1e-15)     # left of every edge
+        weights = np.random.default_rng(f).dirichlet(np.ones(len(corners)), 40)   # points of the face
+        N = shape_values(d.code, origin + (weights @ corners) @ np.stack([a, b]))
+        off = np.setdiff1d(np.arange(d.n_nodes), on)
+        assert np.abs(N[:, off]).max(initial=0.0) <= 1e-14
+        assert np.linalg.matrix_rank(N[:, on], tol=1e-10) == len(on)
     assert len(corner_sets) == d.n_faces    # all faces distinct
 
 
@@ -358,7 +375,7 @@ def test_registry_codes_and_sizes():
     assert codes == list(range(len(dispatch.SOLID_ELEMENTS)))
     assert set(dispatch.BY_CODE) == set(codes)
     assert dispatch.MAX_NODES == max(d.n_nodes for d in dispatch.SOLID_ELEMENTS.values()) == 27
-    assert set(NAMES) == {"hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"}
+    assert set(NAMES) == {"hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10", "wedge"}
     for name, d in dispatch.SOLID_ELEMENTS.items():
         assert d.name == name
         assert dispatch.SOLID_MODULES[name].DESCRIPTOR is d
@@ -369,14 +386,14 @@ def test_registry_codes_and_sizes():
         assert dispatch.solid_element(name) is d
         assert d.dim == 3
     expected = {"hexahedron": (8, 1, "hex"), "hexahedron20": (20, 2, "hex"), "hexahedron27": (27, 2, "hex"),
-                "tetra": (4, 1, "tet"), "tetra10": (10, 2, "tet")}
+                "tetra": (4, 1, "tet"), "tetra10": (10, 2, "tet"), "wedge": (6, 1, "wedge")}
     assert {n: (d.n_nodes, d.degree, d.family) for n, d in dispatch.SOLID_ELEMENTS.items()} == expected
 
 
 def test_registry_lists_are_in_code_order():
     assert [m.DESCRIPTOR.code for m in registry.SOLID_TYPES] == list(range(len(registry.SOLID_TYPES)))
     assert [f.code for f in registry.FAMILIES] == list(range(len(registry.FAMILIES)))
-    assert {f.name for f in registry.FAMILIES} == {"hex", "tet"}
+    assert {f.name for f in registry.FAMILIES} == {"hex", "tet", "wedge"}
     for d in dispatch.SOLID_ELEMENTS.values():
         assert d.family_type in registry.FAMILIES
         np.testing.assert_array_equal(d.reference_nodes[: len(d.family_type.corners)], d.family_type.corners)
@@ -410,11 +427,10 @@ def test_line_degree_table_matches_the_shape_functions(name):
 
 
 def _monomial_integral(d, alpha):
-    """Exact integral of ξ^alpha over the family's domain (box [-1, 1]^3 or the unit simplex)."""
-    from math import factorial
-    if d.family == "hex":
-        return np.prod([0.0 if a % 2 else 2.0 / (a + 1) for a in alpha])
-    return np.prod([factorial(int(a)) for a in alpha]) / factorial(int(sum(alpha)) + 3)
+    """Integral of ξ^alpha over the family's domain, exact to round-off for degrees up to 13
+    (:func:`naive.domain_rule`)."""
+    points, weights = naive.domain_rule(d.family)
+    return weights @ np.prod(points ** np.asarray(alpha), axis=1)
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -471,8 +487,8 @@ def test_box_meets_never_misses_the_domain(name):
 
 
 def test_solid_element_unknown_name():
-    with pytest.raises(ValueError, match="unknown solid element type 'wedge'.*hexahedron"):
-        dispatch.solid_element("wedge")
+    with pytest.raises(ValueError, match="unknown solid element type 'pyramid'.*hexahedron"):
+        dispatch.solid_element("pyramid")
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -509,6 +525,38 @@ def test_hex8_closed_form():
     hex8.shape(xi, N)
     assert N[6] == pytest.approx(0.125 * 1.3 * 0.3 * 1.1, abs=1e-16)
     assert N[0] == pytest.approx(0.125 * 0.7 * 1.7 * 0.9, abs=1e-16)
+
+
+def test_wedge6_closed_form():
+    # N_a = L_a (1 - ζ)/2, N_a+3 = L_a (1 + ζ)/2 with L = (1 - ξ1 - ξ2, ξ1, ξ2), written out
+    xi = np.array([0.2, 0.5, -0.4])
+    N, dN = np.empty(6), np.empty((6, 3))
+    wedge6.shape(xi, N)
+    wedge6.deriv(xi, dN)
+    np.testing.assert_allclose(N, [0.3 * 0.7, 0.2 * 0.7, 0.5 * 0.7, 0.3 * 0.3, 0.2 * 0.3, 0.5 * 0.3],
+                               rtol=0, atol=1e-16)
+    np.testing.assert_allclose(dN, [[-0.7, -0.7, -0.15], [0.7, 0, -0.1], [0, 0.7, -0.25],
+                                    [-0.3, -0.3, 0.15], [0.3, 0, 0.1], [0, 0.3, 0.25]], rtol=0, atol=1e-16)
+
+
+def test_wedge_family_by_hand():
+    d = dispatch.SOLID_ELEMENTS["wedge"]
+    f = d.family_type
+    # two triangles (ζ = ∓1) and three quadrilaterals, each face's shape and node count its own
+    assert [s.name for s in f.face_shapes] == ["triangle"] * 2 + ["quadrilateral"] * 3
+    np.testing.assert_allclose(dispatch.FACE_CENTROIDS[d.code, :5], [[1 / 3, 1 / 3, -1], [1 / 3, 1 / 3, 1],
+                                                                     [0.5, 0, 0], [0.5, 0.5, 0], [0, 0.5, 0]])
+    # spans of the affine check differ per axis: ξ1, ξ2 from 0 to 1, ζ from -1 to 1
+    np.testing.assert_array_equal(dispatch.AXIS_NODES[d.code], [1, 2, 3])
+    np.testing.assert_array_equal(dispatch.AXIS_SPAN[d.code], [1.0, 1.0, 2.0])
+    # det J: columns ∂x/∂ξ1, ∂x/∂ξ2 ∈ P0 ⊗ P1 and ∂x/∂ζ ∈ P1 ⊗ P0, so det J ∈ P1(ξ1, ξ2) ⊗ P2(ζ)
+    assert d.jacobian_degree == (1, 2)
+    assert d.line_degree == 2
+    assert dispatch.outside_distance(d.code, np.array([0.5, 0.5, 0.0])) == 0.0
+    assert dispatch.outside_distance(d.code, np.array([0.2, 0.2, 1.5])) == 0.5
+    assert dispatch.outside_distance(d.code, np.array([0.7, 0.5, 0.0])) == pytest.approx(0.2, abs=1e-15)
+    # two wedges fill a grid cell, over the halves of its bottom square
+    np.testing.assert_array_equal(f.cube_split[:, :3, :2], [[[0, 0], [1, 0], [1, 1]], [[0, 0], [1, 1], [0, 1]]])
 
 
 def test_tet10_closed_form():

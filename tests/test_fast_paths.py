@@ -18,7 +18,9 @@ from mortar1d3d.geometry.projection import linear_maps
 from mortar1d3d.geometry.context import KernelInput
 from mortar1d3d.study.reference import newton_projection
 
-SOLID_TYPES = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
+SOLID_TYPES = list(SOLID_ELEMENTS)
+#: types whose shape functions are linear: every element is affine, whatever its nodes (tet4)
+ALWAYS_AFFINE = [n for n, d in SOLID_ELEMENTS.items() if d.monomials.sum(axis=1).max() <= 1]
 
 # a shear and stretch: maps the unit-cube grid onto parallelepipeds (every element stays affine)
 SHEAR = np.array([[1.0, 0.2, 0.1], [0.05, 0.9, 0.15], [0.0, 0.1, 1.1]])
@@ -63,13 +65,14 @@ def test_affine_maps_are_found_exactly_for_parallelepipeds(element):
     # a perturbation far below any tolerance of the method, but above round-off: Newton path
     # (a tet4 stays affine whatever its nodes)
     exact = inverse_maps(sheared(box, wobble=1e-11))[:, 4, 0] == 1.0
-    assert exact.all() if element == "tetra" else not exact.any()
+    assert exact.all() if element in ALWAYS_AFFINE else not exact.any()
 
 
 @pytest.mark.parametrize("element", SOLID_TYPES)
 def test_curved_elements_get_their_centre_linearisation(element):
     """Distorted elements are left to Newton, which starts from ξ_c + J(ξ_c)⁻¹ (x - x(ξ_c))."""
-    solid = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (3, 3, 3), element), 0.15, seed=1)
+    box = generate.box((0, 0, 0), (1, 1, 1), (3, 3, 3), element)
+    solid = generate.distort(box, 0.15, seed=1)
     ctx = KernelInput(generate.random_curved_beams(1, 2, seed=1), solid)
     table = np.empty((solid.n_elements, 5, 3))
     linear_maps(ctx.points, ctx.conn, ctx.codes, ctx.solid_origin, ctx.solid_h, table, workers())
@@ -87,8 +90,14 @@ def test_curved_elements_get_their_centre_linearisation(element):
         inverse = np.linalg.inv(X.T @ dN)
         np.testing.assert_allclose(table[s, :3], inverse, rtol=1e-12, atol=1e-12 * abs(inverse).max())
         moved += table[s, 4, 0] == 0.0
-    # a tet4 is affine whatever its nodes; the other types: every element has a moved node
-    assert moved == (0 if element == "tetra" else solid.n_elements)
+    # a tet4 is affine whatever its nodes; the other types: every element with a moved node (every
+    # element of a hexahedral or tetrahedral split of 3 × 3 × 3 cells; a wedge split leaves two
+    # wedges per layer without an interior node, which stay affine)
+    node_moved = (solid.points != box.points).any(axis=1)
+    with_moved_node = int(node_moved[solid.connectivity[:, :n]].any(axis=1).sum())
+    if element not in ALWAYS_AFFINE and SOLID_ELEMENTS[element].family in ("hex", "tet"):
+        assert with_moved_node == solid.n_elements
+    assert moved == (0 if element in ALWAYS_AFFINE else with_moved_node)
 
 
 @pytest.mark.parametrize("integration", ["segment", "element"])
@@ -105,7 +114,7 @@ def test_affine_location_gives_the_points_of_a_newton_projection(element, integr
 
 
 @pytest.mark.parametrize("integration", ["segment", "element"])
-@pytest.mark.parametrize("element", [e for e in SOLID_TYPES if e != "tetra"])   # a tet4 is always affine
+@pytest.mark.parametrize("element", [e for e in SOLID_TYPES if e not in ALWAYS_AFFINE])
 def test_affine_location_gives_the_newton_operators(element, integration):
     box = generate.box((0, 0, 0), (1, 1, 1), (2, 2, 2), element)
     beams = sheared_beams()
@@ -131,6 +140,7 @@ def test_face_control_points_contain_the_face(element):
     code, n = descriptor.code, descriptor.n_nodes
     module = SOLID_MODULES[element]
     u = np.linspace(0.0, 1.0, 9)
+    shapes = descriptor.family_type.face_shapes
     C = np.empty((CONTROL_MATRIX.shape[1], 3))
     N = np.empty(n)
     checked = 0
@@ -140,14 +150,16 @@ def test_face_control_points_contain_the_face(element):
         for f, (origin, a, b, _normal) in enumerate(descriptor.faces):
             ctrl = C[FACE_CONTROL[code, f, : N_FACE_CONTROL[code, f]]]
             lo, hi = ctrl.min(axis=0), ctrl.max(axis=0)
+            corners = shapes[f].corners
+            lower, upper = corners.min(axis=0), corners.max(axis=0)
             for i in u:
                 for j in u:
-                    if descriptor.family == "hex":
-                        xi = origin + (2 * i - 1) * a + (2 * j - 1) * b
-                    elif i + j <= 1.0:
-                        xi = origin + i * a + j * b
-                    else:
+                    # a lattice over the face shape's box, the points in the shape (left of every edge)
+                    uv = lower + np.array([i, j]) * (upper - lower)
+                    edges = np.roll(corners, -1, axis=0) - corners
+                    if ((edges[:, 0] * (uv - corners)[:, 1] - edges[:, 1] * (uv - corners)[:, 0]) < -1e-15).any():
                         continue
+                    xi = origin + uv[0] * a + uv[1] * b
                     module.shape(xi, N)
                     x = N @ X
                     assert np.all(x >= lo - 1e-14) and np.all(x <= hi + 1e-14), (element, s, f, xi)

@@ -37,7 +37,7 @@ from mortar1d3d.errors import MeshError
 import hard_cases as hc
 from clamped_scenes import clamped_scene, rotation_error
 
-ELEMENTS = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
+ELEMENTS = list(m13.elements.SOLID_ELEMENTS)
 SIZE = 2.0        # the solid is the box [0, SIZE]^3 in every scene
 
 

@@ -10,15 +10,11 @@ import numpy as np
 import pytest
 
 from mortar1d3d import generate
-from mortar1d3d.elements.solid import hex8, hex20, hex27, tet4, tet10
-from mortar1d3d.elements.solid.hex_family import HEXAHEDRON
-from mortar1d3d.elements.solid.tet_family import TETRAHEDRON
+from mortar1d3d.elements.solid.dispatch import SOLID_MODULES
 
-from naive import gauss_rule, reference_splitmix64
+from naive import domain_rule, reference_splitmix64
 
-HEX_FACE_NODES, TET_FACE_NODES = HEXAHEDRON.face_nodes, TETRAHEDRON.face_nodes
-
-MODULES = {"hexahedron": hex8, "hexahedron20": hex20, "hexahedron27": hex27, "tetra": tet4, "tetra10": tet10}
+MODULES = SOLID_MODULES
 TYPES = list(MODULES)
 L, R = 0.3, 0.03
 
@@ -167,8 +163,11 @@ def jacobian_determinants(solid, rule):
     return np.linalg.det(J)
 
 
-def volume(solid, kind, n_points=None):
-    rule = gauss_rule(kind, n_points)
+def volume(solid, n_points=2):
+    """Σ w det J over the single block of ``solid`` with :func:`naive.domain_rule` (exact for det J
+    of total degree 2 n_points - 3)."""
+    (name, _), = solid.cells.items()
+    rule = domain_rule(MODULES[name].DESCRIPTOR.family, n_points)
     det = jacobian_determinants(solid, rule)
     assert (det > 0).all()                   # positive orientation at every integration point
     return float((det @ rule[1]).sum())
@@ -183,7 +182,9 @@ def expected_counts(name, nx, ny, nz):
             "hexahedron27": (lattice, cells), "tetra": (corners, 6 * cells),
             # the Kuhn split uses one diagonal per grid face and the body diagonal of every cell:
             # its mid-edge nodes fill the whole half-cell lattice
-            "tetra10": (lattice, 6 * cells)}[name]
+            "tetra10": (lattice, 6 * cells),
+            # two wedges per cell over the halves of its bottom square
+            "wedge": (corners, 2 * cells)}[name]
 
 
 @pytest.mark.parametrize("name", TYPES)
@@ -191,8 +192,7 @@ def test_box_volume_counts_and_uniqueness(name):
     solid = generate.box(LOWER, UPPER, CELLS, element=name)
     assert list(solid.cells) == [name]
     assert (solid.n_nodes, solid.n_elements) == expected_counts(name, *CELLS)
-    rule = ("hex", 2) if name.startswith("hex") else ("tet4",)     # exact for affine elements
-    assert abs(volume(solid, *rule) - BOX_VOLUME) <= 1e-12
+    assert abs(volume(solid) - BOX_VOLUME) <= 1e-12            # exact for affine elements
     assert len(np.unique(solid.points, axis=0)) == solid.n_nodes          # no duplicate nodes
     conn = solid.cells[name]
     assert np.array_equal(np.unique(conn), np.arange(solid.n_nodes))      # no orphan nodes
@@ -204,7 +204,8 @@ def test_box_higher_order_nodes_sit_where_the_reference_element_puts_them(name):
     solid = generate.box(LOWER, UPPER, CELLS, element=name)
     conn = solid.cells[name]
     ref = MODULES[name].REFERENCE_NODES
-    linear = hex8 if name.startswith("hex") else tet4
+    family = MODULES[name].DESCRIPTOR.family_type
+    linear = next(m for m in MODULES.values() if m.DESCRIPTOR.family_type is family and m.DESCRIPTOR.degree == 1)
     n_corners = len(linear.REFERENCE_NODES)
     N = np.empty((len(ref), n_corners))
     for a, xi in enumerate(ref):
@@ -218,18 +219,20 @@ def test_box_is_conforming(name):
     # every element face is shared by exactly two elements, or lies on the box boundary
     solid = generate.box(LOWER, UPPER, CELLS, element=name)
     conn = solid.cells[name]
-    face_nodes = HEX_FACE_NODES if name.startswith("hex") else TET_FACE_NODES
-    faces = np.sort(np.vstack([conn[:, list(f)] for f in face_nodes]), axis=1)
-    unique, counts = np.unique(faces, axis=0, return_counts=True)
+    face_nodes = MODULES[name].DESCRIPTOR.face_nodes
+    width = max(len(f) for f in face_nodes)
+    # corners of every face in their cyclic order, padded with -1; sorted, they key the face
+    ordered = np.vstack([np.pad(conn[:, list(f)], ((0, 0), (0, width - len(f))), constant_values=-1)
+                         for f in face_nodes])
+    keys = np.sort(np.where(ordered < 0, np.iinfo(np.int64).max, ordered), axis=1)
+    _, first, counts = np.unique(keys, axis=0, return_index=True, return_counts=True)
     assert counts.max() == 2
-    X = solid.points[unique[counts == 1]]                                # (faces, corners, 3)
-    on_plane = ((X == LOWER).all(axis=1) | (X == UPPER).all(axis=1)).any(axis=1)
-    assert on_plane.all()
-    # boundary area = box surface (a mismatched split would leave holes or extra faces)
-    if name.startswith("tet"):
-        area = 0.5 * np.linalg.norm(np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]), axis=1).sum()
-    else:
-        area = np.linalg.norm(np.cross(X[:, 1] - X[:, 0], X[:, 3] - X[:, 0]), axis=1).sum()
+    area = 0.0
+    for face in ordered[first[counts == 1]]:
+        X = solid.points[face[face >= 0]]                                # (corners, 3)
+        assert ((X == LOWER).all(axis=0) | (X == UPPER).all(axis=0)).any()
+        # boundary area = box surface (a mismatched split would leave holes or extra faces)
+        area += sum(0.5 * np.linalg.norm(np.cross(X[k] - X[0], X[k + 1] - X[0])) for k in range(1, len(X) - 1))
     size = UPPER - LOWER
     assert abs(area - 2 * (size[0] * size[1] + size[1] * size[2] + size[0] * size[2])) <= 1e-12
 
@@ -258,7 +261,7 @@ def test_box_numbering_is_x_fastest():
 def test_box_single_cell_and_large_grid():
     solid = generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1), element="tetra")
     assert (solid.n_nodes, solid.n_elements) == (8, 6)
-    assert abs(volume(solid, "tet4") - 1.0) <= 1e-15
+    assert abs(volume(solid) - 1.0) <= 1e-15
     big = generate.box((0, 0, 0), (1, 1, 1), (40, 40, 40))
     assert (big.n_nodes, big.n_elements) == (41 ** 3, 40 ** 3)
 
@@ -268,8 +271,8 @@ def test_box_rejects_bad_input():
                  ((0, 0, 0), (1, 1, 1), (1.5, 1, 1))]:
         with pytest.raises(ValueError):
             generate.box(*args)
-    with pytest.raises(ValueError, match="wedge"):
-        generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1), element="wedge")
+    with pytest.raises(ValueError, match="pyramid"):
+        generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1), element="pyramid")
 
 
 # -- distort -------------------------------------------------------------------------------------
@@ -287,9 +290,8 @@ def test_distort_moves_interior_nodes_only_and_keeps_a_valid_conforming_mesh(nam
     assert (np.abs(shift) <= 0.2 * h + 1e-15).all()
     assert {k: v.tolist() for k, v in moved.point_sets.items()} == {k: v.tolist() for k, v in solid.point_sets.items()}
     # fixed boundary + conforming elements: the volume is still the box's. det J of a distorted
-    # element has degree <= 5 per parameter (hex) or 3 in total (tet10): these rules are exact
-    rule = ("hex", 3) if name.startswith("hex") else ("tet", 4)
-    assert abs(volume(moved, *rule) - BOX_VOLUME) <= 1e-12
+    # element has total degree <= 15 (hex27: 5 per parameter): the rule is exact
+    assert abs(volume(moved, 9) - BOX_VOLUME) <= 1e-12
     again = generate.distort(solid, 0.2, seed=7)
     assert np.array_equal(again.points, moved.points)
     assert not np.array_equal(generate.distort(solid, 0.2, seed=8).points, moved.points)

@@ -70,6 +70,17 @@ def test_write_solid_hex27_is_a_quadratic_vtk_cell(tmp_path, hex27):
     assert SolidMesh.from_meshio(mesh).n_elements == 8
 
 
+def test_write_solid_wedges_read_back_as_wedges(tmp_path):
+    wedges = generate.box((0.0, 0.0, 0.0), (1.0, 2.0, 1.0), (2, 1, 2), element="wedge")
+    mesh = meshio.read(write_solid(tmp_path / "wedges.vtu", wedges))
+    np.testing.assert_array_equal(mesh.points, wedges.points)
+    _, conn = cell_block(mesh, "wedge")                            # VTK_WEDGE (13)
+    np.testing.assert_array_equal(conn, wedges.cells["wedge"])
+    again = SolidMesh.from_meshio(mesh)
+    np.testing.assert_array_equal(again.connectivity, wedges.connectivity)
+    np.testing.assert_array_equal(again.element_codes, wedges.element_codes)
+
+
 def test_write_solid_mixed_blocks_and_global_cell_data(tmp_path):
     hexes = generate.box((0, 0, 0), (2, 1, 1), (2, 1, 1), "hexahedron")
     tets = generate.box((0, 0, 0), (2, 1, 1), (2, 1, 1), "tetra")

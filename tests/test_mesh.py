@@ -253,7 +253,17 @@ def test_degenerate_flat_hex():
         SolidMesh(points, {"hexahedron": np.arange(8)[None]})
 
 
-@pytest.mark.parametrize("element", ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"])
+def _mirror(reference_nodes):
+    """A reflection of the reference element onto itself, as the node permutation it induces:
+    ξ_3 -> -ξ_3 where the element is symmetric about ξ_3 = 0 (hexahedra), else ξ_1 <-> ξ_2."""
+    for mirrored in (reference_nodes * [1, 1, -1], reference_nodes[:, [1, 0, 2]]):
+        match = (np.abs(reference_nodes[None, :, :] - mirrored[:, None, :]) < 1e-12).all(axis=2)
+        if (match.sum(axis=1) == 1).all():
+            return match.argmax(axis=1)
+    raise AssertionError("no reflection maps the reference nodes onto themselves")
+
+
+@pytest.mark.parametrize("element", list(dispatch.SOLID_ELEMENTS))
 def test_inverted_and_degenerate_every_element_type(element):
     box = generate.box((0, 0, 0), (1, 1, 1), (2, 1, 1), element)
     ids = re.escape(format_ids(range(box.n_elements)))              # "0, 1, ... 9 (and 2 more)" for 12 tets
@@ -265,10 +275,7 @@ def test_inverted_and_degenerate_every_element_type(element):
         SolidMesh(box.points * [1.0, 1.0, 1e-14], box.cells)
     # the last element's nodes listed as its mirror image (ξ_3 -> -ξ_3 for hexahedra, ξ_1 <-> ξ_2 for
     # tetrahedra): that element alone is inverted
-    d = dispatch.SOLID_ELEMENTS[element]
-    ref = d.reference_nodes
-    mirrored = ref * [1, 1, -1] if d.family == "hex" else ref[:, [1, 0, 2]]
-    perm = [int(np.flatnonzero((np.abs(ref - m) < 1e-12).all(axis=1))[0]) for m in mirrored]
+    perm = _mirror(dispatch.SOLID_ELEMENTS[element].reference_nodes)
     cells = box.cells[element].copy()
     cells[-1] = cells[-1][perm]
     with pytest.raises(MeshError, match=rf"inverted {element} elements .*: {box.n_elements - 1}$"):
@@ -341,10 +348,23 @@ def test_from_meshio_round_trip_skips_triangles():
     np.testing.assert_array_equal(again.element_codes, solid.element_codes)
 
 
-def test_from_meshio_rejects_wedges():
+def test_from_meshio_hexahedron_and_wedge_sharing_a_face():
+    from mortar1d3d.physics.surface import boundary_faces
     points = np.vstack([HEX_POINTS, [[2, 0, 0], [2, 0, 1]]])
     mesh = meshio.Mesh(points, [("hexahedron", np.arange(8)[None]), ("wedge", [[1, 8, 2, 5, 9, 6]])])
-    with pytest.raises(MeshError, match="unsupported cell type 'wedge'"):
+    solid = SolidMesh.from_meshio(mesh)
+    assert solid.n_elements == 2 and list(solid.cells) == ["hexahedron", "wedge"]
+    # the hexahedron's face x = 1 is the wedge's face ξ1 = 0: interior, on neither boundary list
+    faces = boundary_faces(solid)
+    assert len(faces) == 5 + 4
+    on_boundary = {(int(e), int(f)) for e, f in zip(faces["element"], faces["face"])}
+    assert (0, 1) not in on_boundary and (1, 4) not in on_boundary
+
+
+def test_from_meshio_rejects_pyramids():
+    points = np.vstack([HEX_POINTS, [[0.5, 0.5, 2.0]]])
+    mesh = meshio.Mesh(points, [("hexahedron", np.arange(8)[None]), ("pyramid", [[4, 5, 6, 7, 8]])])
+    with pytest.raises(MeshError, match="unsupported cell type 'pyramid'"):
         SolidMesh.from_meshio(mesh)
 
 

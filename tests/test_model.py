@@ -72,12 +72,77 @@ def test_uniform_strain_patch_every_coupling_variant(constraint, integration, en
     assert result.steps[-1].iterations <= 4
 
 
-@pytest.mark.parametrize("element", ["tetra", "hexahedron27"])
+@pytest.mark.parametrize("element", ["tetra", "hexahedron27", "wedge"])
 def test_uniform_strain_patch_other_elements_linear(element):
     result = m13.solve(patch_scene("mortar", "segment", "penalty", element=element, kinematics="linear"))
     exact = np.array([affine(x) for x in result.model.solid_mesh.points])
     assert np.abs(result.solid_displacement - exact).max() <= 1e-10 * STRAIN
     assert np.abs(result.line_load).max() <= 1e-8 * 5.0 * STRAIN
+
+
+WEDGE_SCENE = """
+[solid]
+mesh = { box = [[0, 0, 0], [1, 1, 1]], cells = [2, 3, 3], element = "wedge" }
+material = { model = "saint_venant_kirchhoff", E = 1e3, nu = 0.0 }
+
+[[beams]]
+curve = { line = [[0.1, 0.2, 0.15], [0.9, 0.75, 0.85]] }
+elements = 4
+section = { EA = 5.0, EI = 0.01 }
+
+[coupling]
+constraint = "mortar"
+integration = "segment"
+enforcement = "lagrange"
+n_gauss = 4
+
+[[dirichlet]]
+on = "solid:x_min"
+components = ["x"]
+
+[[dirichlet]]
+on = "solid:y_min"
+components = ["y"]
+
+[[dirichlet]]
+on = "solid:z_min"
+components = ["z"]
+
+[[dirichlet]]
+on = "beam:0:start"
+value = [0, 0, START]
+
+[[dirichlet]]
+on = "beam:0:end"
+value = [0, 0, END]
+
+[[load]]
+type = "traction"
+on = "solid:z_max"
+value = [0, 0, TRACTION]
+
+[analysis]
+kinematics = "nonlinear"
+steps = 2
+"""
+
+
+def test_wedge_scene_file_stretched_through_its_triangle_faces(tmp_path):
+    """A scene file with a wedge mesh, solved: the uniform stretch along z (dead traction on z_max, whose
+    faces are the wedges' triangles) is the exact solution of solid and beam, and λ = 0."""
+    stretch = 1.0 + STRAIN
+    P = stretch * E_SOLID * (STRAIN + 0.5 * STRAIN ** 2)
+    path = tmp_path / "wedges.toml"
+    text = WEDGE_SCENE.replace("START", repr(STRAIN * 0.15)).replace("END", repr(STRAIN * 0.85))
+    path.write_text(text.replace("TRACTION", repr(P)))
+    result = m13.solve(Scene.from_toml(path))
+    model = result.model
+    assert list(model.solid_mesh.cells) == ["wedge"] and model.solid_mesh.n_elements == 2 * 18
+    exact = lambda X: STRAIN * np.column_stack([0 * X[:, 0], 0 * X[:, 1], X[:, 2]])    # noqa: E731
+    assert np.abs(result.solid_displacement - exact(model.solid_mesh.points)).max() <= 1e-10 * STRAIN
+    assert np.abs(result.beam_displacement - exact(model.groups[0].mesh.positions)).max() <= 1e-10 * STRAIN
+    assert np.abs(result.line_load).max() <= 1e-8 * 5.0 * STRAIN
+    assert result.steps[-1].iterations <= 4
 
 
 # --------------------------------------------------------------------------------------------

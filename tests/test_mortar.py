@@ -13,13 +13,13 @@ import pytest
 
 import mortar1d3d as m13
 from mortar1d3d import generate
-from mortar1d3d.elements.solid.dispatch import BY_CODE, SOLID_MODULES
+from mortar1d3d.elements.solid.dispatch import BY_CODE, SOLID_ELEMENTS, SOLID_MODULES
 from mortar1d3d.geometry.search import beam_bounding_boxes, find_candidate_pairs, solid_bounding_boxes
 from mortar1d3d.study.reference import newton_projection
 
 from naive import arc_length, brute_force_pairs, constraint_residual, outside_distance, reference_samples
 
-SOLID_TYPES = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
+SOLID_TYPES = list(SOLID_ELEMENTS)
 LM_TYPES = ["line2", "line3", "line4"]
 INTEGRATIONS = ["segment", "element"]
 N_INTERIOR = {"line2": 0, "line3": 1, "line4": 2}

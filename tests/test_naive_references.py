@@ -25,7 +25,7 @@ from mortar1d3d.geometry.search import beam_bounding_boxes, find_candidate_pairs
 
 import naive
 
-SOLID_TYPES = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
+SOLID_TYPES = list(dispatch.SOLID_ELEMENTS)
 BEAM_TYPES = ["hermite", "line", "line3"]
 
 
@@ -53,8 +53,8 @@ def scene_beams(kind, seed, count=2, elements=3, upper=1.0):
 def test_solid_shape_functions_equal_the_monomial_reference(name):
     d = dispatch.SOLID_ELEMENTS[name]
     rng = np.random.default_rng(5)
-    xi = np.vstack([rng.uniform(-1.2, 1.2, (40, 3)) if d.family == "hex" else rng.uniform(-0.2, 1.2, (40, 3)),
-                    d.reference_nodes])
+    lower, upper = naive.parameter_box(d.family)
+    xi = np.vstack([rng.uniform(lower - 0.2, upper + 0.2, (40, 3)), d.reference_nodes])
     N_ref, dN_ref = naive.shape_values(name, xi)
     N, dN = np.empty(dispatch.MAX_NODES), np.empty((dispatch.MAX_NODES, 3))
     for q, x in enumerate(xi):

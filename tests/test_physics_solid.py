@@ -13,13 +13,14 @@ from mortar1d3d.physics.solid import InvertedElementsError, SolidModel
 
 from naive import central_differences
 
-ELEMENTS = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
+ELEMENTS = list(m13.elements.SOLID_ELEMENTS)
 HYPERELASTIC = ["saint_venant_kirchhoff", "neo_hooke"]
 E_MODULUS, NU = 200.0, 0.3
 
 
 def single_element(element, seed=0, amplitude=0.06):
-    """The unit cube as one hexahedron (six tetrahedra), every node moved at random."""
+    """The unit cube as the elements of one grid cell (a hexahedron, six tetrahedra, ...), every node
+    moved at random."""
     mesh = m13.generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1), element)
     rng = np.random.default_rng(seed)
     return m13.SolidMesh(mesh.points + amplitude * rng.uniform(-1, 1, mesh.points.shape), mesh.cells)

@@ -8,7 +8,7 @@ import pytest
 from mortar1d3d import generate
 from mortar1d3d.elements.solid.dispatch import SOLID_ELEMENTS
 from mortar1d3d.physics.surface import FACE_DTYPE, Pressure, boundary_faces, face_nodes, traction_force
-from mortar1d3d.quadrature import quadrilateral_rule, triangle_rule
+from mortar1d3d.quadrature import quadrilateral_rule, triangle_rule, wedge_rule
 
 from naive import surface_loads
 
@@ -30,20 +30,60 @@ def side_areas(lower, upper):
     return {"x": e[1] * e[2], "y": e[0] * e[2], "z": e[0] * e[1]}
 
 
+def faces_per_cube_side(family):
+    """(3,) faces of the elements that fill one grid cell of ``generate.box`` (the family's
+    ``cube_split``) lying on the cell's side normal to each axis (hex 1, 1, 1; tet 2, 2, 2)."""
+    count = np.zeros(3, dtype=np.int64)
+    for corners in family.cube_split:
+        for nodes in family.face_nodes:
+            count += (corners[list(nodes)] == 0).all(axis=0)
+    return count
+
+
+def polygon_area(X):
+    """Area of the flat polygon with corners X (k, 3) in cyclic order (a fan of triangles)."""
+    return sum(0.5 * np.linalg.norm(np.cross(X[k] - X[0], X[k + 1] - X[0])) for k in range(1, len(X) - 1))
+
+
 # ---------------------------------------------------------------------------------------------
 # quadrature
 
 
-def test_triangle_rule_integrates_degree_4_exactly():
-    points, weights = triangle_rule()
-    for i in range(6):
-        for j in range(6 - i):
+def assert_exact_on_the_triangle(points, weights, degree):
+    """∫ u^i v^j over the triangle u, v >= 0, u + v <= 1 (= i! j! / (i + j + 2)!) for every i + j <= degree."""
+    for i in range(degree + 1):
+        for j in range(degree + 1 - i):
             exact = factorial(i) * factorial(j) / factorial(i + j + 2)
             got = weights @ (points[:, 0] ** i * points[:, 1] ** j)
-            if i + j <= 4:
-                assert got == pytest.approx(exact, rel=1e-14, abs=1e-16)
+            assert got == pytest.approx(exact, rel=1e-14, abs=1e-16)
+
+
+def test_triangle_rule_integrates_degree_4_exactly():
+    points, weights = triangle_rule()
+    assert_exact_on_the_triangle(points, weights, 4)
     # ... and not degree 5 (the rule is what it claims, no more)
     assert abs(weights @ (points[:, 0] ** 5) - 1 / 42) > 1e-6
+
+
+def test_triangle_rule_of_degree_2_and_the_wedge_rule():
+    points, weights = triangle_rule(2)
+    assert len(weights) == 3
+    assert_exact_on_the_triangle(points, weights, 2)
+    assert abs(weights @ points[:, 0] ** 3 - 1 / 20) > 1e-4
+    # the prism: P2 on the triangle times degree 3 in ζ, exactly
+    points, weights = wedge_rule(2, 2)
+    assert len(weights) == 6 and weights.sum() == pytest.approx(1.0, rel=1e-15)
+    for i in range(3):
+        for j in range(3 - i):
+            for k in range(5):
+                exact = factorial(i) * factorial(j) / factorial(i + j + 2) * (2 / (k + 1) if k % 2 == 0 else 0)
+                got = weights @ (points[:, 0] ** i * points[:, 1] ** j * points[:, 2] ** k)
+                if k <= 3:
+                    assert got == pytest.approx(exact, rel=1e-14, abs=1e-16)
+                elif i == j == 0:
+                    assert abs(got - exact) > 1e-3                     # ζ⁴: not
+    with pytest.raises(ValueError, match="degree 2 or 4"):
+        triangle_rule(3)
 
 
 def test_quadrilateral_rule_integrates_degree_5_per_direction():
@@ -59,12 +99,13 @@ def test_quadrilateral_rule_integrates_degree_5_per_direction():
 
 
 @pytest.mark.parametrize("name, expected", [("hexahedron", 4), ("hexahedron20", 8), ("hexahedron27", 9),
-                                            ("tetra", 3), ("tetra10", 6)])
+                                            ("tetra", 3), ("tetra10", 6), ("wedge", (3, 3, 4, 4, 4))])
 def test_face_nodes_lie_on_the_face(name, expected):
     d = SOLID_ELEMENTS[name]
+    expected = expected if isinstance(expected, tuple) else (expected,) * d.n_faces
     for f in range(d.n_faces):
         local = face_nodes(d.code, f)
-        assert len(local) == expected
+        assert len(local) == expected[f]
         origin, _, _, normal = d.faces[f]
         assert np.allclose((d.reference_nodes[local] - origin) @ normal, 0.0)
         assert set(d.face_nodes[f]) <= set(local.tolist())
@@ -80,9 +121,8 @@ def test_boundary_face_count_and_outward_normals(name):
     lower, upper = np.array([0.0, -1.0, 0.5]), np.array([1.0, 1.0, 2.0])
     solid = generate.box(lower, upper, cells, name)
     faces = boundary_faces(solid)
-    nx, ny, nz = cells
-    per_quad = 1 if SOLID_ELEMENTS[name].family == "hex" else 2
-    assert len(faces) == per_quad * 2 * (nx * ny + ny * nz + nx * nz)
+    per_side = faces_per_cube_side(SOLID_ELEMENTS[name].family_type)
+    assert len(faces) == 2 * sum(per_side[axis] * np.prod(np.delete(cells, axis)) for axis in range(3))
     assert faces.dtype == FACE_DTYPE
     assert (faces["code"] == SOLID_ELEMENTS[name].code).all()
     assert len(np.unique(faces[["element", "face"]])) == len(faces)
@@ -92,7 +132,7 @@ def test_boundary_face_count_and_outward_normals(name):
     for side, (axis, sign) in SIDES.items():
         selected = boundary_faces(solid, solid.point_sets[side])
         on_a_side += len(selected)
-        assert len(selected) == per_quad * np.prod(np.delete(cells, axis))
+        assert len(selected) == per_side[axis] * np.prod(np.delete(cells, axis))
         # p = -1 turns -p ∫ N n da into ∫ N n da: the summed force of a face is its area-weighted
         # normal, which must point out of the box on every face
         for one in selected:
@@ -138,6 +178,7 @@ def test_traction_sums_to_traction_times_area(name):
     ("hexahedron20", {range(0, 8): -1 / 12, range(8, 20): 1 / 3}),
     ("hexahedron27", {range(0, 8): 1 / 36, range(8, 20): 1 / 9, range(20, 26): 4 / 9}),
     ("tetra10", {range(0, 4): 0.0, range(4, 10): 1 / 3}),
+    ("wedge", {range(0, 6): 1 / 4}),         # the first face on x_max is a quadrilateral
 ])
 def test_consistent_nodal_forces_of_one_face(name, share):
     solid = generate.box([0, 0, 0], [1.0, 2.0, 0.5], (1, 1, 1), name)
@@ -145,7 +186,8 @@ def test_consistent_nodal_forces_of_one_face(name, share):
     f = traction_force(solid, faces, [0.0, 0.0, 3.0]).reshape(-1, 3)
     element, face = faces["element"][0], faces["face"][0]
     local = face_nodes(faces["code"][0], face)
-    total = 3.0 * (1.0 if SOLID_ELEMENTS[name].family == "hex" else 0.5)   # area of the face × t
+    corners = solid.connectivity[element, list(SOLID_ELEMENTS[name].face_nodes[face])]
+    total = 3.0 * polygon_area(solid.points[corners])                      # area of the face × t
     for a in local:
         expected = next(s for r, s in share.items() if a in r)
         node = solid.connectivity[element, a]
@@ -153,6 +195,22 @@ def test_consistent_nodal_forces_of_one_face(name, share):
     others = np.setdiff1d(np.arange(solid.n_nodes), solid.connectivity[element, local])
     assert not f[others].any()
     assert f[:, 2].sum() == pytest.approx(total, rel=1e-14)
+
+
+def test_consistent_nodal_forces_of_a_wedge_triangle_face():
+    # z_max of a wedge box is made of the wedges' top triangles (face 1): a third of the force per corner
+    solid = generate.box([0, 0, 0], [1.0, 2.0, 0.5], (1, 1, 1), "wedge")
+    faces = boundary_faces(solid, solid.point_sets["z_max"])
+    assert len(faces) == 2 and set(faces["face"].tolist()) == {1}
+    f = traction_force(solid, faces[:1], [0.0, 0.0, 3.0]).reshape(-1, 3)
+    corners = solid.connectivity[faces["element"][0], [3, 4, 5]]
+    total = 3.0 * polygon_area(solid.points[corners])
+    assert total == pytest.approx(3.0, rel=1e-15)                          # half of the 1 × 2 top
+    for node in corners:
+        assert f[node] == pytest.approx([0, 0, total / 3], abs=1e-14)
+    assert not f[np.setdiff1d(np.arange(solid.n_nodes), corners)].any()
+    both = traction_force(solid, faces, [0.0, 0.0, 3.0]).reshape(-1, 3)
+    assert both[:, 2].sum() == pytest.approx(6.0, rel=1e-14)
 
 
 # ---------------------------------------------------------------------------------------------

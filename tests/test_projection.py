@@ -9,11 +9,13 @@ import pytest
 
 import mortar1d3d as m13
 from mortar1d3d import generate
-from mortar1d3d.elements.solid.dispatch import BY_CODE, SOLID_MODULES
+from mortar1d3d.elements.solid.dispatch import BY_CODE, SOLID_ELEMENTS, SOLID_MODULES
 from mortar1d3d.geometry.projection import INSIDE, NOT_CONVERGED, OUTSIDE
 from mortar1d3d.geometry.search import solid_bounding_boxes
 
-SOLID_TYPES = ["hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"]
+from naive import random_parameters
+
+SOLID_TYPES = list(SOLID_ELEMENTS)
 
 
 def distorted(element, seed=1):
@@ -34,21 +36,10 @@ def mapped(solid, s, xi):
 
 def parameters(family, rng, n, margin):
     """n parameter points inside the reference element shrunk by ``margin`` (negative: outside
-    it by -margin in at least one coordinate, and still within 0.3 of it)."""
-    if family == "hex":
-        if margin >= 0:
-            return rng.uniform(-1 + margin, 1 - margin, (n, 3))
-        xi = rng.uniform(-1, 1, (n, 3))
-        axis = rng.integers(0, 3, n)
-        xi[np.arange(n), axis] = rng.choice([-1, 1], n) * (1 - margin + rng.uniform(0, 0.2, n))
-        return xi
-    bary = rng.dirichlet(np.ones(4), n)
+    it by at least -margin, and still within 0.2 of it), as distances beyond the face planes."""
     if margin >= 0:
-        return margin + (1 - 4 * margin) * bary[:, 1:]
-    xi = bary[:, 1:].copy()
-    axis = rng.integers(0, 3, n)
-    xi[np.arange(n), axis] = margin - rng.uniform(0, 0.2, n)        # behind face ξ_axis = 0
-    return xi
+        return random_parameters(family, rng, n, high=-margin)
+    return random_parameters(family, rng, n, low=-margin, high=0.2, grow=0.2)
 
 
 @pytest.mark.parametrize("element", SOLID_TYPES)

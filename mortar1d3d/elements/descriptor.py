@@ -1,11 +1,12 @@
 """Frozen descriptors of element types and families: all a type's data, in one object per type.
 
-An element family (:class:`ElementFamily`: hexahedra, tetrahedra) fixes the parameter domain, its
-faces and its quadrature; an element type (:class:`SolidElementType`) adds its nodes, shape
-function space and bounds. The registry (:mod:`mortar1d3d.elements.solid.registry`) lists the
-types; :mod:`mortar1d3d.elements.solid.dispatch` derives every per-code table and the kernels'
-dispatch from these descriptors, so a new type of a known family is one module and one registry
-line.
+An element family (:class:`ElementFamily`: hexahedra, tetrahedra, wedges) fixes the parameter
+domain, its faces (each with its :class:`FaceShape`) and the cells of the validity check; an element
+type (:class:`SolidElementType`) adds its nodes, shape function space, bounds and volume rule. The
+registry (:mod:`mortar1d3d.elements.solid.registry`) lists the types and families;
+:mod:`mortar1d3d.elements.solid.dispatch` derives every per-code table and the kernels' dispatch
+from these descriptors, so a new type of a known family is one module and one registry line, and
+a new family its module, its types' modules and registry lines.
 """
 from dataclasses import dataclass, field
 
@@ -13,14 +14,42 @@ import numpy as np
 
 
 @dataclass(frozen=True, eq=False)
-class ElementFamily:
-    """A parameter domain shared by several element types (one module per family:
-    :mod:`~mortar1d3d.elements.solid.hex_family`, :mod:`~mortar1d3d.elements.solid.tet_family`).
+class FaceShape:
+    """The parameter domain of a face, ``(u, v)``: a square or a triangle
+    (:mod:`~mortar1d3d.elements.solid.face_shapes`). A family's face ``f`` is the image of its shape
+    under ``ξ = origin + u a + v b``.
 
     Attributes
     ----------
     name : str
-        ``"hex"`` or ``"tet"`` (what :attr:`SolidElementType.family` says).
+        ``"quadrilateral"`` or ``"triangle"``.
+    corners : (k, 2) float64
+        Corners in cyclic order (the order of the family's ``face_nodes``).
+    centre : (2,) float64
+        Centroid (Newton start of a crossing search on the face).
+    rule : callable ``() -> (points (q, 2), weights (q,))``
+        Quadrature on the shape (surface loads).
+    """
+
+    name: str
+    corners: np.ndarray = field(repr=False)
+    centre: np.ndarray = field(repr=False)
+    rule: object = field(repr=False)
+
+    @property
+    def n_corners(self):
+        return len(self.corners)
+
+
+@dataclass(frozen=True, eq=False)
+class ElementFamily:
+    """A parameter domain shared by several element types (one module per family, e.g.
+    :mod:`~mortar1d3d.elements.solid.hex_family`).
+
+    Attributes
+    ----------
+    name : str
+        ``"hex"``, ``"tet"``, ... (what :attr:`SolidElementType.family` says).
     code : int
         Integer code used for dispatch inside kernels (position in the registry's family list).
     faces : (n_faces, 4, 3) float64
@@ -37,18 +66,18 @@ class ElementFamily:
     box_meets : numba dispatcher ``(m0, m1, m2, r, tol) -> bool``
         Whether the box ``|ξ - m|∞ <= r`` meets ``{ξ : outside_distance(ξ) <= tol}`` (it may say
         True for a box that misses, never False for one that meets).
-    face_rule : callable ``() -> (points (q, 2), weights (q,))``
-        Quadrature on a face's (u, v) parameters (surface loads).
+    face_shapes : tuple of FaceShape
+        The (u, v) domain of each face, same order as ``faces``: its corners, centroid and
+        quadrature rule (faces of one family may differ, e.g. a wedge's triangles and squares).
     cells : object
-        Cells of the validity check (:mod:`mortar1d3d.elements.validity`): ``jacobian_degree``,
-        ``lattice``, ``corner_rows``, ``whole``, ``points``, ``take``, ``children`` and, where the
-        Bernstein coefficients can be subdivided exactly, ``child_coefficients``.
+        Cells of the validity check (:mod:`mortar1d3d.elements.validity`): ``jacobian_degree``
+        (an int, or a tuple of degrees per factor of a product domain: whatever ``lattice`` takes),
+        ``lattice``, ``corner_rows``, ``whole``, ``points``, ``take``, ``children`` with
+        ``n_children`` children per cell and, where the Bernstein coefficients can be subdivided
+        exactly, ``child_coefficients``.
     cube_split : (n, n_corners, 3) int64
         Corner offsets (lattice units) of the n elements that fill a unit cube of a structured
         mesh (:func:`mortar1d3d.generate.box`).
-    face_centre : float
-        The face parameters u = v of a face's centroid (0 on a square face [-1, 1]², 1/3 on a
-        triangle u, v >= 0, u + v <= 1).
     """
 
     name: str
@@ -59,14 +88,27 @@ class ElementFamily:
     centre: np.ndarray = field(repr=False)
     outside_distance: object = field(repr=False)
     box_meets: object = field(repr=False)
-    face_rule: object = field(repr=False)
+    face_shapes: tuple = field(repr=False)
     cells: object = field(repr=False)
     cube_split: np.ndarray = field(repr=False)
-    face_centre: float = 0.0
+
+    def __post_init__(self):
+        counts = [s.n_corners for s in self.face_shapes]
+        if not len(self.faces) == len(self.face_nodes) == len(self.face_shapes) or \
+                counts != [len(nodes) for nodes in self.face_nodes]:
+            raise ValueError(f"{self.name}: faces, face_nodes and face_shapes must agree face by face")
 
     @property
     def n_faces(self):
         return self.faces.shape[0]
+
+    @property
+    def face_centroids(self):
+        """(n_faces, 3) parameter coordinates of each face's centroid (its shape's centre mapped)."""
+        # the offset first, then the origin: u (a + b) for the equal parameters of a centroid, as
+        # the crossing search has always started (the last bit of a Newton start can change a result)
+        return np.array([origin + (s.centre[0] * a + s.centre[1] * b)
+                         for (origin, a, b, _normal), s in zip(self.faces, self.face_shapes)])
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,7 +126,7 @@ class SolidElementType:
     degree : int
         Polynomial degree of the interpolation (1 or 2).
     family_type : ElementFamily
-        Parameter domain, faces, face quadrature (also as the properties ``family`` (its name),
+        Parameter domain, faces and their shapes (also as the properties ``family`` (its name),
         ``centre``, ``faces``, ``face_nodes``, ``n_faces``).
     reference_nodes : (n_nodes, 3) float64
         Parameter coordinates of the nodes, in VTK/meshio order.
@@ -120,7 +162,7 @@ class SolidElementType:
 
     @property
     def family(self):
-        """Name of the element's family (``"hex"``, ``"tet"``)."""
+        """Name of the element's family (``"hex"``, ``"tet"``, ...)."""
         return self.family_type.name
 
     @property
@@ -138,7 +180,7 @@ class SolidElementType:
     @property
     def line_degree(self):
         """Degree in η of N_a(ξ(η)) along a straight line (ξ affine in η): the largest total degree
-        of the element's monomials (hex8 3, hex20 4, hex27 6, tet4 1, tet10 2)."""
+        of the element's monomials (e.g. hex8 3, hex27 6, tet4 1, tet10 2)."""
         return int(self.monomials.sum(axis=1).max())
 
     @property
@@ -148,8 +190,9 @@ class SolidElementType:
 
     @property
     def jacobian_degree(self):
-        """Polynomial degree of det J for this element's shape functions: per direction on a box
-        (det J ∈ Q_p), total on a simplex (P_p); the family's validity cells say which."""
+        """Polynomial degree of det J for this element's shape functions, as the family's validity
+        cells count it: per direction on a box (det J ∈ Q_p), total on a simplex (P_p), one degree
+        per factor on a product of such domains."""
         return self.family_type.cells.jacobian_degree(self.monomials)
 
     @property

@@ -1,10 +1,11 @@
 """Where is det J positive? A check of solid elements that cannot miss a fold between sample points.
 
-det J of an element's map is a polynomial in ξ: of degree ``p`` in each direction on a
-hexahedron (``descriptor.jacobian_degree``; Q2 for hex8, Q5 for hex20 and hex27) and of total
-degree ``p`` on a tetrahedron (P0 for tet4, P3 for tet10). On any sub-box (sub-simplex) of the
-parameter domain it has a Bernstein–Bézier form, and the polynomial lies between its smallest and
-largest Bernstein coefficient there, while the coefficients at the corners equal its values.
+det J of an element's map is a polynomial in ξ of a degree the family's cells derive from the
+element's monomials (``descriptor.jacobian_degree``): per direction on a hexahedron (Q2 for hex8,
+Q5 for hex20 and hex27), total on a tetrahedron (P0 for tet4, P3 for tet10), per factor on a
+product domain. On any sub-cell of the parameter domain (the family's ``cells``) it has a
+Bernstein–Bézier form, and the polynomial lies between its smallest and largest Bernstein
+coefficient there, while the coefficients at the corners equal its values.
 So (Johnen, Remacle & Geuzaine, J Comput Phys 233, 2013):
 
 - every coefficient > 0 on a cell: det J > 0 throughout the cell;
@@ -174,7 +175,7 @@ def _bernstein(descriptor, X, zero):
             out[owner[undecided]] = DEGENERATE
             return out
         index = np.flatnonzero(undecided)
-        owner = np.tile(owner[index], 8)
+        owner = np.tile(owner[index], cells.n_children)
         if subdivide is not None:
             # children's coefficients by exact subdivision; their corner coefficients are values of det J
             coefficients = subdivide(coefficients[index], p)

@@ -434,15 +434,15 @@ def affine_inverse(code, X, h, rel_tol, Ainv):
     """
     axes = solid.AXIS_NODES[code]
     span = solid.AXIS_SPAN[code]
-    a00 = X[axes[0], 0] / span
-    a10 = X[axes[0], 1] / span
-    a20 = X[axes[0], 2] / span
-    a01 = X[axes[1], 0] / span
-    a11 = X[axes[1], 1] / span
-    a21 = X[axes[1], 2] / span
-    a02 = X[axes[2], 0] / span
-    a12 = X[axes[2], 1] / span
-    a22 = X[axes[2], 2] / span
+    a00 = X[axes[0], 0] / span[0]
+    a10 = X[axes[0], 1] / span[0]
+    a20 = X[axes[0], 2] / span[0]
+    a01 = X[axes[1], 0] / span[1]
+    a11 = X[axes[1], 1] / span[1]
+    a21 = X[axes[1], 2] / span[1]
+    a02 = X[axes[2], 0] / span[2]
+    a12 = X[axes[2], 1] / span[2]
+    a22 = X[axes[2], 2] / span[2]
     ref = solid.REFERENCE_NODES[code]
     tol = rel_tol * h
     for a in range(solid.n_nodes(code)):

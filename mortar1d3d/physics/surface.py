@@ -3,12 +3,14 @@ follower pressure, for every solid element type (linear and quadratic faces).
 
 A face is named by ``(element, face, code)``: the global element number, the local face index
 into the element descriptor's ``faces`` table and the element type code. The descriptor gives
-the face as an affine map of the parameter space, ``ξ(u, v) = origin + u a + v b``, with
-``u, v ∈ [-1, 1]`` on hexahedra and ``u, v >= 0, u + v <= 1`` on tetrahedra, and an outward
-normal; ``a × b`` is parallel to that normal, with either sign (``orientation`` below).
+the face as an affine map of the parameter space, ``ξ(u, v) = origin + u a + v b``, of its
+family's face shape (``u, v ∈ [-1, 1]`` on a quadrilateral, ``u, v >= 0, u + v <= 1`` on a
+triangle), and an outward normal; ``a × b`` is parallel to that normal, with either sign
+(``orientation`` below). Every table here is per (type, face): the faces of one element may
+differ in shape, node count and rule.
 
 Face functions. The nodes of a face are the element nodes whose reference coordinates lie on it
-(4/8/9 for hexahedron/hexahedron20/hexahedron27, 3/6 for tetra/tetra10). The volume shape
+(e.g. 4/8/9 for hexahedron/hexahedron20/hexahedron27, 3/6 for tetra/tetra10). The volume shape
 functions of the other nodes vanish identically on the face, so the face functions are the
 volume functions restricted to ``ξ(u, v)``; their tangential derivatives are
 ``∂N/∂u = ∇_ξ N · a`` and ``∂N/∂v = ∇_ξ N · b``. Both are tabulated once per (type, face,
@@ -16,12 +18,13 @@ quadrature point) and only the face nodes are used in the kernels: this keeps th
 element dispatch and never scatters the round-off values that the vanishing functions take at
 points such as ``1 - u - v`` computed in floating point.
 
-Quadrature. Quadrilateral faces use 3 × 3 Gauss–Legendre points, triangular faces the 6-point
-degree-4 rule (Strang–Fix / Dunavant). The follower load ``N (x_,u × x_,v)`` is a polynomial on
+Quadrature. Each face uses its shape's rule (:mod:`mortar1d3d.elements.solid.face_shapes`):
+quadrilateral faces 3 × 3 Gauss–Legendre points, triangular faces the 6-point degree-4 rule
+(Strang–Fix / Dunavant). The follower load ``N (x_,u × x_,v)`` is a polynomial on
 the face: on a 9-node face ``N ∈ Q2``, ``x_,u ∈ Q(1,2)``, ``x_,v ∈ Q(2,1)``, so the integrand is
 in ``Q(5,5)``, which 3 points per direction integrate exactly; on a 6-node triangle the degrees are
 2 + 1 + 1 = 4. Both rules are therefore exact for the follower pressure and its tangent on any
-(curved, deformed) face of every supported type, and exact for the dead traction on flat faces
+(curved, deformed) face of up to these degrees, and exact for the dead traction on flat faces
 (where ``|X_,u × X_,v|`` is constant).
 
 Assembly. The kernels compute each face's local vector/matrix independently (``prange`` over
@@ -36,51 +39,58 @@ import scipy.sparse as sp
 from numba import prange
 
 from .._config import njit, njit_parallel
-from ..elements.solid.dispatch import BY_CODE, MAX_FACES, deriv, shape
+from ..elements.solid.dispatch import BY_CODE, MAX_FACES, MAX_NODES, deriv, shape
 from ..geometry.linalg import norm3
 
 #: dtype of face lists (see :func:`boundary_faces`)
 FACE_DTYPE = np.dtype([("element", np.int64), ("face", np.int64), ("code", np.int64)])
 
-MAX_FACE_NODES = 9
-MAX_FACE_POINTS = 9
+
+def _nodes_on(d, f):
+    """Local ids of the nodes of type ``d`` whose reference coordinates lie on the plane of face f."""
+    origin, _a, _b, normal = d.faces[f]
+    return np.flatnonzero(np.abs((d.reference_nodes - origin) @ normal) < 1e-12)
+
 
 class _FaceTables:
-    """Per element type code: face nodes, quadrature and tabulated face functions (padded arrays).
+    """Per element type code and face: face nodes, quadrature and tabulated face functions (padded).
 
-    nodes : (n_codes, MAX_FACES, MAX_FACE_NODES) int64, local node ids of each face (-1 padded)
-    n_nodes : (n_codes,) int64, nodes per face (the same for all faces of a type)
+    nodes : (n_codes, MAX_FACES, max_face_nodes) int64, local node ids of each face (-1 padded)
+    n_nodes : (n_codes, MAX_FACES) int64, nodes of each face
     n_faces : (n_codes,) int64
-    n_points : (n_codes,) int64, quadrature points per face
-    weights : (n_codes, MAX_FACE_POINTS) float64
-    N, dN_du, dN_dv : (n_codes, MAX_FACES, MAX_FACE_POINTS, MAX_FACE_NODES) float64
+    n_points : (n_codes, MAX_FACES) int64, quadrature points of each face (its shape's rule)
+    weights : (n_codes, MAX_FACES, max_face_points) float64
+    N, dN_du, dN_dv : (n_codes, MAX_FACES, max_face_points, max_face_nodes) float64
     orientation : (n_codes, MAX_FACES) float64, sign of ``(a × b) · outward normal``
+    max_corners : int, most corners of any face (width of the keys of :func:`boundary_faces`)
     """
 
     def __init__(self):
         n_codes = len(BY_CODE)
-        self.nodes = np.full((n_codes, MAX_FACES, MAX_FACE_NODES), -1, dtype=np.int64)
-        self.n_nodes = np.zeros(n_codes, dtype=np.int64)
+        max_nodes = max(len(_nodes_on(d, f)) for d in BY_CODE.values() for f in range(d.n_faces))
+        shapes = [s for d in BY_CODE.values() for s in d.family_type.face_shapes]
+        max_points = max(len(s.rule()[1]) for s in shapes)
+        self.max_corners = max(s.n_corners for s in shapes)
+        self.nodes = np.full((n_codes, MAX_FACES, max_nodes), -1, dtype=np.int64)
+        self.n_nodes = np.zeros((n_codes, MAX_FACES), dtype=np.int64)
         self.n_faces = np.zeros(n_codes, dtype=np.int64)
-        self.n_points = np.zeros(n_codes, dtype=np.int64)
-        self.weights = np.zeros((n_codes, MAX_FACE_POINTS))
-        shape4 = (n_codes, MAX_FACES, MAX_FACE_POINTS, MAX_FACE_NODES)
+        self.n_points = np.zeros((n_codes, MAX_FACES), dtype=np.int64)
+        self.weights = np.zeros((n_codes, MAX_FACES, max_points))
+        shape4 = (n_codes, MAX_FACES, max_points, max_nodes)
         self.N, self.dN_du, self.dN_dv = np.zeros(shape4), np.zeros(shape4), np.zeros(shape4)
         self.orientation = np.zeros((n_codes, MAX_FACES))
-        N = np.empty(27)
-        dN = np.empty((27, 3))
+        N = np.empty(MAX_NODES)
+        dN = np.empty((MAX_NODES, 3))
         for code, d in BY_CODE.items():
-            points, weights = d.family_type.face_rule()
             self.n_faces[code] = d.n_faces
-            self.n_points[code] = len(weights)
-            self.weights[code, : len(weights)] = weights
             for f in range(d.n_faces):
                 origin, a, b, normal = d.faces[f]
-                on_face = np.flatnonzero(np.abs((d.reference_nodes - origin) @ normal) < 1e-12)
+                points, weights = d.family_type.face_shapes[f].rule()
+                self.n_points[code, f] = len(weights)
+                self.weights[code, f, : len(weights)] = weights
+                on_face = _nodes_on(d, f)
                 m = len(on_face)
-                if self.n_nodes[code] not in (0, m):
-                    raise AssertionError(f"{d.name}: faces with different node counts")
-                self.n_nodes[code] = m
+                self.n_nodes[code, f] = m
                 self.nodes[code, f, :m] = on_face
                 self.orientation[code, f] = np.sign(np.cross(a, b) @ normal)
                 for q, (u, v) in enumerate(points):
@@ -101,7 +111,7 @@ def face_tables():
 def face_nodes(code, face):
     """Local node ids (int64) of face ``face`` of element type ``code``: corners and mid-side nodes."""
     tables = face_tables()
-    return tables.nodes[code, face, : tables.n_nodes[code]].copy()
+    return tables.nodes[code, face, : tables.n_nodes[code, face]].copy()
 
 
 # --------------------------------------------------------------------------------------------
@@ -136,7 +146,7 @@ def boundary_faces(solid, nodes=None):
     for d, conn in solid.blocks:
         ids = np.arange(start, start + len(conn), dtype=np.int64)
         for f, corners in enumerate(d.face_nodes):
-            key = np.full((len(conn), 4), -1, dtype=np.int64)
+            key = np.full((len(conn), tables.max_corners), -1, dtype=np.int64)
             key[:, : len(corners)] = np.sort(conn[:, list(corners)], axis=1)
             keys.append(key)
             element.append(ids)
@@ -149,9 +159,10 @@ def boundary_faces(solid, nodes=None):
     keep = counts[inverse.ravel()] == 1
     if nodes is not None:
         mask = _node_mask(nodes, solid.n_nodes)
-        for c in np.unique(code[keep]):
-            idx = np.flatnonzero(keep & (code == c))
-            local = tables.nodes[c, face[idx], : tables.n_nodes[c]]
+        m = tables.n_nodes[code, face]
+        for count in np.unique(m[keep]):
+            idx = np.flatnonzero(keep & (m == count))
+            local = tables.nodes[code[idx], face[idx], :count]
             keep[idx] = mask[solid.connectivity[element[idx, None], local]].all(axis=1)
     order = np.flatnonzero(keep)
     order = order[np.lexsort((face[order], element[order]))]
@@ -200,16 +211,17 @@ class _FaceSet:
             raise ValueError(f"faces: local face index out of range at positions "
                              f"{np.flatnonzero(bad)[:10].tolist()}")
         self.n_dofs = 3 * solid.n_nodes
-        n_local = 3 * tables.n_nodes[self.code]          # DOFs per face
+        self.n_face_nodes = tables.n_nodes[self.code, self.face]
+        n_local = 3 * self.n_face_nodes          # DOFs per face
         self.f_offsets = np.zeros(len(self.code) + 1, dtype=np.int64)
         np.cumsum(n_local, out=self.f_offsets[1:])
         self.k_offsets = np.zeros(len(self.code) + 1, dtype=np.int64)
         np.cumsum(n_local * n_local, out=self.k_offsets[1:])
         self.dofs = np.empty(self.f_offsets[-1], dtype=np.int64)
-        for c in np.unique(self.code):
-            idx = np.flatnonzero(self.code == c)
-            m = 3 * tables.n_nodes[c]
-            local = tables.nodes[c, self.face[idx], : m // 3]
+        for count in np.unique(self.n_face_nodes):
+            idx = np.flatnonzero(self.n_face_nodes == count)
+            m = 3 * count
+            local = tables.nodes[self.code[idx], self.face[idx], :count]
             nodes = solid.connectivity[self.element[idx, None], local]
             self.dofs[self.f_offsets[idx, None] + np.arange(m)] = (3 * nodes[:, :, None]
                                                                   + np.arange(3)).reshape(len(idx), m)
@@ -235,16 +247,14 @@ class _FaceSet:
         Built on node pairs (3 × 3 blocks), nine times fewer keys to sort than DOF pairs.
         """
         n_nodes = self.n_dofs // 3
-        tables = face_tables()
-        n_face_nodes = tables.n_nodes[self.code]
+        n_face_nodes = self.n_face_nodes
         pair_offsets = np.zeros(len(self) + 1, dtype=np.int64)
         np.cumsum(n_face_nodes * n_face_nodes, out=pair_offsets[1:])
         node_rows = np.empty(pair_offsets[-1], dtype=np.int64)
         node_cols = np.empty_like(node_rows)
         groups = []
-        for c in np.unique(self.code):
-            idx = np.flatnonzero(self.code == c)
-            m = tables.n_nodes[c]
+        for m in np.unique(n_face_nodes):
+            idx = np.flatnonzero(n_face_nodes == m)
             nodes = self.dofs[self.f_offsets[idx, None] + 3 * np.arange(m)] // 3       # (k, m)
             at = pair_offsets[idx, None] + np.arange(m * m)
             node_rows[at] = np.repeat(nodes, m, axis=1)
@@ -313,13 +323,13 @@ def _traction_kernel(X, conn, element, code, face, t, nodes, n_face_nodes, n_poi
     """Local nodal forces ``∫ N_k t dA0`` of every face into ``f_local`` (flat, ``f_offsets``)."""
     for i in prange(element.shape[0]):
         e, c, fc = element[i], code[i], face[i]
-        m = n_face_nodes[c]
+        m = n_face_nodes[c, fc]
         o = f_offsets[i]
         for r in range(3 * m):
             f_local[o + r] = 0.0
-        for q in range(n_points[c]):
+        for q in range(n_points[c, fc]):
             xu0, xu1, xu2, xv0, xv1, xv2 = _face_tangents(X, conn, e, c, fc, q, m, nodes, dN_du, dN_dv)
-            dA = weights[c, q] * norm3(xu1 * xv2 - xu2 * xv1, xu2 * xv0 - xu0 * xv2, xu0 * xv1 - xu1 * xv0)
+            dA = weights[c, fc, q] * norm3(xu1 * xv2 - xu2 * xv1, xu2 * xv0 - xu0 * xv2, xu0 * xv1 - xu1 * xv0)
             for k in range(m):
                 g = dA * N[c, fc, q, k]
                 f_local[o + 3 * k] += g * t[i, 0]
@@ -338,7 +348,7 @@ def _pressure_kernel(x, conn, element, code, face, p, nodes, n_face_nodes, n_poi
     """
     for i in prange(element.shape[0]):
         e, c, fc = element[i], code[i], face[i]
-        m = n_face_nodes[c]
+        m = n_face_nodes[c, fc]
         nl = 3 * m
         fo = f_offsets[i]
         ko = k_offsets[i]
@@ -348,12 +358,12 @@ def _pressure_kernel(x, conn, element, code, face, p, nodes, n_face_nodes, n_poi
             for r in range(nl * nl):
                 k_local[ko + r] = 0.0
         scale = -p * orientation[c, fc]
-        for q in range(n_points[c]):
+        for q in range(n_points[c, fc]):
             xu0, xu1, xu2, xv0, xv1, xv2 = _face_tangents(x, conn, e, c, fc, q, m, nodes, dN_du, dN_dv)
             n0 = xu1 * xv2 - xu2 * xv1
             n1 = xu2 * xv0 - xu0 * xv2
             n2 = xu0 * xv1 - xu1 * xv0
-            sw = scale * weights[c, q]
+            sw = scale * weights[c, fc, q]
             for k in range(m):
                 g = sw * N[c, fc, q, k]
                 f_local[fo + 3 * k] += g * n0

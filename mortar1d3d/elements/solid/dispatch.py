@@ -40,8 +40,7 @@ def _face_tables():
     centroids = np.zeros((_N_CODES, MAX_FACES, 3))
     for c, d in BY_CODE.items():
         faces[c, : d.n_faces] = d.faces
-        u = d.family_type.face_centre
-        centroids[c, : d.n_faces] = d.faces[:, 0] + u * (d.faces[:, 1] + d.faces[:, 2])
+        centroids[c, : d.n_faces] = d.family_type.face_centroids
     return faces, centroids
 
 
@@ -52,21 +51,20 @@ FACES, FACE_CENTROIDS = _face_tables()
 def _axis_tables():
     """Per code: nodes a with ξ_a - ξ_0 along each parameter axis (the affine check) and that distance."""
     axes = np.zeros((_N_CODES, 3), dtype=np.int64)
-    span = np.zeros(_N_CODES)
+    span = np.zeros((_N_CODES, 3))
     for c, d in BY_CODE.items():
         offsets = d.reference_nodes - d.reference_nodes[0]
         for i in range(3):
             along = np.flatnonzero((np.abs(np.delete(offsets, i, axis=1)) == 0).all(axis=1) & (offsets[:, i] > 0))
-            a = along[np.argmax(offsets[along, i])]
-            axes[c, i] = a
-            span[c] = offsets[a, i]
-        if not np.allclose(span[c], [offsets[axes[c, i], i] for i in range(3)]):
-            raise ImportError(f"{d.name}: the affine check needs the same span along the three axes")
+            if not len(along):
+                raise ImportError(f"{d.name}: the affine check needs a node along each parameter axis from node 0")
+            axes[c, i] = along[np.argmax(offsets[along, i])]
+            span[c, i] = offsets[axes[c, i], i]
     return axes, span
 
 
-#: per code: the nodes spanning the parameter axes from node 0 and their distance (hex 1, 3, 4 at 2;
-#: tet 1, 2, 3 at 1), for the affine check of :mod:`mortar1d3d.geometry.projection`
+#: per code and axis: the node spanning the parameter axis from node 0 and their distance (hex 1, 3, 4
+#: at 2, 2, 2; tet 1, 2, 3 at 1, 1, 1), for the affine check of :mod:`mortar1d3d.geometry.projection`
 AXIS_NODES, AXIS_SPAN = _axis_tables()
 #: per code: reference node coordinates (padded)
 REFERENCE_NODES = np.zeros((_N_CODES, MAX_NODES, 3))

@@ -2,7 +2,7 @@
 
 What every hexahedron shares lives here: the six faces (affine in parameter space, so the
 intersection kernels treat every face alike: ``ξ = origin + u a + v b`` with an outward normal),
-the inside test, the face quadrature, how a unit cube of a structured mesh is filled (one element),
+the inside test, how a unit cube of a structured mesh is filled (one element),
 and the cells of the validity check (sub-boxes, whose Bernstein coefficients of det J are
 subdivided exactly by de Casteljau's rule). Also the 3 × 3 × 3 node lattice of the quadratic
 hexahedra (hex20 takes the serendipity subset of hex27's nodes).
@@ -13,8 +13,8 @@ from math import comb
 import numpy as np
 
 from ..._config import njit
-from ...quadrature import quadrilateral_rule
 from ..descriptor import ElementFamily
+from .face_shapes import QUADRILATERAL
 
 #: the corners of [-1, 1]^3 in VTK order
 CORNERS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
@@ -51,6 +51,8 @@ class BoxCells:
     box; its coefficients on the 8 half-boxes follow from those on the box by de Casteljau's rule,
     so refinement needs no new samples (:meth:`child_coefficients`).
     """
+
+    n_children = 8
 
     @staticmethod
     def jacobian_degree(monomials):
@@ -135,7 +137,7 @@ HEXAHEDRON = ElementFamily(
     ], dtype=np.float64),
     face_nodes=((0, 3, 7, 4), (1, 2, 6, 5), (0, 1, 5, 4), (3, 2, 6, 7), (0, 1, 2, 3), (4, 5, 6, 7)),
     corners=CORNERS, centre=np.zeros(3), outside_distance=outside_distance, box_meets=box_meets,
-    face_rule=quadrilateral_rule,
+    face_shapes=(QUADRILATERAL,) * 6,
     cells=BoxCells(),
     # a unit cube of a structured mesh is one hexahedron (corner offsets in lattice units)
     cube_split=((CORNERS[None] + 1) // 2).astype(np.int64),

@@ -1,7 +1,7 @@
 """The tetrahedral family: elements on the unit simplex ξ_i >= 0, Σξ_i <= 1 (tet4, tet10).
 
 What every tetrahedron shares lives here: the four faces (affine in parameter space, as for every
-family: ``ξ = origin + u a + v b`` with an outward normal), the inside test, the face quadrature,
+family: ``ξ = origin + u a + v b`` with an outward normal), the inside test,
 how a unit cube of a structured mesh is filled (the six tetrahedra of the Kuhn split), and the cells
 of the validity check (sub-simplices from red refinement, on which det J is sampled afresh).
 """
@@ -11,8 +11,8 @@ from math import factorial
 import numpy as np
 
 from ..._config import njit
-from ...quadrature import triangle_rule
 from ..descriptor import ElementFamily
+from .face_shapes import TRIANGLE
 
 #: the vertices of the unit simplex in VTK order
 CORNERS = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
@@ -55,6 +55,8 @@ class SimplexCells:
     A polynomial of total degree p (P_p) has a Bernstein–Bézier form on every simplex; children come
     from red refinement (8 per cell) and are sampled afresh.
     """
+
+    n_children = 8
 
     @staticmethod
     def jacobian_degree(monomials):
@@ -117,6 +119,5 @@ TETRAHEDRON = ElementFamily(
     ], dtype=np.float64),
     face_nodes=((0, 2, 3), (0, 1, 3), (0, 1, 2), (1, 2, 3)),
     corners=CORNERS, centre=np.full(3, 0.25), outside_distance=outside_distance, box_meets=box_meets,
-    face_rule=triangle_rule,
-    face_centre=1.0 / 3.0, cells=SimplexCells(), cube_split=kuhn_split(),
+    face_shapes=(TRIANGLE,) * 4, cells=SimplexCells(), cube_split=kuhn_split(),
 )
