@@ -2,9 +2,8 @@
 
 Each element type's volume rule comes from its descriptor
 (:attr:`~mortar1d3d.elements.descriptor.SolidElementType.quadrature`, built in
-:mod:`mortar1d3d.quadrature`): full Gauss rules, hexahedron 2×2×2, hexahedron20 and hexahedron27
-3×3×3, tetra 1 point, tetra10 4 points (degree 2). The kernels read them as flat tables indexed by
-element code (:data:`RULE_PTR`, :data:`RULE_XI`, :data:`RULE_W`).
+:mod:`mortar1d3d.quadrature`; each type's module says which rule and why). The kernels read them as
+flat tables indexed by element code (:data:`RULE_PTR`, :data:`RULE_XI`, :data:`RULE_W`).
 
 :func:`reference_gauss_points` evaluates, once per mesh, the reference derivatives ``∂N_a/∂X``
 and the weights ``w det J`` of every Gauss point of every element, which the element kernels
