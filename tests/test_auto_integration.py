@@ -13,7 +13,7 @@ import scipy.sparse.linalg as spla
 import mortar1d3d as m13
 from mortar1d3d import generate
 from mortar1d3d.elements.solid.dispatch import SOLID_ELEMENTS
-from mortar1d3d.geometry.auto_segments import AFFINE_TOL, beam_is_affine
+from mortar1d3d.geometry.beam import AFFINE_TOL, beam_is_affine
 from mortar1d3d.geometry.projection import affine_inverse
 from mortar1d3d.integration.points import exact_gauss_count
 
@@ -182,18 +182,19 @@ def test_affine_inverse_maps_nodes_to_their_reference_coordinates(element):
 
 
 def test_beam_affinity():
+    ddH = np.empty(4)
     straight = straight_beam((0.1, 0.2, 0.3), (0.7, 0.1, 0.5), 2)
     Q = straight.coefficients()
     Q[:, 2] -= Q[:, 0]
     Q[:, 0] = 0.0
-    assert beam_is_affine(0, Q[0], straight.lengths[0])
+    assert beam_is_affine(0, Q[0], straight.lengths[0], ddH)
     bent = Q[0].copy()
     bent[1] = (bent[1] + np.array([0.0, 1e-6, 0.0])) / np.linalg.norm(bent[1] + np.array([0.0, 1e-6, 0.0]))
-    assert not beam_is_affine(0, bent, straight.lengths[0])
+    assert not beam_is_affine(0, bent, straight.lengths[0], ddH)
     line3 = np.array([[0, 0, 0], [1.0, 0, 0], [0.5, 0, 0], [0, 0, 0]])
-    assert beam_is_affine(2, line3, 1.0)
+    assert beam_is_affine(2, line3, 1.0, ddH)
     line3[2, 1] = 1e-9
-    assert not beam_is_affine(2, line3, 1.0)
+    assert not beam_is_affine(2, line3, 1.0, ddH)
 
 
 def test_exact_gauss_counts():

@@ -20,40 +20,16 @@ from .._config import PARAMETER_TOL, njit, njit_parallel
 from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
-from .beam import beam_point
+from .beam import AFFINE_TOL, beam_is_affine, beam_point
 from .projection import affine_inverse, affine_parameters, load_element
 from .segmentation import pair_crossings, tile
 
-#: a map counts as affine when its nonlinear part is below AFFINE_TOL times the element size
-AFFINE_TOL = 1e-12
 #: a curved beam element is certified inside an affine solid element when all its Bézier control
 #: points lie this far (parameter units) inside; far above PARAMETER_TOL, so no neighbour can
 #: claim any of its points under the ownership rule
 CERTIFY_MARGIN = 1e3 * PARAMETER_TOL
 #: pair outcome of the auto classification
 PAIR_DONE, PAIR_NUMERIC = 0, 1
-
-
-@njit
-def beam_is_affine(beam_code, Qe, length):
-    """Whether the centreline r(η) of one beam element is affine in η (to ``AFFINE_TOL · L``).
-
-    Hermite: r(η) - affine = (1 - η²)/8 [η (2c - L (t1 + t2)) + L (t1 - t2)] with c = r2 - r1,
-    so it is affine iff t1 = t2 = c / L. Lagrange line: always; line3: iff the middle node is the
-    chord's midpoint. Then |r'| is constant and every coupling integrand is a polynomial in an
-    affine solid element.
-    """
-    tol = AFFINE_TOL * length
-    dev = 0.0
-    if beam_code == 0:
-        for i in range(3):
-            c = Qe[2, i] - Qe[0, i]
-            dev = max(dev, abs(2.0 * c - length * (Qe[1, i] + Qe[3, i])) + length * abs(Qe[1, i] - Qe[3, i]))
-        dev *= 0.125
-    elif beam_code == 2:
-        for i in range(3):
-            dev = max(dev, abs(Qe[2, i] - 0.5 * (Qe[0, i] + Qe[1, i])))
-    return dev <= tol
 
 
 @njit
@@ -98,6 +74,7 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
         X = np.empty((solid.MAX_NODES, 3))
         H = np.empty(MAX_FUNCTIONS)
         dH = np.empty(MAX_FUNCTIONS)
+        ddH = np.empty(MAX_FUNCTIONS)
         Ainv = np.empty((3, 3))
         ctrl = np.empty((4, 3))
         alpha = np.empty(3)
@@ -107,7 +84,7 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
         while begin < stop:
             for e in range(begin, stop):
                 Qe = Q[e]
-                straight = beam_is_affine(beam_code, Qe, lengths[e])
+                straight = beam_is_affine(beam_code, Qe, lengths[e], ddH)
                 beam_affine[e] = straight
                 # the line r(η) = p + q η (straight) or the control polygon (curved), beam-local frame
                 p0, p1, p2, q0, q1, q2 = beam_point(beam_code, Qe, lengths[e], 0.0, 0.0, 0.0, 0.0, H, dH)

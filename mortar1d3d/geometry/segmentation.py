@@ -32,7 +32,7 @@ from .._config import MERGE_TOL, PARAMETER_TOL, SEGMENT_OWNER_TOL, TOUCH_TOL, nj
 from .._memory import carve
 from .._schedule import claim, new_claims, workers
 from ..elements.solid import dispatch as solid
-from .beam import beam_point
+from .beam import beam_point, beams_affine
 from .intersection import face_coordinates, intersect_face
 from .linalg import norm3, solve3
 from .projection import (CONVERGED, NOT_CONVERGED, certified_outside, first_containing, is_affine, jacobian,
@@ -77,8 +77,11 @@ def pair_crossings(ctx, pair_beam, pair_solid, search_points):
     the pairs whose beam element reaches no face of the solid element.
     """
     n = len(pair_solid)
+    # a straight beam element in an affine solid element has face functions linear in η: their roots
+    # are the sign changes between samples, with no touch or double crossing to look for
+    straight = beams_affine(ctx.beam_code, ctx.Q, ctx.lengths)
     args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.linear, ctx.beam_code, ctx.Q,
-            ctx.lengths, ctx.beam_origin, ctx.beam_boxes, search_points)
+            ctx.lengths, ctx.beam_origin, ctx.beam_boxes, straight, search_points)
     full = crossings_capacity(search_points)
     width = min(_FIRST_CAPACITY, full)
     crossing_eta, crossing_face, crossing_count, no_face, overflow = carve(
@@ -191,8 +194,8 @@ def _faces_in_reach(code, X, h, box, origin, C, reach):
 
 @njit_parallel
 def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear,
-                    beam_code, Q, lengths, beam_origin, beam_boxes, search_points, out_eta, out_face, out_count,
-                    no_face, overflow, workers):
+                    beam_code, Q, lengths, beam_origin, beam_boxes, straight, search_points, out_eta, out_face,
+                    out_count, no_face, overflow, workers):
     n_pairs = pair_beam.shape[0]
     S = search_points
     claims = new_claims(n_pairs, workers)
@@ -263,6 +266,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                         dxi_s[k] = 0.0
                         solid.centre(code, xi)
                 faces = solid.faces(code)
+                line = affine and straight[e]
                 count = 0
                 for f in range(faces.shape[0]):
                     if not reach[f]:
@@ -308,6 +312,10 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                             eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
                                                t_start, z, xi, N, dN, H, dH)
                             count = _record(eta, f, out_eta, out_face, p, count, overflow)
+                        if line:
+                            # g is linear in η: a sign change is its only root, and it cannot touch the
+                            # face or cross it twice (the searches below found each crossing again)
+                            continue
                         # a sample on the face: the scan starts Newton there and finds that point again;
                         # a crossing soon after it (leaving at a corner and coming back) is a root of
                         # the cubic divided by its known root (found by make fuzz, see test_hard_cases)
@@ -333,8 +341,11 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                             eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
                                                best_t, z, xi, N, dN, H, dH)
                             count = _record(eta, f, out_eta, out_face, p, count, overflow)
-                            if not np.isnan(eta):
-                                t_mirror = 2.0 * best_t - (eta - eta_s[k]) / (eta_s[k + 1] - eta_s[k])
+                            t_found = (eta - eta_s[k]) / (eta_s[k + 1] - eta_s[k])
+                            # a root outside the interval is a neighbour's sign change, not one end of
+                            # a dip in this one (whose other end the mirror start is for)
+                            if 0.0 <= t_found <= 1.0:
+                                t_mirror = 2.0 * best_t - t_found
                                 if 0.0 < t_mirror < 1.0:
                                     eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s,
                                                        xi_s, k, t_mirror, z, xi, N, dN, H, dH)

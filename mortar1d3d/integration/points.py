@@ -21,7 +21,7 @@ from .._memory import carve
 from .._schedule import claim, new_claims, workers
 from ..elements import beam as beam_elements
 from ..elements.solid import dispatch as solid
-from ..geometry.auto_segments import AFFINE_TOL
+from ..geometry.beam import AFFINE_TOL
 from ..geometry.beam import beam_point
 from ..geometry.linalg import norm3
 from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse, first_containing,
