@@ -752,3 +752,34 @@ def test_beam_element_registry():
     assert beam.beam_element("hermite").dofs_per_node == 6
     with pytest.raises(ValueError, match="unknown beam element type 'line4'"):
         beam.beam_element("line4")
+
+
+@pytest.mark.parametrize("name", BEAM_NAMES)
+def test_beam_coefficients_and_control_points(name):
+    """Each centreline type's coefficients reproduce its nodes (and tangents), and its Bézier control
+    points hold the curve in their convex hull: the curve's points are convex combinations of them
+    (checked by a non-negative least-squares fit that must sum to one and reproduce the point)."""
+    from scipy.optimize import nnls
+    et = beam.beam_element(name)
+    rng = np.random.default_rng(7)
+    positions = rng.uniform(-1, 1, (et.n_nodes, 3))
+    tangents = rng.normal(size=(et.n_nodes, 3))
+    tangents /= np.linalg.norm(tangents, axis=1)[:, None]
+    nodes = np.arange(et.n_nodes)
+    L = 1.9
+    Q = np.full((beam.MAX_FUNCTIONS, 3), np.nan)
+    origin = positions[0].copy()
+    beam.coefficients(et.code, positions, tangents, nodes, origin, Q)
+    H = np.empty(beam.MAX_FUNCTIONS)
+    for eta, node in ((-1.0, 0), (1.0, 1)):
+        beam.shape(et.code, eta, L, H)
+        np.testing.assert_allclose(H[: et.n_functions] @ Q[: et.n_functions] + origin, positions[node], atol=1e-15)
+    ctrl = np.empty((beam.MAX_FUNCTIONS, 3))
+    n = beam.control_points(et.code, Q, L, ctrl)
+    assert 2 <= n <= beam.MAX_FUNCTIONS
+    A = np.vstack([ctrl[:n].T, np.ones(n)])
+    for eta in np.linspace(-1, 1, 9):
+        beam.shape(et.code, eta, L, H)
+        r = H[: et.n_functions] @ Q[: et.n_functions]
+        weights, residual = nnls(A, np.append(r, 1.0))
+        assert residual < 1e-12, (eta, residual)

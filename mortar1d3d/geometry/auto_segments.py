@@ -18,6 +18,7 @@ from numba import prange
 
 from .._config import PARAMETER_TOL, njit, njit_parallel
 from .._schedule import claim, new_claims, workers
+from ..elements import beam as beam_functions
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from .beam import AFFINE_TOL, beam_is_affine, beam_point
@@ -30,27 +31,6 @@ from .segmentation import pair_crossings, tile
 CERTIFY_MARGIN = 1e3 * PARAMETER_TOL
 #: pair outcome of the auto classification
 PAIR_DONE, PAIR_NUMERIC = 0, 1
-
-
-@njit
-def _control_points(beam_code, Qe, length, ctrl):
-    """Bézier control points of a beam element (local frame); their number. The curve lies in their hull."""
-    if beam_code == 0:
-        for i in range(3):
-            ctrl[0, i] = Qe[0, i]
-            ctrl[1, i] = Qe[0, i] + length / 3.0 * Qe[1, i]
-            ctrl[2, i] = Qe[2, i] - length / 3.0 * Qe[3, i]
-            ctrl[3, i] = Qe[2, i]
-        return 4
-    if beam_code == 1:
-        ctrl[0] = Qe[0]
-        ctrl[1] = Qe[1]
-        return 2
-    for i in range(3):
-        ctrl[0, i] = Qe[0, i]
-        ctrl[1, i] = 2.0 * Qe[2, i] - 0.5 * (Qe[0, i] + Qe[1, i])
-        ctrl[2, i] = Qe[1, i]
-    return 3
 
 
 @njit_parallel
@@ -88,7 +68,7 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                 beam_affine[e] = straight
                 # the line r(η) = p + q η (straight) or the control polygon (curved), beam-local frame
                 p0, p1, p2, q0, q1, q2 = beam_point(beam_code, Qe, lengths[e], 0.0, 0.0, 0.0, 0.0, H, dH)
-                n_ctrl = 0 if straight else _control_points(beam_code, Qe, lengths[e], ctrl)
+                n_ctrl = 0 if straight else beam_functions.control_points(beam_code, Qe, lengths[e], ctrl)
                 inside = -1
                 for p in range(pair_offsets[e], pair_offsets[e + 1]):
                     s = pair_solid[p]

@@ -12,6 +12,7 @@ from numba import prange
 from .._config import PARAMETER_TOL, njit, njit_parallel
 from .._memory import carve
 from .._schedule import claim, new_claims, workers
+from ..elements import beam as beam_functions
 from ..elements.solid.dispatch import CONTROL_MATRIX, MAX_NODES, N_NODES, control_points
 
 MAX_CONTROL = CONTROL_MATRIX.shape[1]
@@ -99,39 +100,25 @@ def _solid_boxes(points, conn, codes, padding, boxes, size, origin, workers):
 
 @njit_parallel
 def _beam_frames(positions, tangents, elements, lengths, code, padding, Q, origin, boxes, size):
-    # Hermite: q = (r1, t1, r2, t2); Lagrange: the nodes. Bézier control points for the box:
-    # Hermite r1, r1 + L/3 t1, r2 - L/3 t2, r2; line3 r1, 2 r_mid - (r1 + r2)/2, r2; line r1, r2
+    # coefficients relative to the first node (the kernels' frame); the box from the Bézier control
+    # points of the coefficients in the global frame (the curve lies in their convex hull)
+    zero = np.zeros(3)
     for e in prange(elements.shape[0]):
-        n0 = elements[e, 0]
-        n1 = elements[e, 1]
+        nodes = elements[e]
+        ctrl = np.empty((beam_functions.MAX_FUNCTIONS, 3))
+        global_q = np.empty((beam_functions.MAX_FUNCTIONS, 3))
         for i in range(3):
-            o = positions[n0, i]
-            origin[e, i] = o
-            Q[e, 0, i] = 0.0
-            if code == 0:
-                Q[e, 1, i] = tangents[n0, i]
-                Q[e, 2, i] = positions[n1, i] - o
-                Q[e, 3, i] = tangents[n1, i]
-                c0 = o
-                c1 = o + lengths[e] / 3.0 * tangents[n0, i]
-                c2 = positions[n1, i] - lengths[e] / 3.0 * tangents[n1, i]
-                c3 = positions[n1, i]
-            elif code == 2:
-                Q[e, 1, i] = positions[n1, i] - o
-                Q[e, 2, i] = positions[elements[e, 2], i] - o
-                Q[e, 3, i] = 0.0
-                c0 = o
-                c1 = 2.0 * positions[elements[e, 2], i] - 0.5 * (o + positions[n1, i])
-                c2 = c1
-                c3 = positions[n1, i]
-            else:
-                Q[e, 1, i] = positions[n1, i] - o
-                Q[e, 2, i] = 0.0
-                Q[e, 3, i] = 0.0
-                c0 = c1 = c2 = o
-                c3 = positions[n1, i]
-            boxes[e, 0, i] = min(min(c0, c1), min(c2, c3))
-            boxes[e, 1, i] = max(max(c0, c1), max(c2, c3))
+            origin[e, i] = positions[nodes[0], i]
+        beam_functions.coefficients(code, positions, tangents, nodes, origin[e], Q[e])
+        beam_functions.coefficients(code, positions, tangents, nodes, zero, global_q)
+        n = beam_functions.control_points(code, global_q, lengths[e], ctrl)
+        for i in range(3):
+            lo = hi = ctrl[0, i]
+            for k in range(1, n):
+                lo = min(lo, ctrl[k, i])
+                hi = max(hi, ctrl[k, i])
+            boxes[e, 0, i] = lo
+            boxes[e, 1, i] = hi
         size[e] = _finish_box(boxes[e], padding)
 
 

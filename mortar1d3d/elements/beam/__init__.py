@@ -11,7 +11,8 @@ line3      2     r1, r2, r_mid (meshio ``line3`` order)      3
 =========  ====  ==========================================  =========================
 
 Only the Hermite functions depend on the element length ``L``. Each type is one module with its
-kernels and a :class:`~mortar1d3d.elements.descriptor.BeamElementType`; :mod:`.registry` lists
+kernels (shape functions and derivatives, coefficients from node data, Bézier control points for
+bounding boxes and inside certificates) and a :class:`~mortar1d3d.elements.descriptor.BeamElementType`; :mod:`.registry` lists
 them, and everything here (tables by code, the kernels' dispatch, the vectorised evaluator) is
 derived from that list.
 """
@@ -24,7 +25,7 @@ from ..selector import kernel_selector
 from .registry import BEAM_TYPES
 
 __all__ = ["BeamElementType", "BEAM_ELEMENTS", "BY_CODE", "MAX_FUNCTIONS", "beam_element", "shape", "deriv",
-           "deriv2", "n_functions", "evaluate"]
+           "deriv2", "coefficients", "control_points", "n_functions", "evaluate"]
 
 BEAM_ELEMENTS = {m.DESCRIPTOR.name: m.DESCRIPTOR for m in BEAM_TYPES}
 BY_CODE = {d.code: d for d in BEAM_ELEMENTS.values()}
@@ -71,6 +72,26 @@ def deriv2(code, eta, length, ddH):
     for k in literal_unroll(_CODES):
         if k == code:
             _kernel(k, "deriv2")(eta, length, ddH)
+
+
+@njit
+def coefficients(code, positions, tangents, nodes, origin, Qe):
+    """Coefficients of the element with node ids ``nodes`` into ``Qe`` (MAX_FUNCTIONS, 3): positions
+    minus ``origin`` (3,), tangents as they are, unused rows zero."""
+    for k in literal_unroll(_CODES):
+        if k == code:
+            _kernel(k, "coefficients")(positions, tangents, nodes, origin, Qe)
+
+
+@njit
+def control_points(code, Qe, length, ctrl):
+    """Bézier control points of coefficients ``Qe`` (in their frame) into ``ctrl`` (MAX_FUNCTIONS, 3);
+    returns their number. The centreline lies in their convex hull."""
+    n = 0
+    for k in literal_unroll(_CODES):
+        if k == code:
+            n = _kernel(k, "control_points")(Qe, length, ctrl)
+    return n
 
 
 @njit

@@ -40,5 +40,27 @@ def deriv2(eta, length, ddH):
     ddH[3] = 0.125 * length * (2.0 + 6.0 * eta)
 
 
+@njit
+def coefficients(positions, tangents, nodes, origin, Qe):
+    """Coefficients (r1, t1, r2, t2) of element ``nodes`` into ``Qe`` (4, 3), positions minus ``origin``."""
+    n0, n1 = nodes[0], nodes[1]
+    for i in range(3):
+        Qe[0, i] = positions[n0, i] - origin[i]
+        Qe[1, i] = tangents[n0, i]
+        Qe[2, i] = positions[n1, i] - origin[i]
+        Qe[3, i] = tangents[n1, i]
+
+
+@njit
+def control_points(Qe, length, ctrl):
+    """Bézier control points r1, r1 + L/3 t1, r2 - L/3 t2, r2 of coefficients ``Qe`` into ``ctrl``; returns 4."""
+    for i in range(3):
+        ctrl[0, i] = Qe[0, i]
+        ctrl[1, i] = Qe[0, i] + length / 3.0 * Qe[1, i]
+        ctrl[2, i] = Qe[2, i] - length / 3.0 * Qe[3, i]
+        ctrl[3, i] = Qe[2, i]
+    return 4
+
+
 DESCRIPTOR = BeamElementType("hermite", code=0, n_nodes=2, n_functions=4, dofs_per_node=6,
                              function_node=(0, 0, 1, 1), function_offset=(0, 3, 0, 3), degree=3)

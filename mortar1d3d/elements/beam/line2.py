@@ -25,5 +25,24 @@ def deriv2(eta, length, ddH):
     ddH[1] = 0.0
 
 
+@njit
+def coefficients(positions, tangents, nodes, origin, Qe):
+    """Coefficients (r1, r2) of element ``nodes`` into ``Qe`` (4, 3), minus ``origin``; rows 2, 3 zero."""
+    for i in range(3):
+        Qe[0, i] = positions[nodes[0], i] - origin[i]
+        Qe[1, i] = positions[nodes[1], i] - origin[i]
+        Qe[2, i] = 0.0
+        Qe[3, i] = 0.0
+
+
+@njit
+def control_points(Qe, length, ctrl):
+    """Bézier control points of coefficients ``Qe``: the two nodes; returns 2."""
+    for i in range(3):
+        ctrl[0, i] = Qe[0, i]
+        ctrl[1, i] = Qe[1, i]
+    return 2
+
+
 DESCRIPTOR = BeamElementType("line", code=1, n_nodes=2, n_functions=2, dofs_per_node=3,
                              function_node=(0, 1), function_offset=(0, 0), degree=1)

@@ -1,7 +1,8 @@
 """The beam centreline element types, in code order.
 
 A new centreline interpolation is its module (``shape``, ``deriv``, ``deriv2`` with the signature
-``(eta, length, out)`` and a ``DESCRIPTOR``) plus one line below; :mod:`mortar1d3d.elements.beam`
+``(eta, length, out)``, ``coefficients(positions, tangents, nodes, origin, Qe)``,
+``control_points(Qe, length, ctrl)`` and a ``DESCRIPTOR``) plus one line below; :mod:`mortar1d3d.elements.beam`
 derives the tables and the kernels' dispatch from this list.
 """
 from . import hermite, line2, line3
