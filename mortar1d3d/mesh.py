@@ -260,9 +260,11 @@ class BeamMesh:
 
     @classmethod
     def lagrange(cls, positions, elements, element="line"):
-        """Lagrange beams, ``element`` = ``"line"`` (n, 2) or ``"line3"`` (n, 3: ends, then middle)."""
-        if element not in ("line", "line3"):
-            raise MeshError(f"unknown Lagrange beam element {element!r}; use 'line' or 'line3'")
+        """Lagrange beams, ``element`` = ``"line"`` (n, 2) or ``"line3"`` (n, 3: ends, then middle), or
+        any other registered centreline type interpolating positions only."""
+        lagrange = [name for name, et in BEAM_ELEMENTS.items() if not any(et.function_offset)]
+        if element not in lagrange:
+            raise MeshError(f"unknown Lagrange beam element {element!r}; use {' or '.join(map(repr, lagrange))}")
         return cls(element, positions, elements)
 
     @classmethod

@@ -125,8 +125,11 @@ def test_unknown_solid_element_type():
 
 
 def test_unknown_beam_element_type():
-    with pytest.raises(MeshError, match="unknown Lagrange beam element 'line4'"):
+    with pytest.raises(MeshError, match="unknown Lagrange beam element 'line4'; use 'line' or 'line3'"):
         BeamMesh.lagrange(HEX_POINTS[:2], [[0, 1]], element="line4")
+    # Hermite interpolates tangents too: not a Lagrange element
+    with pytest.raises(MeshError, match="unknown Lagrange beam element 'hermite'"):
+        BeamMesh.lagrange(HEX_POINTS[:2], [[0, 1]], element="hermite")
 
 
 def test_unknown_beam_element_type_direct_constructor():
