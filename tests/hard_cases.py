@@ -87,7 +87,32 @@ def locate_points(name, X, P, iterations=40):
             xi[retry[better]] = trial[better]
             converged[retry[better]] = True
             retry = retry[~(ok & (outside_distance(d.family, trial) <= 0.0))]
+        # a strongly curved element can hide the preimage inside from every fixed start (make fuzz: a
+        # tet10 near a vertex): start also from the lattice points whose images lie nearest to p
+        if len(retry):
+            lattice = _lattice(d)
+            N, _ = shape_values(name, lattice)
+            images = np.matmul(N[None], X[retry])                      # (k, lattice points, 3)
+            nearest = np.argsort(np.linalg.norm(images - P[retry][:, None, :], axis=2), axis=1)[:, :4]
+            for j in range(nearest.shape[1]):
+                trial = lattice[nearest[:, j]].copy()
+                ok = _newton(name, X[retry], P[retry], trial, h[retry], iterations)
+                inside = ok & (outside_distance(d.family, trial) <= 0.0)
+                xi[retry[inside]] = trial[inside]
+                converged[retry[inside]] = True
+                retry, nearest = retry[~inside], nearest[~inside]
+                if not len(retry):
+                    break
     return xi, converged
+
+
+def _lattice(d, n=12):
+    """Reference points of element type ``d``: an n+1 lattice of its parameter box, those inside it."""
+    from mortar1d3d.elements.solid.dispatch import PARAMETER_BOX
+    lo, hi = PARAMETER_BOX[d.code]
+    axes = [np.linspace(lo[i], hi[i], n + 1) for i in range(3)]
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    return pts[outside_distance(d.family, pts) <= 1e-12]
 
 
 def containment(solid, P):

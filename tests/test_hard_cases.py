@@ -402,3 +402,29 @@ def test_a_nearly_folded_element_is_continuous_to_its_conditioning():
     # the bound of a well-shaped element is too tight here, by 5 % (M changed by 4.19e-9 > 4.0e-9)
     with pytest.raises(AssertionError, match=r"changes M by 4\.\d+e-09 > 4\.0e-09"):
         hc.check_continuity(ops, hc.Case(case.name, beams, solid, conditioning=case.conditioning))
+
+
+def test_the_reference_locator_finds_a_preimage_hidden_from_its_fixed_starts():
+    """make fuzz: in a strongly curved tet10 (det J from 0.05 to 15) a straight beam passes near a
+    vertex; the library located its points inside (x(ξ) = p to 5e-16 with ξ = (0.977, 9e-5, 1e-4)),
+    the reference only found a second solution outside (0.063 beyond a face) from its fixed starts
+    and called the library wrong. The reference now also starts from the lattice points whose
+    images lie nearest to p."""
+    X = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1],
+                  [0.8340568533594487, 0.45997471326844536, -0.20967809290610728],
+                  [0.9135352493465028, 0.9147180661647365, -0.3131885257365784],
+                  [-0.5348271180150953, -0.10219769614186192, 0.3590941433841671],
+                  [-0.18290819568605043, -0.14106804149536073, 0.6253937397296822],
+                  [0.6600820901753097, -0.4378363822060678, 0.5131370216967308],
+                  [-0.5256809242289184, 0.7702741453447438, 0.9554581549313217]])
+    solid = m13.SolidMesh(2.0 * X, {"tetra10": np.arange(10)[None]})
+    a = np.array([2.0137553496594993, 0.08068370619388576, -0.03675593075170084])
+    b = np.array([2.0049898773581183, 0.04760690768858808, -0.01655593644393288])
+    points = np.array([0.5 * (1 - eta) * a + 0.5 * (1 + eta) * b for eta in (-0.99, -0.97, -0.945)])
+    assert np.all(hc.containment(solid, points)[:, 0] <= 0.0)
+    xi, status = m13.project_points(solid, points, 0)
+    assert np.all(status == 0)
+    t = (a - b) / np.linalg.norm(a - b)
+    beams = m13.BeamMesh.hermite([a, b], [-t, -t], [[0, 1]])
+    hc.check_tiling(hc.assemble(hc.Case("tet10_hidden_preimage", beams, solid)), hc.Case("tet10_hidden_preimage",
+                                                                                         beams, solid))

@@ -341,11 +341,8 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                             eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
                                                best_t, z, xi, N, dN, H, dH)
                             count = _record(eta, f, out_eta, out_face, p, count, overflow)
-                            t_found = (eta - eta_s[k]) / (eta_s[k + 1] - eta_s[k])
-                            # a root outside the interval is a neighbour's sign change, not one end of
-                            # a dip in this one (whose other end the mirror start is for)
-                            if 0.0 <= t_found <= 1.0:
-                                t_mirror = 2.0 * best_t - t_found
+                            if not np.isnan(eta):
+                                t_mirror = 2.0 * best_t - (eta - eta_s[k]) / (eta_s[k + 1] - eta_s[k])
                                 if 0.0 < t_mirror < 1.0:
                                     eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s,
                                                        xi_s, k, t_mirror, z, xi, N, dN, H, dH)
