@@ -57,6 +57,19 @@ def beam_frames(beams, padding=PARAMETER_TOL):
 
 
 @njit
+def _hull_box(points, n, box):
+    """The box (2, 3) of the first ``n`` rows of ``points``: a curve or element inside their convex hull
+    is inside it."""
+    for i in range(3):
+        lo = hi = points[0, i]
+        for k in range(1, n):
+            lo = min(lo, points[k, i])
+            hi = max(hi, points[k, i])
+        box[0, i] = lo
+        box[1, i] = hi
+
+
+@njit
 def _finish_box(box, padding):
     """Pad by ``padding`` times the diagonal plus a few ulps of the coordinates; return the diagonal."""
     size = 0.0
@@ -86,14 +99,7 @@ def _solid_boxes(points, conn, codes, padding, boxes, size, origin, workers):
                     for i in range(3):
                         X[a, i] = points[conn[s, a], i]
                 origin[s, 0], origin[s, 1], origin[s, 2] = X[0, 0], X[0, 1], X[0, 2]
-                n = control_points(code, X, C)
-                for i in range(3):
-                    lo = hi = C[0, i]
-                    for k in range(1, n):
-                        lo = min(lo, C[k, i])
-                        hi = max(hi, C[k, i])
-                    boxes[s, 0, i] = lo
-                    boxes[s, 1, i] = hi
+                _hull_box(C, control_points(code, X, C), boxes[s])
                 size[s] = _finish_box(boxes[s], padding)
             begin, stop = claim(claims, conn.shape[0], worker)
 
@@ -111,14 +117,7 @@ def _beam_frames(positions, tangents, elements, lengths, code, padding, Q, origi
             origin[e, i] = positions[nodes[0], i]
         beam_functions.coefficients(code, positions, tangents, nodes, origin[e], Q[e])
         beam_functions.coefficients(code, positions, tangents, nodes, zero, global_q)
-        n = beam_functions.control_points(code, global_q, lengths[e], ctrl)
-        for i in range(3):
-            lo = hi = ctrl[0, i]
-            for k in range(1, n):
-                lo = min(lo, ctrl[k, i])
-                hi = max(hi, ctrl[k, i])
-            boxes[e, 0, i] = lo
-            boxes[e, 1, i] = hi
+        _hull_box(ctrl, beam_functions.control_points(code, global_q, lengths[e], ctrl), boxes[e])
         size[e] = _finish_box(boxes[e], padding)
 
 
