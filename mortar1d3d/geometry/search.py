@@ -52,7 +52,7 @@ def beam_frames(beams, padding=PARAMETER_TOL):
                                    (m, np.float64))
     tangents = beams.tangents if beams.tangents is not None else np.zeros((0, 3))
     _beam_frames(beams.positions, tangents, beams.elements, beams.lengths, beams.element_type.code, padding,
-                 Q, origin, boxes, size)
+                 Q, origin, boxes, size, workers())
     return Q, origin, boxes, size
 
 
@@ -105,20 +105,26 @@ def _solid_boxes(points, conn, codes, padding, boxes, size, origin, workers):
 
 
 @njit_parallel
-def _beam_frames(positions, tangents, elements, lengths, code, padding, Q, origin, boxes, size):
+def _beam_frames(positions, tangents, elements, lengths, code, padding, Q, origin, boxes, size, workers):
     # coefficients relative to the first node (the kernels' frame); the box from the Bézier control
     # points of the coefficients in the global frame (the curve lies in their convex hull)
-    zero = np.zeros(3)
-    for e in prange(elements.shape[0]):
-        nodes = elements[e]
+    n_el = elements.shape[0]
+    claims = new_claims(n_el, workers)
+    for worker in prange(workers):
+        zero = np.zeros(3)
         ctrl = np.empty((beam_functions.MAX_FUNCTIONS, 3))
         global_q = np.empty((beam_functions.MAX_FUNCTIONS, 3))
-        for i in range(3):
-            origin[e, i] = positions[nodes[0], i]
-        beam_functions.coefficients(code, positions, tangents, nodes, origin[e], Q[e])
-        beam_functions.coefficients(code, positions, tangents, nodes, zero, global_q)
-        _hull_box(ctrl, beam_functions.control_points(code, global_q, lengths[e], ctrl), boxes[e])
-        size[e] = _finish_box(boxes[e], padding)
+        begin, stop = claim(claims, n_el, worker)
+        while begin < stop:
+            for e in range(begin, stop):
+                nodes = elements[e]
+                for i in range(3):
+                    origin[e, i] = positions[nodes[0], i]
+                beam_functions.coefficients(code, positions, tangents, nodes, origin[e], Q[e])
+                beam_functions.coefficients(code, positions, tangents, nodes, zero, global_q)
+                _hull_box(ctrl, beam_functions.control_points(code, global_q, lengths[e], ctrl), boxes[e])
+                size[e] = _finish_box(boxes[e], padding)
+            begin, stop = claim(claims, n_el, worker)
 
 
 @njit
