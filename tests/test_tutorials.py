@@ -80,3 +80,55 @@ def test_t05_own_solver(capsys):
     assert out["penalty"]["difference"] < 1e-9 and out["lagrange"]["difference"] < 1e-10
     assert out["lagrange"]["tip"][2] == pytest.approx(-9.92493302e-04, rel=1e-7)
     assert out["D_shape"] == (33, 33) and out["M_shape"] == (33, 297)
+
+
+def test_t06_named_sets(capsys, tmp_path):
+    out = _load("t06_named_sets").run(out=tmp_path)
+    assert "gmsh physical groups as point sets" in capsys.readouterr().out
+    assert (tmp_path / "named_sets" / "block.msh").exists() and (tmp_path / "named_sets" / "block.inp").exists()
+    # 3 × 3 nodes on each end face of the 8 × 2 × 2 block, 81 in the volume group
+    assert out["sets"] == {"clamped": 9, "loaded": 9, "block": 81}
+    assert any("skipped lower-dimensional cells 8 quad" in w for w in out["skipped"])
+    # the file's named sets select the nodes the generated box's face sets select: same solution
+    assert out["gmsh_difference"] < 1e-13 and out["abaqus_difference"] < 1e-13
+    assert out["tip"] == pytest.approx(-4.206167e-03, rel=1e-6)
+
+
+def test_t09_accuracy_vs_time(capsys, tmp_path):
+    variants = {"element": (2, 16), "segment": (2, 6, 8), "auto": (6,)}
+    rows = _load("t09_accuracy_vs_time").run(variants=variants, out=tmp_path, repeats=1)
+    assert "M error" in capsys.readouterr().out and (tmp_path / "accuracy_vs_time.png").exists()
+    error = {(integration, n): e for integration, n, _, e, _ in rows}     # times are printed, never asserted
+    # measured: element 2.46e-2, 3.18e-4; segment 9.12e-3, 1.10e-7, 5.69e-10; auto = segment here
+    assert error["element", 2] == pytest.approx(2.46e-2, rel=0.01)
+    assert error["element", 16] == pytest.approx(3.18e-4, rel=0.01)
+    assert error["segment", 6] == pytest.approx(1.10e-7, rel=0.02) and error["segment", 8] < 1e-9
+    assert error["auto", 6] == pytest.approx(error["segment", 6], rel=1e-6)
+    assert error["segment", 6] < 1e-3 * error["element", 16]
+
+
+def test_t07_random_fibres(capsys):
+    out = _load("t07_random_fibres").run(fibres=30, cells=4)
+    assert "efficiency of the short fibres" in capsys.readouterr().out
+    assert out["volume_fraction"] == pytest.approx(30 * np.pi * 1e-4 * 0.3, rel=1e-14)
+    # measured: plain 9.612929e-4, explicit 8.948644e-4, homogenised 8.590158e-4 (efficiency 0.623)
+    assert out["plain"] == pytest.approx(9.612929e-4, rel=1e-6)
+    assert out["explicit"] == pytest.approx(8.948644e-4, rel=1e-6)
+    assert out["homogenised"] == pytest.approx(8.590158e-4, rel=1e-6)
+    # short fibres stiffen less than the Voigt mixture that assumes full load along their length
+    assert out["homogenised"] < out["explicit"] < out["plain"] and 0.5 < out["efficiency"] < 0.75
+
+
+def test_t08_helix_in_tube(capsys):
+    out = _load("t08_helix_in_tube").run()
+    assert "radial expansion at mid-height" in capsys.readouterr().out
+    assert (out["nodes"], out["elements"]) == (648, 384)        # the seam's 27 nodes merged away
+    # the whole wire lies in the wall: embedded length = length of the 90 chords, below the helix's
+    assert out["embedded_length"] == pytest.approx(out["beam_length"], rel=1e-14)
+    assert out["beam_length"] == pytest.approx(21.353512, rel=1e-7) and out["beam_length"] < out["helix_length"]
+    assert out["constraint_residual"] < 1e-14
+    # 90 elements cut by 96 sector faces and 7 layer faces (measured 192 segments)
+    assert out["segments"] == 192
+    # measured: 3.680891e-3 without, 1.946371e-3 with the wire (47.1 % less)
+    assert out["expansion_without"] == pytest.approx(3.680891e-3, rel=1e-6)
+    assert out["reduction"] == pytest.approx(0.471, abs=0.002)
