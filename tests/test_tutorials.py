@@ -1,12 +1,15 @@
 """Every tutorial of examples/tutorials/ runs (at small sizes) and prints the numbers its page
 states; each test fails if the tutorial's claim stops holding."""
 import importlib.util
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 TUTORIALS = Path(__file__).resolve().parent.parent / "examples" / "tutorials"
+if str(TUTORIALS) not in sys.path:      # the scripts import their shared helper _tutorial.py
+    sys.path.insert(0, str(TUTORIALS))
 
 
 def _load(name):

@@ -21,12 +21,12 @@ Run it::
 
     python examples/tutorials/t02_element_vs_segment.py [--out results/tutorials] [--no-plot]
 """
-import argparse
 from pathlib import Path
 
 import numpy as np
 
 import mortar1d3d as m13
+from _tutorial import main, save_figure
 
 START, END = np.array([0.1, 0.2, 0.3]), np.array([2.9, 0.7, 0.9])   # the beam, from x = 0.1 to 2.9
 GAUSS_COUNTS = (2, 4, 8, 16, 32, 64)
@@ -92,7 +92,6 @@ def _plot(solid, errors, out):
     import matplotlib.ticker
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    out.mkdir(parents=True, exist_ok=True)
     tau = np.linspace(0, 1, 1001)
     N = trilinear(solid.points, START + tau[:, None] * (END - START))
     on_face = np.flatnonzero(np.isclose(solid.points[:, 0], 1.0))
@@ -112,15 +111,8 @@ def _plot(solid, errors, out):
     ax2.set_ylabel("relative error of M")
     ax2.set_title("segment-based is exact (error 0)")
     ax2.legend()
-    fig.tight_layout()
-    fig.savefig(out / "element_vs_segment.png", dpi=110)
-    plt.close(fig)
-    print(f"wrote {out / 'element_vs_segment.png'}")
+    save_figure(fig, out, "element_vs_segment.png")
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", default="results/tutorials")
-    parser.add_argument("--no-plot", action="store_true")
-    args = parser.parse_args()
-    run(out=args.out, plot=not args.no_plot)
+    main(run, __doc__)

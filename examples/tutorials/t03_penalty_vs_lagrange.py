@@ -16,12 +16,12 @@ Run it::
 
     python examples/tutorials/t03_penalty_vs_lagrange.py [--out results/tutorials] [--no-plot]
 """
-import argparse
 from pathlib import Path
 
 import numpy as np
 
 import mortar1d3d as m13
+from _tutorial import main, save_figure
 
 E_SOLID = 1.0e4
 FACTORS = (1e2, 1e3, 1e4, 1e5)
@@ -71,7 +71,6 @@ def _plot(errors, out):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    out.mkdir(parents=True, exist_ok=True)
     c = np.array(list(errors))
     e = np.array(list(errors.values()))
     fig, ax = plt.subplots(figsize=(5.5, 4))
@@ -80,15 +79,8 @@ def _plot(errors, out):
     ax.set_xlabel("penalty ε / E_solid")
     ax.set_ylabel("relative difference of the displacements")
     ax.legend()
-    fig.tight_layout()
-    fig.savefig(out / "penalty_vs_lagrange.png", dpi=110)
-    plt.close(fig)
-    print(f"wrote {out / 'penalty_vs_lagrange.png'}")
+    save_figure(fig, out, "penalty_vs_lagrange.png")
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", default="results/tutorials")
-    parser.add_argument("--no-plot", action="store_true")
-    args = parser.parse_args()
-    run(out=args.out, plot=not args.no_plot)
+    main(run, __doc__)

@@ -24,7 +24,6 @@ Run it::
 and open ``results/tutorials/reinforced_beam/result.pvd`` in ParaView (Warp By Vector,
 ``displacement``).
 """
-import argparse
 import math
 import tomllib
 from pathlib import Path
@@ -32,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 import mortar1d3d as m13
+from _tutorial import main
 
 SCENE = Path(__file__).resolve().parent.parent / "scenes" / "reinforced_beam.toml"
 
@@ -95,7 +95,4 @@ def run(out=None, write=True, verbose=True):
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", default="results/tutorials")
-    args = parser.parse_args()
-    run(out=args.out)
+    main(run, __doc__, plots=False)

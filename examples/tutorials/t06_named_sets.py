@@ -21,7 +21,6 @@ Run it::
 
     python examples/tutorials/t06_named_sets.py [--out results/tutorials]
 """
-import argparse
 import warnings
 from pathlib import Path
 
@@ -29,6 +28,7 @@ import meshio
 import numpy as np
 
 import mortar1d3d as m13
+from _tutorial import main
 
 BOX, CELLS = [[0, 0, 0], [1, 0.2, 0.2]], (8, 2, 2)
 #: the six faces of a VTK hexahedron as local node numbers
@@ -114,7 +114,4 @@ def run(out=None, verbose=True):
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", default="results/tutorials")
-    args = parser.parse_args()
-    run(out=args.out)
+    main(run, __doc__, plots=False)

@@ -21,7 +21,6 @@ Run it::
 
     python examples/tutorials/t09_accuracy_vs_time.py [--out results/tutorials] [--no-plot]
 """
-import argparse
 import time
 from pathlib import Path
 
@@ -30,6 +29,7 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 import mortar1d3d as m13
+from _tutorial import main, save_figure
 
 VARIANTS = {"element": (1, 2, 4, 8, 16), "segment": (1, 2, 3, 4, 6, 8), "auto": (1, 2, 3, 4, 6, 8)}
 REFERENCE = ("segment", 16)
@@ -83,7 +83,6 @@ def _plot(rows, out):
     import matplotlib.ticker
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    out.mkdir(parents=True, exist_ok=True)
     fig, ax = plt.subplots(figsize=(6, 4.2))
     for integration, style in (("element", "o-"), ("segment", "s-"), ("auto", "^--")):
         mine = [r for r in rows if r[0] == integration]
@@ -92,15 +91,8 @@ def _plot(rows, out):
     ax.set_xlabel("wall time of assemble_mortar [ms], one thread")
     ax.set_ylabel("relative error of M")
     ax.legend(loc="lower left")
-    fig.tight_layout()
-    fig.savefig(out / "accuracy_vs_time.png", dpi=110)
-    plt.close(fig)
-    print(f"wrote {out / 'accuracy_vs_time.png'}")
+    save_figure(fig, out, "accuracy_vs_time.png")
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", default="results/tutorials")
-    parser.add_argument("--no-plot", action="store_true")
-    args = parser.parse_args()
-    run(out=args.out, plot=not args.no_plot)
+    main(run, __doc__)
