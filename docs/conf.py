@@ -35,7 +35,7 @@ numpydoc_validation_checks = set()
 html_theme = "alabaster"
 html_static_path = []
 html_theme_options = {"description": "1D beams embedded in 3D solids with mortar-type coupling",
-                      "fixed_sidebar": False}
+                      "fixed_sidebar": False, "page_width": "1180px"}
 html_show_sourcelink = False
 # no network: nothing here refers to another project's inventory
 intersphinx_mapping = {}
