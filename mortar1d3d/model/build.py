@@ -115,8 +115,8 @@ def build(scene):
         g.element_offsets = list(np.cumsum([0] + [p.n_elements for p in parts[:-1]]))
         g.entry_elements = [(int(o), int(o) + p.n_elements) for o, p in zip(g.element_offsets, parts)]
     n_solid_nodes = solid_mesh.n_nodes if solid_mesh is not None else 0
-    dofmap = DofMap.layout(n_solid_nodes, [(g.type.dofs_per_node, g.type.rotations_per_node, g.mesh.n_nodes)
-                                           for g in groups])
+    dofmap = DofMap.layout(n_solid_nodes, [(g.type.dofs_per_node, g.type.rotations_per_node, g.mesh.n_nodes,
+                                            g.type.n_rotation_nodes(g.mesh)) for g in groups])
     for g, centreline, rotations in zip(groups, dofmap.centreline, dofmap.rotations):
         g.dofs, g.rotations = centreline, rotations
     return BuiltScene(scene=scene, solid_mesh=solid_mesh, groups=groups, entry_group=entry_group,

@@ -14,6 +14,8 @@ implemented yet (the scene says so instead of calling the name unknown).
 import importlib
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..elements.beam import BEAM_ELEMENTS, BeamElementType
 
 __all__ = ["BeamType", "BEAM_TYPES", "PLANNED_BEAM_TYPES", "DEFAULT_BEAM_TYPE", "beam_type"]
@@ -43,7 +45,16 @@ class BeamType:
     output_fields : tuple of str
         Keys of ``sample`` written per sample point to ``beams_<k>.vtu``.
     rotations_per_node : int
-        DOFs per node in the rotations block of the DOF map (0: a centreline-only beam).
+        DOFs per rotation node in the rotations block of the DOF map (0: a centreline-only beam).
+    triads : str or None
+        How the beam's material frame is interpolated, which fixes its rotation nodes
+        (:meth:`rotation_nodes`): None (no frame, no rotation DOFs) or ``"line3"`` (three triad
+        nodes per element: the mesh's nodes, shared by adjacent elements, then one middle node per
+        element, numbered ``n_nodes + e``).
+    section_law : str
+        Which section keys the scene takes: ``"axial_bending"`` (``{E, radius}`` or ``{EA, EI}``)
+        or ``"shear_torsion"`` (axial, shear, torsion and two bending stiffnesses, see
+        :mod:`mortar1d3d.scene`).
     """
 
     name: str
@@ -54,6 +65,8 @@ class BeamType:
     physics: str
     output_fields: tuple = ("displacement", "axial_force", "curvature")
     rotations_per_node: int = 0
+    triads: str = None
+    section_law: str = "axial_bending"
 
     @property
     def dofs_per_node(self):
@@ -65,14 +78,32 @@ class BeamType:
         module, name = self.physics.split(":")
         return getattr(importlib.import_module(module), name)
 
+    def rotation_nodes(self, mesh):
+        """(n_elements, k) int64: the rotation nodes of each element (``k = 0`` without triads;
+        line3 order: start, end, middle)."""
+        if self.triads is None:
+            return np.zeros((mesh.n_elements, 0), dtype=np.int64)
+        ends = mesh.elements[:, :2].astype(np.int64)
+        middle = mesh.n_nodes + np.arange(mesh.n_elements, dtype=np.int64)
+        return np.column_stack([ends, middle])
+
+    def n_rotation_nodes(self, mesh):
+        """Rotation nodes of ``mesh`` (the rows of its rotations block in the DOF map)."""
+        return 0 if self.triads is None else mesh.n_nodes + mesh.n_elements
+
 
 BEAM_TYPES = {t.name: t for t in (
     BeamType("torsion_free", BEAM_ELEMENTS["hermite"], "Hermite centreline", bending=True, curved_reference=False,
              physics="mortar1d3d.physics.beam:BeamModel"),
     BeamType("truss", BEAM_ELEMENTS["line"], "line", bending=False, curved_reference=True,
              physics="mortar1d3d.physics.beam:BeamModel"),
+    BeamType("simo_reissner", BEAM_ELEMENTS["hermite"], "Hermite centreline with line3 triads", bending=True,
+             curved_reference=True, physics="mortar1d3d.physics.simo_reissner:SimoReissnerBeam",
+             output_fields=("displacement", "axial_force", "curvature", "g1", "g2", "g3", "force", "moment",
+                            "shear_strain", "curvature_strain"),
+             rotations_per_node=3, triads="line3", section_law="shear_torsion"),
 )}
-PLANNED_BEAM_TYPES = ("simo_reissner",)
+PLANNED_BEAM_TYPES = ()
 DEFAULT_BEAM_TYPE = "torsion_free"
 
 
