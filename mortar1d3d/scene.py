@@ -230,7 +230,7 @@ def _curve(value, path):
 
 def _beam(value, i, base_dir):
     path = f"beams[{i}]"
-    _table(value, path, ("curve", "mesh", "elements", "model", "section", "normal"), required=("section",))
+    _table(value, path, ("curve", "mesh", "elements", "model", "section", "normal", "triads"), required=("section",))
     model = _choice(value.get("model", DEFAULT_BEAM_TYPE), f"{path}.model", BEAM_MODELS)
     if model not in IMPLEMENTED_BEAM_MODELS:
         _fail(f"{path}.model", f"{model!r} beams are not implemented yet; use one of "
@@ -247,6 +247,16 @@ def _beam(value, i, base_dir):
         if np.linalg.norm(normal) == 0.0:
             _fail(f"{path}.normal", "must not be zero")
         out["normal"] = normal / np.linalg.norm(normal)
+    out["triads"] = None
+    if "triads" in value:
+        if kind.triads is None or "normal" in value:
+            _fail(f"{path}.triads", "given reference triads are for beams with rotations (model = \"simo_reissner\"), "
+                                    "instead of normal" if kind.triads is None else "give normal or triads, not both")
+        triads = value["triads"]
+        if isinstance(triads, (str, bytes, dict)) or not hasattr(triads, "__len__") or not len(triads):
+            _fail(f"{path}.triads", "expected a list of 3×3 triads (columns g1, g2, g3), one per rotation node")
+        out["triads"] = np.array([[_vector(row, f"{path}.triads[{k}][{r}]") for r, row in
+                                   enumerate(_list(t, f"{path}.triads[{k}]", 3))] for k, t in enumerate(triads)])
     if "curve" in value:
         out["curve"] = _curve(value["curve"], f"{path}.curve")
         if "polyline" in out["curve"]:

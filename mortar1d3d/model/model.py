@@ -216,9 +216,10 @@ class Model:
             except ValueError as exc:
                 raise SceneError(f"solid.material: {exc}") from None
         for g in self.groups:
-            EA = np.concatenate([np.full(b - a, sc.beams[i]["section"]["EA"]) for i, (a, b) in zip(g.entries, g.entry_elements)])
-            EI = np.concatenate([np.full(b - a, sc.beams[i]["section"]["EI"]) for i, (a, b) in zip(g.entries, g.entry_elements)])
-            g.physics = g.type.physics_class()(g.mesh, EA, EI, model=g.model)
+            sections = [(b - a, sc.beams[i]["section"]) for i, (a, b) in zip(g.entries, g.entry_elements)]
+            g.physics = g.type.make_physics(g.mesh, sections, g.triads)
+            if g.rotations.size:
+                self.counts["beam.rotations"] += 1
         if sc.coupled:
             c = sc.coupling
             for k, g in enumerate(self.groups):
@@ -460,7 +461,7 @@ class Model:
         for g in self.groups:
             sl = g.dofs.slice
             if g.rotations.size:
-                f, K = g.physics.evaluate(d[sl], d[g.rotations.slice], tangent=tangent)
+                f, K = g.physics.evaluate(d[sl], d[g.rotations.slice].reshape(-1, 3), tangent=tangent)
                 self._count("beam", tangent)
                 idx = np.concatenate([np.arange(g.dofs.start, g.dofs.stop), np.arange(g.rotations.start,
                                                                                       g.rotations.stop)])
@@ -499,6 +500,7 @@ class Model:
             return
         step = np.zeros(len(z))
         step[free] = dz
+        self.counts["beam.rotation_update"] += 1
         for g in framed:
             b = g.rotations
             spin = step[b.slice].reshape(-1, 3).copy()

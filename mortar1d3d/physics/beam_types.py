@@ -40,10 +40,15 @@ class BeamType:
         Whether the reference centreline may be curved (the torsion-free beam needs it straight).
     physics : str
         ``"module:Class"`` of the physics, imported on first use (:meth:`physics_class`) so that
-        the physics may consult this registry: called as ``Class(mesh, EA, EI, model=name)``,
-        with ``evaluate(d, tangent)`` (internal force, tangent) and ``sample(d, eta)``.
+        the physics may consult this registry; built by :meth:`make_physics`: without triads
+        ``Class(mesh, EA, EI, model=name)`` with ``evaluate(d, tangent)`` (internal force,
+        tangent) and ``sample(d, eta)``; with triads ``Class(mesh, sections, reference_triads=...)``
+        with ``evaluate(d, psi, tangent)``, ``sample(d, psi, eta)`` and ``update(psi, dtheta)``
+        (ψ: the rotations block, one row per rotation node), and the module has ``Section``,
+        ``reference_triads`` and ``check_triads``.
     output_fields : tuple of str
-        Keys of ``sample`` written per sample point to ``beams_<k>.vtu``.
+        Keys of ``sample`` written per sample point to ``beams_<k>.vtu`` (``g1``, ``g2``, ``g3``:
+        the columns of its ``triads``).
     rotations_per_node : int
         DOFs per rotation node in the rotations block of the DOF map (0: a centreline-only beam).
     triads : str or None
@@ -78,6 +83,41 @@ class BeamType:
         module, name = self.physics.split(":")
         return getattr(importlib.import_module(module), name)
 
+    def physics_module(self):
+        """The module of this beam's physics."""
+        return importlib.import_module(self.physics.split(":")[0])
+
+    def make_physics(self, mesh, sections, triads=None):
+        """The physics of a beam group.
+
+        Parameters
+        ----------
+        mesh : BeamMesh
+        sections : list of (n_elements_i, dict)
+            Per beam of the group in mesh order: its number of elements and its normalised
+            scene section (``EA``, ``EI``; with triads also ``GA2, GA3, GI_T, EI2, EI3``).
+        triads : (n_rotation_nodes, 3, 3) array, optional
+            Reference triads (beams with triads only; default: the physics' own rule).
+        """
+        cls = self.physics_class()
+        if self.triads is None:
+            EA = np.concatenate([np.full(n, s["EA"]) for n, s in sections])
+            EI = np.concatenate([np.full(n, s["EI"]) for n, s in sections])
+            return cls(mesh, EA, EI, model=self.name)
+        Section = self.physics_module().Section
+        per_beam = [Section(**{k: s[k] for k in ("EA", "GA2", "GA3", "GI_T", "EI2", "EI3")}) for _, s in sections]
+        per_element = [section for (n, _), section in zip(sections, per_beam) for _ in range(n)]
+        return cls(mesh, per_element, reference_triads=triads)
+
+    def reference_triads(self, mesh, normal=None, given=None):
+        """Reference triads at the rotation nodes of ``mesh``: ``given`` checked (orthonormal,
+        right-handed, g1 along the tangent), or carried along each beam by parallel transport from
+        ``normal`` (ValueError naming the rotation nodes otherwise)."""
+        module = self.physics_module()
+        if given is not None:
+            return module.check_triads(mesh, given)
+        return module.reference_triads(mesh, normal)
+
     def rotation_nodes(self, mesh):
         """(n_elements, k) int64: the rotation nodes of each element (``k = 0`` without triads;
         line3 order: start, end, middle)."""
@@ -99,8 +139,7 @@ BEAM_TYPES = {t.name: t for t in (
              physics="mortar1d3d.physics.beam:BeamModel"),
     BeamType("simo_reissner", BEAM_ELEMENTS["hermite"], "Hermite centreline with line3 triads", bending=True,
              curved_reference=True, physics="mortar1d3d.physics.simo_reissner:SimoReissnerBeam",
-             output_fields=("displacement", "axial_force", "curvature", "g1", "g2", "g3", "force", "moment",
-                            "shear_strain", "curvature_strain"),
+             output_fields=("displacement", "axial_force", "curvature", "g1", "g2", "g3", "n", "m", "Gamma", "K"),
              rotations_per_node=3, triads="line3", section_law="shear_torsion"),
 )}
 PLANNED_BEAM_TYPES = ()
