@@ -243,7 +243,7 @@ def mechanism_message(model, g, m, label):
         entry_nodes = f"beam:{entry}:start"
         return (f"{where}: zero-energy mode (a mechanism: the beam can move without any stiffness against it, so "
                 f"no solver can determine that motion): its cross-sections turn about the centreline (a twist "
-                f"about its axis, nodes {format_ids(local)}); the coupling ties the centreline only, not the "
+                f"about its axis, nodes {format_ids(np.sort(local))}); the coupling ties the centreline only, not the "
                 f"rotation of the cross-sections. Support the rotation at one node ([[dirichlet]] on = "
                 f"\"{entry_nodes}\", rotation = [0, 0, 0]); rotational coupling to the solid would hold it too "
                 "(not implemented yet)")
