@@ -161,6 +161,11 @@ class Model:
         if solver == "block" and not lagrange:
             raise SceneError("analysis.solver: 'block' is the saddle-point solver of Lagrange-multiplier coupling; "
                              "use 'auto', 'direct' or 'amg'")
+        framed = [g.model for g in self.groups if g.rotations.size]
+        if framed and solver in ("amg", "block") and not self.linear:
+            raise SceneError(f"analysis.solver: {solver!r} runs CG or MINRES, which need a symmetric tangent; the "
+                             f"{framed[0]} beam's tangent is not symmetric away from its reference state, so a "
+                             "nonlinear analysis with it uses 'direct' (or 'auto', which picks it)")
         if solver == "amg" and lagrange:
             raise SceneError("analysis.solver: Lagrange-multiplier coupling gives a saddle point; use 'auto', "
                              "'direct' or 'block' (MINRES, the auxiliary-space AMG inside a block preconditioner)")
@@ -178,6 +183,9 @@ class Model:
         from ..solvers.direct import DIRECT_MAX_DOFS
         n = self.n_displacement_dofs if n_unknowns is None else n_unknowns
         if n <= DIRECT_MAX_DOFS:
+            return "direct"
+        if not self.linear and any(g.rotations.size for g in self.groups):
+            # beams with rotations: a non-symmetric tangent, which CG and MINRES do not take
             return "direct"
         return "block" if self.lagrange else "amg"
 
