@@ -314,3 +314,31 @@ def test_nonlinear_simo_reissner_scenes_solve_directly():
         Model(scene)
     scene.analysis["solver"] = "auto"
     assert Model(scene).linear_solver_method(10 ** 6) == "direct"
+
+
+#: the 45° bend cantilever: tip positions under the out-of-plane tip load P published by Bathe &
+#: Bolourchi (Int J Numer Meth Eng 14, 1979) and Simo & Vu-Quoc (CMAME 58, 1986), both 8 elements
+BEND_REFERENCE = {300.0: ((22.33, 58.84, 40.08), (22.5, 59.2, 39.5)),
+                  600.0: ((15.79, 47.23, 53.37), (15.9, 47.2, 53.4))}
+
+
+def test_45_degree_bend_matches_the_published_tip_positions():
+    """R = 100, 45° arc in the x-y plane, clamped at the origin, P along z at the tip; E = 1e7, A = 1,
+    I = 1/12, G = E/2 (GA = 5e6, GI_T = EI = 833 333); 8 elements, P up to 600."""
+    from mortar1d3d import BeamMesh
+    R, E = 100.0, 1e7
+    mesh = BeamMesh.from_curve(lambda t: np.array([R - R * np.cos(t), R * np.sin(t), 0.0]),
+                               lambda t: np.array([R * np.sin(t), R * np.cos(t), 0.0]), 0.0, math.pi / 4, 8)
+    section = {"EA": E, "GA2": E / 2, "GA3": E / 2, "GI_T": E / 12, "EI2": E / 12, "EI3": E / 12}
+    scene = m13.Scene(beams=[{"mesh": mesh, "model": "simo_reissner", "section": section}],
+                      dirichlet=[{"on": "beam:0:start", "clamp": True}],
+                      load=[{"type": "point", "on": "beam:0:end", "value": [0, 0, 600.0]}], analysis={"steps": 6})
+    result = m13.solve(scene)
+    g = result.model.groups[0]
+    tips = {round(600 * s.load_factor, 6): result.model.basis.to_physical(z)[g.dofs.slice].reshape(-1, 6)[-1, :3]
+            + mesh.positions[-1] for s, z in zip(result.steps, result.history)}
+    for load, (bathe, simo) in BEND_REFERENCE.items():
+        # measured (22.24, 58.79, 40.18) and (15.68, 47.17, 53.44): 0.14 from Bathe & Bolourchi's
+        # positions, 0.84 and 0.23 from Simo & Vu-Quoc's (rounded to 0.1; the two references differ by 0.7)
+        assert np.linalg.norm(tips[load] - bathe) < 0.2
+        assert np.linalg.norm(tips[load] - simo) < 1.0
