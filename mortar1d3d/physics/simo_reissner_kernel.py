@@ -175,15 +175,14 @@ def _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, D, triads, wa
         for i in range(3):
             Gam[i] -= Gamma0[e, g, i]
             Kap[i] -= K0[e, g, i]
-        wf = wF[e, g]
         wm = wM[e, g]
         for i in range(3):
-            energy += 0.5 * (wf * CF[e, i] * Gam[i] * Gam[i] + wm * CM[e, i] * Kap[i] * Kap[i])
+            energy += 0.5 * (wF[e, g, i] * CF[e, i] * Gam[i] * Gam[i] + wm * CM[e, i] * Kap[i] * Kap[i])
         if want == 0:
             continue
         # material resultants F = C_F Γ, M = C_M K (Gam, Kap now hold them times the weights)
         for i in range(3):
-            Gam[i] *= wf * CF[e, i]
+            Gam[i] *= wF[e, g, i] * CF[e, i]
             Kap[i] *= wm * CM[e, i]
         _matvec(Lam, Gam, n)                     # w n (spatial force)
         for k in range(4):
@@ -233,9 +232,11 @@ def element_range(first, last, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM,
         Reference ``r0'`` at the points, from coefficients relative to each element's first node.
     J : (n_el, n_g) float64
         ``|r0'|``.
-    wF, wM : (n_el, n_g) float64
-        Integration weights ``w_g J_g`` of the force (Γ) and moment (K) terms at each point (a
-        point may serve only one of them: 0 for the other).
+    wF : (n_el, n_g, 3) float64
+        Integration weights ``w_g J_g`` of the force term per strain component (Γ1, Γ2, Γ3) at each
+        point (a component may use its own rule: weight 0 at the points of the others).
+    wM : (n_el, n_g) float64
+        Integration weights ``w_g J_g`` of the moment (K) term.
     Gamma0, K0 : (n_el, n_g, 3) float64
         Reference strains at the points.
     CF, CM : (n_el, 3) float64
