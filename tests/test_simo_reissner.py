@@ -387,3 +387,122 @@ def test_end_moment_rolls_the_cantilever_into_a_circle(rules, clamp_tangent, bou
     tip = model.beams.positions[n] + d[6 * n: 6 * n + 3]
     assert np.linalg.norm(tip) < bound
     assert np.abs(model.triads(psi)[n] - np.eye(3)).max() < max(bound, 1e-12) * 10
+
+
+# -- reference triads, sections, input checks ---------------------------------------------------------
+
+@pytest.mark.parametrize("make", [straight_beam, arc_beam, helix_beam], ids=["straight", "arc", "helix"])
+def test_reference_triads_are_orthonormal_frames_on_the_tangent(make):
+    beams = make(6)
+    L = reference_triads(beams)
+    assert L.shape == (beams.n_nodes + beams.n_elements, 3, 3)
+    assert np.abs(np.einsum("kji,kjl->kil", L, L) - np.eye(3)).max() < 1e-14
+    assert np.abs(np.linalg.det(L) - 1.0).max() < 1e-14
+    assert np.abs(L[: beams.n_nodes, :, 0] - beams.tangents).max() < 1e-15
+    mid = np.array([unit(beams.evaluate(e, [1e-7])[0] - beams.evaluate(e, [-1e-7])[0]) for e in range(beams.n_elements)])
+    assert np.abs(L[beams.n_nodes:, :, 0] - mid).max() < 1e-8
+
+
+def test_parallel_transport_frames():
+    """A planar arc keeps g3 normal to its plane; the helix frame is rotation-minimising: its reference
+    twist K0_1 is far below the helix torsion τ (a Frenet frame would twist at τ), and shrinks as h²."""
+    arc = reference_triads(arc_beam(5), normal=[0.0, 1.0, 0.0])
+    assert np.abs(arc[:, :, 2] - [0.0, 0.0, 1.0]).max() < 1e-15
+    radius, pitch = 0.3, 0.1
+    tau = pitch / (radius ** 2 + pitch ** 2)
+    twist = []
+    for n in (4, 8):
+        model = SimoReissnerBeam(helix_beam(n, radius, pitch), SECTION)
+        twist.append(np.abs(model._K0[..., 0]).max())
+    assert twist[0] < 1.1e-2 * tau                  # 4 elements: 1.02e-2 τ
+    assert twist[0] / twist[1] > 3.9                # h²
+    # the default normal is the coordinate axis least aligned with the first tangent
+    assert np.abs(reference_triads(straight_beam(2))[0] - np.eye(3)).max() == 0.0
+
+
+def test_given_triads_are_checked():
+    beams = helix_beam(3)
+    L = reference_triads(beams)
+    # turned about their tangents: still valid, and the model's energy at the reference is zero
+    turn = np.array([rotation_exp(0.3 * g[:, 0]) for g in L])
+    model = SimoReissnerBeam(beams, SECTION, reference_triads=turn @ L)
+    assert np.abs(model.triads0 - turn @ L).max() < 1e-15
+    f, _ = model.evaluate(np.zeros(model.n_centreline_dofs), np.zeros((model.n_rotation_nodes, 3)))
+    assert np.abs(f).max() < 1e-14
+    bad = L.copy()
+    bad[2, :, 1] *= 1.01
+    with pytest.raises(ValueError, match="not orthonormal at rotation nodes 2"):
+        check_triads(beams, bad)
+    bad = L.copy()
+    bad[5, :, 2] *= -1.0
+    with pytest.raises(ValueError, match="left-handed at rotation nodes 5"):
+        check_triads(beams, bad)
+    bad = rotation_exp(0.01 * L[4, :, 1]) @ L[4]
+    with pytest.raises(ValueError, match="g1 is not the unit reference tangent at rotation nodes 4"):
+        check_triads(beams, np.concatenate([L[:4], bad[None], L[5:]]))
+    with pytest.raises(ValueError, match=r"shape \(7, 3, 3\)"):
+        check_triads(beams, L[:4])
+    with pytest.raises(ValueError, match="parallel to the tangent at node 0"):
+        reference_triads(straight_beam(2), normal=[2.0, 0.0, 0.0])
+
+
+def test_sections():
+    s = Section.circular(E=200.0, radius=0.5, nu=0.3)
+    A, I = np.pi * 0.25, np.pi * 0.0625 / 4
+    k = 6 * 1.3 / (7 + 6 * 0.3)
+    G = 200.0 / 2.6
+    assert (s.EA, s.EI2, s.EI3, s.GI_T) == pytest.approx((200 * A, 200 * I, 200 * I, G * 2 * I), rel=1e-15)
+    assert (s.GA2, s.GA3) == pytest.approx((G * k * A, G * k * A), rel=1e-15)
+    g = Section.circular(E=200.0, radius=0.5, G=G)            # ν from G: the same shear correction
+    assert (g.GA2, g.GI_T) == pytest.approx((s.GA2, s.GI_T), rel=1e-14)
+    t = Section.from_properties(E=10.0, A=2.0, I2=3.0, I3=4.0, I_T=5.0, shear_correction=(0.5, 0.25), G=4.0)
+    assert (t.EA, t.GA2, t.GA3, t.GI_T, t.EI2, t.EI3) == (20.0, 4.0, 2.0, 20.0, 30.0, 40.0)
+    for bad, match in [(dict(E=1.0, radius=1.0), "exactly one of G and nu"),
+                       (dict(E=1.0, radius=1.0, G=1.0, nu=0.3), "exactly one of G and nu"),
+                       (dict(E=1.0, radius=1.0, nu=0.7), r"section.nu must lie in"),
+                       (dict(E=-1.0, radius=1.0, nu=0.3), "section.E"),
+                       (dict(E=1.0, radius=np.nan, nu=0.3), "section.radius")]:
+        with pytest.raises(ValueError, match=match):
+            Section.circular(**bad)
+    with pytest.raises(ValueError, match="section.I_T"):
+        Section.from_properties(E=1.0, A=1.0, I2=1.0, I3=1.0, I_T=0.0, shear_correction=1.0, nu=0.3)
+    with pytest.raises(ValueError, match="section.GA3"):
+        Section(EA=1.0, GA2=1.0, GA3=np.inf, GI_T=1.0, EI2=1.0, EI3=1.0)
+
+
+def test_model_checks_input():
+    beams = straight_beam(2)
+    with pytest.raises(ValueError, match="hermite"):
+        SimoReissnerBeam(BeamMesh.lagrange([[0, 0, 0], [1, 0, 0]], [[0, 1]]), SECTION)
+    with pytest.raises(ValueError, match="one per element"):
+        SimoReissnerBeam(beams, [SECTION])
+    model = SimoReissnerBeam(beams, [SECTION, Section.circular(1.0, 0.1, nu=0.3)])
+    assert model.n_rotation_nodes == 5 and model.n_dofs == 18 + 15
+    assert model.rotation_nodes.tolist() == [[0, 1, 3], [1, 2, 4]]
+    with pytest.raises(ValueError, match="psi: expected shape"):
+        model.evaluate(np.zeros(18), np.zeros((3, 3)))
+    # an end triad turned against the middle one by more than the interpolation takes
+    psi = np.zeros((5, 3))
+    psi[2] = [0.0, 0.0, 3.12]
+    with pytest.raises(RotationRangeError, match="elements 1") as info:
+        model.evaluate(np.zeros(18), psi)
+    assert info.value.elements.tolist() == [1]
+
+
+def test_results_do_not_depend_on_the_thread_count():
+    import numba
+    n = 70                                          # more than one chunk of elements
+    s = np.linspace(0.0, 4 * np.pi, n + 1)
+    beams = chain(np.column_stack([np.cos(s), np.sin(s), 0.1 * s]),
+                  np.column_stack([-np.sin(s), np.cos(s), 0.1 * np.ones_like(s)]) / np.hypot(1, 0.1))
+    model = SimoReissnerBeam(beams, SECTION)
+    d, psi = deformed_state(model, seed=9, size=0.01, turn=0.05)
+    threads = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        f1, K1 = model.evaluate(d, psi)
+        numba.set_num_threads(threads)
+        f2, K2 = model.evaluate(d, psi)
+    finally:
+        numba.set_num_threads(threads)
+    assert np.array_equal(f1, f2) and np.array_equal(K1.data, K2.data)
