@@ -19,37 +19,19 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # measure this checkout's package
+sys.path.insert(1, str(Path(__file__).resolve().parents[1] / "tests"))     # the tests' beam geometries
 
 import numba                                                        # noqa: E402
 import numpy as np                                                  # noqa: E402
 import scipy.sparse.linalg as spla                                  # noqa: E402
 
-from mortar1d3d import BeamMesh                                     # noqa: E402
 from mortar1d3d.physics.beam import BeamModel                       # noqa: E402
 from mortar1d3d.physics.simo_reissner import Section, SimoReissnerBeam  # noqa: E402
+from test_simo_reissner import arc_beam as arc, helix_beam, straight_beam as straight  # noqa: E402
 
 
-def chain(positions, tangents):
-    n = len(positions) - 1
-    return BeamMesh.hermite(positions, tangents, np.column_stack([np.arange(n), np.arange(1, n + 1)]))
-
-
-def straight(n, length=1.0):
-    s = np.linspace(0.0, length, n + 1)
-    return chain(np.column_stack([s, 0 * s, 0 * s]), np.tile([1.0, 0.0, 0.0], (n + 1, 1)))
-
-
-def arc(n, radius=1.0, angle=np.pi / 2):
-    s = np.linspace(0.0, angle, n + 1)
-    return chain(radius * np.column_stack([np.sin(s), 1 - np.cos(s), 0 * s]),
-                 np.column_stack([np.cos(s), np.sin(s), 0 * s]))
-
-
-def helix(n, radius=0.3, pitch=0.1, turns=2.0):
-    c = np.hypot(radius, pitch)
-    s = np.linspace(0.0, 2 * np.pi * turns, n + 1)
-    return chain(np.column_stack([radius * np.cos(s), radius * np.sin(s), pitch * s]),
-                 np.column_stack([-radius * np.sin(s), radius * np.cos(s), pitch * np.ones_like(s)]) / c)
+def helix(n, turns=2.0):
+    return helix_beam(n, turns=turns)
 
 
 def median_time(fun, repeats):
@@ -121,7 +103,8 @@ def tangent():
             x[j] = h
             Kfd[:, j] = (model.evaluate(*perturbed(model, d, psi, x), tangent=False)[0]
                          - model.evaluate(*perturbed(model, d, psi, -x), tangent=False)[0]) / (2 * h)
-            gfd[j] = (model.energy(*perturbed(model, d, psi, x)) - model.energy(*perturbed(model, d, psi, -x))) / (2 * h)
+            gfd[j] = (model.energy(*perturbed(model, d, psi, x))
+                      - model.energy(*perturbed(model, d, psi, -x))) / (2 * h)
         print(f"  rules {rules or 'default'}: max|K - K_fd| / max|K| = {np.abs(K - Kfd).max() / np.abs(K).max():.2e}; "
               f"max|f - dΠ_fd| / max|f| = {np.abs(f - gfd).max() / np.abs(f).max():.2e}; "
               f"asymmetry max|K - Kᵀ| / max|K| = {np.abs(K - K.T).max() / np.abs(K).max():.2e}")

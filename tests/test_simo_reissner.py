@@ -52,28 +52,20 @@ def sample_vectors(seed=0, per_size=4):
     return [unit(rng.normal(size=3)) * a for a in SIZES for _ in range(per_size)]
 
 
-def chain(positions, tangents):
-    n = len(positions) - 1
-    return BeamMesh.hermite(positions, tangents, np.column_stack([np.arange(n), np.arange(1, n + 1)]))
-
-
 def straight_beam(n, length=1.0, direction=(1.0, 0.0, 0.0)):
-    s = np.linspace(0.0, length, n + 1)
     d = unit(direction)
-    return chain(s[:, None] * d, np.tile(d, (n + 1, 1)))
+    return BeamMesh.from_curve(lambda s: s * d, lambda s: d, 0.0, length, n)
 
 
 def arc_beam(n, radius=1.0, angle=np.pi / 2):
-    s = np.linspace(0.0, angle, n + 1)
-    return chain(radius * np.column_stack([np.sin(s), 1 - np.cos(s), 0 * s]),
-                 np.column_stack([np.cos(s), np.sin(s), 0 * s]))
+    return BeamMesh.from_curve(lambda s: radius * np.array([np.sin(s), 1 - np.cos(s), 0.0]),
+                               lambda s: np.array([np.cos(s), np.sin(s), 0.0]), 0.0, angle, n)
 
 
 def helix_beam(n, radius=0.3, pitch=0.1, turns=0.35):
-    c = np.hypot(radius, pitch)
-    s = np.linspace(0.0, 2 * np.pi * turns, n + 1)
-    return chain(np.column_stack([radius * np.cos(s), radius * np.sin(s), pitch * s]),
-                 np.column_stack([-radius * np.sin(s), radius * np.cos(s), pitch * np.ones_like(s)]) / c)
+    return BeamMesh.from_curve(lambda s: np.array([radius * np.cos(s), radius * np.sin(s), pitch * s]),
+                               lambda s: np.array([-radius * np.sin(s), radius * np.cos(s), pitch]),
+                               0.0, 2 * np.pi * turns, n)
 
 
 #: unequal stiffnesses, so that a wrong axis or a swapped component shows
@@ -399,7 +391,8 @@ def test_reference_triads_are_orthonormal_frames_on_the_tangent(make):
     assert np.abs(np.einsum("kji,kjl->kil", L, L) - np.eye(3)).max() < 1e-14
     assert np.abs(np.linalg.det(L) - 1.0).max() < 1e-14
     assert np.abs(L[: beams.n_nodes, :, 0] - beams.tangents).max() < 1e-15
-    mid = np.array([unit(beams.evaluate(e, [1e-7])[0] - beams.evaluate(e, [-1e-7])[0]) for e in range(beams.n_elements)])
+    mid = np.array([unit(beams.evaluate(e, [1e-7])[0] - beams.evaluate(e, [-1e-7])[0])
+                    for e in range(beams.n_elements)])
     assert np.abs(L[beams.n_nodes:, :, 0] - mid).max() < 1e-8
 
 
@@ -491,10 +484,7 @@ def test_model_checks_input():
 
 def test_results_do_not_depend_on_the_thread_count():
     import numba
-    n = 70                                          # more than one chunk of elements
-    s = np.linspace(0.0, 4 * np.pi, n + 1)
-    beams = chain(np.column_stack([np.cos(s), np.sin(s), 0.1 * s]),
-                  np.column_stack([-np.sin(s), np.cos(s), 0.1 * np.ones_like(s)]) / np.hypot(1, 0.1))
+    beams = helix_beam(70, radius=1.0, turns=2.0)        # more than one chunk of elements
     model = SimoReissnerBeam(beams, SECTION)
     d, psi = deformed_state(model, seed=9, size=0.01, turn=0.05)
     threads = numba.get_num_threads()

@@ -42,7 +42,7 @@ import numpy as np
 from numba import prange
 
 from .._config import CHUNK, njit, njit_parallel
-from .rotations import exp, jacobian, jacobian_derivative_transpose, jacobian_inverse, log
+from .rotations import _cross, exp, jacobian, jacobian_derivative_transpose, jacobian_inverse, log
 
 __all__ = ["element_range", "element_chunks", "strain_range", "N_DOFS", "STEP", "OK", "ROTATION_RANGE",
            "NOT_FINITE", "MAX_RELATIVE_ROTATION"]
@@ -76,16 +76,6 @@ def _matvec(A, x, y):
 def _matvec_t(A, x, y):
     for i in range(3):
         y[i] = A[0, i] * x[0] + A[1, i] * x[1] + A[2, i] * x[2]
-
-
-@njit
-def _cross(a, b, c):
-    c0 = a[1] * b[2] - a[2] * b[1]
-    c1 = a[2] * b[0] - a[0] * b[2]
-    c2 = a[0] * b[1] - a[1] * b[0]
-    c[0] = c0
-    c[1] = c1
-    c[2] = c2
 
 
 @njit
@@ -140,6 +130,16 @@ def point_kinematics(Lr, psi_nodes, lag, dlag, J, rp, psi, dpsi, E, Lam, T, Gam,
 
 
 @njit
+def _current_point(e, g, dH, lag, dlag, A0, J, D, Lr, psi_nodes, rp, psi, dpsi, E, Lam, T, Gam, Kap):
+    """:func:`point_kinematics` at Gauss point g of element e with the current
+    ``r' = r0' + Σ dH_k D_k`` (into ``rp``) from the coefficients' displacement D (4, 3)."""
+    for i in range(3):
+        rp[i] = A0[e, g, i] + dH[e, g, 0] * D[0, i] + dH[e, g, 1] * D[1, i] + dH[e, g, 2] * D[2, i] \
+            + dH[e, g, 3] * D[3, i]
+    point_kinematics(Lr, psi_nodes, lag[g], dlag[g], J[e, g], rp, psi, dpsi, E, Lam, T, Gam, Kap)
+
+
+@njit
 def _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, D, triads, want, res, m33, v3, work):
     """Energy and (``want >= 1``) the residual ``res`` (21,) of element ``e`` at the coefficients'
     displacement ``D`` (4, 3) and the triads (3, 3, 3); returns (energy, status).
@@ -170,10 +170,7 @@ def _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, D, triads, wa
     n_g = lag.shape[0]
     for g in range(n_g):
         Jg = J[e, g]
-        for i in range(3):
-            rp[i] = A0[e, g, i] + dH[e, g, 0] * D[0, i] + dH[e, g, 1] * D[1, i] + dH[e, g, 2] * D[2, i] \
-                + dH[e, g, 3] * D[3, i]
-        point_kinematics(Lr, psi_nodes, lag[g], dlag[g], Jg, rp, psi, dpsi, E, Lam, T, Gam, Kap)
+        _current_point(e, g, dH, lag, dlag, A0, J, D, Lr, psi_nodes, rp, psi, dpsi, E, Lam, T, Gam, Kap)
         for i in range(3):
             Gam[i] -= Gamma0[e, g, i]
             Kap[i] -= K0[e, g, i]
@@ -333,10 +330,7 @@ def _centreline_columns(e, dH, lag, dlag, A0, J, wF, Gamma0, CF, D, triads, ke, 
             acc[2, col, i] = 0.0
     for g in range(lag.shape[0]):
         Jg = J[e, g]
-        for i in range(3):
-            rp[i] = A0[e, g, i] + dH[e, g, 0] * D[0, i] + dH[e, g, 1] * D[1, i] + dH[e, g, 2] * D[2, i] \
-                + dH[e, g, 3] * D[3, i]
-        point_kinematics(Lr, psi_nodes, lag[g], dlag[g], Jg, rp, psi, dpsi, E, Lam, T, Gam, Kap)
+        _current_point(e, g, dH, lag, dlag, A0, J, D, Lr, psi_nodes, rp, psi, dpsi, E, Lam, T, Gam, Kap)
         for i in range(3):
             Gam[i] = (Gam[i] - Gamma0[e, g, i]) * wF[e, g, i] * CF[e, i]
             rp[i] /= Jg
@@ -404,8 +398,5 @@ def strain_range(dH, lag, dlag, A0, J, Dd, triads, Gamma, Kappa, Lambda, status)
     for e in range(dH.shape[0]):
         status[e] = element_setup(triads[e], psi_nodes, work)
         for g in range(lag.shape[0]):
-            for i in range(3):
-                rp[i] = A0[e, g, i] + dH[e, g, 0] * Dd[e, 0, i] + dH[e, g, 1] * Dd[e, 1, i] \
-                    + dH[e, g, 2] * Dd[e, 2, i] + dH[e, g, 3] * Dd[e, 3, i]
-            point_kinematics(triads[e, 2], psi_nodes, lag[g], dlag[g], J[e, g], rp, psi, dpsi, E, Lambda[e, g], T,
-                             Gamma[e, g], Kappa[e, g])
+            _current_point(e, g, dH, lag, dlag, A0, J, Dd[e], triads[e, 2], psi_nodes, rp, psi, dpsi, E, Lambda[e, g],
+                           T, Gamma[e, g], Kappa[e, g])
