@@ -496,3 +496,24 @@ def test_results_do_not_depend_on_the_thread_count():
     finally:
         numba.set_num_threads(threads)
     assert np.array_equal(f1, f2) and np.array_equal(K1.data, K2.data)
+
+
+def test_reference_triads_of_joined_and_reversed_beams():
+    """Several beams in one mesh each start their own transport; a beam whose elements are listed
+    from its far end is transported from the node that already has a frame."""
+    straight, arc = straight_beam(2), arc_beam(3)
+    joined = BeamMesh.join([straight, arc])
+    L = reference_triads(joined)
+    n_s = straight.n_nodes
+    # nodes of the arc (and its middle nodes) carry the arc's own frames
+    arc_alone = reference_triads(arc)
+    assert np.abs(L[n_s: n_s + arc.n_nodes] - arc_alone[: arc.n_nodes]).max() < 1e-15
+    assert np.abs(L[joined.n_nodes + straight.n_elements:] - arc_alone[arc.n_nodes:]).max() < 1e-15
+    # the helix with its elements listed backwards: the same frames up to the start node's choice
+    helix = helix_beam(4)
+    backwards = BeamMesh.hermite(helix.positions, helix.tangents, helix.elements[::-1])
+    Lb = reference_triads(backwards)
+    assert np.abs(np.einsum("kji,kjl->kil", Lb, Lb) - np.eye(3)).max() < 1e-14
+    assert np.abs(Lb[: helix.n_nodes, :, 0] - helix.tangents).max() < 1e-15
+    model = SimoReissnerBeam(backwards, SECTION)
+    assert np.abs(model._K0[..., 0]).max() < 1.1e-2         # rotation-minimising from either end
