@@ -24,11 +24,13 @@ the internal virtual work in these variations,
   ``δK = exp(-ψ) dT[ψ_s] δψ + T(ψ)ᵀ δψ_s``.
 
 The tangent is the derivative of that residual with respect to the 21 unknowns, triads perturbed
-multiplicatively like the Newton update, computed by the *complex step*: column j is
-``Im r(q ⊕ i h e_j) / h`` with ``h = 1e-30``, exact to round-off (no subtraction), from the
-residual's own code compiled for complex128 (every rotation map is complex-analytic, see
-:mod:`.rotations`). It costs 21 extra residual evaluations per element. It is not symmetric away
-from equilibrium (multiplicative rotations).
+multiplicatively like the Newton update. Its 9 rotation columns are computed by the *complex
+step*: column j is ``Im r(q ⊕ i h e_j) / h`` with ``h = 1e-30``, exact to round-off (no
+subtraction), from the residual's own code compiled for complex128 (every rotation map is
+complex-analytic, see :mod:`.rotations`): 9 residual evaluations in complex arithmetic per
+element. Its 12 centreline columns are written out (the centreline enters through ``r_s`` in the
+force term only, see :func:`_centreline_columns`); the tests check both against central
+differences. It is not symmetric away from equilibrium (multiplicative rotations).
 
 Elements are evaluated in chunks of :data:`~mortar1d3d._config.CHUNK` (in parallel when there are
 several), each into its own slice by the same serial code: results are bit-identical for any
@@ -40,7 +42,7 @@ import numpy as np
 from numba import prange
 
 from .._config import CHUNK, njit, njit_parallel
-from .rotations import exp, jacobian, jacobian_derivative_transpose, jacobian_inverse, log
+from .rotations import _cross, exp, jacobian, jacobian_derivative_transpose, jacobian_inverse, log
 
 __all__ = ["element_range", "element_chunks", "strain_range", "N_DOFS", "STEP", "OK", "ROTATION_RANGE",
            "NOT_FINITE", "MAX_RELATIVE_ROTATION"]
@@ -74,16 +76,6 @@ def _matvec(A, x, y):
 def _matvec_t(A, x, y):
     for i in range(3):
         y[i] = A[0, i] * x[0] + A[1, i] * x[1] + A[2, i] * x[2]
-
-
-@njit
-def _cross(a, b, c):
-    c0 = a[1] * b[2] - a[2] * b[1]
-    c1 = a[2] * b[0] - a[0] * b[2]
-    c2 = a[0] * b[1] - a[1] * b[0]
-    c[0] = c0
-    c[1] = c1
-    c[2] = c2
 
 
 @njit
@@ -138,6 +130,16 @@ def point_kinematics(Lr, psi_nodes, lag, dlag, J, rp, psi, dpsi, E, Lam, T, Gam,
 
 
 @njit
+def _current_point(e, g, dH, lag, dlag, A0, J, D, Lr, psi_nodes, rp, psi, dpsi, E, Lam, T, Gam, Kap):
+    """:func:`point_kinematics` at Gauss point g of element e with the current
+    ``r' = r0' + Σ dH_k D_k`` (into ``rp``) from the coefficients' displacement D (4, 3)."""
+    for i in range(3):
+        rp[i] = A0[e, g, i] + dH[e, g, 0] * D[0, i] + dH[e, g, 1] * D[1, i] + dH[e, g, 2] * D[2, i] \
+            + dH[e, g, 3] * D[3, i]
+    point_kinematics(Lr, psi_nodes, lag[g], dlag[g], J[e, g], rp, psi, dpsi, E, Lam, T, Gam, Kap)
+
+
+@njit
 def _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, D, triads, want, res, m33, v3, work):
     """Energy and (``want >= 1``) the residual ``res`` (21,) of element ``e`` at the coefficients'
     displacement ``D`` (4, 3) and the triads (3, 3, 3); returns (energy, status).
@@ -168,22 +170,18 @@ def _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, D, triads, wa
     n_g = lag.shape[0]
     for g in range(n_g):
         Jg = J[e, g]
-        for i in range(3):
-            rp[i] = A0[e, g, i] + dH[e, g, 0] * D[0, i] + dH[e, g, 1] * D[1, i] + dH[e, g, 2] * D[2, i] \
-                + dH[e, g, 3] * D[3, i]
-        point_kinematics(Lr, psi_nodes, lag[g], dlag[g], Jg, rp, psi, dpsi, E, Lam, T, Gam, Kap)
+        _current_point(e, g, dH, lag, dlag, A0, J, D, Lr, psi_nodes, rp, psi, dpsi, E, Lam, T, Gam, Kap)
         for i in range(3):
             Gam[i] -= Gamma0[e, g, i]
             Kap[i] -= K0[e, g, i]
-        wf = wF[e, g]
         wm = wM[e, g]
         for i in range(3):
-            energy += 0.5 * (wf * CF[e, i] * Gam[i] * Gam[i] + wm * CM[e, i] * Kap[i] * Kap[i])
+            energy += 0.5 * (wF[e, g, i] * CF[e, i] * Gam[i] * Gam[i] + wm * CM[e, i] * Kap[i] * Kap[i])
         if want == 0:
             continue
         # material resultants F = C_F Γ, M = C_M K (Gam, Kap now hold them times the weights)
         for i in range(3):
-            Gam[i] *= wf * CF[e, i]
+            Gam[i] *= wF[e, g, i] * CF[e, i]
             Kap[i] *= wm * CM[e, i]
         _matvec(Lam, Gam, n)                     # w n (spatial force)
         for k in range(4):
@@ -233,9 +231,11 @@ def element_range(first, last, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM,
         Reference ``r0'`` at the points, from coefficients relative to each element's first node.
     J : (n_el, n_g) float64
         ``|r0'|``.
-    wF, wM : (n_el, n_g) float64
-        Integration weights ``w_g J_g`` of the force (Γ) and moment (K) terms at each point (a
-        point may serve only one of them: 0 for the other).
+    wF : (n_el, n_g, 3) float64
+        Integration weights ``w_g J_g`` of the force term per strain component (Γ1, Γ2, Γ3) at each
+        point (a component may use its own rule: weight 0 at the points of the others).
+    wM : (n_el, n_g) float64
+        Integration weights ``w_g J_g`` of the moment (K) term.
     Gamma0, K0 : (n_el, n_g, 3) float64
         Reference strains at the points.
     CF, CM : (n_el, 3) float64
@@ -256,49 +256,122 @@ def element_range(first, last, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM,
     m33 = np.empty((8, 3, 3), dtype=np.complex128)
     v3 = np.empty((24, 3), dtype=np.complex128)
     res = np.empty(N_DOFS, dtype=np.complex128)
-    Dc = np.empty((4, 3), dtype=np.complex128)
     Lc = np.empty((3, 3, 3), dtype=np.complex128)
+    Dc = np.empty((4, 3), dtype=np.complex128)
     rot = np.empty((3, 3), dtype=np.complex128)
     spin = np.empty(3, dtype=np.complex128)
     work = np.empty(9, dtype=np.complex128)
-    n_columns = N_DOFS if want == 2 else 0
+    # the unperturbed residual and the centreline columns in real arithmetic
+    r33 = np.empty((8, 3, 3))
+    rv3 = np.empty((24, 3))
+    rres = np.empty(N_DOFS)
+    rwork = np.empty(9)
+    acc = np.empty((3, 12, 3))
     for e in range(first, last):
-        st = OK
-        for j in range(-1, n_columns):
-            for k in range(4):
-                for i in range(3):
-                    Dc[k, i] = Dd[e, k, i]
+        W, st = _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dd[e], triads[e], want, rres, r33,
+                          rv3, rwork)
+        energy[e] = W
+        if not math.isfinite(W):
+            st = NOT_FINITE
+        if want >= 1:
+            for i in range(N_DOFS):
+                fe[e, i] = rres[i]
+                if not math.isfinite(rres[i]):
+                    st = NOT_FINITE
+        status[e] = st
+        if want < 2:
+            continue
+        _centreline_columns(e, dH, lag, dlag, A0, J, wF, Gamma0, CF, Dd[e], triads[e], ke, r33, rv3, acc)
+        # rotation columns: complex step of the residual, triad k turned by exp(i h e_c)
+        for i in range(4):
+            for l in range(3):
+                Dc[i, l] = Dd[e, i, l]
+        for j in range(12, N_DOFS):
             for k in range(3):
                 for i in range(3):
                     for l in range(3):
                         Lc[k, i, l] = triads[e, k, i, l]
-            if 0 <= j < 12:
-                Dc[j // 3, j % 3] += 1j * STEP
-            elif j >= 12:
-                node = (j - 12) // 3
+            node = (j - 12) // 3
+            for i in range(3):
+                spin[i] = 0.0
+            spin[(j - 12) % 3] = 1j * STEP
+            exp(spin, rot)
+            for i in range(3):
+                for l in range(3):
+                    m33[7, i, l] = Lc[node, i, l]
+            _matmul(rot, m33[7], Lc[node])
+            _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dc, Lc, 1, res, m33, v3, work)
+            for i in range(N_DOFS):
+                ke[e, i, j] = res[i].imag / STEP
+
+
+@njit
+def _centreline_columns(e, dH, lag, dlag, A0, J, wF, Gamma0, CF, D, triads, ke, m33, v3, acc):
+    """Columns 0-11 of the tangent (derivatives along the centreline coefficients), written out.
+
+    The centreline enters the residual only through ``r_s``, in the force term: with
+    ``S = Λ diag(w C_F) Λᵀ`` and ``δr_s = dH_k/J e_c``, ``δn = S δr_s``, the centreline rows get
+    ``dH_l/J δn``, and the spin rows get ``δ(n × r_s) = δn × r_s + n × δr_s`` through the same
+    transformation as the residual (``δθ_r`` directly, ``Tᵀ Λ_rᵀ`` for the local rotation vectors).
+    ``acc``: (3, 12, 3) scratch (accumulators of δθ_r, δψ_0, δψ_1 per column).
+    """
+    psi_nodes = v3[0:3]
+    Lr = triads[2]
+    E, Lam, T, S, Tinv = m33[2], m33[3], m33[4], m33[5], m33[6]
+    psi, dpsi, rp, Gam, Kap = v3[3], v3[4], v3[5], v3[6], v3[7]
+    n, dn, dnxr, y, z, drs = v3[8], v3[9], v3[10], v3[11], v3[12], v3[13]
+    element_setup(triads, psi_nodes, m33[0])
+    for col in range(12):
+        for l in range(N_DOFS):
+            ke[e, l, col] = 0.0
+        for i in range(3):
+            acc[0, col, i] = 0.0
+            acc[1, col, i] = 0.0
+            acc[2, col, i] = 0.0
+    for g in range(lag.shape[0]):
+        Jg = J[e, g]
+        _current_point(e, g, dH, lag, dlag, A0, J, D, Lr, psi_nodes, rp, psi, dpsi, E, Lam, T, Gam, Kap)
+        for i in range(3):
+            Gam[i] = (Gam[i] - Gamma0[e, g, i]) * wF[e, g, i] * CF[e, i]
+            rp[i] /= Jg
+        _matvec(Lam, Gam, n)
+        for i in range(3):
+            for l in range(3):
+                S[i, l] = Lam[i, 0] * wF[e, g, 0] * CF[e, 0] * Lam[l, 0] \
+                    + Lam[i, 1] * wF[e, g, 1] * CF[e, 1] * Lam[l, 1] + Lam[i, 2] * wF[e, g, 2] * CF[e, 2] * Lam[l, 2]
+        for k in range(4):
+            ck = dH[e, g, k] / Jg
+            for c in range(3):
+                col = 3 * k + c
                 for i in range(3):
-                    spin[i] = 0.0
-                spin[(j - 12) % 3] = 1j * STEP
-                exp(spin, rot)
+                    dn[i] = S[i, c] * ck
+                    drs[i] = 0.0
+                drs[c] = ck
+                for m in range(4):
+                    cm = dH[e, g, m] / Jg
+                    for i in range(3):
+                        ke[e, 3 * m + i, col] += cm * dn[i]
+                _cross(dn, rp, dnxr)
+                _cross(n, drs, y)
                 for i in range(3):
-                    for l in range(3):
-                        m33[7, i, l] = Lc[node, i, l]
-                _matmul(rot, m33[7], Lc[node])
-            W, s = _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dc, Lc, want, res, m33, v3, work)
-            if j < 0:
-                st = s
-                energy[e] = W.real
-                if not math.isfinite(W.real):
-                    st = NOT_FINITE
-                if want >= 1:
-                    for i in range(N_DOFS):
-                        fe[e, i] = res[i].real
-                        if not math.isfinite(fe[e, i]):
-                            st = NOT_FINITE
-            else:
-                for i in range(N_DOFS):
-                    ke[e, i, j] = res[i].imag / STEP
-        status[e] = st
+                    dnxr[i] += y[i]
+                    acc[0, col, i] += dnxr[i]
+                _matvec_t(Lr, dnxr, y)
+                _matvec_t(T, y, z)
+                for i in range(3):
+                    acc[1, col, i] += lag[g, 0] * z[i]
+                    acc[2, col, i] += lag[g, 1] * z[i]
+    for k in range(2):
+        jacobian_inverse(psi_nodes[k], Tinv)
+        for col in range(12):
+            _matvec_t(Tinv, acc[1 + k, col], y)
+            _matvec(Lr, y, z)
+            for i in range(3):
+                ke[e, 12 + 3 * k + i, col] = z[i]
+                ke[e, 18 + i, col] -= z[i]
+    for col in range(12):
+        for i in range(3):
+            ke[e, 18 + i, col] += acc[0, col, i]
 
 
 @njit_parallel
@@ -325,8 +398,5 @@ def strain_range(dH, lag, dlag, A0, J, Dd, triads, Gamma, Kappa, Lambda, status)
     for e in range(dH.shape[0]):
         status[e] = element_setup(triads[e], psi_nodes, work)
         for g in range(lag.shape[0]):
-            for i in range(3):
-                rp[i] = A0[e, g, i] + dH[e, g, 0] * Dd[e, 0, i] + dH[e, g, 1] * Dd[e, 1, i] \
-                    + dH[e, g, 2] * Dd[e, 2, i] + dH[e, g, 3] * Dd[e, 3, i]
-            point_kinematics(triads[e, 2], psi_nodes, lag[g], dlag[g], J[e, g], rp, psi, dpsi, E, Lambda[e, g], T,
-                             Gamma[e, g], Kappa[e, g])
+            _current_point(e, g, dH, lag, dlag, A0, J, Dd[e], triads[e, 2], psi_nodes, rp, psi, dpsi, E, Lambda[e, g],
+                           T, Gamma[e, g], Kappa[e, g])
