@@ -107,12 +107,64 @@ def _node_scale(mesh):
     return np.divide(total, count, out=np.ones(mesh.n_nodes), where=count > 0)
 
 
-def _dof_layout(mesh):
-    """Per centreline DOF: its node and whether it is a tangent component."""
+def _dof_layout(mesh, rotation_nodes=None):
+    """Per unknown of the probe: its node and whether it is a tangent (or rotation) component.
+
+    With ``rotation_nodes`` the rotation unknowns follow the centreline DOFs; a rotation node
+    that is not a mesh node (an element's middle node) counts as its element's first node.
+    """
     per_node = mesh.element_type.dofs_per_node // 3          # vectors per node: [r] or [r, t]
     triplet = np.arange(per_node * mesh.n_nodes)
     node, tangent = triplet // per_node, triplet % per_node > 0
+    if rotation_nodes is not None:
+        owner = np.empty(int(rotation_nodes.max()) + 1, dtype=np.int64)
+        owner[rotation_nodes.ravel()] = np.where(rotation_nodes < mesh.n_nodes, rotation_nodes,
+                                                 mesh.elements[:, :1]).ravel()
+        node = np.concatenate([node, owner])
+        tangent = np.concatenate([tangent, np.ones(len(owner), dtype=bool)])
     return np.repeat(node, 3), np.repeat(tangent, 3)
+
+
+def _framed_element_projectors(mesh, scale, rotation_nodes):
+    """``Π_e = I − U_e U_eᵀ`` of elements with a material frame (centreline and rotation nodes).
+
+    The rigid motions of such an element are six, also when it is curved: a translation moves
+    its positions; a rotation ω turns positions about the element's midpoint, its tangents
+    (``ω × t``) and its triads (spin ``ω``), so the turn about the chord of a straight element
+    moves the triads and is no longer invisible.
+
+    Returns
+    -------
+    dofs : (n_el, 3 (n_f + k)) int64
+        Centreline DOFs, then ``n_centreline_dofs + 3 * rotation node + i``.
+    projectors : (n_el, nd, nd) float64
+    """
+    cols = mesh.function_columns()
+    cols = cols[:, cols[0] >= 0]                           # Hermite: [r1, t1, r2, t2]
+    n_el, n_f = cols.shape
+    n_cl = mesh.n_centreline_dofs
+    k = rotation_nodes.shape[1]
+    dofs = np.concatenate([(3 * cols[:, :, None] + np.arange(3)).reshape(n_el, 3 * n_f),
+                           (n_cl + 3 * rotation_nodes[:, :, None] + np.arange(3)).reshape(n_el, 3 * k)], axis=1)
+    vectors = np.empty((2 * mesh.n_nodes, 3))
+    vectors[0::2], vectors[1::2] = mesh.positions, mesh.tangents
+    unit = np.zeros(2 * mesh.n_nodes)
+    unit[0::2] = scale
+    centre = 0.5 * (mesh.positions[mesh.elements[:, 0]] + mesh.positions[mesh.elements[:, 1]])
+    U = np.zeros((n_el, n_f + k, 3, 6))
+    v, u = vectors[cols], unit[cols]                       # (n_el, n_f, 3), (n_el, n_f)
+    position = u > 0.0
+    lever = np.where(position[..., None], (v - centre[:, None, :]) / np.where(position, u, 1.0)[..., None], v)
+    for i in range(3):
+        w = np.zeros(3)
+        w[i] = 1.0
+        U[:, :n_f, :, 3 + i] = np.cross(w, lever)
+        U[:, :n_f, i, i] = np.where(position, 1.0 / np.where(position, u, 1.0), 0.0)
+        U[:, n_f:, i, 3 + i] = 1.0
+    U = U.reshape(n_el, 3 * (n_f + k), 6)
+    Q, _ = np.linalg.qr(U)
+    projectors = np.eye(U.shape[1])[None] - np.einsum("eik,ejk->eij", Q, Q)
+    return dofs, projectors
 
 
 def _element_projectors(mesh, scale):
@@ -244,7 +296,8 @@ def _row_band(C, position):
     return int((np.maximum.reduceat(p, starts) - np.minimum.reduceat(p, starts)).max())
 
 
-def find_mechanisms(mesh, coupling_rows=None, fixed=None, tolerance=MECHANISM_TOLERANCE, seed=0):
+def find_mechanisms(mesh, coupling_rows=None, fixed=None, tolerance=MECHANISM_TOLERANCE, seed=0,
+                    rotation_nodes=None):
     """Zero-energy modes of the chains of one beam mesh at its reference state, solid held.
 
     Parameters
@@ -261,6 +314,11 @@ def find_mechanisms(mesh, coupling_rows=None, fixed=None, tolerance=MECHANISM_TO
         See :data:`MECHANISM_TOLERANCE`.
     seed : int
         Start vectors of the inverse iteration (deterministic).
+    rotation_nodes : (n_elements, k) int array, optional
+        Rotation nodes of each element of a beam with a material frame
+        (:meth:`~mortar1d3d.physics.beam_types.BeamType.rotation_nodes`): the probe's unknowns
+        are then the centreline DOFs followed by three spins per rotation node (``fixed`` and the
+        returned modes have that length; ``coupling_rows`` still act on the centreline only).
 
     Returns
     -------
@@ -268,15 +326,24 @@ def find_mechanisms(mesh, coupling_rows=None, fixed=None, tolerance=MECHANISM_TO
         One per chain that can move at no cost (its smallest mode), in chain order.
     """
     n = mesh.n_centreline_dofs
+    framed = rotation_nodes is not None and np.size(rotation_nodes) > 0
+    if framed:
+        rotation_nodes = np.asarray(rotation_nodes, dtype=np.int64)
+        n += 3 * (int(rotation_nodes.max()) + 1)
     fixed = np.zeros(n, dtype=bool) if fixed is None else np.asarray(fixed, dtype=bool)
     n_chains, label = chains(mesh)
-    dof_node, dof_tangent = _dof_layout(mesh)
+    dof_node, dof_tangent = _dof_layout(mesh, rotation_nodes if framed else None)
     node_scale = _node_scale(mesh)
     scale_inverse = np.where(dof_tangent, 1.0, node_scale[dof_node])      # v = scale_inverse * w
-    dofs, Pi = _element_projectors(mesh, node_scale)
+    if framed:
+        dofs, Pi = _framed_element_projectors(mesh, node_scale, rotation_nodes)
+    else:
+        dofs, Pi = _element_projectors(mesh, node_scale)
     C = None
     if coupling_rows is not None and coupling_rows.shape[0]:
         C = sp.csr_matrix(coupling_rows)
+        if C.shape[1] < n:          # rotations: the coupling does not act on them
+            C = sp.hstack([C, sp.csr_matrix((C.shape[0], n - C.shape[1]))], format="csr")
         C.sum_duplicates()
         data = np.empty(len(C.data))
         _unit_rows(C.indptr, C.indices, C.data, scale_inverse, data)

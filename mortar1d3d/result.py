@@ -22,6 +22,9 @@ class Result:
         Centreline position displacements, beams in scene order, each beam's nodes in order.
     beam_tangent_displacement : (n_beam_nodes, 3) float64
         Change of the nodal tangent vectors (zero rows for truss beams).
+    beam_rotation : (n_beam_nodes, 3) float64
+        Total rotation vector ψ of the triad at each beam node, ``Λ = exp(ψ) Λ0`` (zero rows for
+        beams without rotations).
     line_load : (n_lm, 3) float64
         Coupling line load λ at the LM nodes (beam groups in order of first appearance;
         zero at LM nodes no integration point touched).
@@ -42,15 +45,18 @@ class Result:
         self.scene = model.scene
         self.counts = model.counts
         self.solid_displacement = z[: 3 * model.n_solid_nodes].reshape(-1, 3).copy()
-        pos, tan = [], []
+        pos, tan, rot = [], [], []
         for entry in range(len(self.scene.beams)):
             g = model.entry_group[entry]
             nodes = self._entry_nodes(g, entry)
             q = z[g.dofs.slice].reshape(g.mesh.n_nodes, -1)
             pos.append(q[nodes, :3])
             tan.append(q[nodes, 3:6] if g.type.element.has_tangents else np.zeros((len(nodes), 3)))
+            # a mesh node is the rotation node of the same index
+            rot.append(z[g.rotations.slice].reshape(-1, 3)[nodes] if g.rotations.size else np.zeros((len(nodes), 3)))
         self.beam_displacement = np.vstack(pos) if pos else np.zeros((0, 3))
         self.beam_tangent_displacement = np.vstack(tan) if tan else np.zeros((0, 3))
+        self.beam_rotation = np.vstack(rot) if rot else np.zeros((0, 3))
         self.line_load = self._line_load(z)
         r = getattr(model, "last_residual", None)
         r = model.basis.to_physical(r) if r is not None else None
@@ -101,7 +107,9 @@ class Result:
         ``displacement``; cell data ``green_lagrange_strain`` and ``cauchy_stress`` as 3×3
         tensors, averaged over each element's Gauss points), ``beams_<k>.vtu`` (the reference
         centrelines sampled as polylines with ``displacement``, ``axial_force``, ``curvature`` and
-        the coupling ``line_load`` λ(η)); once: ``segments.vtu`` and ``points.vtu`` (the coupling's
+        the coupling ``line_load`` λ(η); beams with rotations also the triad ``g1``, ``g2``, ``g3``,
+        the spatial force and moment resultants ``n``, ``m`` and the elastic strains ``Gamma``
+        (Γ − Γ0: axial and shear) and ``K`` (K − K0: torsion and bending) in the material frame); once: ``segments.vtu`` and ``points.vtu`` (the coupling's
         segments and integration points). Open ``result.pvd`` and apply *Warp By Vector* with
         ``displacement``.
 
@@ -142,8 +150,7 @@ class Result:
                 lm_start = 0
                 for gi, g in enumerate(model.groups):
                     suffix = f"{gi}_" if len(model.groups) > 1 else ""
-                    d = z[g.dofs.slice]
-                    data = self._beam_samples(g, d, samples_per_element)
+                    data = self._beam_samples(g, z, samples_per_element)
                     if g.coupling is not None:
                         data["line_load"] = self._line_load_samples(g, lam_all[lm_start: lm_start + g.coupling.n_lm],
                                                                     samples_per_element)
@@ -163,9 +170,15 @@ class Result:
         return [directory / name for name in written]
 
     @staticmethod
-    def _beam_samples(g, d, s):
+    def _beam_samples(g, z, s):
         eta = np.linspace(-1.0, 1.0, s)
-        sample = g.physics.sample(d, eta)
+        d = z[g.dofs.slice]
+        if g.rotations.size:
+            sample = g.physics.sample(d, z[g.rotations.slice].reshape(-1, 3), eta)
+            for k in range(3):          # the triad's base vectors as vector fields
+                sample[f"g{k + 1}"] = sample["triads"][..., :, k]
+        else:
+            sample = g.physics.sample(d, eta)
         out = {}
         for key in g.type.output_fields:
             if key in sample:

@@ -230,7 +230,7 @@ def _curve(value, path):
 
 def _beam(value, i, base_dir):
     path = f"beams[{i}]"
-    _table(value, path, ("curve", "mesh", "elements", "model", "section"), required=("section",))
+    _table(value, path, ("curve", "mesh", "elements", "model", "section", "normal", "triads"), required=("section",))
     model = _choice(value.get("model", DEFAULT_BEAM_TYPE), f"{path}.model", BEAM_MODELS)
     if model not in IMPLEMENTED_BEAM_MODELS:
         _fail(f"{path}.model", f"{model!r} beams are not implemented yet; use one of "
@@ -238,7 +238,25 @@ def _beam(value, i, base_dir):
     kind = BEAM_TYPES[model]
     if ("curve" in value) == ("mesh" in value):
         _fail(path, "give exactly one of curve or mesh")
-    out = {"model": model}
+    out = {"model": model, "normal": None}
+    if "normal" in value:
+        if kind.triads is None:
+            _fail(f"{path}.normal", f"a {model} beam has no material frame (no triads); the reference normal "
+                                    "is for beams with rotations (model = \"simo_reissner\")")
+        normal = _vector(value["normal"], f"{path}.normal")
+        if np.linalg.norm(normal) == 0.0:
+            _fail(f"{path}.normal", "must not be zero")
+        out["normal"] = normal / np.linalg.norm(normal)
+    out["triads"] = None
+    if "triads" in value:
+        if kind.triads is None or "normal" in value:
+            _fail(f"{path}.triads", "given reference triads are for beams with rotations (model = \"simo_reissner\"), "
+                                    "instead of normal" if kind.triads is None else "give normal or triads, not both")
+        triads = value["triads"]
+        if isinstance(triads, (str, bytes, dict)) or not hasattr(triads, "__len__") or not len(triads):
+            _fail(f"{path}.triads", "expected a list of 3×3 triads (columns g1, g2, g3), one per rotation node")
+        out["triads"] = np.array([[_vector(row, f"{path}.triads[{k}][{r}]") for r, row in
+                                   enumerate(_list(t, f"{path}.triads[{k}]", 3))] for k, t in enumerate(triads)])
     if "curve" in value:
         out["curve"] = _curve(value["curve"], f"{path}.curve")
         if "polyline" in out["curve"]:
@@ -265,6 +283,9 @@ def _beam(value, i, base_dir):
             out["mesh"] = file
         else:
             _fail(f"{path}.mesh", f"expected a BeamMesh or a file name, got {_describe(mesh)}")
+    if kind.section_law == "shear_torsion":
+        out["section"] = _shear_torsion_section(value["section"], f"{path}.section")
+        return out
     s = _table(value["section"], f"{path}.section", ("E", "radius", "EA", "EI"))
     by_radius, explicit = ("E" in s or "radius" in s), ("EA" in s or "EI" in s)
     if by_radius == explicit:
@@ -283,6 +304,59 @@ def _beam(value, i, base_dir):
         else:
             EI = _number(s.get("EI", 0.0), f"{path}.section.EI", low=0.0)
         out["section"] = {"EA": EA, "EI": EI}
+    return out
+
+
+#: shear correction factor of a solid circular section, ``6(1 + ν) / (7 + 6ν)`` (Cowper, J Appl
+#: Mech 33, 1966), used when a section is given by its radius
+def circular_shear_correction(nu):
+    return 6.0 * (1.0 + nu) / (7.0 + 6.0 * nu)
+
+
+def _shear_torsion_section(value, path):
+    """Section of a beam with shear and torsion (``simo_reissner``), normalised to the six
+    stiffnesses ``EA, GA2, GA3, GI_T, EI2, EI3`` (plus ``EI`` = the mean bending stiffness).
+
+    Accepted forms: stiffnesses ``{EA, GA2, GA3, GI_T, EI2, EI3}``; a solid circular section
+    ``{E, G | nu, radius}`` (A = πr², I2 = I3 = πr⁴/4, I_T = πr⁴/2, shear correction
+    6(1 + ν)/(7 + 6ν)); or a general one ``{E, G | nu, A, I2, I3, I_T[, shear_correction]}``
+    (shear correction default 1: shear areas equal to A).
+    """
+    keys = ("E", "G", "nu", "A", "I2", "I3", "I_T", "shear_correction", "radius",
+            "EA", "GA2", "GA3", "GI_T", "EI2", "EI3")
+    _table(value, path, keys)
+    stiffness = ("EA", "GA2", "GA3", "GI_T", "EI2", "EI3")
+    given = [k for k in stiffness if k in value]
+    if given:
+        other = [k for k in value if k not in stiffness]
+        if other:
+            _fail(f"{path}.{other[0]}", "give either the stiffnesses EA, GA2, GA3, GI_T, EI2, EI3 or the material "
+                                        "and geometry (E, G or nu, and radius or A, I2, I3, I_T), not both")
+        out = {k: _number(_required(value, k, path), f"{path}.{k}", low=0.0, low_open=True) for k in stiffness}
+    else:
+        E = _number(_required(value, "E", path), f"{path}.E", low=0.0, low_open=True)
+        if ("G" in value) == ("nu" in value):
+            _fail(f"{path}.G", "give exactly one of G (shear modulus) and nu (Poisson's ratio)")
+        if "G" in value:
+            G = _number(value["G"], f"{path}.G", low=0.0, low_open=True)
+            nu = E / (2.0 * G) - 1.0
+        else:
+            nu = _number(value["nu"], f"{path}.nu", low=-1.0, high=0.5, low_open=True, high_open=True)
+            G = E / (2.0 * (1.0 + nu))
+        if "radius" in value:
+            for k in ("A", "I2", "I3", "I_T", "shear_correction"):
+                if k in value:
+                    _fail(f"{path}.{k}", "a circular section (radius) defines A, I2, I3, I_T and its shear "
+                                         "correction; leave it out or give A, I2, I3, I_T instead of radius")
+            r = _number(value["radius"], f"{path}.radius", low=0.0, low_open=True)
+            A, I2, I_T = math.pi * r * r, math.pi * r ** 4 / 4.0, math.pi * r ** 4 / 2.0
+            I3, k = I2, circular_shear_correction(nu) if -1.0 < nu < 0.5 else 1.0
+        else:
+            A, I2, I3, I_T = (_number(_required(value, key, path), f"{path}.{key}", low=0.0, low_open=True)
+                              for key in ("A", "I2", "I3", "I_T"))
+            k = _number(value.get("shear_correction", 1.0), f"{path}.shear_correction", low=0.0, low_open=True)
+        out = {"EA": E * A, "GA2": G * k * A, "GA3": G * k * A, "GI_T": G * I_T, "EI2": E * I2, "EI3": E * I3}
+    out["EI"] = 0.5 * (out["EI2"] + out["EI3"])
     return out
 
 
@@ -334,17 +408,28 @@ def _set_spec(value, path):
 
 def _dirichlet(value, i):
     path = f"dirichlet[{i}]"
-    _table(value, path, ("on", "value", "components", "clamp"), required=("on",))
-    comps = value.get("components", ["x", "y", "z"])
+    _table(value, path, ("on", "value", "components", "clamp", "rotation"), required=("on",))
+    # an entry that prescribes a rotation fixes positions only when it says so (value or components)
+    rotation_only = "rotation" in value and "value" not in value and "components" not in value
+    comps = value.get("components", [] if rotation_only else ["x", "y", "z"])
     comps = _list(comps, f"{path}.components")
-    if not comps:
+    if not comps and not rotation_only:
         _fail(f"{path}.components", "empty: name at least one of 'x', 'y', 'z'")
     idx = sorted({"xyz".index(_choice(c, f"{path}.components[{k}]", ("x", "y", "z"))) for k, c in enumerate(comps)})
     out = {"on": _set_spec(value["on"], f"{path}.on"),
            "value": _vector(value.get("value", [0.0, 0.0, 0.0]), f"{path}.value"),
-           "components": idx, "clamp": _boolean(value.get("clamp", False), f"{path}.clamp")}
+           "components": idx, "clamp": _boolean(value.get("clamp", False), f"{path}.clamp"), "rotation": None}
     if out["clamp"] and not (isinstance(out["on"], str) and out["on"].startswith("beam:")):
         _fail(f"{path}.clamp", "clamp (fix the tangent too) applies to beam sets only")
+    if "rotation" in value:
+        rotation = value["rotation"]
+        if not (isinstance(out["on"], str) and out["on"].startswith("beam:")):
+            _fail(f"{path}.rotation", "a rotation is prescribed on beam sets only (beam:<i>, beam:<i>:start|end)")
+        if isinstance(rotation, (list, tuple)) and len(rotation) != 3:
+            _fail(f"{path}.rotation", f"expected the total rotation vector [θx, θy, θz] (all three components: a "
+                                      f"rotation is one object, its components are not independent), got "
+                                      f"{len(rotation)} entries")
+        out["rotation"] = _vector(rotation, f"{path}.rotation")
     return out
 
 
@@ -367,9 +452,9 @@ def _load(value, i):
         out["value"] = _vector(value["value"], f"{path}.value")
     if kind in ("traction", "pressure") and not (isinstance(out["on"], str) and out["on"].startswith("solid:")):
         _fail(f"{path}.on", f"a {kind} acts on a solid surface: use 'solid:x_max' or a solid point set")
-    if kind == "moment" and not (isinstance(out["on"], str) and out["on"].startswith("beam:")
-                                 and out["on"].count(":") == 2):
-        _fail(f"{path}.on", "a moment acts on a beam end: use 'beam:<i>:start' or 'beam:<i>:end'")
+    if kind == "moment" and not (isinstance(out["on"], str) and out["on"].startswith("beam:")):
+        _fail(f"{path}.on", "a moment acts on beam nodes: use 'beam:<i>:start' or 'beam:<i>:end' (or 'beam:<i>' "
+                            "for a beam with rotations)")
     return out
 
 
@@ -429,6 +514,17 @@ class Scene:
                 if beam < len(self.beams) and not BEAM_TYPES[self.beams[beam]["model"]].bending:
                     _fail(f"load[{i}].on", f"a moment needs a beam with bending stiffness; beam {beam} is a "
                                            f"{self.beams[beam]['model']}")
+                if (beam < len(self.beams) and BEAM_TYPES[self.beams[beam]["model"]].triads is None
+                        and item["on"].count(":") != 2):
+                    _fail(f"load[{i}].on", f"a moment on a {self.beams[beam]['model']} beam acts on a beam end: use "
+                                           "'beam:<i>:start' or 'beam:<i>:end'")
+        for i, d in enumerate(self.dirichlet):
+            if d["rotation"] is not None:
+                beam = int(d["on"].split(":")[1])
+                if beam < len(self.beams) and BEAM_TYPES[self.beams[beam]["model"]].triads is None:
+                    _fail(f"dirichlet[{i}].rotation", f"beam {beam} is a {self.beams[beam]['model']} beam, which "
+                                                      "has no rotation DOFs; prescribe rotations on a "
+                                                      "simo_reissner beam (a clamp fixes a tangent's direction)")
 
     @property
     def coupled(self):

@@ -743,3 +743,48 @@ def reference_splitmix64(seed, count):
         z = z ^ (z >> 31)
         out.append(z)
     return out
+
+
+# --------------------------------------------------------------------------------------------
+# finite rotations (the Simo–Reissner beam's rotation maps, the plain way)
+
+def skew_matrix(v):
+    """[v]× written out."""
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def rotation_exp(psi):
+    """exp([ψ]×) by scipy's general matrix exponential (no Rodrigues formula)."""
+    from scipy.linalg import expm
+    return expm(skew_matrix(np.asarray(psi, dtype=float)))
+
+
+def rotation_log(R):
+    """Rotation vector of R from its angle (arccos of the trace) and axis (skew part, or the
+    eigenvector of eigenvalue 1 near π): valid for angles in (0, π]."""
+    R = np.asarray(R, dtype=float)
+    angle = np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0))
+    if angle < 1e-12:
+        return np.zeros(3)
+    if angle < np.pi - 1e-3:
+        w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+        return angle * w / (2.0 * np.sin(angle))
+    values, vectors = np.linalg.eig(R)
+    axis = np.real(vectors[:, np.argmin(np.abs(values - 1.0))])
+    axis /= np.linalg.norm(axis)
+    # the sign of the axis: the one whose rotation by ``angle`` reproduces R better
+    candidates = [axis * angle, -axis * angle]
+    return min(candidates, key=lambda p: np.abs(rotation_exp(p) - R).max())
+
+
+def spin_jacobian(psi, h=1e-6):
+    """T(ψ) with δR Rᵀ = [T δψ]×, by central differences of :func:`rotation_exp`."""
+    psi = np.asarray(psi, dtype=float)
+    R = rotation_exp(psi)
+    T = np.empty((3, 3))
+    for j in range(3):
+        e = np.zeros(3)
+        e[j] = h
+        W = (rotation_exp(psi + e) - rotation_exp(psi - e)) / (2.0 * h) @ R.T
+        T[:, j] = [W[2, 1], W[0, 2], W[1, 0]]
+    return T

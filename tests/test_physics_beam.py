@@ -95,7 +95,7 @@ def test_section_values_and_errors():
 def test_model_checks_input():
     hermite = straight_beam(2)
     line = BeamMesh.lagrange([[0, 0, 0], [1, 0, 0]], [[0, 1]])
-    with pytest.raises(NotImplementedError, match="simo_reissner"):
+    with pytest.raises(ValueError, match="'simo_reissner' is implemented by .*SimoReissnerBeam, not BeamModel"):
         BeamModel(hermite, 1.0, 1.0, model="simo_reissner")
     with pytest.raises(ValueError, match="needs a 'line'"):
         BeamModel(hermite, 1.0, 1.0, model="truss")

@@ -6,6 +6,7 @@ import pytest
 
 import mortar1d3d as m13
 from mortar1d3d.elements.beam import BEAM_ELEMENTS, MAX_FUNCTIONS, deriv, evaluate, shape
+from mortar1d3d.mesh import BeamMesh
 from mortar1d3d.model import READERS, Block, BuiltScene, DofMap, Model, build
 from mortar1d3d.physics.beam import BeamModel
 from mortar1d3d.physics.beam_types import BEAM_TYPES, PLANNED_BEAM_TYPES, beam_type
@@ -150,18 +151,22 @@ def test_every_mesh_file_goes_through_a_registered_reader(tmp_path, monkeypatch)
 # beam types
 # --------------------------------------------------------------------------------------------
 def test_beam_types_take_their_dofs_from_the_element_type():
+    from mortar1d3d.physics.simo_reissner import SimoReissnerBeam
     for t in BEAM_TYPES.values():
         assert t.dofs_per_node == t.element.dofs_per_node
         assert t.element is BEAM_ELEMENTS[t.element.name]
-        assert t.physics_class() is BeamModel
+        assert t.physics_class() is (SimoReissnerBeam if t.triads else BeamModel)
     assert BEAM_TYPES["torsion_free"].element.has_tangents and not BEAM_TYPES["truss"].element.has_tangents
+    # rotation nodes: none without triads; line3 triads: the mesh's nodes, then one middle node per element
+    beams = BeamMesh.hermite([[0, 0, 0], [1, 0, 0], [2, 0, 0]], [[1, 0, 0]] * 3, [[0, 1], [1, 2]])
+    assert BEAM_TYPES["torsion_free"].rotation_nodes(beams).shape == (2, 0)
+    assert BEAM_TYPES["torsion_free"].n_rotation_nodes(beams) == 0
+    assert BEAM_TYPES["simo_reissner"].rotation_nodes(beams).tolist() == [[0, 1, 3], [1, 2, 4]]
+    assert BEAM_TYPES["simo_reissner"].n_rotation_nodes(beams) == 5
     # the scene validates against the registry (planned types are named, not run)
     assert IMPLEMENTED_BEAM_MODELS == tuple(BEAM_TYPES)
     assert BEAM_MODELS == tuple(BEAM_TYPES) + PLANNED_BEAM_TYPES
-    with pytest.raises(NotImplementedError, match=r"'simo_reissner' is not implemented yet; use 'torsion_free' "
-                                                  r"\(Hermite centreline\) or 'truss' \(line\)"):
-        beam_type("simo_reissner")
-    with pytest.raises(ValueError, match="unknown beam model 'cable'; known models: torsion_free, truss"):
+    with pytest.raises(ValueError, match="unknown beam model 'cable'; known models: torsion_free, truss, simo_reissner"):
         beam_type("cable")
 
 

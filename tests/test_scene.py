@@ -52,7 +52,7 @@ def scene_with(path, value):
     ("beams.0.section", {"E": 2e11}, "beams[0].section.radius: missing"),
     ("beams.0.section", {"E": 2e11, "radius": 0.1, "EA": 1.0}, "beams[0].section: give either"),
     ("beams.0.elements", 2.5, "beams[0].elements: expected an integer"),
-    ("beams.0.model", "simo_reissner", "beams[0].model: 'simo_reissner' beams are not implemented"),
+    ("beams.0.model", "kirchhoff", "beams[0].model: unknown value 'kirchhoff'"),
     ("beams.0.curve", {"line": [[0, 0, 0], [0, 0, 0]]}, "beams[0].curve.line: the two points coincide"),
     ("beams.0.curve", {"spiral": 1}, "beams[0].curve.spiral: unknown key"),
     ("dirichlet.0.on", "solid:top", None),        # unknown set: found when the model is built

@@ -34,6 +34,7 @@ class BeamGroup:
     entry_elements: list = field(default_factory=list)   # (start, stop) element range per entry
     dofs: object = None                # its centreline Block of the DOF map
     rotations: object = None           # its rotations Block (empty for centreline-only types)
+    triads: object = None              # reference triads (n_rotation_nodes, 3, 3) of types with triads
     physics: object = None             # the type's physics (BeamModel)
     operators: object = None           # MortarOperators
     coupling: object = None            # Coupling
@@ -114,9 +115,12 @@ def build(scene):
         g.node_offsets = list(np.cumsum([0] + [p.n_nodes for p in parts[:-1]]))
         g.element_offsets = list(np.cumsum([0] + [p.n_elements for p in parts[:-1]]))
         g.entry_elements = [(int(o), int(o) + p.n_elements) for o, p in zip(g.element_offsets, parts)]
+    for g in groups:
+        if g.type.triads is not None:
+            g.triads = group_triads(g, [scene.beams[i] for i in g.entries])
     n_solid_nodes = solid_mesh.n_nodes if solid_mesh is not None else 0
-    dofmap = DofMap.layout(n_solid_nodes, [(g.type.dofs_per_node, g.type.rotations_per_node, g.mesh.n_nodes)
-                                           for g in groups])
+    dofmap = DofMap.layout(n_solid_nodes, [(g.type.dofs_per_node, g.type.rotations_per_node, g.mesh.n_nodes,
+                                            g.type.n_rotation_nodes(g.mesh)) for g in groups])
     for g, centreline, rotations in zip(groups, dofmap.centreline, dofmap.rotations):
         g.dofs, g.rotations = centreline, rotations
     return BuiltScene(scene=scene, solid_mesh=solid_mesh, groups=groups, entry_group=entry_group,
@@ -154,6 +158,43 @@ def build_beam_mesh(spec, kind, path):
         return curve_mesh(spec["curve"], spec["elements"], kind.element)
     except MeshError as exc:
         raise SceneError(f"{path}: {exc}") from None
+
+
+def group_triads(g, specs):
+    """Reference triads (n_rotation_nodes, 3, 3) of a beam group with triads: per beam its given
+    ``triads`` (checked) or the parallel-transport frame from its ``normal`` (default rule without).
+
+    Raises SceneError naming ``beams[i].triads`` or ``beams[i].normal``.
+    """
+    mesh = g.mesh
+    rows = g.type.rotation_nodes(mesh)
+    out = np.empty((g.type.n_rotation_nodes(mesh), 3, 3))
+    by_normal = {}
+    for k, (entry, spec) in enumerate(zip(g.entries, specs)):
+        a, b = g.entry_elements[k]
+        nodes = np.unique(rows[a:b])
+        if spec.get("triads") is not None:
+            # given per rotation node of this beam: its mesh nodes, then one middle node per element
+            given = np.asarray(spec["triads"], dtype=float)
+            full = g.type.reference_triads(mesh)
+            if given.shape != (len(nodes), 3, 3):
+                raise SceneError(f"beams[{entry}].triads: expected shape ({len(nodes)}, 3, 3) (its {len(nodes) - (b - a)} "
+                                 f"nodes, then one middle node per element), got {given.shape}")
+            full[nodes] = given
+            try:
+                checked = g.type.reference_triads(mesh, given=full)
+            except ValueError as exc:
+                raise SceneError(f"beams[{entry}].triads: {exc}") from None
+            out[nodes] = checked[nodes]
+            continue
+        key = None if spec.get("normal") is None else tuple(spec["normal"])
+        if key not in by_normal:
+            try:
+                by_normal[key] = g.type.reference_triads(mesh, normal=spec.get("normal"))
+            except ValueError as exc:
+                raise SceneError(f"beams[{entry}].normal: {exc}") from None
+        out[nodes] = by_normal[key][nodes]
+    return out
 
 
 def check_straight(mesh, path):

@@ -118,6 +118,9 @@ def bodies(model):
             a, b = g.entry_elements[k]
             nodes = np.unique(g.mesh.elements[a:b])
             dofs = g.dofs.dofs(nodes, np.arange(g.dofs.dofs_per_node))
+            if g.rotations.size:
+                dofs = np.concatenate([dofs, g.rotations.dofs(np.unique(g.type.rotation_nodes(g.mesh)[a:b]),
+                                                              [0, 1, 2])])
             inside = np.any((coupled_elements >= a) & (coupled_elements < b))
             if inside:
                 solid_body.append(dofs)
@@ -146,7 +149,7 @@ def check_supports(model):
         else:
             rank_fix = 0
         if rank_fix < rank_all:
-            centre, size = model._mode_frame(dofs, model._tangent_triplets())
+            centre, size = model._mode_frame(dofs, ~model._position_triplets())
             free = free_rigid_motions(R, Rf, 1e-10 * s_all[0], centre, size)
             raise SceneError(f"dirichlet: {label} can move freely ({len(free)} rigid-body mode(s) not "
                              f"fixed: {', '.join(free)}); add supports ([[dirichlet]]) that stop these motions")
@@ -159,7 +162,7 @@ def check_linear_displacements(model, z, stacklevel=3):
     linear kinematics assumes displacements small against the body."""
     u = model.basis.to_physical(z[: model.n_displacement_dofs]).reshape(-1, 3)
     X = model.reference().reshape(-1, 3)
-    position = ~model._tangent_triplets()
+    position = model._position_triplets()
     for label, dofs in bodies(model):
         triplets = np.unique(dofs // 3)
         triplets = triplets[position[triplets]]
@@ -201,7 +204,11 @@ def check_zero_energy_modes(model):
                 rows = g.coupling.G[:, g.dofs.slice]
             else:
                 rows = g.operators.D.tocsr()[g.coupling.coupled_rows]
-        found = find_mechanisms(g.mesh, rows, fixed[g.dofs.slice])
+        if g.rotations.size:
+            found = find_mechanisms(g.mesh, rows, np.concatenate([fixed[g.dofs.slice], fixed[g.rotations.slice]]),
+                                    rotation_nodes=g.type.rotation_nodes(g.mesh))
+        else:
+            found = find_mechanisms(g.mesh, rows, fixed[g.dofs.slice])
         model.zero_energy_modes += [(g, m) for m in found]
     if model.zero_energy_modes:
         g, m = model.zero_energy_modes[0]
@@ -230,6 +237,16 @@ def mechanism_message(model, g, m, label):
         elements = np.unique(g.operators.point_fields["beam_element"])
         coupled[np.unique(g.mesh.elements[elements])] = True
     outside = ~coupled[m.moving]
+    n_cl = g.mesh.n_centreline_dofs
+    if g.rotations.size and np.abs(m.mode[:n_cl]).max() <= 1e-8 * np.abs(m.mode).max():
+        # only the triads move: the cross-sections turn about a straight centreline
+        entry_nodes = f"beam:{entry}:start"
+        return (f"{where}: zero-energy mode (a mechanism: the beam can move without any stiffness against it, so "
+                f"no solver can determine that motion): its cross-sections turn about the centreline (a twist "
+                f"about its axis, nodes {format_ids(np.sort(local))}); the coupling ties the centreline only, not the "
+                f"rotation of the cross-sections. Support the rotation at one node ([[dirichlet]] on = "
+                f"\"{entry_nodes}\", rotation = [0, 0, 0]); rotational coupling to the solid would hold it too "
+                "(not implemented yet)")
     if outside.all() and model.solid_mesh is None:
         why = "nothing but the beam itself holds the moving nodes"
         advice = (f"a {g.model} has no bending stiffness, so between supports its nodes are held only along its bars: "

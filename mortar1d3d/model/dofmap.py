@@ -10,9 +10,11 @@ block        unknowns                                            DOFs per node
 solid        displacements, ``3 * node + i``                     3
 centreline   one block per beam group (beams of one type):       the element
              Hermite ``[r, t]`` per node, positions for a truss  type's
-rotations    one block per beam group: nodal rotations of beams  3
-             with a material frame (empty until such a type
-             exists)
+rotations    one block per beam group: the total spatial        3
+             rotation vectors ψ of the rotation nodes of
+             beams with a material frame (``simo_reissner``:
+             the mesh's nodes, then one middle node per
+             element; empty for the other types)
 multipliers  Lagrange multipliers of the coupling rows           1
 ===========  ==================================================  ===============
 
@@ -97,15 +99,17 @@ class DofMap:
         Parameters
         ----------
         n_solid_nodes : int
-        beams : sequence of (centreline DOFs per node, rotations per node, n_nodes)
-            One per beam group, in group order (rotations per node: 0 or 3).
+        beams : sequence of (centreline DOFs per node, rotations per node, n_nodes[, n_rotation_nodes])
+            One per beam group, in group order (rotations per node: 0 or 3; rotation nodes:
+            default ``n_nodes``).
         n_multipliers : int
         """
         blocks = [Block("solid", 0, 3 * n_solid_nodes, 3)]
         for kind, column in (("centreline", 0), ("rotations", 1)):
             for k, group in enumerate(beams):
                 start = blocks[-1].stop
-                blocks.append(Block(kind, start, start + group[column] * group[2], group[column] or 3, group=k))
+                nodes = group[2] if kind == "centreline" or len(group) < 4 else group[3]
+                blocks.append(Block(kind, start, start + group[column] * nodes, group[column] or 3, group=k))
         blocks.append(Block("multipliers", blocks[-1].stop, blocks[-1].stop + n_multipliers, 1))
         return cls(blocks)
 

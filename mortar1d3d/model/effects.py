@@ -79,6 +79,13 @@ def effects(model):
             out.append(Effect("beam.tangent", every, "consistent tangent"))
         else:
             out.append(Effect("beam.stiffness", "once", "linearised at the reference configuration"))
+        framed = [g for g in model.groups if g.rotations.size]
+        if framed:
+            nodes = sum(g.rotations.size // 3 for g in framed)
+            out.append(Effect("beam.rotations", "once", f"{', '.join(g.model for g in framed)}: {nodes} rotation "
+                                                        "nodes (mesh nodes + element middles), reference triads"))
+            if nonlinear:
+                out.append(Effect("beam.rotation_update", every, "multiplicative: ψ ← log(exp(Δθ) exp(ψ))"))
     kinds = {item["type"] for item in sc.loads}
     for kind, when, detail in (("point", "once", "dead nodal forces"),
                                ("traction", "once", "dead surface traction"),
@@ -92,7 +99,12 @@ def effects(model):
         else:
             out.append(Effect("load.pressure", "once", "pressure on the reference surface (linear kinematics)"))
     if "moment" in kinds:
-        out.append(Effect("load.moment", every, "beam end moment"))
+        on_spins = [sel[1].rotations.size > 0 for item, (sel, _) in zip(sc.loads, model.load_sets)
+                    if item["type"] == "moment"]
+        if all(on_spins):
+            out.append(Effect("load.moment", "once", "dead moments on rotation nodes (virtual work M·δθ)"))
+        else:
+            out.append(Effect("load.moment", every, "beam end moment"))
     if nonlinear:
         a = sc.analysis
         out.append(Effect("solver.newton", "every load step", f"{a['steps']} load steps, rtol {a['rtol']:g}, "

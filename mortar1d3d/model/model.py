@@ -6,8 +6,11 @@ the solid and beam models, the coupling (after :meth:`Model.prepare`), and the n
 that :mod:`mortar1d3d.solvers.newton` solves (``fixed``, ``free``, ``prescribed``, ``residual``,
 ``solve_linear``). Global unknowns follow the DOF map (:mod:`.dofmap`): solid displacements,
 the centreline DOFs of each beam group (Hermite ``[r, t]`` per node for ``torsion_free``,
-positions for ``truss``), rotations (none yet), then Lagrange multipliers (coupled LM rows) when
-the coupling is enforced with Lagrange multipliers.
+positions for ``truss``), rotations (the total spatial rotation vectors ψ of the rotation nodes
+of ``simo_reissner`` groups), then Lagrange multipliers (coupled LM rows) when the coupling is
+enforced with Lagrange multipliers. Rotations are updated multiplicatively (:meth:`Model.update`):
+the residual and tangent are taken with respect to spatial spins, so a Newton increment of a
+rotation node is a spin Δθ and ψ ← log(exp(Δθ) exp(ψ)).
 
 Every stage that does work increments ``Model.counts[<effect>]`` with the names that
 :func:`~mortar1d3d.model.plan` lists, so that tests can prove what ran.
@@ -91,6 +94,12 @@ class Model:
         block = self.dofmap.solid if sel[0] == "solid" else sel[1].dofs
         return block.dofs(sel[-1], components)
 
+    @staticmethod
+    def _rotation_dofs(sel):
+        """Rotation unknowns (three per node) at the mesh nodes of a resolved beam set ``sel``
+        (a mesh node is the rotation node of the same index)."""
+        return sel[1].rotations.dofs(sel[2], [0, 1, 2])
+
     def _dirichlet(self):
         """Fixed DOFs and their values in the basis of the unknowns, the position DOFs of each entry
         (for its reaction), and that basis (:class:`~mortar1d3d.supports.RotatedBasis` of the clamps)."""
@@ -99,7 +108,7 @@ class Model:
         for i, d in enumerate(self.scene.dirichlet):
             sel = self.select(d["on"], f"dirichlet[{i}].on")
             idx = self._set_dofs(sel, d["components"])
-            val = np.tile(d["value"][d["components"]], len(idx) // len(d["components"]))
+            val = np.tile(d["value"][d["components"]], len(idx) // max(len(d["components"]), 1))
             dofs.append(idx)
             values.append(val)
             if d["clamp"]:
@@ -111,6 +120,12 @@ class Model:
                 t_idx = (starts[:, None] + np.arange(2)).ravel()      # e1·Δt, e2·Δt in the rotated frame
                 dofs.append(t_idx)
                 values.append(np.zeros(len(t_idx)))
+            if d["rotation"] is not None or (d["clamp"] and sel[1].rotations.size):
+                # the total rotation vector of every node of the set (a clamp: the reference triad)
+                r_idx = self._rotation_dofs(sel)
+                rotation = d["rotation"] if d["rotation"] is not None else np.zeros(3)
+                dofs.append(r_idx)
+                values.append(np.tile(rotation, len(r_idx) // 3))
             per_entry.append(idx)     # position DOFs only: their reactions are forces
         starts = sorted(clamps)
         basis = RotatedBasis(starts, [clamps[s] for s in starts])
@@ -146,6 +161,11 @@ class Model:
         if solver == "block" and not lagrange:
             raise SceneError("analysis.solver: 'block' is the saddle-point solver of Lagrange-multiplier coupling; "
                              "use 'auto', 'direct' or 'amg'")
+        framed = [g.model for g in self.groups if g.rotations.size]
+        if framed and solver in ("amg", "block") and not self.linear:
+            raise SceneError(f"analysis.solver: {solver!r} runs CG or MINRES, which need a symmetric tangent; the "
+                             f"{framed[0]} beam's tangent is not symmetric away from its reference state, so a "
+                             "nonlinear analysis with it uses 'direct' (or 'auto', which picks it)")
         if solver == "amg" and lagrange:
             raise SceneError("analysis.solver: Lagrange-multiplier coupling gives a saddle point; use 'auto', "
                              "'direct' or 'block' (MINRES, the auxiliary-space AMG inside a block preconditioner)")
@@ -163,6 +183,9 @@ class Model:
         from ..solvers.direct import DIRECT_MAX_DOFS
         n = self.n_displacement_dofs if n_unknowns is None else n_unknowns
         if n <= DIRECT_MAX_DOFS:
+            return "direct"
+        if not self.linear and any(g.rotations.size for g in self.groups):
+            # beams with rotations: a non-symmetric tangent, which CG and MINRES do not take
             return "direct"
         return "block" if self.lagrange else "amg"
 
@@ -201,9 +224,10 @@ class Model:
             except ValueError as exc:
                 raise SceneError(f"solid.material: {exc}") from None
         for g in self.groups:
-            EA = np.concatenate([np.full(b - a, sc.beams[i]["section"]["EA"]) for i, (a, b) in zip(g.entries, g.entry_elements)])
-            EI = np.concatenate([np.full(b - a, sc.beams[i]["section"]["EI"]) for i, (a, b) in zip(g.entries, g.entry_elements)])
-            g.physics = g.type.physics_class()(g.mesh, EA, EI, model=g.model)
+            sections = [(b - a, sc.beams[i]["section"]) for i, (a, b) in zip(g.entries, g.entry_elements)]
+            g.physics = g.type.make_physics(g.mesh, sections, g.triads)
+            if g.rotations.size:
+                self.counts["beam.rotations"] += 1
         if sc.coupled:
             c = sc.coupling
             for k, g in enumerate(self.groups):
@@ -319,6 +343,12 @@ class Model:
                     self.counts["load.traction"] += 1
                 else:
                     self.pressures.append(Pressure(self.solid_mesh, faces, item["value"]))
+            elif sel[1].rotations.size:
+                # moment on the rotation nodes of a beam with a material frame: virtual work M·δθ
+                # with spatial spins δθ, a dead load on the rotation unknowns
+                r_idx = self._rotation_dofs(sel)
+                self.dead_load[r_idx] += np.tile(item["value"], len(r_idx) // 3)
+                self.counts["load.moment"] += 1
             else:   # moment on a Hermite beam end: acts on the node's tangent DOFs
                 g, nodes = sel[1], sel[2]
                 dofs = g.dofs.dofs(nodes[:1], [3, 4, 5])
@@ -357,9 +387,22 @@ class Model:
                 is_tangent[first + 1: first + 2 * g.mesh.n_nodes: 2] = True
         return is_tangent
 
+    def _rotation_triplets(self):
+        """(n_displacement_dofs // 3,) bool: which DOF triplets are rotations (spins of rotation nodes)."""
+        is_rotation = np.zeros(self.n_displacement_dofs // 3, dtype=bool)
+        for g in self.groups:
+            if g.rotations is not None and g.rotations.size:
+                is_rotation[g.rotations.start // 3: g.rotations.stop // 3] = True
+        return is_rotation
+
+    def _position_triplets(self):
+        """(n_displacement_dofs // 3,) bool: which DOF triplets move a point (solid nodes, beam positions)."""
+        return ~(self._tangent_triplets() | self._rotation_triplets())
+
     def _mode_frame(self, dofs, is_tangent):
         """Centre and length scale of :meth:`rigid_body_modes`: the centroid and the largest extent
-        of the positions among ``dofs`` (all when None)."""
+        of the positions among ``dofs`` (all when None); ``is_tangent`` marks the triplets that
+        are no positions."""
         X = self.reference().reshape(-1, 3)
         triplets = np.arange(len(X)) if dofs is None else np.unique(dofs // 3)
         pos = triplets[~is_tangent[triplets]]
@@ -373,8 +416,10 @@ class Model:
         the unknowns (clamped tangents in their rotated frames), like ``fixed`` and ``free``."""
         from ..solvers.rigid import rigid_body_modes
         is_tangent = self._tangent_triplets()
-        centre, size = self._mode_frame(dofs, is_tangent)
-        R = rigid_body_modes(self.reference().reshape(-1, 3), is_tangent, centre=centre, scale=size)
+        is_rotation = self._rotation_triplets()
+        centre, size = self._mode_frame(dofs, is_tangent | is_rotation)
+        R = rigid_body_modes(self.reference().reshape(-1, 3), is_tangent, centre=centre, scale=size,
+                             rotation_mask=is_rotation if is_rotation.any() else None)
         return self.basis.to_unknowns(R)
 
     def check_supports(self):
@@ -420,18 +465,59 @@ class Model:
             self._count("solid", tangent)
             r[:nS] = f
             blocks.append(K)
+        framed = []          # tangents of beams with rotations: their unknowns are not contiguous
         for g in self.groups:
             sl = g.dofs.slice
+            if g.rotations.size:
+                f, K = g.physics.evaluate(d[sl], d[g.rotations.slice].reshape(-1, 3), tangent=tangent)
+                self._count("beam", tangent)
+                idx = np.concatenate([np.arange(g.dofs.start, g.dofs.stop), np.arange(g.rotations.start,
+                                                                                      g.rotations.stop)])
+                r[idx] = f
+                blocks.append(sp.csr_matrix((g.dofs.size, g.dofs.size)))
+                framed.append((K, idx))
+                continue
             f, K = g.physics.evaluate(d[sl], tangent=tangent)
             self._count("beam", tangent)
             r[sl] = f
             blocks.append(K)
+        if tangent and framed:
+            rotations = sum(g.rotations.size for g in self.groups)
+            blocks.append(sp.csr_matrix((rotations, rotations)))
         K = sp.block_diag(blocks, format="csr") if tangent else None
+        for Kb, idx in framed if tangent else ():
+            Kb = Kb.tocoo()
+            K = K + sp.csr_matrix((Kb.data, (idx[Kb.row], idx[Kb.col])), shape=(n, n))
         if self.scene.coupled and not self.lagrange:
             r += self.coupling_stiffness @ d
             if tangent:
                 K = K + self.coupling_stiffness
         return r, K
+
+    def update(self, z, free, dz):
+        """Apply a Newton increment ``dz`` (on the ``free`` unknowns) to ``z`` in place.
+
+        Additive for every unknown but rotations: a rotation node's increment is a spatial spin
+        Δθ, and its total rotation vector becomes ψ ← log(exp(Δθ) exp(ψ)) (the multiplicative
+        update the residual's linearisation in spins asks for). Without rotations this is
+        ``z[free] += dz``.
+        """
+        framed = [g for g in self.groups if g.rotations.size]
+        if not framed:
+            z[free] += dz
+            return
+        step = np.zeros(len(z))
+        step[free] = dz
+        self.counts["beam.rotation_update"] += 1
+        for g in framed:
+            b = g.rotations
+            spin = step[b.slice].reshape(-1, 3).copy()
+            step[b.slice] = 0.0
+            psi = z[b.slice].reshape(-1, 3)
+            moved = np.any(spin != 0.0, axis=1)          # the others keep their bits
+            psi[moved] = g.physics.update(psi, spin)[moved]
+            z[b.slice] = psi.ravel()
+        z[free] += step[free]
 
     def residual(self, z, t, tangent=True):
         """Residual ``r = f_int + (coupling) − t f_ext`` over all unknowns, and its Jacobian.
@@ -486,6 +572,9 @@ class Model:
             nS = 3 * self.n_solid_nodes
             free = self.free[self.free < self.n_displacement_dofs]
             blocks = [follow_operator(g.operators, g.mesh) for g in self.groups]
+            rotations = sum(g.rotations.size for g in self.groups)
+            if rotations:       # rotations (after every centreline block) do not follow the solid's nodes
+                blocks.append(sp.csr_matrix((rotations, 3 * self.n_solid_nodes)))
             P = sp.vstack(blocks, format="csr")           # groups are contiguous after the solid
             P = self.basis.to_unknowns(P, offset=nS)      # rows of clamped tangents: rotated frames
             solid = np.flatnonzero(free < nS)

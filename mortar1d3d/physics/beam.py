@@ -405,8 +405,8 @@ def curved_torsion_free_message(ids, values, n_elements):
             f"elements are curved (elements {format_ids(ids)}; reference curvature × element length up to "
             f"{worst:.3g}). Its bending energy ½EI(|k| − |k0|)² depends on the size of the curvature only, so a "
             "curved reference could change its bending plane at no cost (zero stiffness; the coupling does not "
-            "hold it). Use model = \"truss\" for curved fibres; a geometrically exact beam for curved "
-            "centrelines (simo_reissner) is planned")
+            "hold it). Use model = \"simo_reissner\" (a geometrically exact beam with rotations) for curved "
+            "beams, or model = \"truss\" for curved fibres without bending stiffness")
 
 
 def _stiffness(value, name, n_elements, allow_zero=False):
@@ -461,7 +461,7 @@ class BeamModel:
     direction: a change of the bending plane of a planar arc costs nothing, the tangent has
     no stiffness against it, and embedding the beam in a solid does not supply it (the
     ``line2`` coupling ties three of the six DOFs per node). Curved fibres need the truss, or
-    a beam with a material frame (Simo–Reissner, planned).
+    a beam with a material frame (``simo_reissner``, :mod:`mortar1d3d.physics.simo_reissner`).
 
     *Gauss rules*: the bending term uses ``n_gauss`` points (default 6): on a straight
     reference element its linearised integrand ``(u'')²`` is a quadratic, and the nonlinear
@@ -491,6 +491,8 @@ class BeamModel:
         if not isinstance(beams, BeamMesh):
             raise TypeError(f"BeamModel: expected a BeamMesh, got {type(beams).__name__}")
         kind = beam_type(model)         # NotImplementedError (planned) or ValueError (unknown)
+        if kind.physics.split(":")[1] != "BeamModel":
+            raise ValueError(f"beam model {model!r} is implemented by {kind.physics.replace(':', '.')}, not BeamModel")
         needed = kind.element.name
         if beams.element_type.name != needed:
             raise ValueError(f"beam model {model!r} needs a {needed!r} BeamMesh, got "

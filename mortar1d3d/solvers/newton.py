@@ -13,6 +13,8 @@ exactly solved step, no Newton loop). The system is any object with
 
 and optionally
 
+* ``update(z, free, dz)``: apply the Newton increment ``dz`` of the free unknowns to ``z`` in
+  place (default ``z[free] += dz``; a model with rotations composes them multiplicatively);
 * ``reference()``: the base configuration of the leading unknowns (coordinates and tangents that
   the unknowns displace), for the round-off floor of the residual;
 * ``last_linear_info``: a dict set by ``solve_linear``; its ``note`` (a string, e.g. that an
@@ -141,7 +143,11 @@ def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence)
         dn = float(np.linalg.norm(dz))
         if not math.isfinite(dn):
             raise _StepFailed("the Newton increment is not finite (singular tangent?)")
-        z[free] += dz
+        update = getattr(system, "update", None)
+        if update is None:
+            z[free] += dz
+        else:
+            update(z, free, dz)
         increments.append(dn)
         if d0 is None:
             d0 = max(dn, 1e-300)

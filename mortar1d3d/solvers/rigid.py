@@ -5,7 +5,7 @@ import numpy as np
 __all__ = ["rigid_body_modes"]
 
 
-def rigid_body_modes(points, tangent_mask=None, *, centre=None, scale=1.0):
+def rigid_body_modes(points, tangent_mask=None, *, centre=None, scale=1.0, rotation_mask=None):
     """The six rigid-body modes of a set of DOF triplets (three translations, three rotations).
 
     Parameters
@@ -21,6 +21,9 @@ def rigid_body_modes(points, tangent_mask=None, *, centre=None, scale=1.0):
     scale : float
         A length the rotation columns are divided by (e.g. the body's size: the columns are then
         of the order of the translations whatever the units). Default 1.
+    rotation_mask : (n_triplets,) array_like of bool, optional
+        True for rotation triplets (spatial spins of a beam's material frame): a rigid rotation
+        ω turns them by ω itself, a translation not at all (their ``points`` are ignored).
 
     Returns
     -------
@@ -62,4 +65,9 @@ def rigid_body_modes(points, tangent_mask=None, *, centre=None, scale=1.0):
     R[:, 1, 3], R[:, 2, 3] = -z, y
     R[:, 0, 4], R[:, 2, 4] = z, -x
     R[:, 0, 5], R[:, 1, 5] = -y, x
+    if rotation_mask is not None:
+        spin = np.asarray(rotation_mask, dtype=bool)
+        R[spin] = 0.0
+        for i in range(3):
+            R[spin, i, 3 + i] = 1.0 / scale
     return R.reshape(3 * n, 6)
