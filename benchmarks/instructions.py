@@ -10,7 +10,8 @@ under ``valgrind --tool=callgrind``: the scene is built and assembled once (warm
 cache must already be filled, see below), then assembled ``--calls`` more times, and the same
 child with no extra call is counted too. The difference divided by ``--calls`` is the count of
 one call, free of the import, the scene generation and the warm-up. It prints the count of
-every checkout and its ratio to the first one.
+every checkout, split into the compiled kernels (code valgrind sees without a name), the Python
+interpreter, numpy/scipy and the rest, and each checkout's ratios to the first one.
 
 Counts say whether a version *does more work*. Two versions with equal counts and different
 times differ in how the CPU runs the same work (code layout, branch prediction, memory), which
@@ -52,7 +53,9 @@ def _child(args):
 
 def _environment(package, args):
     cache = Path(args.cache) / package.name
-    return dict(os.environ, NUMBA_NUM_THREADS="1", NUMBA_CPU_NAME=TARGET, NUMBA_CPU_FEATURES=TARGET_FEATURES,
+    # one thread everywhere: BLAS threads that spin while waiting would add instructions at random
+    return dict(os.environ, NUMBA_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1",
+                MKL_NUM_THREADS="1", NUMBA_CPU_NAME=TARGET, NUMBA_CPU_FEATURES=TARGET_FEATURES,
                 NUMBA_CACHE_DIR=str(cache))
 
 
@@ -63,21 +66,38 @@ TARGET = "haswell"
 TARGET_FEATURES = "+sse2,+sse3,+ssse3,+sse4.1,+sse4.2,+popcnt,+avx,+avx2,+fma,+bmi,+bmi2,+lzcnt,+movbe,+f16c,+cx16"
 
 
+def _by_object(path):
+    """Instructions of a callgrind output per object: "kernels" (Numba's code, which valgrind sees
+    without a name), "python" (the interpreter), "numpy/scipy" and "other" (libc, LLVM, ...)."""
+    text = subprocess.run(["callgrind_annotate", "--inclusive=no", "--threshold=100", str(path)],
+                          capture_output=True, text=True, check=True).stdout
+    parts = dict.fromkeys(PARTS, 0)
+    for line in text.splitlines():
+        match = re.match(r"\s*([\d,]+) \(\s*[\d.]+%\)\s+.*\[(.*)\]\s*$", line)
+        if match:
+            obj = Path(match.group(2)).name
+            part = ("kernels" if obj == "???" else "python" if obj.startswith("libpython")
+                    else "numpy/scipy" if ("umath" in obj or "openblas" in obj or obj.startswith("_"))
+                    else "other")
+            parts[part] += int(match.group(1).replace(",", ""))
+    return parts
+
+
+PARTS = ("kernels", "python", "numpy/scipy", "other")
+
+
 def _count(package, args, calls):
-    """Instructions executed by a child that makes ``calls`` extra calls (callgrind's total)."""
+    """Instructions executed by a child that makes ``calls`` extra calls: {part: count}."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "callgrind.out"
-        cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", "--dump-instr=no",
+        cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
                sys.executable, str(HERE), "--child", "--package", str(package), "--integration",
                args.integration, "--distort", str(args.distort), "--n", str(args.n), "--fibres",
                str(args.fibres), "--child-calls", str(calls)]
         done = subprocess.run(cmd, env=_environment(package, args), capture_output=True, text=True)
         if done.returncode != 0:
             raise SystemExit(f"child failed ({package}, {calls} calls):\n{done.stderr[-2000:]}")
-        match = re.search(r"^summary:\s+(\d+)", out.read_text(), re.MULTILINE)
-        if match is None:
-            raise SystemExit(f"no instruction total in callgrind's output for {package}")
-        return int(match.group(1))
+        return _by_object(out)
 
 
 def main(argv=None):
@@ -107,12 +127,14 @@ def main(argv=None):
                         str(args.fibres)], check=True, env=_environment(package, args))
         base = _count(package, args, 0)
         more = _count(package, args, args.calls)
-        counts.append((more - base) / args.calls)
-        print(f"{package}: {counts[-1]:.4e} instructions per {args.integration} call "
-              f"(fibre_cube({args.n}, {args.fibres}, {args.n}), distort {args.distort}, n_gauss 4, 1 thread)",
-              flush=True)
+        per_call = {k: (more[k] - base[k]) / args.calls for k in PARTS}
+        counts.append(per_call)
+        print(f"{package}: {sum(per_call.values()):.4e} instructions per {args.integration} call "
+              f"(fibre_cube({args.n}, {args.fibres}, {args.n}), distort {args.distort}, n_gauss 4, 1 thread): "
+              + ", ".join(f"{k} {v:.4e}" for k, v in per_call.items()), flush=True)
     for package, c in zip(packages[1:], counts[1:]):
-        print(f"{package.name} / {packages[0].name}: {c / counts[0]:.4f}")
+        print(f"{package.name} / {packages[0].name}: total {sum(c.values()) / sum(counts[0].values()):.4f}, "
+              + ", ".join(f"{k} {c[k] / counts[0][k]:.4f}" for k in PARTS if counts[0][k]))
 
 
 if __name__ == "__main__":
