@@ -151,7 +151,7 @@ def jacobian(psi, T):
 
 @njit
 def jacobian_inverse(psi, Ti):
-    """``T(ψ)⁻¹ = I - ½ [ψ]× + D [ψ]×²`` (|ψ| < 2π)."""
+    """``T(ψ)⁻¹ = I - ½ [ψ]× + D [ψ]×²`` (``|ψ| < 2π``)."""
     a2 = psi[0] * psi[0] + psi[1] * psi[1] + psi[2] * psi[2]
     _fill(psi, 1.0, -0.5, _inverse_coefficient(a2), Ti)
 
@@ -198,7 +198,7 @@ def jacobian_derivative_transpose(psi, v, u, out, work):
 
 @njit
 def log(R, psi):
-    """Rotation vector ``ψ`` (|ψ| ≤ π) of the rotation matrix R, through its unit quaternion.
+    """Rotation vector ``ψ`` (``|ψ| ≤ π``) of the rotation matrix R, through its unit quaternion.
 
     The quaternion's largest component (by real part) is taken first and the others follow from
     the off-diagonal entries (Spurrier 1978), so no square root is taken of a small number. The
