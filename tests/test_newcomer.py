@@ -293,3 +293,14 @@ def test_demo_says_when_it_overwrites(tmp_path):
     (tmp_path / "old").mkdir()
     (tmp_path / "old" / "fibre_cube.png").write_bytes(b"")
     assert "overwriting the 1 files of an earlier run" in note(str(tmp_path / "old"))
+
+
+def test_the_scene_reference_fibres_example_builds():
+    text = (Path(__file__).resolve().parent.parent / "docs" / "scene_reference.md").read_text()
+    section = text[text.index("## `[[fibres]]`"):]
+    block = section[section.index("```toml") + 7: section.index("```", section.index("```toml") + 7)]
+    import tomllib
+    data = tomllib.loads(block)
+    scene = m13.Scene.from_dict({"solid": {"mesh": {"box": [[0, 0, 0], [1, 0.2, 0.2]], "cells": [10, 2, 2]},
+                                           "material": {"model": "linear_elastic", "E": 30e9, "nu": 0.2}}, **data})
+    assert len(scene.beams) == 206 and scene.fibres == [(0, 200), (200, 6)]

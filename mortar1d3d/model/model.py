@@ -239,7 +239,7 @@ class Model:
         return self
 
     #: a beam whose coupled length falls short of its length by more than this fraction gets a
-    #: CouplingWarning (quadrature of |r0'| over the segments is far more accurate than this)
+    #: CouplingWarning (the quadrature of the speed over the segments is far more accurate than this)
     UNCOUPLED_FRACTION_LIMIT = 1e-3
 
     def _check_coupled_lengths(self, g):
