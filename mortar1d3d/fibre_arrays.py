@@ -16,11 +16,10 @@ HELIX_KEYS = ("cylinder",)
 MAX_FIBRES = 100_000
 
 
-def expand(value, i, first_beam):
+def expand(value, i):
     """Validate ``fibres[i]`` and return its fibres as beam tables (dicts in the ``[[beams]]`` layout).
 
-    ``first_beam`` is the index the first of them gets in ``scene.beams`` (used in messages only).
-    Errors name ``fibres[i].<key>``.
+    Errors name ``fibres[i].<key>``; the beam tables are validated by the caller (as beams).
     """
     from . import generate
     from .scene import _choice, _integer, _list, _number, _points, _table, _vector

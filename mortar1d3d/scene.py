@@ -391,7 +391,7 @@ def _fibre_arrays(value, beams, base_dir):
     out = []
     for i, entry in enumerate(_list(value, "fibres")):
         first = len(beams)
-        for k, table in enumerate(expand(entry, i, first)):
+        for k, table in enumerate(expand(entry, i)):
             try:
                 beams.append(_beam(table, first + k, base_dir))
             except SceneError as exc:

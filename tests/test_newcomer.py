@@ -2,7 +2,6 @@
 the beam VTU, segments and points that move with the beams, coupled length per beam and its
 warning, fibre generators and [[fibres]] arrays, the plan table, --version, the demo's overwrite
 note and the patch test's closing line."""
-import importlib.util
 import io
 import re
 from pathlib import Path
@@ -18,14 +17,7 @@ from mortar1d3d.errors import CouplingWarning
 from mortar1d3d.io.vtu import beam_fibres, displacement_coefficients, write_beams, write_integration_points, \
     write_segments
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-
-
-def _example(name):
-    spec = importlib.util.spec_from_file_location(f"{name}_example", EXAMPLES / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+from example_modules import load_example as _example
 
 
 # -- first run: say that the kernels compile, only when the cache is cold ------------------------

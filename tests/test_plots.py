@@ -1,9 +1,6 @@
 """The example and report plots (issue 21): no legend or inset covers a data point or the target
 line, legend entries draw the line styles of their curves, log axes carry readable labels. The
 figures are built from small synthetic data (their functions take the numbers, not a run)."""
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -14,14 +11,11 @@ import matplotlib.ticker  # noqa: E402
 
 from mortar1d3d.study.plots import EMBEDDING_STYLES, _error_time_grid  # noqa: E402
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+from example_modules import load_example  # noqa: E402
 
 
 def _example(name):
-    spec = importlib.util.spec_from_file_location(f"{name}_plot_example", EXAMPLES / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_example(name, f"{name}_plot_example")
 
 
 def _data_points(ax):
