@@ -231,7 +231,18 @@ def _plot(curves, levels, path):
     except ImportError:
         print("matplotlib is not installed: no plot (pip install matplotlib)")
         return
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    fig = figure(curves, levels)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    print(f"plot written to {path}")
+
+
+def figure(curves, levels):
+    """The figure of :func:`_plot`; legends below the panels, so that none covers a curve or the
+    target line, and the inset with the displacement itself in a corner the curves leave free."""
+    import matplotlib.pyplot as plt
+    from matplotlib.ticker import FuncFormatter
+    fig, axes = plt.subplots(1, 3, figsize=(15, 5.2))
     for ax, load, label in ((axes[0], "tension", "u_x"), (axes[1], "bending", "u_z")):
         # the curves of both models overlap on the scale of u: plot u (inset scale) and the difference
         scale = np.abs(curves[load, levels[0]]["u_homogenised"]).max()
@@ -242,13 +253,13 @@ def _plot(curves, levels, path):
         ax.axhline(0.0, color="k", lw=0.8)
         ax.set_xlabel("x [m] (centre line y = W/2, z = t/2)")
         ax.set_ylabel(f"Δ{label} / max |{label}| [%]")
-        inset = ax.inset_axes([0.6, 0.25, 0.35, 0.3] if load == "tension" else [0.08, 0.08, 0.35, 0.3])
+        inset = ax.inset_axes(_free_corner(ax, (0.35, 0.3)))
         first = curves[load, levels[0]]
         inset.plot(first["x"], first["u_homogenised"], "k-", lw=1.5)
         inset.set_title(f"{label}(x), homogenised", fontsize=7)
         inset.tick_params(labelsize=6)
         ax.set_title(f"{load}: centre-line displacement difference")
-        ax.legend(fontsize=8, loc="upper right")
+        ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=1, frameon=False)
     ax = axes[2]
     for load, marker in (("tension", "o"), ("bending", "s")):
         ax.semilogy(levels, [abs(curves[load, lv]["tip"]) * 100 for lv in levels], marker=marker,
@@ -260,10 +271,38 @@ def _plot(curves, levels, path):
     ax.set_xlabel("density level (level² fibres per element and ply)")
     ax.set_ylabel("explicit vs homogenised [%]")
     ax.set_xticks(levels)
-    ax.legend(fontsize=8)
+    # the target line inside the range, the ticks as plain percentages
+    low, high = ax.get_ylim()
+    ax.set_ylim(low, max(high, 2.0 * 1.6))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    print(f"plot written to {path}")
+    return fig
+
+
+def _free_corner(ax, size, grow=0.55):
+    """Axes-fraction bounds ``[x0, y0, w, h]`` of a corner box of ``size`` (w, h) that no data point
+    of ``ax`` falls into. If every corner holds data, the y-range is grown by ``grow`` of its
+    height on one side (below, then above) to make room. Falls back to the lower right corner."""
+    import numpy as np
+    w, h = size
+    # left corners leave room for the inset's own tick labels (they sit left of it)
+    corners = [(1 - w - 0.03, 0.04), (0.13, 0.04), (1 - w - 0.03, 1 - h - 0.04), (0.13, 1 - h - 0.04)]
+    data = np.vstack([np.column_stack(line.get_data()) for line in ax.get_lines()
+                      if line.get_transform() == ax.transData])     # the curves, not axhline
+    for extend in (None, "below", "above"):
+        if extend:
+            low, high = ax.get_ylim()
+            ax.set_ylim(low - grow * (high - low), high) if extend == "below" else ax.set_ylim(low, high + grow * (high - low))
+        frac = ax.transAxes.inverted().transform(ax.transData.transform(data))
+        for x0, y0 in corners:
+            inside = (frac[:, 0] >= x0 - 0.02) & (frac[:, 0] <= x0 + w + 0.02) & (frac[:, 1] >= y0 - 0.02) & \
+                (frac[:, 1] <= y0 + h + 0.02)
+            if not inside.any():
+                return [x0, y0, w, h]
+        if extend:
+            ax.set_ylim(low, high)
+    return [corners[0][0], corners[0][1], w, h]
 
 
 if __name__ == "__main__":

@@ -185,6 +185,18 @@ def plot(out, path, lam_level):
     except ImportError:
         print("matplotlib is not installed: no plot (pip install matplotlib)")
         return False
+    fig = figure(out, lam_level)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return True
+
+
+def figure(out, lam_level):
+    """The figure of :func:`plot`: error against h_S for solid and beam, λ_z along the beam per
+    variant, and one panel holding the legends (so that none covers a curve)."""
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter, NullLocator
     levels = out["levels"]
     h = 1.0 / np.array(levels[:-1])
     variants = list(dict.fromkeys(v for v, _ in out["errors"]))
@@ -201,8 +213,13 @@ def plot(out, path, lam_level):
         ax.set_xlabel("h_S")
         ax.set_ylabel(f"relative L2 error, {what}")
         ax.set_title(f"{what} displacement vs level n={levels[-1]}")
+        # readable ticks: h_S as the fractions it is, the error at 1, 2, 5 × 10^k as plain numbers
+        ax.set_xticks(h, [f"1/{n}" for n in levels[:-1]])
+        ax.xaxis.set_minor_locator(NullLocator())         # the default labels minor ticks as 1.4×10⁻¹ ...
+        ax.yaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.yaxis.set_minor_formatter(NullFormatter())
         ax.invert_xaxis()
-    axes[0].legend(fontsize=6, ncol=2)
     for ax, variant in zip(axes[2:], variants):
         for ratio in ratios:
             s, lam = out["line_load"][(variant, ratio, lam_level)]
@@ -210,13 +227,22 @@ def plot(out, path, lam_level):
         ax.set_xlabel("arc length s")
         ax.set_ylabel("λ_z (line load at LM nodes)")
         ax.set_title(f"{variant}, h_S = 1/{lam_level}")
-        ax.legend(fontsize=7)
-    for ax in axes[2 + len(variants):]:
+    # legends in their own panel: in the data panels they covered curves. Styles and colours
+    # separately, with handles long enough to show the dashes.
+    legend_ax = axes[-1]
+    legend_ax.axis("off")
+    styles = [Line2D([], [], color="k", ls=markers[v][1:], marker=markers[v][0], label=v) for v in variants]
+    styles += [Line2D([], [], color="k", lw=0.6, ls="-", label="slope 2"),
+               Line2D([], [], color="k", lw=0.6, ls="--", label="slope 1")]
+    first = legend_ax.legend(handles=styles, loc="upper left", title="coupling (error panels)", fontsize=9,
+                             handlelength=4)
+    legend_ax.add_artist(first)
+    legend_ax.legend(handles=[Line2D([], [], color=colours[r], lw=2, label=f"h_B/h_S = {r:g}") for r in ratios],
+                     loc="lower left", title="beam / solid element size (all panels)", fontsize=9)
+    for ax in axes[2 + len(variants):-1]:
         ax.axis("off")
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return True
+    return fig
 
 
 def main(argv=None):

@@ -22,6 +22,15 @@ def relative_error(A, B):
     return spla.norm(A - B) / spla.norm(B)
 
 
+def overwrite_note(out):
+    """Where the results go, and whether an earlier run's files there are overwritten."""
+    earlier = sorted(os.listdir(out)) if os.path.isdir(out) else []
+    if earlier:
+        return (f"writing to {out}/: overwriting the {len(earlier)} files of an earlier run there "
+                "(use --out DIR to keep them)")
+    return f"writing to {out}/"
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", default="results/demo", help="output directory")
@@ -31,6 +40,7 @@ def main(argv=None):
     parser.add_argument("--curved", action="store_true", help="helical instead of straight fibres")
     parser.add_argument("--no-plot", action="store_true")
     args = parser.parse_args(argv)
+    print(overwrite_note(args.out), flush=True)
     os.makedirs(args.out, exist_ok=True)
 
     print("compiling / loading kernels ...", flush=True)

@@ -74,6 +74,50 @@ def _prune_caches(current, keep=KEEP_OTHER_CACHES):
 #: where compiled kernels are cached (set before any kernel is decorated)
 CACHE_DIR = _configure_cache()
 
+
+
+def cached_kernel_files(directory=None):
+    """Number of compiled-kernel index files (``*.nbi``) in the cache of this source version.
+
+    Numba writes one per cached function when it compiles it: the count grows during a run
+    exactly when something was compiled rather than loaded.
+    """
+    directory = Path(CACHE_DIR if directory is None else directory)
+    try:
+        return sum(1 for _ in directory.rglob("*.nbi"))
+    except OSError:
+        return 0
+
+
+#: whether the cache of this source version held no compiled kernel when the package was imported
+#: (a first run after installing or editing the package): :func:`announce_compilation` says so once
+CACHE_WAS_COLD = cached_kernel_files() == 0
+_announced = False
+
+#: the first-run compile time to announce (docs/performance.md measures it: about a minute for the
+#: mortar engine, one to three for everything, on two cores)
+COLD_COMPILE_NOTE = "about 1-3 minutes, once"
+
+
+def announce_compilation(stream=None):
+    """On a cold cache, say once per process that the kernels are being compiled and for how long.
+
+    Called by the entry points (:func:`~mortar1d3d.solve`, :func:`~mortar1d3d.assemble_mortar`,
+    :func:`~mortar1d3d.warmup`) before their first kernel call; prints nothing when the cache
+    already held kernels at import time, or when ``MORTAR1D3D_QUIET_COMPILE`` is set to a
+    non-empty value. Writes to ``stream`` (default ``sys.stderr``), so that piped stdout stays
+    clean. Returns True when it printed.
+    """
+    global _announced
+    if _announced or not CACHE_WAS_COLD or os.environ.get("MORTAR1D3D_QUIET_COMPILE"):
+        return False
+    _announced = True
+    import sys
+    print(f"mortar1d3d: first run of this version: compiling the Numba kernels ({COLD_COMPILE_NOTE}; "
+          f"later runs load them from {CACHE_DIR})", file=sys.stderr if stream is None else stream, flush=True)
+    return True
+
+
 #: Options shared by all kernels. ``fastmath`` stays off: the geometry relies on IEEE
 #: comparisons (inside tests, merging tolerances) and bit-identical results across threads.
 JIT_OPTIONS = dict(cache=True, nogil=True, fastmath=False, error_model="numpy")

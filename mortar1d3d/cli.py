@@ -28,6 +28,8 @@ def _run(args):
         return 2 if isinstance(exc, (SceneError, MeshError)) else 3
     if not args.quiet:
         print(f"{result!r}")
+        for line in result.coupling_summary():
+            print(f"  {line}")
         print(f"wrote {len(paths)} files to {out}/ (open {out / 'result.pvd'} in ParaView) "
               f"in {time.perf_counter() - start:.2f} s")
     return 0
@@ -43,8 +45,8 @@ def _plan(args):
         print(f"error: {exc}", file=sys.stderr)
         return 2
     print(f"mortar1d3d plan {args.scene}: solve() will run")
-    for e in effects:
-        print(f"  {e}")
+    for line in str(effects).splitlines():
+        print(f"  {line}")
     return 0
 
 
@@ -89,6 +91,8 @@ def main(argv=None):
 
 def _main(argv):
     parser = argparse.ArgumentParser(prog="mortar1d3d", description="Beams embedded in 3D solids (mortar coupling)")
+    from . import __version__
+    parser.add_argument("--version", action="version", version=f"mortar1d3d {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="solve a scene file and write a ParaView series")
     run.add_argument("scene", help="TOML scene file")

@@ -9,6 +9,10 @@ no Python loop over elements, fibres or nodes, so benchmark scenes build in well
 - :func:`fibre_cube`: the benchmark scene of docs/conventions.md §5 (the unit cube, straight or helical
   fibres drawn with splitmix64 so that other codes can rebuild the same curves).
 - :func:`random_curved_beams`: random helix pieces and arcs inside a box, for tests.
+- :func:`fibres_in_box`: straight fibres in any box with length and orientation distributions and
+  a minimum spacing; :func:`helices_on_cylinder`: a family of helices on one cylinder;
+  :func:`straight_beams`, :func:`helix_beams`: their Hermite meshes (``[[fibres]]`` of a scene
+  uses the same generators, one beam per fibre).
 - :func:`splitmix64`, :func:`splitmix64_uniforms`: the random stream of docs/conventions.md §5.
 """
 import numpy as np
@@ -17,6 +21,7 @@ from .elements.solid.dispatch import SOLID_ELEMENTS, SOLID_MODULES
 from .mesh import BeamMesh, SolidMesh
 
 __all__ = ["box", "distort", "fibre_cube", "random_curved_beams", "splitmix64", "splitmix64_uniforms",
+           "fibres_in_box", "helices_on_cylinder", "straight_beams", "helix_beams", "segment_distances",
            "FIBRE_LENGTH", "FIBRE_MARGIN", "HELIX_RADIUS", "HELIX_TURNS", "FACE_SETS"]
 
 # docs/conventions.md §5: fixed so that every code builds the same scene from (n, fibres, m, curved, seed)
@@ -390,3 +395,217 @@ def distort(solid, amplitude=0.1, seed=0):
     ramp[on_boundary] = 0.0
     points = X + amplitude * h * g * ramp[:, None]
     return SolidMesh(points, solid.cells, point_sets=solid.point_sets)
+
+
+# -- fibre families for scenes (random straight fibres in a box, helices on a cylinder) ---------
+
+def _draw(spec, rng, count, what):
+    """``count`` values of a length distribution: a number, ``{"uniform": [a, b]}`` or
+    ``{"normal": [mean, std]}`` (redrawn until positive)."""
+    if isinstance(spec, dict):
+        if len(spec) != 1 or next(iter(spec)) not in ("uniform", "normal"):
+            raise ValueError(f"{what}: expected a number, {{uniform = [a, b]}} or {{normal = [mean, std]}}, got {spec!r}")
+        kind, (p, q) = next(iter(spec.items()))
+        if kind == "uniform":
+            if not 0.0 < p <= q:
+                raise ValueError(f"{what}.uniform: expected 0 < a <= b, got [{p}, {q}]")
+            return rng.uniform(p, q, count)
+        if not (p > 0.0 and q >= 0.0):
+            raise ValueError(f"{what}.normal: expected mean > 0 and std >= 0, got [{p}, {q}]")
+        out = rng.normal(p, q, count)
+        while (bad := out <= 0.0).any():
+            out[bad] = rng.normal(p, q, int(bad.sum()))
+        return out
+    value = float(spec)
+    if not value > 0.0:
+        raise ValueError(f"{what}: expected a number > 0, got {spec!r}")
+    return np.full(count, value)
+
+
+def _directions(spec, rng, count):
+    """``count`` unit vectors: ``"isotropic"`` (uniform on the sphere), a vector (all along it), or
+    ``{"direction": d, "spread": degrees}`` (uniform over the cap of that half-angle around d)."""
+    if isinstance(spec, str):
+        if spec != "isotropic":
+            raise ValueError(f"orientation: expected 'isotropic', a direction or {{direction, spread}}, got {spec!r}")
+        axis, cos_min = np.array([0.0, 0.0, 1.0]), -1.0
+    elif isinstance(spec, dict):
+        axis, cos_min = np.asarray(spec["direction"], dtype=float), np.cos(np.radians(float(spec.get("spread", 0.0))))
+    else:
+        axis, cos_min = np.asarray(spec, dtype=float), 1.0
+    norm = np.linalg.norm(axis)
+    if axis.shape != (3,) or not norm > 0.0:
+        raise ValueError(f"orientation: the direction must be a non-zero 3-vector, got {axis}")
+    axis = axis / norm
+    # uniform on a spherical cap: the cosine to the axis is uniform in [cos_min, 1]
+    c = rng.uniform(cos_min, 1.0, count)
+    phi = rng.uniform(0.0, 2.0 * np.pi, count)
+    s = np.sqrt(np.maximum(1.0 - c * c, 0.0))
+    e1, e2 = _helix_frame(axis[None, :])
+    return c[:, None] * axis + s[:, None] * (np.cos(phi)[:, None] * e1 + np.sin(phi)[:, None] * e2)
+
+
+def segment_distances(p, q, a, b):
+    """Shortest distances between the segment [p, q] (3,) and each segment [a_k, b_k] (k, 3).
+
+    Minimises ``|p + s (q - p) - a - t (b - a)|`` over s, t ∈ [0, 1] (both segments of non-zero
+    length): s from the unconstrained optimum clamped to [0, 1] (0 for parallel segments), t
+    optimal for that s; where t had to be clamped, s is re-optimised for the clamped t.
+    """
+    d1, d2, r = q - p, b - a, p[None, :] - a          # r: (k, 3)
+    A, E = d1 @ d1, np.einsum("ki,ki->k", d2, d2)
+    B, C, F = d2 @ d1, r @ d1, np.einsum("ki,ki->k", d2, r)
+    den = A * E - B * B
+    s = np.where(den > 1e-14 * A * E, np.clip((B * F - C * E) / np.where(den > 0, den, 1.0), 0.0, 1.0), 0.0)
+    t_free = (B * s + F) / E
+    t = np.clip(t_free, 0.0, 1.0)
+    s = np.where(t != t_free, np.clip((B * t - C) / A, 0.0, 1.0), s)
+    return np.linalg.norm(r + s[:, None] * d1[None, :] - t[:, None] * d2, axis=1)
+
+
+def fibres_in_box(count, lower, upper, length=0.3, orientation="isotropic", min_spacing=0.0, seed=0,
+                  max_attempts=1000):
+    """Straight fibres placed at random inside a box, with length and orientation distributions and
+    a minimum distance between any two fibres.
+
+    Each candidate draws its length, its direction and then its centre, uniformly among the
+    centres that keep the whole fibre inside ``[lower, upper]``; a candidate closer than
+    ``min_spacing`` to an accepted fibre (shortest distance between the two segments) is
+    rejected and drawn again (random sequential adsorption). Drawn with
+    ``numpy.random.default_rng(seed)``: the same arguments give the same fibres.
+
+    Parameters
+    ----------
+    count : int
+        Number of fibres, >= 1.
+    lower, upper : (3,) array_like of float
+        Box corners, ``upper > lower`` (length units).
+    length : float or dict
+        A length, ``{"uniform": [a, b]}`` or ``{"normal": [mean, std]}`` (redrawn until > 0).
+    orientation : str, (3,) array_like or dict
+        ``"isotropic"`` (uniform on the sphere), a direction (all fibres parallel), or
+        ``{"direction": d, "spread": degrees}`` (uniform within that angle of d).
+    min_spacing : float
+        Smallest distance between the centrelines of two fibres, >= 0.
+    seed : int
+    max_attempts : int
+        Candidates drawn per fibre before giving up.
+
+    Returns
+    -------
+    (count, 2, 3) float64
+        Start and end point of every fibre.
+
+    Raises
+    ------
+    ValueError
+        A fibre longer than fits in the box, or fewer than ``count`` fibres placed within
+        ``count * max_attempts`` candidates (the message says how many fitted).
+    """
+    count = int(count)
+    if count < 1:
+        raise ValueError(f"fibres_in_box: need count >= 1, got {count}")
+    lower, upper = _box_corners(lower, upper)
+    if not min_spacing >= 0.0:
+        raise ValueError(f"fibres_in_box: min_spacing must be >= 0, got {min_spacing}")
+    rng = np.random.default_rng(seed)
+    size = upper - lower
+    placed = np.empty((count, 2, 3))
+    n, attempts, batch = 0, 0, max(count, 16)
+    while n < count and attempts < count * max_attempts:
+        L = _draw(length, rng, batch, "length")
+        d = _directions(orientation, rng, batch)
+        half = 0.5 * L[:, None] * np.abs(d)                              # half extent per axis
+        room = size - 2.0 * half
+        u = rng.uniform(size=(batch, 3))
+        for k in range(batch):
+            attempts += 1
+            if (room[k] < 0.0).any():
+                continue
+            centre = lower + half[k] + room[k] * u[k]
+            p, q = centre - 0.5 * L[k] * d[k], centre + 0.5 * L[k] * d[k]
+            if min_spacing > 0.0 and n and segment_distances(p, q, placed[:n, 0], placed[:n, 1]).min() < min_spacing:
+                continue
+            placed[n] = p, q
+            n += 1
+            if n == count or attempts >= count * max_attempts:
+                break
+    if n < count:
+        raise ValueError(f"fibres_in_box: placed {n} of {count} fibres in {attempts} attempts; lower min_spacing "
+                         f"({min_spacing:g}), the count or the lengths, or enlarge the box")
+    return placed
+
+
+def helices_on_cylinder(count, centre, axis, radius, length, turns, phase=0.0):
+    """A family of ``count`` helices wound on one cylinder, evenly shifted in phase (like the
+    strands of a rope or the wires of a helical reinforcement).
+
+    Helix k is the curve of :func:`fibre_cube`'s helices with phase ``phase + 2π k / count``:
+    ``c + (s - 1/2) length d + radius (cos θ e1 + sin θ e2)``, ``θ = phase_k + 2π turns s``.
+
+    Parameters
+    ----------
+    count : int
+        Number of helices, >= 1.
+    centre, axis : (3,) array_like of float
+        Centre of the cylinder's axis segment and its direction (normalised here).
+    radius, length : float
+        Cylinder radius and axial length (> 0).
+    turns : float
+        Turns of every helix over ``length`` (>= 0).
+    phase : float
+        Phase of helix 0 in radians.
+
+    Returns
+    -------
+    list of dict
+        One ``{"centre", "axis", "radius", "length", "turns", "phase"}`` per helix: the
+        ``helix`` curve of a scene beam (docs/scene_reference.md); :func:`helix_beams` meshes them.
+    """
+    count = int(count)
+    if count < 1 or not (radius > 0 and length > 0 and turns >= 0):
+        raise ValueError(f"helices_on_cylinder: need count >= 1, radius > 0, length > 0, turns >= 0, got "
+                         f"{count}, {radius}, {length}, {turns}")
+    axis = np.asarray(axis, dtype=float)
+    axis = axis / np.linalg.norm(axis)
+    centre = np.asarray(centre, dtype=float)
+    return [{"centre": centre.copy(), "axis": axis.copy(), "radius": float(radius), "length": float(length),
+             "turns": float(turns), "phase": float(phase) + 2.0 * np.pi * k / count} for k in range(count)]
+
+
+def straight_beams(endpoints, elements):
+    """Hermite beams along straight fibres (e.g. from :func:`fibres_in_box`).
+
+    Parameters
+    ----------
+    endpoints : (k, 2, 3) array_like of float
+    elements : int
+        Elements per fibre (m), >= 1.
+
+    Returns
+    -------
+    BeamMesh
+        Fibre f uses nodes ``f (m+1)`` ... ``f (m+1) + m`` (layout as in :func:`fibre_cube`).
+    """
+    P = np.asarray(endpoints, dtype=float).reshape(-1, 2, 3)
+    m = int(elements)
+    s = np.arange(m + 1) / m
+    positions = (P[:, :1] + s[None, :, None] * (P[:, 1:] - P[:, :1])).reshape(-1, 3)
+    d = P[:, 1] - P[:, 0]
+    tangents = np.repeat(d / np.linalg.norm(d, axis=1)[:, None], m + 1, axis=0)
+    return BeamMesh.hermite(positions, tangents, _chain_elements(len(P), m))
+
+
+def helix_beams(helices, elements):
+    """Hermite beams along helices given as dicts (e.g. from :func:`helices_on_cylinder`).
+
+    Returns
+    -------
+    BeamMesh
+        Helix k uses nodes ``k (m+1)`` ... ``k (m+1) + m`` (layout as in :func:`fibre_cube`).
+    """
+    m = int(elements)
+    get = lambda key: np.array([h[key] for h in helices], dtype=float)      # noqa: E731
+    positions, tangents = _helices(get("centre"), get("axis"), get("length"), get("radius"), get("turns"),
+                                   get("phase"), m)
+    return BeamMesh.hermite(positions, tangents, _chain_elements(len(helices), m))

@@ -34,6 +34,10 @@ class Result:
         Sum of the support forces over each ``[[dirichlet]]`` entry's position DOFs.
     counts : collections.Counter
         The effects that ran and how often (names as in :func:`mortar1d3d.plan`).
+    coupled_length, beam_length : (n_beams,) float64
+        Per scene beam: the reference length the coupling integrates over (the part inside the
+        solid) and the whole reference length; ``coupled_length`` is all zeros without a
+        coupling. A beam with ``coupled_length < beam_length`` got a CouplingWarning.
     wall_time : float
     """
 
@@ -45,9 +49,11 @@ class Result:
         self.scene = model.scene
         self.counts = model.counts
         self.solid_displacement = z[: 3 * model.n_solid_nodes].reshape(-1, 3).copy()
-        pos, tan, rot = [], [], []
+        pos, tan, rot, lengths = [], [], [], []
         for entry in range(len(self.scene.beams)):
             g = model.entry_group[entry]
+            a, b = g.entry_elements[g.entries.index(entry)]
+            lengths.append(g.mesh.lengths[a:b].sum())
             nodes = self._entry_nodes(g, entry)
             q = z[g.dofs.slice].reshape(g.mesh.n_nodes, -1)
             pos.append(q[nodes, :3])
@@ -58,6 +64,10 @@ class Result:
         self.beam_tangent_displacement = np.vstack(tan) if tan else np.zeros((0, 3))
         self.beam_rotation = np.vstack(rot) if rot else np.zeros((0, 3))
         self.line_load = self._line_load(z)
+        n_beams = len(self.scene.beams)
+        coupled = getattr(model, "coupled_length", None)
+        self.coupled_length = np.array(coupled, dtype=float) if coupled is not None else np.zeros(n_beams)
+        self.beam_length = np.array(lengths, dtype=float)
         r = getattr(model, "last_residual", None)
         r = model.basis.to_physical(r) if r is not None else None
         self.reactions = []
@@ -89,6 +99,24 @@ class Result:
             parts.append(g.coupling.line_load(z[:n], lam))
         return np.vstack(parts) if parts else np.zeros((0, 3))
 
+    def coupling_summary(self, max_lines=10):
+        """Lines of text: the coupled length of every beam (at most ``max_lines`` beams listed,
+        partly coupled ones first), then the total. Empty without a coupling."""
+        if not (self.scene.coupled and len(self.beam_length)):
+            return []
+        fraction = self.coupled_length / np.where(self.beam_length > 0, self.beam_length, 1.0)
+        order = np.argsort(fraction, kind="stable")
+        lines = [f"beams[{i}]: coupled length {self.coupled_length[i]:.6g} of {self.beam_length[i]:.6g} "
+                 f"({fraction[i]:.1%})" for i in order[:max_lines]]
+        if len(order) > max_lines:
+            lines.append(f"... {len(order) - max_lines} more beams")
+        total, coupled = self.beam_length.sum(), self.coupled_length.sum()
+        limit = self.model.UNCOUPLED_FRACTION_LIMIT
+        partly = int(np.count_nonzero(self.coupled_length < (1.0 - limit) * self.beam_length))
+        lines.append(f"all {len(order)} beams: coupled length {coupled:.6g} of {total:.6g} "
+                     f"({coupled / total:.1%}); {partly} partly or not coupled")
+        return lines
+
     @property
     def load_factor(self):
         return self.steps[-1].load_factor if self.steps else 0.0
@@ -107,11 +135,13 @@ class Result:
         ``displacement``; cell data ``green_lagrange_strain`` and ``cauchy_stress`` as 3×3
         tensors, averaged over each element's Gauss points), ``beams_<k>.vtu`` (the reference
         centrelines sampled as polylines with ``displacement``, ``axial_force``, ``curvature`` and
-        the coupling ``line_load`` λ(η); beams with rotations also the triad ``g1``, ``g2``, ``g3``,
-        the spatial force and moment resultants ``n``, ``m`` and the elastic strains ``Gamma``
-        (Γ − Γ0: axial and shear) and ``K`` (K − K0: torsion and bending) in the material frame); once: ``segments.vtu`` and ``points.vtu`` (the coupling's
-        segments and integration points). Open ``result.pvd`` and apply *Warp By Vector* with
-        ``displacement``.
+        the coupling ``line_load`` λ(η), the scene ``beam`` index, the ``fibre`` and the
+        ``arc_length`` along it; beams with rotations also the triad ``g1``, ``g2``, ``g3``, the
+        spatial force and moment resultants ``n``, ``m`` and the elastic strains ``Gamma``
+        (Γ − Γ0: axial and shear) and ``K`` (K − K0: torsion and bending) in the material frame),
+        ``segments_<k>.vtu`` and ``points_<k>.vtu`` (the coupling's segments and integration points
+        at their reference positions, with the beams' ``displacement``). Open ``result.pvd`` and
+        apply *Warp By Vector* with ``displacement``: solid, beams, segments and points all move.
 
         Everything is written into a temporary directory first and moved into ``directory`` only
         when complete: a failure leaves no partial files.
@@ -120,7 +150,8 @@ class Result:
         -------
         list of pathlib.Path
         """
-        from .io.vtu import write_beams, write_integration_points, write_pvd, write_segments, write_solid
+        from .io.vtu import (displacement_coefficients, write_beams, write_integration_points, write_pvd,
+                             write_segments, write_solid)
         directory = Path(directory)
         directory.parent.mkdir(parents=True, exist_ok=True)
         tmp = directory.parent / f".{directory.name}.tmp-{uuid.uuid4().hex[:8]}"
@@ -128,14 +159,6 @@ class Result:
         model = self.model
         try:
             entries, written = [], []
-            static = []
-            for gi, g in enumerate(model.groups):
-                if g.operators is not None:
-                    suffix = f"_{gi}" if len(model.groups) > 1 else ""
-                    static.append(write_segments(tmp / f"segments{suffix}.vtu", g.mesh, g.operators,
-                                                 compression=compression).name)
-                    static.append(write_integration_points(tmp / f"points{suffix}.vtu", g.operators,
-                                                           compression=compression).name)
             states = [(0.0, np.zeros_like(self.z))] + [(s.load_factor, z) for s, z in zip(self.steps, self.history)]
             for k, (t, z) in enumerate(states):
                 files = []
@@ -150,17 +173,27 @@ class Result:
                 lm_start = 0
                 for gi, g in enumerate(model.groups):
                     suffix = f"{gi}_" if len(model.groups) > 1 else ""
+                    d = z[g.dofs.slice]         # the group's centreline unknowns (rotations are a block of their own)
                     data = self._beam_samples(g, z, samples_per_element)
+                    data["beam"] = np.repeat(g.entries, [b - a for a, b in g.entry_elements])
                     if g.coupling is not None:
                         data["line_load"] = self._line_load_samples(g, lam_all[lm_start: lm_start + g.coupling.n_lm],
                                                                     samples_per_element)
                         lm_start += g.coupling.n_lm
                     files.append(write_beams(tmp / f"beams_{suffix}{k:04d}.vtu", g.mesh, samples_per_element,
                                              point_data=data, compression=compression).name)
-                for part, name in enumerate(files + static):
+                    if g.operators is not None:
+                        # segments and points at every step, with the beams' centreline displacement,
+                        # so that Warp By Vector moves them
+                        u = displacement_coefficients(g.mesh, d) if len(d) == g.mesh.n_centreline_dofs else None
+                        files.append(write_segments(tmp / f"segments_{suffix}{k:04d}.vtu", g.mesh, g.operators,
+                                                    displacement=u, compression=compression).name)
+                        files.append(write_integration_points(tmp / f"points_{suffix}{k:04d}.vtu", g.operators,
+                                                              beams=g.mesh, displacement=u,
+                                                              compression=compression).name)
+                for part, name in enumerate(files):
                     entries.append((t, part, name))
                 written += files
-            written += static
             written.append(write_pvd(tmp / "result.pvd", entries).name)
             directory.mkdir(parents=True, exist_ok=True)
             for name in written:

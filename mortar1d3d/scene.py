@@ -469,6 +469,22 @@ def _analysis(value):
             "max_cuts": _integer(value.get("max_cuts", 6), "analysis.max_cuts", 0, 50)}
 
 
+def _fibre_arrays(value, beams, base_dir):
+    """Expand ``[[fibres]]`` (mortar1d3d.fibre_arrays) into beams appended to ``beams``; returns
+    ``[(first beam index, count), ...]`` per entry. A beam's errors name ``fibres[i]``."""
+    from .fibre_arrays import expand
+    out = []
+    for i, entry in enumerate(_list(value, "fibres")):
+        first = len(beams)
+        for k, table in enumerate(expand(entry, i)):
+            try:
+                beams.append(_beam(table, first + k, base_dir))
+            except SceneError as exc:
+                raise SceneError(str(exc).replace(f"beams[{first + k}]", f"fibres[{i}]", 1)) from None
+        out.append((first, len(beams) - first))
+    return out
+
+
 class Scene:
     """What is simulated: solid, beams, coupling, supports, loads and the analysis.
 
@@ -493,11 +509,12 @@ class Scene:
     """
 
     def __init__(self, solid=None, beams=(), coupling=None, dirichlet=(), load=(), analysis=None, *,
-                 base_dir=None, name="scene"):
+                 fibres=(), base_dir=None, name="scene"):
         self.name = name
         self.base_dir = Path(base_dir) if base_dir is not None else None
         self.solid = _solid(solid, base_dir) if solid is not None else None
         self.beams = [_beam(b, i, base_dir) for i, b in enumerate(_list(beams, "beams"))]
+        self.fibres = _fibre_arrays(fibres, self.beams, base_dir)
         if self.solid is None and not self.beams:
             _fail("scene", "nothing to simulate: give a [solid] and/or [[beams]]")
         if coupling is not None and (self.solid is None or not self.beams):
@@ -534,10 +551,10 @@ class Scene:
     @classmethod
     def from_dict(cls, data, *, base_dir=None, name="scene"):
         """Scene from a nested dict with the TOML file's layout."""
-        _table(data, "", ("solid", "beams", "coupling", "dirichlet", "load", "analysis"))
+        _table(data, "", ("solid", "beams", "fibres", "coupling", "dirichlet", "load", "analysis"))
         return cls(solid=data.get("solid"), beams=data.get("beams", ()), coupling=data.get("coupling"),
                    dirichlet=data.get("dirichlet", ()), load=data.get("load", ()), analysis=data.get("analysis"),
-                   base_dir=base_dir, name=name)
+                   fibres=data.get("fibres", ()), base_dir=base_dir, name=name)
 
     @classmethod
     def from_toml(cls, path):

@@ -10,11 +10,13 @@ def warmup(verbose=False):
     scenes of any element type use. Returns the elapsed time in seconds.
     """
     from . import generate
+    from ._config import announce_compilation
     from .model import solve
     from .geometry.projection import project_points
     from .mortar.assemble import assemble_mortar
     from .scene import Scene
 
+    announce_compilation()
     t0 = time.perf_counter()
     beams, solid = generate.fibre_cube(2, 1, 2)
     for integration in ("segment", "element", "auto"):

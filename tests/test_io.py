@@ -129,7 +129,7 @@ def test_write_beams_samples_equal_evaluate(tmp_path, scene):
     tangent = mesh.point_data["tangent"].reshape(m, SAMPLES, 3)
     np.testing.assert_allclose(tangent, np.broadcast_to(beams.tangents[beams.elements[:, 0]][:, None],
                                                         tangent.shape), rtol=0, atol=1e-14)
-    arc = mesh.point_data["arc_length"].reshape(m, SAMPLES)
+    arc = mesh.point_data["element_arc_length"].reshape(m, SAMPLES)
     np.testing.assert_allclose(arc, 0.5 * (eta + 1.0) * beams.lengths[:, None], rtol=0, atol=1e-15)
     np.testing.assert_allclose(beams.lengths, 0.1, rtol=1e-14)                  # L = 0.3, 3 elements
 
@@ -181,7 +181,7 @@ def test_write_beams_lagrange(tmp_path, element):
     points = mesh.points.reshape(beams.n_elements, 4, 3)
     for e in range(beams.n_elements):
         np.testing.assert_allclose(points[e], beams.evaluate(e, eta), rtol=0, atol=1e-15)
-    np.testing.assert_allclose(mesh.point_data["arc_length"].reshape(-1, 4)[:, -1], beams.lengths, rtol=1e-13)
+    np.testing.assert_allclose(mesh.point_data["element_arc_length"].reshape(-1, 4)[:, -1], beams.lengths, rtol=1e-13)
 
 
 def test_write_beams_extra_point_data(tmp_path, scene):
@@ -210,7 +210,7 @@ def test_write_beams_20000_elements(tmp_path):
     e = 12345
     np.testing.assert_allclose(mesh.points[8 * e:8 * e + 8], beams.evaluate(e, np.linspace(-1, 1, 8)),
                                rtol=0, atol=1e-15)
-    np.testing.assert_allclose(mesh.point_data["arc_length"][7::8], beams.lengths, rtol=1e-13)
+    np.testing.assert_allclose(mesh.point_data["element_arc_length"][7::8], beams.lengths, rtol=1e-13)
 
 
 # -- segments and integration points --------------------------------------------------------------

@@ -34,19 +34,22 @@ _CHUNK_ROWS = 8192
 COMPRESSIONS = ("zlib", "lzma", None)
 
 __all__ = ["write_solid", "write_beams", "write_segments", "write_integration_points",
-           "write_mortar", "write_pvd", "sample_beams", "BeamSamples"]
+           "write_mortar", "write_pvd", "sample_beams", "BeamSamples", "beam_fibres",
+           "displacement_coefficients"]
 
 
 # --------------------------------------------------------------------------------------------
 # curve evaluation (vectorised over elements)
 # --------------------------------------------------------------------------------------------
-def _scaled_coefficients(beams):
+def _scaled_coefficients(beams, Q=None):
     """(m, 4, 3) coefficients with the element length folded in: ``r(η) = Σ_k B_k(η) Q̃_k``, where
     ``B`` are the centreline functions for L = 1 (:func:`~mortar1d3d.elements.beam.evaluate`).
 
     Only the tangent coefficients' functions (Hermite H2, H4) carry the length, as a factor.
+    ``Q``: other coefficients in the layout of ``beams.coefficients()`` (e.g. a displacement's,
+    from :func:`displacement_coefficients`) to scale instead of the reference curve's.
     """
-    Q = beams.coefficients()
+    Q = beams.coefficients() if Q is None else np.array(Q, dtype=np.float64)
     for k, offset in enumerate(beams.element_type.function_offset):
         if offset > 0:
             Q[:, k] *= beams.lengths[:, None]
@@ -117,6 +120,67 @@ class BeamSamples:
         m = len(self.points) // s
         first = (np.arange(m, dtype=np.int64)[:, None] * s + np.arange(s - 1)).reshape(-1)
         return np.column_stack([first, first + 1])
+
+
+def displacement_coefficients(beams, d):
+    """Per-element coefficients of a centreline displacement, in the layout of ``beams.coefficients()``.
+
+    Parameters
+    ----------
+    beams : BeamMesh
+    d : (n_centreline_dofs,) array_like of float
+        Displacement of the centreline DOFs (docs/conventions.md §2 layout: per node the
+        position, then for Hermite beams the tangent).
+
+    Returns
+    -------
+    (n_elements, 4, 3) float64
+        ``u(η) = Σ_k H_k(η) Q_k`` element by element; zero rows where the element has fewer functions.
+    """
+    d = np.asarray(d, dtype=np.float64)
+    if d.shape != (beams.n_centreline_dofs,):
+        raise ValueError(f"d: expected shape ({beams.n_centreline_dofs},), got {d.shape}")
+    cols = beams.function_columns()
+    return np.where((cols >= 0)[..., None], d.reshape(-1, 3)[np.maximum(cols, 0)], 0.0)
+
+
+def beam_fibres(beams):
+    """Fibre of every beam element and the arc length where the element starts along its fibre.
+
+    A fibre is a connected chain of elements (elements that share a node belong to the same
+    fibre); fibres are numbered 0, 1, ... in the order of their first element. Along a fibre the
+    arc length adds up the reference lengths of its elements in element order, which is the order
+    along the curve for every mesh the library generates (chains numbered from start to end).
+
+    Parameters
+    ----------
+    beams : BeamMesh
+
+    Returns
+    -------
+    fibre : (n_elements,) int64
+    start : (n_elements,) float64
+        Arc length from the fibre's first element's η = -1 to this element's η = -1.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    conn = beams.elements
+    n = beams.n_nodes
+    graph = coo_matrix((np.ones(conn.size), (np.repeat(conn[:, 0], conn.shape[1]), conn.ravel())), shape=(n, n))
+    _, label = connected_components(graph, directed=False)
+    raw = label[conn[:, 0]]
+    labels, first, inverse = np.unique(raw, return_index=True, return_inverse=True)
+    rank = np.empty(len(labels), dtype=np.int64)
+    rank[np.argsort(first, kind="stable")] = np.arange(len(labels))
+    fibre = rank[inverse].astype(np.int64)
+    order = np.argsort(fibre, kind="stable")
+    lengths = beams.lengths[order]
+    before = np.cumsum(lengths) - lengths                       # length of all earlier elements in order
+    fibre_begin = np.searchsorted(fibre[order], np.arange(len(labels)))
+    start = np.empty(beams.n_elements)
+    start[order] = before - before[fibre_begin][fibre[order]]
+    return fibre, start
 
 
 def _check_samples(name, value):
@@ -281,8 +345,10 @@ def write_beams(path, beams, samples_per_element=8, point_data=None, *, compress
 
     Notes
     -----
-    Point data written: ``beam_element`` (int64), ``eta``, ``arc_length`` (from η = -1 along the
-    element), ``tangent`` (3 components, unit reference tangent). Cell data: ``beam_element``.
+    Point data written: ``beam_element`` and ``fibre`` (int64, see :func:`beam_fibres`), ``eta``,
+    ``arc_length`` (reference arc length from the start of the fibre), ``element_arc_length``
+    (from η = -1 along the element), ``tangent`` (3 components, unit reference tangent). Cell
+    data: ``beam_element``, ``fibre``.
     """
     import meshio
     samples = sample_beams(beams, samples_per_element)
@@ -294,16 +360,18 @@ def write_beams(path, beams, samples_per_element=8, point_data=None, *, compress
         if arr.ndim >= 1 and arr.shape[0] == beams.n_elements:
             arr = np.repeat(arr, s, axis=0)
         extra.update(_data_dict("point_data", {key: arr}, n, "sample point or beam element"))
-    data = {"beam_element": samples.beam_element, "eta": samples.eta,
-            "arc_length": samples.arc_length, "tangent": samples.tangent}
+    fibre, start = beam_fibres(beams)
+    data = {"beam_element": samples.beam_element, "fibre": np.repeat(fibre, s), "eta": samples.eta,
+            "arc_length": np.repeat(start, s) + samples.arc_length, "element_arc_length": samples.arc_length,
+            "tangent": samples.tangent}
     data.update(extra)
     cells = samples.line_cells()
     mesh = meshio.Mesh(samples.points, [("line", cells)], point_data=data,
-                       cell_data={"beam_element": [cells[:, 0] // s]})
+                       cell_data={"beam_element": [cells[:, 0] // s], "fibre": [fibre[cells[:, 0] // s]]})
     return _write_vtu(path, mesh, compression)
 
 
-def write_segments(path, beams, ops, samples_per_segment=4, *, compression="zlib"):
+def write_segments(path, beams, ops, samples_per_segment=4, *, displacement=None, compression="zlib"):
     """Write the mortar segments ``[eta_start, eta_end]`` of ``ops`` as polylines (``.vtu``).
 
     Parameters
@@ -314,6 +382,9 @@ def write_segments(path, beams, ops, samples_per_segment=4, *, compression="zlib
     ops : MortarOperators
     samples_per_segment : int
         Equally spaced samples in η per segment (>= 2), joined by line cells.
+    displacement : (n_elements, 4, 3) array_like, optional
+        Beam displacement coefficients (:func:`displacement_coefficients`): written as point data
+        ``displacement`` at the samples, so that *Warp By Vector* moves the segments with the beams.
     compression : {"zlib", "lzma", None}
         Compression of the binary data (None: uncompressed, fastest to write).
 
@@ -348,18 +419,27 @@ def write_segments(path, beams, ops, samples_per_segment=4, *, compression="zlib
     cell_data = {"beam_element": [seg["beam_element"][owner].astype(np.int64)],
                  "solid_element": [seg["solid_element"][owner].astype(np.int64)],
                  "segment": [owner], "length": [length[owner]]}
-    mesh = meshio.Mesh(points, [("line", cells)], point_data={"eta": eta.reshape(-1)},
-                       cell_data=cell_data)
+    point_data = {"eta": eta.reshape(-1)}
+    if displacement is not None:
+        Qd = _scaled_coefficients(beams, displacement)[seg["beam_element"]]
+        point_data["displacement"] = (_apply(beam_functions(element, eta), Qd).reshape(-1, 3) if n_seg
+                                      else np.zeros((0, 3)))
+    mesh = meshio.Mesh(points, [("line", cells)], point_data=point_data, cell_data=cell_data)
     return _write_vtu(path, mesh, compression)
 
 
-def write_integration_points(path, ops, *, compression="zlib"):
+def write_integration_points(path, ops, *, beams=None, displacement=None, compression="zlib"):
     """Write the integration points of ``ops`` as ``vertex`` cells (``.vtu``).
 
     Parameters
     ----------
     path : str or os.PathLike
     ops : MortarOperators
+    beams : BeamMesh, optional
+        The beams ``ops`` was assembled for; needed with ``displacement``.
+    displacement : (n_elements, 4, 3) array_like, optional
+        Beam displacement coefficients (:func:`displacement_coefficients`): written as point data
+        ``displacement`` at every point, so that *Warp By Vector* moves the points with the beams.
     compression : {"zlib", "lzma", None}
         Compression of the binary data (None: uncompressed, fastest to write).
 
@@ -380,6 +460,12 @@ def write_integration_points(path, ops, *, compression="zlib"):
             "beam_element": p["beam_element"].astype(np.int64),
             "solid_element": p["solid_element"].astype(np.int64),
             "status": p["status"].astype(np.int64)}
+    if displacement is not None:
+        if beams is None:
+            raise ValueError("write_integration_points: displacement needs the beams")
+        Qd = _scaled_coefficients(beams, displacement)[p["beam_element"]]
+        basis = beam_functions(beams.element_type, p["eta"][:, None]) if n else np.zeros((0, 1, 4))
+        data["displacement"] = _apply(basis, Qd).reshape(-1, 3)
     mesh = meshio.Mesh(np.ascontiguousarray(p["position"]),
                        [("vertex", np.arange(n, dtype=np.int64)[:, None])],
                        point_data={key: np.ascontiguousarray(v) for key, v in data.items()})

@@ -23,9 +23,25 @@ class Effect:
         return f"{self.name:<28} {self.when:<22} {self.detail}"
 
 
+class Plan(list):
+    """The list of :class:`Effect` returned by :func:`plan`; ``print(plan(scene))`` shows a table.
+
+    A plain list otherwise (indexing, ``==`` with a list of effects, ``[e.name for e in ...]``).
+    """
+
+    HEADER = ("effect", "when", "detail")
+
+    def __str__(self):
+        rows = [self.HEADER] + [(e.name, e.when, e.detail) for e in self]
+        widths = [max(len(r[k]) for r in rows) for k in range(2)]
+        lines = [f"{a:<{widths[0]}}  {b:<{widths[1]}}  {c}".rstrip() for a, b, c in rows]
+        lines.insert(1, f"{'-' * widths[0]}  {'-' * widths[1]}  {'-' * max(len(r[2]) for r in rows)}")
+        return "\n".join(lines)
+
+
 def plan(scene):
-    """The effects :func:`solve` will run for ``scene`` (Scene or TOML file), in order (list of
-    :class:`Effect`).
+    """The effects :func:`solve` will run for ``scene`` (Scene or TOML file), in order (a
+    :class:`Plan`: a list of :class:`Effect` that prints as a table).
 
     Builds the meshes and resolves every set (supports, loads, fibre regions: a set that is
     unknown or selects nothing is reported here, as :func:`solve` would), assembles nothing.
@@ -34,10 +50,10 @@ def plan(scene):
 
 
 def effects(model):
-    """The list of :class:`Effect` that :func:`solve` will run for ``model`` (a Model)."""
+    """The :class:`Plan` (list of :class:`Effect`) that :func:`solve` will run for ``model`` (a Model)."""
     sc, nonlinear = model.scene, not model.linear
     every = "every iteration" if nonlinear else "once"
-    out = []
+    out = Plan()
     if model.solid_mesh is not None:
         m = model.solid_mesh
         kinds = ", ".join(f"{len(c)} {d.name}" for d, c in m.blocks)

@@ -244,12 +244,7 @@ class Model:
                 g.coupling = Coupling(g.operators, g.mesh, self.solid_mesh, g.dof_offset, n,
                                       constraint=c["constraint"], enforcement=c["enforcement"], penalty=self.penalty)
                 self.counts["coupling.lagrange" if self.lagrange else f"coupling.{c['constraint']}_penalty"] += 1
-                coupled = np.unique(g.operators.point_fields["beam_element"])
-                for entry, (a, b) in zip(g.entries, g.entry_elements):
-                    if not np.any((coupled >= a) & (coupled < b)):
-                        warnings.warn(f"beams[{entry}]: no part of this beam lies inside the solid, so it is not "
-                                      "coupled (check the units: a mm/m mix-up moves a beam out of the solid)",
-                                      CouplingWarning, stacklevel=3)
+                self._check_coupled_lengths(g)
             if self.lagrange:
                 self.constraint_matrix = sp.vstack([g.coupling.constraint_matrix() for g in self.groups], format="csr")
                 self.n_multipliers = self.constraint_matrix.shape[0]
@@ -266,6 +261,34 @@ class Model:
         self.check_supports()
         self.prepared = True
         return self
+
+    #: a beam whose coupled length falls short of its length by more than this fraction gets a
+    #: CouplingWarning (the quadrature of the speed over the segments is far more accurate than this)
+    UNCOUPLED_FRACTION_LIMIT = 1e-3
+
+    def _check_coupled_lengths(self, g):
+        """Record every beam's coupled (embedded) length and warn about beams partly or wholly outside.
+
+        The coupled length of a beam is the sum of its integration points' weights (each includes
+        ``|r0'|``), i.e. the length the coupling integrates over; ``coupled_length[i]`` and
+        ``beam_length[i]`` are indexed like ``scene.beams``.
+        """
+        n_beams = len(self.scene.beams)
+        if getattr(self, "coupled_length", None) is None:
+            self.coupled_length, self.beam_length = np.zeros(n_beams), np.zeros(n_beams)
+        per_element = np.bincount(g.operators.point_fields["beam_element"], g.operators.point_fields["weight"],
+                                  minlength=g.mesh.n_elements)
+        for entry, (a, b) in zip(g.entries, g.entry_elements):
+            coupled, total = float(per_element[a:b].sum()), float(g.mesh.lengths[a:b].sum())
+            self.coupled_length[entry], self.beam_length[entry] = coupled, total
+            if coupled == 0.0:
+                warnings.warn(f"beams[{entry}]: no part of this beam lies inside the solid, so it is not "
+                              "coupled (check the units: a mm/m mix-up moves a beam out of the solid)",
+                              CouplingWarning, stacklevel=4)
+            elif coupled < (1.0 - self.UNCOUPLED_FRACTION_LIMIT) * total:
+                warnings.warn(f"beams[{entry}]: {1.0 - coupled / total:.1%} of this beam ({total - coupled:.4g} of "
+                              f"length {total:.4g}) lies outside the solid and is not coupled there",
+                              CouplingWarning, stacklevel=4)
 
     def _check_operators(self, operators):
         """Validate precomputed operators against the groups' meshes and the scene's LM type."""

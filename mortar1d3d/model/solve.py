@@ -11,6 +11,7 @@ import time
 
 import numpy as np
 
+from .._config import announce_compilation
 from ..result import Result
 from ..solvers.newton import solve_linear_step, solve_load_steps
 from .build import build
@@ -47,7 +48,9 @@ def solve(scene, *, progress=False):
         Linear kinematics, and a body moved by more than LINEAR_DISPLACEMENT_LIMIT of its size.
     """
     start = time.perf_counter()
-    model = Model(build(scene)).prepare()
+    model = Model(build(scene))
+    announce_compilation()      # after the scene's checks: an invalid scene fails without it
+    model.prepare()
     callback = _print_step if progress is True else (progress or None)
     z0 = np.zeros(model.n_unknowns)
     if model.linear:

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import prange
 
-from .._config import njit, njit_parallel
+from .._config import announce_compilation, njit, njit_parallel
 from .._memory import carve
 from .._schedule import claim, new_claims, workers
 from ..elements.multiplier import multiplier as multiplier_type
@@ -288,6 +288,7 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     except ValueError as exc:
         raise ValueError(f"lm: {exc}") from None
 
+    announce_compilation()
     timings = {}
     t0 = time.perf_counter()
     ctx = KernelInput(beams, solid)

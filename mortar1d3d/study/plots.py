@@ -8,10 +8,26 @@ from .config import INTEGRATIONS
 from .timing import STAGES
 
 
+#: line style per embedding of the error-time plots (legend and curves use the same)
+EMBEDDING_STYLES = {"embedded": "-", "partly outside": "--"}
+
+
+def readable_log_ticks(axis, matplotlib):
+    """Label a log axis at 1, 2 and 5 times the powers of ten, written as plain numbers (0.5, 20):
+    the default labels only the powers of ten, often one or two on a time axis."""
+    axis.set_major_locator(matplotlib.ticker.LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+
+
 def _error_time_grid(plt, matplotlib, scenes, kinds, ratios, error, ylabel, floor, pareto=False):
     """One log-log panel per (kind, ratio): ``error`` of each record against its median time, a
     curve per integration and embedding (records without the error are left out); ``pareto``
-    marks the Pareto-optimal points."""
+    marks the Pareto-optimal points.
+
+    The legend sits below the panels, outside every one of them, and has separate entries for
+    the colours (integration) and the line styles (embedding), drawn long enough to show dashes.
+    """
     colours = {"element": "tab:blue", "segment": "tab:orange", "auto": "tab:green"}
     fig, axes = plt.subplots(len(kinds), len(ratios), figsize=(4.2 * len(ratios), 3.4 * len(kinds)),
                              squeeze=False, sharey=True)
@@ -21,7 +37,7 @@ def _error_time_grid(plt, matplotlib, scenes, kinds, ratios, error, ylabel, floo
             for scene in scenes:
                 if scene["kind"] != kind or scene["ratio"] != ratio:
                     continue
-                style = "-" if scene["embedding"] == "embedded" else "--"
+                style = EMBEDDING_STYLES.get(scene["embedding"], ":")
                 for integration in INTEGRATIONS:
                     recs = [r for r in scene["records"] if r["integration"] == integration and error(r) is not None]
                     if not recs:
@@ -35,13 +51,23 @@ def _error_time_grid(plt, matplotlib, scenes, kinds, ratios, error, ylabel, floo
                         ax.loglog([x[k] for k in front], [y[k] for k in front], "s", ms=6, mfc="none",
                                   color=colours[integration])
             ax.set_title(f"{kind}, h_B/h_S = {ratio:g}", fontsize=9)
-            ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+            readable_log_ticks(ax.xaxis, matplotlib)
             ax.grid(True, which="major", alpha=0.3)
             if i == len(kinds) - 1:
                 ax.set_xlabel("median assemble_mortar time [ms]")
             if j == 0:
                 ax.set_ylabel(ylabel)
-    axes[0, 0].legend(fontsize=7)
+    from matplotlib.lines import Line2D
+    handles = [Line2D([], [], color=c, marker="o", ms=4, ls="-", label=k if k == "auto" else f"{k}-based")
+               for k, c in colours.items()]
+    handles += [Line2D([], [], color="k", ls=s, lw=1.2, label=e) for e, s in EMBEDDING_STYLES.items()]
+    if pareto:
+        handles.append(Line2D([], [], color="k", marker="s", ms=6, mfc="none", ls="none", label="Pareto-optimal"))
+    fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=8, handlelength=3.5,
+               frameon=False)
+    # room in inches, whatever the number of rows: two lines of suptitle above, the legend below
+    height = fig.get_figheight()
+    fig.tight_layout(rect=(0, 0.35 / height, 1, 1 - 0.55 / height))
     return fig
 
 
@@ -58,9 +84,11 @@ def _scaling_panel(ax, points, values, ylabel, fitted, **style):
     ax.grid(True, which="major", alpha=0.3)
 
 
-def _save(plt, fig, out, name):
-    """Lay out, write ``out/name`` as PNG, close; returns ``name``."""
-    fig.tight_layout()
+def _save(plt, fig, out, name, layout=True):
+    """Lay out (unless ``layout`` is False: the figure is laid out already), write ``out/name`` as
+    PNG, close; returns ``name``."""
+    if layout:
+        fig.tight_layout()
     fig.savefig(out / name, dpi=110)
     plt.close(fig)
     return name
@@ -90,7 +118,7 @@ def write_plots(results, out):
                            "max(rel. Frobenius error of D, M)", floor, pareto=True)
     fig.suptitle("Error vs time per variant\n(squares: Pareto-optimal; solid: embedded, dashed: partly outside; "
                  "errors < 1e-17 drawn at 1e-17)", fontsize=9)
-    files["pareto"] = _save(plt, fig, out, "pareto.png")
+    files["pareto"] = _save(plt, fig, out, "pareto.png", layout=False)
 
     monitored = [sc for sc in results["scenes"] if sc.get("monitor")]
     if monitored:
@@ -99,11 +127,11 @@ def write_plots(results, out):
                                floor)
         fig.suptitle("Solution error vs assembly time per variant: |u - u_ref| / |u_ref| at the monitor point\n"
                      "(solid: embedded, dashed: partly outside; errors < 1e-17 drawn at 1e-17)", fontsize=9)
-        files["monitor"] = _save(plt, fig, out, "monitor.png")
+        files["monitor"] = _save(plt, fig, out, "monitor.png", layout=False)
 
     # stage breakdown on the benchmark scene
     t = results["auto_target"]
-    fig, ax = plt.subplots(figsize=(6.5, 3.6))
+    fig, ax = plt.subplots(figsize=(7.5, 3.6))
     bottom = np.zeros(len(INTEGRATIONS))
     for stage in STAGES:
         v = np.array([t[k]["stages_s"][stage] * 1e3 for k in INTEGRATIONS])
@@ -111,7 +139,9 @@ def write_plots(results, out):
         bottom += v
     ax.set_ylabel("median time [ms]")
     ax.set_title(f"Stages of assemble_mortar, fibre_cube{tuple(t['scene'])}, n_gauss = 4", fontsize=10)
-    ax.legend(fontsize=8)
+    # beside the bars (inside it covered the tallest one), in the order of the stack, top first
+    handles, labels = ax.get_legend_handles_labels()
+    ax.legend(handles[::-1], labels[::-1], fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     files["stages"] = _save(plt, fig, out, "stages.png")
 
     rows = results["scaling"]["rows"]
