@@ -1,7 +1,8 @@
 """Instructions per assemble_mortar call, counted by valgrind (callgrind), for two checkouts.
 
     .venv/bin/python benchmarks/instructions.py [--package CHECKOUT ...] [--integration segment]
-                                                [--distort 0.1] [--n 10] [--fibres 200] [--calls 3]
+                                                [--stage call|search|points] [--distort 0.1]
+                                                [--n 10] [--fibres 200] [--calls 3]
 
 On a shared, noisy machine seconds move by ±10 % from one run to the next; the number of executed
 instructions does not (callgrind counts them on a simulated CPU, whatever else the machine does).
@@ -36,6 +37,30 @@ from pathlib import Path
 HERE = Path(__file__).resolve()
 
 
+def _stage_call(m13, beams, solid, args):
+    """The call that is counted: a whole ``assemble_mortar``, or one stage of element-based
+    integration (``--stage search``: the kernel input, i.e. solid and beam frames, the linearised
+    maps and the candidate pairs; ``--stage points``: the integration points on a prepared input).
+    Modules moved between versions; each stage is looked up where the checkout has it."""
+    if args.stage == "call":
+        return lambda: m13.assemble_mortar(beams, solid, integration=args.integration, n_gauss=4)
+    import importlib
+    def first(*names):
+        for module, name in names:
+            try:
+                return getattr(importlib.import_module(module), name)
+            except (ImportError, AttributeError):
+                continue
+        raise SystemExit(f"this checkout has none of {names}")
+    kernel_input = first(("mortar1d3d.geometry.context", "KernelInput"), ("mortar1d3d.mortar.assemble", "KernelInput"))
+    if args.stage == "search":
+        return lambda: kernel_input(beams, solid)
+    element_points = first(("mortar1d3d.integration.points", "element_points"),
+                           ("mortar1d3d.integration.rules", "element_points"))
+    ctx = kernel_input(beams, solid)
+    return lambda: element_points(ctx, 4)
+
+
 def _child(args):
     sys.path.insert(0, str(Path(args.package).resolve()))
     import numba
@@ -47,8 +72,10 @@ def _child(args):
     if args.distort:
         solid = m13.generate.distort(solid, args.distort, seed=1)
     m13.assemble_mortar(beams, solid, integration=args.integration, n_gauss=4)
+    call = _stage_call(m13, beams, solid, args)
+    call()
     for _ in range(args.child_calls):
-        m13.assemble_mortar(beams, solid, integration=args.integration, n_gauss=4)
+        call()
 
 
 def _environment(package, args):
@@ -93,7 +120,7 @@ def _count(package, args, calls):
         cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
                sys.executable, str(HERE), "--child", "--package", str(package), "--integration",
                args.integration, "--distort", str(args.distort), "--n", str(args.n), "--fibres",
-               str(args.fibres), "--child-calls", str(calls)]
+               str(args.fibres), "--stage", args.stage, "--child-calls", str(calls)]
         done = subprocess.run(cmd, env=_environment(package, args), capture_output=True, text=True)
         if done.returncode != 0:
             raise SystemExit(f"child failed ({package}, {calls} calls):\n{done.stderr[-2000:]}")
@@ -109,6 +136,9 @@ def main(argv=None):
                         help="move interior solid nodes by up to A times the element size (0: regular)")
     parser.add_argument("--n", type=int, default=10, help="solid elements per edge (default 10)")
     parser.add_argument("--fibres", type=int, default=200)
+    parser.add_argument("--stage", default="call", choices=("call", "search", "points"),
+                        help="count whole assemble_mortar calls (default) or one stage of element-based "
+                             "integration: search (kernel input) or points (integration points)")
     parser.add_argument("--calls", type=int, default=3, help="counted calls (default 3)")
     parser.add_argument("--cache", default=str(Path(tempfile.gettempdir()) / "mortar1d3d-callgrind-cache"),
                         help="kernel cache of the children (default: in the temporary directory)")
@@ -129,7 +159,8 @@ def main(argv=None):
         more = _count(package, args, args.calls)
         per_call = {k: (more[k] - base[k]) / args.calls for k in PARTS}
         counts.append(per_call)
-        print(f"{package}: {sum(per_call.values()):.4e} instructions per {args.integration} call "
+        what = f"{args.integration} call" if args.stage == "call" else f"'{args.stage}' stage"
+        print(f"{package}: {sum(per_call.values()):.4e} instructions per {what} "
               f"(fibre_cube({args.n}, {args.fibres}, {args.n}), distort {args.distort}, n_gauss 4, 1 thread): "
               + ", ".join(f"{k} {v:.4e}" for k, v in per_call.items()), flush=True)
     for package, c in zip(packages[1:], counts[1:]):
