@@ -8,7 +8,9 @@ ids or values at fault and what to try):
 - :class:`LinearSolverError` (``RuntimeError``): a linear solve failed;
 - :class:`ConvergenceError` (``RuntimeError``): Newton's method gave up;
 - :class:`InvertedElementsError` (``FloatingPointError``): det F <= 0 in solid elements (a Newton
-  solver catches it to cut its step).
+  solver catches it to cut its step);
+- :class:`RotationRangeError` (``FloatingPointError``): Simo–Reissner beam elements whose triads are
+  too far apart for the interpolation, or non-finite (likewise a reason to cut the step).
 
 Warnings (``UserWarning`` subclasses): :class:`AccuracyWarning`, :class:`CouplingWarning`,
 :class:`LargeDeformationWarning`.
@@ -19,7 +21,7 @@ The modules that raise them re-export them under their old names (``mortar1d3d.s
 import numpy as np
 
 __all__ = ["MeshError", "SceneError", "LinearSolverError", "ConvergenceError", "InvertedElementsError",
-           "AccuracyWarning", "CouplingWarning", "LargeDeformationWarning", "format_ids"]
+           "RotationRangeError", "AccuracyWarning", "CouplingWarning", "LargeDeformationWarning", "format_ids"]
 
 
 def format_ids(ids, limit=10):
@@ -56,6 +58,18 @@ class InvertedElementsError(FloatingPointError):
         self.elements = np.asarray(elements, dtype=np.int64)
         super().__init__(f"det F <= 0 (or not finite) at a Gauss point of {len(self.elements)} solid "
                          f"elements: {format_ids(self.elements)}")
+
+
+class RotationRangeError(FloatingPointError):
+    """Simo–Reissner beam elements (``.elements``, int64 array) whose end triad is turned against the
+    middle one by more than the triad interpolation takes, or whose energy or force is not finite.
+
+    A Newton solver catches this (a FloatingPointError) to cut its step.
+    """
+
+    def __init__(self, elements, message):
+        self.elements = np.asarray(elements, dtype=np.int64)
+        super().__init__(message)
 
 
 # ----------------------------------------------------------------------------------- warnings

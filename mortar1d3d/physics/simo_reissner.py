@@ -25,7 +25,7 @@ import scipy.sparse as sp
 
 from .._config import CHUNK
 from ..elements.beam import BEAM_ELEMENTS, evaluate
-from ..errors import format_ids
+from ..errors import RotationRangeError, format_ids
 from ..mesh import BeamMesh
 from ..quadrature import gauss_legendre
 from . import simo_reissner_kernel as kernel
@@ -44,16 +44,6 @@ FORCE_GAUSS = None
 ORTHONORMAL_TOL = 1e-8
 #: given reference triads: largest |g1 - t| against the unit reference tangent t
 TANGENT_TOL = 1e-6
-
-
-class RotationRangeError(FloatingPointError):
-    """An element's end triad turned by more than ``kernel.MAX_RELATIVE_ROTATION`` against its
-    middle triad (the interpolation's local rotation vectors would jump), or a non-finite result.
-    ``.elements``: the element ids. A Newton solver catches it (a FloatingPointError) to cut its step."""
-
-    def __init__(self, elements, message):
-        self.elements = np.asarray(elements, dtype=np.int64)
-        super().__init__(message)
 
 
 # -- section ---------------------------------------------------------------------------------------
