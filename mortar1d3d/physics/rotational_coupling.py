@@ -64,7 +64,7 @@ class RotationalCoupling:
         Rotational multiplier functions on the beam elements.
     """
 
-    def __init__(self, ops, beam, solid, rotation_offset, n_dofs, triad="polar", penalty=None, lm="line2"):
+    def __init__(self, ops, beam, solid, rotation_offset, n_dofs, triad="polar", penalty=None, lm="line3"):
         if triad not in kernel.TRIADS:
             raise ValueError(f"coupling.rotational.triad must be one of {TRIADS}, got {triad!r}")
         if lm not in LMS:
