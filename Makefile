@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test fuzz bench report venv clean
+.PHONY: demo test fuzz bench report docs venv clean
 
 $(STAMP): pyproject.toml
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "$(PYTHON) not found; run 'make PYTHON=python3 ...'"; exit 1; }
@@ -29,10 +29,22 @@ fuzz: $(STAMP)
 bench: $(STAMP)
 	NUMBA_NUM_THREADS=2 $(PY) -m pytest benchmarks -q -p no:randomly -p no:xdist --benchmark-only --benchmark-columns=min,median,max,rounds
 
+# the documentation site: HTML in docs/_build/html, warnings are errors, then every internal link
+# and anchor of the built pages and every public name's API entry are checked (docs/check_site.py)
+DOCS_STAMP := $(VENV)/.installed-docs
+$(DOCS_STAMP): $(STAMP)
+	$(PY) -m pip install --quiet -e ".[test,plot,docs]"
+	touch $(DOCS_STAMP)
+
+docs: $(DOCS_STAMP)
+	rm -rf docs/_build/html
+	$(PY) -m sphinx -b html -W --keep-going -q docs docs/_build/html
+	$(PY) docs/check_site.py docs/_build/html
+
 # accuracy-vs-time study (issue 5): report/accuracy_vs_time.md + plots; QUICK=1 for the short run
 report: $(STAMP)
 	$(PY) -m mortar1d3d.cli bench report --out report $(if $(QUICK),--quick,)
 
 clean:
-	rm -rf $(VENV) results .pytest_cache .benchmarks
+	rm -rf $(VENV) results .pytest_cache .benchmarks docs/_build
 	find . -name __pycache__ -type d -prune -exec rm -rf {} +

@@ -1,4 +1,4 @@
-"""Shared fixtures and the end-of-session summary of the benchmarks (design.md §5).
+"""Shared fixtures and the end-of-session summary of the benchmarks (docs/conventions.md §5).
 
 Run with ``make bench``; ``make test`` never collects this directory (``testpaths = ["tests"]``).
 
@@ -25,7 +25,7 @@ HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 RESULTS_FILE = HERE / "results" / "latest.json"
 
-#: the benchmark scene: fibre_cube(n, fibres, elements_per_fibre), design.md §5
+#: the benchmark scene: fibre_cube(n, fibres, elements_per_fibre), docs/conventions.md §5
 SCENE = (20, 1000, 20)
 N_GAUSS = 4
 

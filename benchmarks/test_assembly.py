@@ -1,4 +1,4 @@
-"""Throughput of the whole ``assemble_mortar`` call (design.md §5).
+"""Throughput of the whole ``assemble_mortar`` call (docs/conventions.md §5).
 
 Scene ``generate.fibre_cube(20, 1000, 20)`` (8000 hex8, 1000 fibres of 20 Hermite elements),
 ``n_gauss = 4``; element-based and segment-based integration on straight fibres, segment-based

@@ -1,4 +1,4 @@
-"""Start-up time and peak memory, each measured in a fresh Python process (design.md §5).
+"""Start-up time and peak memory, each measured in a fresh Python process (docs/conventions.md §5).
 
 * cold start: ``import mortar1d3d`` + segment- and element-based assembly of a tiny scene with
   ``NUMBA_CACHE_DIR`` pointing to an empty directory, i.e. every kernel is JIT-compiled;

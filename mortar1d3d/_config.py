@@ -85,7 +85,7 @@ njit_parallel = numba.njit(parallel=True, **JIT_OPTIONS)
 #: (LLVM inlines the arithmetic but keeps the atomic refcount operations)
 njit_inline = numba.njit(inline="always", **JIT_OPTIONS)
 
-# Relative tolerances (design.md §2). Distances are relative to the element size h.
+# Relative tolerances (docs/conventions.md §2). Distances are relative to the element size h.
 NEWTON_RESIDUAL_TOL = 1e-12   # |x(xi) - p| <= tol * h
 PARAMETER_TOL = 1e-9          # inside test of points and of face crossings (parameter space)
 #: a segment's owner must contain its midpoint to this (parameter space): far below PARAMETER_TOL,

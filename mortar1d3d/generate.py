@@ -6,10 +6,10 @@ no Python loop over elements, fibres or nodes, so benchmark scenes build in well
 - :func:`box`: structured mesh of an axis-aligned box for every solid element type, with the
   six face node sets ``x_min`` ... ``z_max``.
 - :func:`distort`: a copy of a solid mesh with its interior nodes moved by a smooth field.
-- :func:`fibre_cube`: the benchmark scene of design.md §5 (the unit cube, straight or helical
+- :func:`fibre_cube`: the benchmark scene of docs/conventions.md §5 (the unit cube, straight or helical
   fibres drawn with splitmix64 so that other codes can rebuild the same curves).
 - :func:`random_curved_beams`: random helix pieces and arcs inside a box, for tests.
-- :func:`splitmix64`, :func:`splitmix64_uniforms`: the random stream of design.md §5.
+- :func:`splitmix64`, :func:`splitmix64_uniforms`: the random stream of docs/conventions.md §5.
 """
 import numpy as np
 
@@ -19,7 +19,7 @@ from .mesh import BeamMesh, SolidMesh
 __all__ = ["box", "distort", "fibre_cube", "random_curved_beams", "splitmix64", "splitmix64_uniforms",
            "FIBRE_LENGTH", "FIBRE_MARGIN", "HELIX_RADIUS", "HELIX_TURNS", "FACE_SETS"]
 
-# design.md §5: fixed so that every code builds the same scene from (n, fibres, m, curved, seed)
+# docs/conventions.md §5: fixed so that every code builds the same scene from (n, fibres, m, curved, seed)
 FIBRE_LENGTH = 0.3      # L: axial length of every fibre
 FIBRE_MARGIN = 0.02     # gap between a fibre's bounding box and the cube faces
 HELIX_RADIUS = 0.03     # R of the curved fibres
@@ -34,7 +34,7 @@ _SPLITMIX_M1 = np.uint64(0xBF58476D1CE4E5B9)
 _SPLITMIX_M2 = np.uint64(0x94D049BB133111EB)
 
 
-# -- random stream (design.md §5) ------------------------------------------------------------
+# -- random stream (docs/conventions.md §5) ------------------------------------------------------------
 
 def splitmix64(seed, count):
     """The first ``count`` outputs of splitmix64 started from ``state = seed``.
@@ -76,7 +76,7 @@ def splitmix64_uniforms(seed, count):
 # -- curves ------------------------------------------------------------------------------------
 
 def _helix_frame(d):
-    """Unit vectors e1, e2 normal to the unit axes ``d`` (k, 3), as design.md §5 defines them.
+    """Unit vectors e1, e2 normal to the unit axes ``d`` (k, 3), as docs/conventions.md §5 defines them.
 
     ``e1 = normalize(d × e*)`` with ``e* = e_x`` if ``|d_x| < 0.9`` else ``e_y`` (far from
     parallel to d, so the cross product is well conditioned); ``e2 = d × e1``.
@@ -125,7 +125,7 @@ def _chain_elements(n_curves, n_elements):
 
 
 def fibre_cube(n, fibres, elements_per_fibre, curved=False, seed=12345):
-    """The benchmark scene of design.md §5: fibres in the unit cube meshed with n³ hex8.
+    """The benchmark scene of docs/conventions.md §5: fibres in the unit cube meshed with n³ hex8.
 
     Every fibre draws six splitmix64 uniforms u0..u5 (in this order, fibre after fibre, from
     ``state = seed``): centre ``c_k = a + (1 - 2a) u_k`` (k = 0, 1, 2) with

@@ -243,7 +243,7 @@ class BeamMesh:
             norm[norm == 0] = 1.0
             if np.abs(norm[used] - 1.0).max() > 1e-10:
                 warnings.warn("beam tangents were not unit vectors and have been normalised "
-                              "(Hermite centrelines use unit tangents, design.md §2)", stacklevel=3)
+                              "(Hermite centrelines use unit tangents, docs/conventions.md §2)", stacklevel=3)
             self.tangents = np.ascontiguousarray(t / norm[:, None])
             self.lengths = hermite_lengths(self.positions, self.tangents, self.elements)
         else:
@@ -319,7 +319,7 @@ class BeamMesh:
         return float(self.lengths.sum())
 
     def centreline_dofs(self):
-        """Reference centreline DOF vector q_B (design.md §2 layout)."""
+        """Reference centreline DOF vector q_B (docs/conventions.md §2 layout)."""
         if self.tangents is not None:
             q = np.empty(6 * self.n_nodes)
             _interleave(self.positions, self.tangents, q)

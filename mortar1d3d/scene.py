@@ -1,4 +1,4 @@
-"""Scenes: what is simulated, from Python or a TOML file (design.md §3).
+"""Scenes: what is simulated, from Python or a TOML file (docs/scene_reference.md).
 
 A :class:`Scene` holds validated, normalised plain data (numbers, strings, lists, and in Python
 also mesh objects or callables). It says what exists and what happens; :mod:`mortar1d3d.model`
@@ -489,7 +489,7 @@ def _analysis(value):
 class Scene:
     """What is simulated: solid, beams, coupling, supports, loads and the analysis.
 
-    Build from Python with the same fields as the TOML file (design.md §3), or with
+    Build from Python with the same fields as the TOML file (docs/scene_reference.md), or with
     :meth:`from_toml` / :meth:`from_dict`. Python scenes may also pass a :class:`SolidMesh` as
     ``solid["mesh"]``, a :class:`BeamMesh` as ``beams[i]["mesh"]`` and callables as curves.
 

@@ -2,7 +2,7 @@
 
 Everything a check compares against is computed without the library's kernels:
 
-- centrelines from the formulas of design.md §2 (Hermite H1..H4 with the mesh's L, Lagrange) and
+- centrelines from the formulas of docs/conventions.md §2 (Hermite H1..H4 with the mesh's L, Lagrange) and
   solid shape functions from the descriptors' reference nodes and a monomial basis (Vandermonde
   inverse), both in tests/naive.py;
 - point-in-element by a vectorised numpy Newton from the element centre;
@@ -286,7 +286,7 @@ def curved_tet10(delta=0.1):
 
 def _arch_up(x_mid, z_top, half_width, rise, y=0.3, elements=1):
     """Hermite arch in the x-z plane: ends at (x_mid ∓ w, y, z_top - rise), symmetric apex at
-    (x_mid, y, z(0)), z(η) = z_end + t_z L/4 (1 - η²) (design.md Hermite, symmetric data)."""
+    (x_mid, y, z(0)), z(η) = z_end + t_z L/4 (1 - η²) (docs/conventions.md §2 Hermite, symmetric data)."""
     t1 = unit([half_width, 0.0, 2 * rise])
     t2 = unit([half_width, 0.0, -2 * rise])
     a = [x_mid - half_width, y, z_top - rise]

@@ -7,7 +7,7 @@ the reference is the summation or the bookkeeping around it, not the functions i
 
 Contents, in the order of the data path:
 
-- numbering: LM rows and centreline columns of every beam element (design.md §2);
+- numbering: LM rows and centreline columns of every beam element (docs/conventions.md §2);
 - beams: centreline functions H, centrelines r(η), r'(η), arc lengths (fixed and adaptive
   Gauss), the functions as exact polynomials, multiplier functions Φ;
 - solids: shape functions from a monomial basis fitted to the reference nodes, the reference
@@ -37,7 +37,7 @@ from mortar1d3d.elements.solid.dispatch import BY_CODE, SOLID_MODULES
 from mortar1d3d.elements.solid.registry import FAMILIES
 
 # --------------------------------------------------------------------------------------------
-# numbering (design.md §2)
+# numbering (docs/conventions.md §2)
 # --------------------------------------------------------------------------------------------
 
 
@@ -80,7 +80,7 @@ LM_NODES = {"line2": [-1.0, 1.0], "line3": [-1.0, 1.0, 0.0], "line4": [-1.0, 1.0
 
 
 def beam_shape(kind, eta, L=1.0):
-    """Centreline functions H_k(η) and dH_k/dη, each (n_functions, m), written out from design.md §2.
+    """Centreline functions H_k(η) and dH_k/dη, each (n_functions, m), written out from docs/conventions.md §2.
 
     ``kind``: "hermite" (coefficients r1, t1, r2, t2; L enters H2, H4), "line" (r1, r2) or
     "line3" (r1, r2, r_mid).
@@ -144,7 +144,7 @@ def adaptive_arc_length(beams, e, a=-1.0, b=1.0):
 
 
 def hermite_polys(L):
-    """H1..H4 of design.md §2 as numpy Polynomials in η (for exact integrals of products)."""
+    """H1..H4 of docs/conventions.md §2 as numpy Polynomials in η (for exact integrals of products)."""
     return [Polynomial([2.0, -3.0, 0.0, 1.0]) / 4, Polynomial([1.0, -1.0, -1.0, 1.0]) * (L / 8),
             Polynomial([2.0, 3.0, 0.0, -1.0]) / 4, Polynomial([-1.0, -1.0, 1.0, 1.0]) * (L / 8)]
 
@@ -328,7 +328,7 @@ def cell_owners(p, lower, h, cells):
 # --------------------------------------------------------------------------------------------
 # point location: lattice search, then scipy.optimize.root
 # --------------------------------------------------------------------------------------------
-INSIDE_TOL = 1e-9      # parameter distance outside the element still counted inside (design.md §2)
+INSIDE_TOL = 1e-9      # parameter distance outside the element still counted inside (docs/conventions.md §2)
 LATTICE = 25           # lattice points per direction of the search
 _LATTICES = {}
 
@@ -572,7 +572,7 @@ def _scatter(beams, solid, n_phi, pieces):
 
 
 def operators_from_points(beams, solid, ops):
-    """Scalar D (dense), M (dense) and κ summed point by point from ``ops.points`` (design.md §1).
+    """Scalar D (dense), M (dense) and κ summed point by point from ``ops.points`` (docs/conventions.md §1).
 
     Checks the assembly (grouping, scatter, DOF order), not the functions: H from
     :func:`beam_shape`, N from the element modules (:func:`solid_functions`).

@@ -24,7 +24,7 @@ multiplier = importlib.import_module("mortar1d3d.elements.multiplier")
 NAMES = list(dispatch.SOLID_ELEMENTS)
 QUADRATIC = [n for n in NAMES if dispatch.SOLID_ELEMENTS[n].degree == 2]
 LINEAR = [n for n in NAMES if dispatch.SOLID_ELEMENTS[n].degree == 1]
-TOL = 1e-9  # parameter tolerance of the inside test (design.md §2)
+TOL = 1e-9  # parameter tolerance of the inside test (docs/conventions.md §2)
 
 
 def descriptor(name):

@@ -1,6 +1,6 @@
 """Generators: the §5 fibre cube rebuilt independently, structured boxes, distortion, random beams.
 
-Reference values are computed from the specification (design.md §5), not with the library's
+Reference values are computed from the specification (docs/conventions.md §5), not with the library's
 helpers: splitmix64 with Python integers (tests/naive.py), fibre axes and helix frames from
 scratch, volumes from the element modules' derivatives and Gauss rules.
 """
@@ -19,7 +19,7 @@ TYPES = list(MODULES)
 L, R = 0.3, 0.03
 
 
-# -- independent reference of design.md §5 -----------------------------------------------------
+# -- independent reference of docs/conventions.md §5 -----------------------------------------------------
 
 def reference_fibres(fibres, curved, seed=12345):
     """Per fibre: centre c, axis d, frame e1, e2 and phase, one fibre at a time (plain Python)."""

@@ -1,7 +1,7 @@
 """Mortar operators: certificates, invariance, broad phase, bounding boxes, threads, bad input.
 
 Reference values are computed independently of the library's kernels wherever that is
-cheap: arc lengths from the centreline formulas of design.md §2 and candidate pairs by numpy
+cheap: arc lengths from the centreline formulas of docs/conventions.md §2 and candidate pairs by numpy
 brute force (tests/naive.py), Newton projections into solid elements in numpy here (with the
 element modules' shape functions, which tests/test_elements.py checks).
 """
@@ -140,7 +140,7 @@ def test_certificates_on_distorted_meshes(element, integration, lm):
     assert_shapes(ops, beams, solid, lm)
     assert ops.diagnostics["points_not_converged"] == 0
     assert ops.diagnostics["points_outside_element"] == 0
-    # the projections meet the design tolerance |x(ξ_g) - r(η_g)| <= 1e-12 h (design.md §2;
+    # the projections meet the design tolerance |x(ξ_g) - r(η_g)| <= 1e-12 h (docs/conventions.md §2;
     # h: the element size the library uses, the diagonal of its unpadded bounding box)
     h = solid_bounding_boxes(solid)[1]
     for p in ops.points:
@@ -175,7 +175,7 @@ def test_certificates_on_distorted_meshes(element, integration, lm):
         np.testing.assert_array_equal(ops.points["eta"], np.tile(x, beams.n_elements))
 
 
-# The certificate ‖D q_B - M X_S‖ / ‖D q_B‖ at round-off (design.md §2: "zero up to round-off").
+# The certificate ‖D q_B - M X_S‖ / ‖D q_B‖ at round-off (docs/conventions.md §1: round-off for any correct projection).
 # Integration points get one Newton step past the 1e-12 h convergence test (projection.polish);
 # without it these scenes gave 1e-13..2.6e-13 on hex8/hex20/tet10.
 

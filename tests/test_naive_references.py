@@ -1,7 +1,7 @@
 """The kernels against the slow, obvious references of tests/naive.py on small random scenes.
 
 - element functions: the solid shape functions of the dispatch against monomial bases fitted to
-  the reference nodes, the beam functions against the formulas of design.md §2;
+  the reference nodes, the beam functions against the formulas of docs/conventions.md §2;
 - broad phase: the candidate pairs of ``geometry.search`` contain every pair whose boxes from
   dense sampling overlap (brute force over all pairs) and every pair the beam really enters;
 - segmentation: the segments of ``assemble_mortar(..., integration="segment")`` against the owner

@@ -112,7 +112,7 @@ def test_curved_hermite_crossing_a_face():
     L = beams.lengths[0]
     curve = hermite_curve(r1, t1, r2, t2, L)
     # L is the arc length of the curve it defines; the library's fixed point uses a 10-point
-    # Gauss rule (design.md §2), which is 1.2e-12 off the exact integral for this curve
+    # Gauss rule (docs/conventions.md §2), which is 1.2e-12 off the exact integral for this curve
     assert arc_length(beams, 0, -1.0, 1.0, 60) == pytest.approx(L, rel=1e-11)
     # x(η) is a genuine cubic, increasing on [-1, 1], inside the slab in y and z
     x = curve[0]
@@ -538,7 +538,7 @@ def _expected_axis_operators(solid, kind, lm, layout):
     for e, (x0, x1, cols, H) in enumerate(elements):
         jac = 0.5 * (x1 - x0)                               # |dr/dη| (straight, uniform)
         x_of_eta = P([0.5 * (x0 + x1), 0.5 * (x1 - x0)])
-        # LM nodes: the beam element's end nodes, then its interior LM nodes (design.md §2)
+        # LM nodes: the beam element's end nodes, then its interior LM nodes (docs/conventions.md §2)
         lm_ids = [beams.elements[e, 0], beams.elements[e, 1]] + [n_beam_nodes + n_int * e + i
                                                                  for i in range(n_int)]
         for j, row in enumerate(lm_ids):

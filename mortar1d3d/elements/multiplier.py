@@ -8,7 +8,7 @@ type        nodes on η             LM nodes
 ``line4``   -1, +1, -1/3, +1/3     end nodes + 2 interior LM nodes per beam element
 ==========  =====================  ================================================
 
-Numbering (design.md §2): LM nodes of beam nodes carry the beam node's index; interior LM
+Numbering (docs/conventions.md §2): LM nodes of beam nodes carry the beam node's index; interior LM
 nodes follow, element by element.
 """
 from dataclasses import dataclass

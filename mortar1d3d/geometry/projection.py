@@ -2,7 +2,7 @@
 
 Coordinates passed to these kernels are *local*: element nodes and points minus the element's
 origin (its first node), so that round-off is relative to the element size h, not to the
-distance from the global origin (design.md §2: tolerances relative to the element size).
+distance from the global origin (docs/conventions.md §2: tolerances relative to the element size).
 All buffers come from the caller; nothing here allocates.
 """
 import numpy as np
@@ -391,7 +391,7 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
 
     Candidates are ``pair_solid[p0:p1]`` (ascending); returns -1 if none contains the point.
     With ``only`` >= 0, tests just that element. On success ``xi`` holds the point's ξ.
-    This is the ownership rule of both integrations (design.md §1-§2): a point on a face,
+    This is the ownership rule of both integrations (docs/conventions.md §1-§2): a point on a face,
     edge or node shared by several elements belongs to the lowest-index one. Affine elements
     are located with their inverse map (``linear``, :func:`linear_maps`), the others by
     :func:`locate_point` (``a``, ``stack``: :func:`search_buffers`), which finds a point inside a
@@ -606,7 +606,7 @@ def project_points(solid, points, elements):
     The location used by :func:`mortar1d3d.assemble_mortar`: affine elements (every tet4,
     parallelepiped hex8, straight-edged quadratic elements) use their exact inverse map. The
     others run Newton on x(ξ) - p with a backtracking line search, converged when
-    |x(ξ) - p| <= 1e-12 h (h: the element's size), at most 20 iterations, from the element's map
+    ``|x(ξ) - p| <= 1e-12 h`` (h: the element's size), at most 20 iterations, from the element's map
     linearised at its centre (else from the centre). A curved element's extended map can fold,
     so a point inside may have further solutions outside, and Newton may find one of those.
     A solution outside therefore counts only where the map is proved one-to-one (a bound on its

@@ -3,7 +3,7 @@
 Both rules produce the same record per point: beam element, solid element, η, ξ (the solid
 parameter coordinates of r(η), Newton projection in the reference configuration), the weight
 ``w_g · (η_b - η_a)/2 · |r'(η_g)|`` (so that Σ weight = coupled arc length) and the outcome of
-the projection. Only the set of points differs (design.md §1):
+the projection. Only the set of points differs (docs/conventions.md §1):
 
 - segment-based: ``n_gauss`` points on every segment [η_a, η_b], in its owning element;
 - element-based: ``n_gauss`` points on the whole beam element, each given to the lowest-index

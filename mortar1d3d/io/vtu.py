@@ -1,5 +1,5 @@
 """VTU/PVD output for ParaView: the solid mesh, beam centrelines, mortar segments and
-integration points, and ``.pvd`` collections that group them (design.md §4, ``io/``).
+integration points, and ``.pvd`` collections that group them (docs/getting_started.md, "Where results go").
 
 Every writer builds a :class:`meshio.Mesh` and writes it as an XML unstructured grid
 (``.vtu``, binary, zlib-compressed). Files are written atomically: to a temporary name in the
@@ -324,7 +324,7 @@ def write_segments(path, beams, ops, samples_per_segment=4, *, compression="zlib
     Notes
     -----
     Every line cell carries the cell data of its segment: ``beam_element``, ``solid_element``,
-    ``segment`` (row of ``ops.segments``), all int64, and ``length`` = ∫|r0'| dη over the
+    ``segment`` (row of ``ops.segments``), all int64, and ``length`` = ∫ ``|r0'|`` dη over the
     segment (float64). Point data: ``eta``. For element-based integration the "segments" are
     the (beam element, solid element) groups of points, from the first to the last point's η.
     """
@@ -370,7 +370,7 @@ def write_integration_points(path, ops, *, compression="zlib"):
     Notes
     -----
     One point per row of ``ops.points``, at ``position`` (reference r0(η)), with point data
-    ``weight`` (Gauss weight · segment Jacobian · |r0'|), ``eta``, ``xi`` (3 components: solid
+    ``weight`` (Gauss weight · segment Jacobian · ``|r0'|``), ``eta``, ``xi`` (3 components: solid
     parameter coordinates), ``beam_element``, ``solid_element``, ``status`` (int64).
     """
     import meshio

@@ -1,6 +1,6 @@
 """``assemble_mortar``: the mortar operators D, M and κ of beams embedded in a solid.
 
-Per (beam element, solid element) group of integration points g (design.md §1):
+Per (beam element, solid element) group of integration points g (docs/conventions.md §1):
 
     D[j, k] += Σ_g Φ_j(η_g) H_k(η_g) w_g        M[j, a] += Σ_g Φ_j(η_g) N_a(ξ_g) w_g
     κ[j]    += Σ_g Φ_j(η_g) w_g                  w_g = Gauss weight · (η_b - η_a)/2 · |r0'(η_g)|
@@ -54,7 +54,7 @@ class MortarOperators:
         element. Element-based: one row per (beam element, solid element) group of points,
         spanning the η of its first and last point.
     points : structured array (POINT_DTYPE)
-        The integration points that were assembled (η, ξ, weight incl. |r0'|, position); built
+        The integration points that were assembled (η, ξ, weight incl. ``|r0'|``, position); built
         on first access from ``point_fields`` (its columns as separate arrays).
     n_integration_points : int
     embedded_length : float
@@ -242,7 +242,7 @@ def _check_int(name, value, low, high):
 
 
 def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", search_points=6):
-    """Mortar operators D, M and κ coupling ``beams`` to ``solid`` (design.md §1).
+    """Mortar operators D, M and κ coupling ``beams`` to ``solid`` (docs/conventions.md §1).
 
     Parameters
     ----------

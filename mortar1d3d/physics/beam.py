@@ -2,7 +2,7 @@
 
 Both models are functions of the centreline only: the current curve is
 ``r(η) = Σ_k H_k(η; L) q_k`` with ``q = q0 + d`` (``q0 = beams.centreline_dofs()``) and the
-reference element length L (design.md §2). In the current configuration the Hermite nodal
+reference element length L (docs/conventions.md §2). In the current configuration the Hermite nodal
 tangents are free vectors, not unit vectors: this is the torsion-free ("reduced") Kirchhoff
 model of Meier, Popp & Wall (CMAME 2015, 2016), which has no rotational DOFs and no torsion.
 
@@ -380,7 +380,7 @@ def curved_elements(beams):
     """Ids and :func:`reference_curvature` of the curved elements of a Hermite beam mesh.
 
     An element is straight when its reference curvature times its length stays below 1e-8,
-    or below the round-off of its stored node positions (64 ε |X| / L: a beam far from the
+    or below the round-off of its stored node positions (``64 ε |X| / L``: a beam far from the
     origin cannot be straighter than its coordinates), whichever is larger.
 
     Returns

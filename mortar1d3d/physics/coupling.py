@@ -1,4 +1,4 @@
-"""Coupling enforcement from the engine's constant operators (design.md §1).
+"""Coupling enforcement from the engine's constant operators (docs/conventions.md §1).
 
 Global unknowns are stacked ``[d_S; d_B]`` (solid displacements first, then the beam centreline
 DOFs). Because the tying constraint ``u_B − u_S = 0`` is linear in the displacements and the

@@ -1,4 +1,4 @@
-"""Linear solvers for the systems of one Newton iteration (design.md §1, "Enforcement"): the
+"""Linear solvers for the systems of one Newton iteration (docs/conventions.md §1, "Enforcement"): the
 entry points, and the names of the modules they are built from.
 
 Two kinds of systems arise, both on the free DOFs only (Dirichlet DOFs are eliminated by the

@@ -15,7 +15,7 @@ from ..mortar.assemble import assemble_mortar, lm_numbering
 
 
 def _hermite(eta, L):
-    """Hermite functions and η-derivatives of design.md §2 (own formulas, numpy)."""
+    """Hermite functions and η-derivatives of docs/conventions.md §2 (own formulas, numpy)."""
     H = np.array([(2 - 3 * eta + eta ** 3) / 4, L / 8 * (1 - eta - eta ** 2 + eta ** 3),
                   (2 + 3 * eta - eta ** 3) / 4, L / 8 * (-1 - eta + eta ** 2 + eta ** 3)])
     dH = np.array([(-3 + 3 * eta ** 2) / 4, L / 8 * (-1 - 2 * eta + 3 * eta ** 2),
@@ -82,7 +82,7 @@ def newton_projection(module, X, p, xi0, h=None, iterations=60, escape=None):
 def adaptive_segment_integrals(beams, solid, beam_element, solid_element, eta_a, eta_b, lm="line2", epsrel=1e-13):
     """κ_j, D_jk, M_ja of one segment by adaptive quadrature (``scipy.integrate.quad_vec``).
 
-    Independent of the library's kernels: Hermite functions from design.md §2 in numpy, Lagrange
+    Independent of the library's kernels: Hermite functions from docs/conventions.md §2 in numpy, Lagrange
     multipliers from their nodes, the solid point by a numpy Newton iteration (warm-started
     along the segment). Only the shape functions of the solid element modules are shared (they
     are checked on their own in tests/test_elements.py).
@@ -130,7 +130,7 @@ def pair_reference_check(beams, solid, beam_elements, n_gauss, lm="line2"):
     -------
     dict
         ``D``, ``M``, ``kappa``: largest entry difference over the largest entry; ``face``:
-        largest |distance to the reference element's boundary| of the interior segment ends (parameter
+        largest distance to the reference element's boundary (absolute value) of the interior segment ends (parameter
         units); ``segments``: how many segments were integrated.
     """
     beam_elements = np.atleast_1d(np.asarray(beam_elements, dtype=np.int64))
