@@ -40,7 +40,7 @@ import numpy as np
 from .._config import njit
 from ..elements.solid import dispatch as solid_types
 from .rotations import exp, log
-from .simo_reissner_kernel import element_setup
+from .simo_reissner_kernel import _matmul, element_setup
 
 __all__ = ["POLAR", "DEFORMATION_GRADIENT", "TRIADS", "point_psi", "point_jacobian", "point_hessian",
            "reference_gradients", "OK", "NOT_CONVERGED", "STEP", "FD_STEP"]
@@ -103,13 +103,6 @@ def _inverse3(A, B):
     B[0, 2] = (A[0, 1] * A[1, 2] - A[0, 2] * A[1, 1]) / det
     B[1, 2] = (A[0, 2] * A[1, 0] - A[0, 0] * A[1, 2]) / det
     B[2, 2] = (A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]) / det
-
-
-@njit
-def _matmul(A, B, C):
-    for i in range(3):
-        for j in range(3):
-            C[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
 
 
 @njit
