@@ -93,8 +93,6 @@ class RotationalCoupling:
         X = np.ascontiguousarray(solid.points, dtype=np.float64)
         kernel.reference_gradients(solid.element_codes, solid.connectivity, X, solid_element, xi, self.G, self.nodes,
                                    self.n_local)
-        # element size per point (the finite-difference step of the geometric tangent)
-        self.size = np.array([np.ptp(X[self.nodes[k, :self.n_local[k]]], axis=0).max() for k in range(n_pts)])
         self.lag = _lagrange_tables(self.eta)[0]
         self.rotation_nodes = beam.rotation_nodes
         self.L0 = np.empty((n_pts, 3, 3))
@@ -116,23 +114,36 @@ class RotationalCoupling:
 
     # -- state -------------------------------------------------------------------------------------
     def _columns(self):
-        """Global unknown of every local column per point (n_pts, 3 MAX_NODES + 9), -1 unused."""
+        """Global unknown of every local column per point (n_pts, 3 MAX_NODES + 9): three per solid
+        node slot (-1 for slots the element does not have), then the nine spins."""
         m = self.nodes.shape[1]
-        cols = np.full((self.n_points, 3 * m + 9), -1, dtype=np.int64)
+        cols = (3 * self.nodes[:, :, None] + np.arange(3)).reshape(self.n_points, 3 * m)
+        cols[np.repeat(np.arange(m)[None, :] >= self.n_local[:, None], 3, axis=1)] = -1
         rot = (self.rotation_offset + 3 * self.rotation_nodes[self.beam_element][:, :, None]
                + np.arange(3)).reshape(-1, 9)
-        for k in range(self.n_points):
-            n = self.n_local[k]
-            cols[k, :3 * n] = (3 * self.nodes[k, :n, None] + np.arange(3)).ravel()
-            cols[k, 3 * n:3 * n + 9] = rot[k]
-        return cols
+        return np.hstack([cols, rot])
+
+    def _local_jacobian(self, J):
+        """``∂ψ/∂(F, θ)`` (n_pts, 3, 18) → ``∂ψ/∂(u, θ)`` (n_pts, 3, 3 MAX_NODES + 9), with
+        ``∂F_ij/∂u_ak = δ_ik G_aj``."""
+        n = self.n_points
+        Ju = np.einsum("prij,paj->prai", J[:, :, :9].reshape(n, 3, 3, 3), self.G).reshape(n, 3, -1)
+        return np.concatenate([Ju, J[:, :, 9:]], axis=2)
+
+    def _local_hessian(self, H):
+        """``∂²/∂(F, θ)²`` (n_pts, 18, 18) → ``∂²/∂(u, θ)²`` (n_pts, 3 MAX_NODES + 9, same)."""
+        n, G = self.n_points, self.G
+        HFF = H[:, :9, :9].reshape(n, 3, 3, 3, 3)
+        uu = np.einsum("pijkl,paj,pbl->paibk", HFF, G, G).reshape(n, 3 * G.shape[1], 3 * G.shape[1])
+        ut = np.einsum("pijt,paj->pait", H[:, :9, 9:].reshape(n, 3, 3, 9), G).reshape(n, -1, 9)
+        tu = np.einsum("ptij,paj->ptai", H[:, 9:, :9].reshape(n, 9, 3, 3), G).reshape(n, 9, -1)
+        return np.concatenate([np.concatenate([uu, ut], axis=2), np.concatenate([tu, H[:, 9:, 9:]], axis=2)], axis=1)
 
     def _run(self, u_solid, psi, want):
         x = np.ascontiguousarray(self.X + np.asarray(u_solid, dtype=float).reshape(-1, 3))
         triads = self.beam.triads(psi)
-        m = 3 * self.nodes.shape[1] + 9
         psi_p = np.zeros((self.n_points, 3))
-        J = np.zeros((self.n_points, 3, m) if want else (0, 3, m))
+        J = np.zeros((self.n_points, 3, 18) if want else (0, 3, 18))
         status = np.empty(self.n_points, dtype=np.int64)
         kernel.jacobian_range(self.kind, x, self.nodes, self.n_local, self.G, self.L0, triads, self.rotation_nodes,
                               self.beam_element, self.lag, want, psi_p, J, status)
@@ -174,7 +185,8 @@ class RotationalCoupling:
         psi : (n_rotation_nodes, 3) total rotation vectors of the group.
         """
         self.n_evaluations += 1
-        x, triads, psi_p, J = self._run(u_solid, psi, True)
+        x, triads, psi_p, J18 = self._run(u_solid, psi, True)
+        J = self._local_jacobian(J18)
         cols = self._columns()
         lam_j = self.penalty * self.kappa_inverse[:, None] * np.asarray(self.Phi @ (self.weight[:, None] * psi_p))
         lam_p = np.asarray(self.Phi.T @ lam_j)                                       # (n_pts, 3)
@@ -193,13 +205,12 @@ class RotationalCoupling:
         mask = cc >= 0
         Gm = sp.csr_matrix((vals[mask], (rows[mask], cc[mask])), shape=(3 * self.n_lm, self.n_dofs))
         K = self.penalty * (Gm.T @ sp.diags(np.repeat(self.kappa_inverse, 3)) @ Gm)
-        m = cols.shape[1]
-        H = np.zeros((self.n_points, m, m))
+        H = np.zeros((self.n_points, 18, 18))
         status = np.empty(self.n_points, dtype=np.int64)
         kernel.hessian_range(self.kind, x, self.nodes, self.n_local, self.G, self.L0, triads, self.rotation_nodes,
-                             self.beam_element, self.lag, np.ascontiguousarray(lam_p), self.size, H, status)
+                             self.beam_element, self.lag, np.ascontiguousarray(lam_p), H, status)
         self._check(status, psi_p)
-        H *= self.weight[:, None, None]
+        H = self._local_hessian(H * self.weight[:, None, None])
         both = used[:, :, None] & used[:, None, :]
         ri = np.broadcast_to(cols[:, :, None], H.shape)[both]
         ci = np.broadcast_to(cols[:, None, :], H.shape)[both]
@@ -211,16 +222,10 @@ class RotationalCoupling:
         held: ``G_j`` restricted to the rotation columns (3 n_lm, 3 n_rotation_nodes), for the
         zero-energy-mode check."""
         n_rot = self.beam.n_rotation_nodes
-        _, _, _, J = self._run(np.zeros(self.X.size), np.zeros((n_rot, 3)), True)
-        cols = self._columns() - self.rotation_offset
+        J = self._run(np.zeros(self.X.size), np.zeros((n_rot, 3)), True)[3][:, :, 9:]
+        cols = self._columns()[:, -9:] - self.rotation_offset
         Phi = self.Phi.tocoo()
-        rows, cc, vals = [], [], []
-        for j, p, v in zip(Phi.row, Phi.col, Phi.data):
-            n = self.n_local[p]
-            c = cols[p, 3 * n:3 * n + 9]
-            for i in range(3):
-                rows.append(np.full(9, 3 * j + i))
-                cc.append(c)
-                vals.append(v * self.weight[p] * J[p, i, 3 * n:3 * n + 9])
-        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cc))),
-                             shape=(3 * self.n_lm, 3 * n_rot))
+        rows = 3 * Phi.row[:, None, None] + np.arange(3)[None, :, None] + np.zeros((1, 1, 9), dtype=np.int64)
+        vals = (Phi.data * self.weight[Phi.col])[:, None, None] * J[Phi.col]
+        cc = np.broadcast_to(cols[Phi.col][:, None, :], vals.shape)
+        return sp.csr_matrix((vals.ravel(), (rows.ravel(), cc.ravel())), shape=(3 * self.n_lm, 3 * n_rot))

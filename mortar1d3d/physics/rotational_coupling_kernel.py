@@ -27,13 +27,15 @@ The constraint measure is the spatial relative rotation vector ``ψ = log(Λ_B �
 reference configuration (``Λ_S0 = Λ_B0``), turned with any rigid rotation of the whole scene (its
 norm, which the penalty energy sees, unchanged).
 
-Derivatives. The local unknowns of a point are the solid element's nodal displacements (3 per
-node, additive) and the spatial spins of the beam element's three triads (multiplicative, ``Λ_k ←
-exp(Δθ_k) Λ_k``, like the Newton update of the beam). :func:`point_jacobian` returns ψ and
-``J = ∂ψ/∂(u, θ)`` by the complex step (every map above is complex-analytic). The second
-derivative ``∂(Jᵀλ)/∂(u, θ)`` for a fixed λ (the geometric part of the tangent,
-:func:`point_hessian`) is the central difference of these exact gradients: truncation ``O(h²)``
-and round-off ``eps/h`` are both about 1e-10 relative with ``h`` = :data:`FD_STEP`.
+Derivatives. ψ depends on the solid only through F, so the kernels differentiate with respect to
+18 local parameters: the nine entries of F and the spatial spins of the beam element's three triads
+(multiplicative, ``Λ_k ← exp(Δθ_k) Λ_k``, like the Newton update of the beam); the caller chains
+F to the nodal displacements with ``∂F/∂x_a = I ⊗ G_a`` (any element type, at no extra cost per
+node). :func:`point_jacobian` returns ψ and ``J = ∂ψ/∂(F, θ)`` by the complex step (every map
+above is complex-analytic). The second derivative ``∂(Jᵀλ)/∂(F, θ)`` for a fixed λ (the geometric
+part of the tangent, :func:`point_hessian`) is the central difference of these exact gradients:
+truncation ``O(h²)`` and round-off ``eps/h`` are both about 1e-10 relative with ``h`` =
+:data:`FD_STEP`.
 """
 import numpy as np
 
@@ -51,8 +53,7 @@ TRIADS = {"polar": POLAR, "deformation_gradient": DEFORMATION_GRADIENT}
 OK, NOT_CONVERGED = 0, 1
 #: complex step of the Jacobian
 STEP = 1e-30
-#: central-difference step of the geometric tangent: radians for spins, times the element size for
-#: positions
+#: central-difference step of the geometric tangent (entries of F, and spins in radians)
 FD_STEP = 1e-5
 #: Newton iterations of the polar decomposition: stop when the real part changes by less than this
 #: (relative), then iterate twice more so that a complex perturbation converges too
@@ -194,32 +195,23 @@ def beam_triad(triads, lag, L, work):
 
 
 @njit
-def point_psi(kind, x, G, n, L0, triads, lag, psi, work):
+def point_psi(kind, F, L0, triads, lag, psi, work):
     """ψ = log(Λ_B Λ_Sᵀ) (3,) at one point.
 
     Parameters
     ----------
     kind : int
         POLAR or DEFORMATION_GRADIENT.
-    x : (>= n, 3)
-        Current positions of the solid element's nodes.
-    G : (>= n, 3) float64
-        Reference gradients of the solid shape functions at the point.
+    F : (3, 3)
+        Deformation gradient of the solid at the point.
     L0 : (3, 3) float64
         Reference triad of the point.
     triads : (3, 3, 3)
         Current nodal triads of the beam element (line3 order).
     lag : (3,) float64
         Line3 Lagrange functions at the point.
-    work : (8, 3, 3) scratch of the type of x.
+    work : (8, 3, 3) scratch of the type of F.
     """
-    F = work[0]
-    for i in range(3):
-        for j in range(3):
-            s = 0.0 * x[0, 0]
-            for a in range(n):
-                s += x[a, i] * G[a, j]
-            F[i, j] = s
     LS = work[1]
     status = solid_triad(kind, F, L0, LS, work[4:8])
     LB = work[2]
@@ -233,100 +225,101 @@ def point_psi(kind, x, G, n, L0, triads, lag, psi, work):
 
 
 @njit
-def _gradient(kind, x, G, n, L0, triads, lag, lam, out, cx, ct, R, psi, work):
-    """``out = Jᵀ λ`` (3 n + 9,) at the state (x, triads), by the complex step; also returns ψ·λ's
-    status. When ``lam`` is None-like (all three ``lam`` rows used), see :func:`point_jacobian`."""
+def _turn(k, v, triads, R, out):
+    """``out`` = the triads with triad k turned by ``exp(v)`` (spatial spin)."""
+    exp(v, R)
+    for m in range(3):
+        for i in range(3):
+            for j in range(3):
+                out[m, i, j] = triads[m, i, j]
+    for i in range(3):
+        for j in range(3):
+            out[k, i, j] = R[i, 0] * triads[k, 0, j] + R[i, 1] * triads[k, 1, j] + R[i, 2] * triads[k, 2, j]
+
+
+@njit
+def _gradient(kind, F, L0, triads, lag, lam, out, cF, ct, R, psi, work):
+    """``out[r] = λ_r · ∂ψ/∂p`` (rows r of ``lam``; 18 columns p: the 9 entries ``F[i, j]`` at
+    ``3 i + j``, then the spins of the three triads) by the complex step."""
     status = OK
-    for c in range(3 * n + 9):
-        for a in range(n):
-            for i in range(3):
-                cx[a, i] = x[a, i]
-        for k in range(3):
-            for i in range(3):
-                for j in range(3):
-                    ct[k, i, j] = triads[k, i, j]
-        if c < 3 * n:
-            cx[c // 3, c % 3] += 1j * STEP
+    v = np.zeros(3, dtype=np.complex128)
+    for c in range(18):
+        for i in range(3):
+            for j in range(3):
+                cF[i, j] = F[i, j]
+        if c < 9:
+            cF[c // 3, c % 3] += 1j * STEP
+            for m in range(3):
+                for i in range(3):
+                    for j in range(3):
+                        ct[m, i, j] = triads[m, i, j]
         else:
-            k = (c - 3 * n) // 3
-            v = work[0, 0]
-            v[0] = 0.0
-            v[1] = 0.0
-            v[2] = 0.0
-            v[(c - 3 * n) % 3] = 1j * STEP
-            exp(v, R)
-            for i in range(3):
-                for j in range(3):
-                    ct[k, i, j] = R[i, 0] * triads[k, 0, j] + R[i, 1] * triads[k, 1, j] + R[i, 2] * triads[k, 2, j]
-        status = max(status, point_psi(kind, cx, G, n, L0, ct, lag, psi, work))
-        for i in range(lam.shape[0]):
-            out[i, c] = (psi[0].imag * lam[i, 0] + psi[1].imag * lam[i, 1] + psi[2].imag * lam[i, 2]) / STEP
+            v[:] = 0.0
+            v[(c - 9) % 3] = 1j * STEP
+            _turn((c - 9) // 3, v, triads, R, ct)
+        status = max(status, point_psi(kind, cF, L0, ct, lag, psi, work))
+        for r in range(lam.shape[0]):
+            out[r, c] = (psi[0].imag * lam[r, 0] + psi[1].imag * lam[r, 1] + psi[2].imag * lam[r, 2]) / STEP
     return status
 
 
 @njit
-def point_jacobian(kind, x, G, n, L0, triads, lag, psi, J):
-    """ψ (3,) and ``J = ∂ψ/∂(u, θ)`` (3, 3 n + 9) at one point (real inputs); returns a status."""
+def point_jacobian(kind, F, L0, triads, lag, psi, J):
+    """ψ (3,) and ``J = ∂ψ/∂(F, θ)`` (3, 18) at one point (real inputs); returns a status."""
     work = np.empty((8, 3, 3), dtype=np.complex128)
-    cx = np.empty((n, 3), dtype=np.complex128)
+    cF = np.empty((3, 3), dtype=np.complex128)
     ct = np.empty((3, 3, 3), dtype=np.complex128)
     R = np.empty((3, 3), dtype=np.complex128)
     cpsi = np.empty(3, dtype=np.complex128)
-    status = _gradient(kind, x, G, n, L0, triads, lag, np.eye(3), J, cx, ct, R, cpsi, work)
-    rwork = np.empty((8, 3, 3))
-    status = max(status, point_psi(kind, x, G, n, L0, triads, lag, psi, rwork))
-    return status
+    status = _gradient(kind, F, L0, triads, lag, np.eye(3), J, cF, ct, R, cpsi, work)
+    return max(status, point_psi(kind, F, L0, triads, lag, psi, np.empty((8, 3, 3))))
 
 
 @njit
-def point_hessian(kind, x, G, n, L0, triads, lag, lam, size, H):
-    """``H = ∂(Jᵀλ)/∂(u, θ)`` (3 n + 9, 3 n + 9) for a fixed λ (3,): central differences (step
-    ``FD_STEP × size`` for positions, ``FD_STEP`` rad for spins) of the complex-step gradients."""
-    m = 3 * n + 9
+def point_hessian(kind, F, L0, triads, lag, lam, H):
+    """``H = ∂(Jᵀλ)/∂(F, θ)`` (18, 18) for a fixed λ (3,): central differences (step
+    :data:`FD_STEP`, F being dimensionless and spins in radians) of the complex-step gradients.
+    H must hold zeros on entry."""
     work = np.empty((8, 3, 3), dtype=np.complex128)
-    cx = np.empty((n, 3), dtype=np.complex128)
+    cF = np.empty((3, 3), dtype=np.complex128)
     ct = np.empty((3, 3, 3), dtype=np.complex128)
     R = np.empty((3, 3), dtype=np.complex128)
     cpsi = np.empty(3, dtype=np.complex128)
-    xs = np.empty((n, 3))
+    Fs = np.empty((3, 3))
     ts = np.empty((3, 3, 3))
     Rr = np.empty((3, 3))
     v = np.zeros(3)
-    g = np.empty((1, m))
+    g = np.empty((1, 18))
     lam2 = lam.reshape(1, 3)
     status = OK
-    for l in range(m):
-        h = FD_STEP * size if l < 3 * n else FD_STEP
+    for l in range(18):
         for sign in (1.0, -1.0):
-            xs[:, :] = x[:n]
-            ts[:, :, :] = triads
-            if l < 3 * n:
-                xs[l // 3, l % 3] += sign * h
+            Fs[:, :] = F
+            if l < 9:
+                Fs[l // 3, l % 3] += sign * FD_STEP
+                ts[:, :, :] = triads
             else:
-                k = (l - 3 * n) // 3
                 v[:] = 0.0
-                v[(l - 3 * n) % 3] = sign * h
-                exp(v, Rr)
-                for i in range(3):
-                    for j in range(3):
-                        ts[k, i, j] = Rr[i, 0] * triads[k, 0, j] + Rr[i, 1] * triads[k, 1, j] \
-                            + Rr[i, 2] * triads[k, 2, j]
-            status = max(status, _gradient(kind, xs, G, n, L0, ts, lag, lam2, g, cx, ct, R, cpsi, work))
-            for c in range(m):
-                H[c, l] += sign * g[0, c] / (2.0 * h)
+                v[(l - 9) % 3] = sign * FD_STEP
+                _turn((l - 9) // 3, v, triads, Rr, ts)
+            status = max(status, _gradient(kind, Fs, L0, ts, lag, lam2, g, cF, ct, R, cpsi, work))
+            for c in range(18):
+                H[c, l] += sign * g[0, c] / (2.0 * FD_STEP)
     return status
 
 
 @njit
-def _point_state(p, x, nodes, n_local, triads, rotation_nodes, beam_element, xl, tl):
-    n = n_local[p]
-    for a in range(n):
-        for i in range(3):
-            xl[a, i] = x[nodes[p, a], i]
+def _point_state(p, x, nodes, n_local, G, triads, rotation_nodes, beam_element, F, tl):
+    """F (3, 3) from the current positions x and the element's nodal triads ``tl`` of point p."""
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for a in range(n_local[p]):
+                acc += x[nodes[p, a], i] * G[p, a, j]
+            F[i, j] = acc
     e = beam_element[p]
     for k in range(3):
         tl[k] = triads[rotation_nodes[e, k]]
-    return n
 
 
 @njit
@@ -343,31 +336,29 @@ def reference_triads_at(triads0, rotation_nodes, beam_element, lag, L0, status):
 
 @njit
 def jacobian_range(kind, x, nodes, n_local, G, L0, triads, rotation_nodes, beam_element, lag, want, psi, J, status):
-    """ψ (n_pts, 3) at every point and, when ``want``, J (n_pts, 3, 3 MAX_NODES + 9): columns
-    ``0..3n-1`` the point's solid nodes (``nodes[p]``), then ``3n..3n+8`` the spins of its beam
-    element's rotation nodes (line3 order); the rest left as is."""
-    m = nodes.shape[1]
-    xl = np.empty((m, 3))
+    """ψ (n_pts, 3) at every point and, when ``want``, ``J = ∂ψ/∂(F, θ)`` (n_pts, 3, 18): columns
+    ``3 i + j`` the entries F[i, j], then the spins of the point's beam element's rotation nodes
+    (line3 order). x: current solid positions (n_solid_nodes, 3)."""
+    F = np.empty((3, 3))
     tl = np.empty((3, 3, 3))
     work = np.empty((8, 3, 3))
     for p in range(len(beam_element)):
-        n = _point_state(p, x, nodes, n_local, triads, rotation_nodes, beam_element, xl, tl)
+        _point_state(p, x, nodes, n_local, G, triads, rotation_nodes, beam_element, F, tl)
         if want:
-            status[p] = point_jacobian(kind, xl[:n], G[p], n, L0[p], tl, lag[p], psi[p], J[p])
+            status[p] = point_jacobian(kind, F, L0[p], tl, lag[p], psi[p], J[p])
         else:
-            status[p] = point_psi(kind, xl[:n], G[p], n, L0[p], tl, lag[p], psi[p], work)
+            status[p] = point_psi(kind, F, L0[p], tl, lag[p], psi[p], work)
 
 
 @njit
-def hessian_range(kind, x, nodes, n_local, G, L0, triads, rotation_nodes, beam_element, lag, lam, size, H, status):
-    """``H[p] = ∂(J_pᵀ λ_p)/∂(u, θ)`` (n_pts, 3 MAX_NODES + 9, same) in the layout of
-    :func:`jacobian_range`; H must hold zeros on entry."""
-    m = nodes.shape[1]
-    xl = np.empty((m, 3))
+def hessian_range(kind, x, nodes, n_local, G, L0, triads, rotation_nodes, beam_element, lag, lam, H, status):
+    """``H[p] = ∂(J_pᵀ λ_p)/∂(F, θ)`` (n_pts, 18, 18) in the layout of :func:`jacobian_range`;
+    H must hold zeros on entry."""
+    F = np.empty((3, 3))
     tl = np.empty((3, 3, 3))
     for p in range(len(beam_element)):
-        n = _point_state(p, x, nodes, n_local, triads, rotation_nodes, beam_element, xl, tl)
+        status[p] = OK
         if lam[p, 0] == 0.0 and lam[p, 1] == 0.0 and lam[p, 2] == 0.0:
-            status[p] = OK
             continue
-        status[p] = point_hessian(kind, xl[:n], G[p], n, L0[p], tl, lag[p], lam[p], size[p], H[p])
+        _point_state(p, x, nodes, n_local, G, triads, rotation_nodes, beam_element, F, tl)
+        status[p] = point_hessian(kind, F, L0[p], tl, lag[p], lam[p], H[p])
