@@ -167,9 +167,9 @@ def test_solid_triads_are_objective_rotations_and_exact_for_rigid_rotations(kind
     assert angle == pytest.approx({"polar": 0.2449786631, "deformation_gradient": 0.2318238045}[kind], rel=1e-8)
 
 
-def coupled_rod():
-    """A straight fibre in a 3 × 2 × 2 block, skew to its axes (polar and gradient triads)."""
-    return m13.Scene(solid={"mesh": {"box": [[0, 0, 0], [1, 1, 1]], "cells": [3, 2, 2]},
+def coupled_rod(element="hexahedron"):
+    """A straight fibre in a 3 × 2 × 2 block, skew to its axes."""
+    return m13.Scene(solid={"mesh": {"box": [[0, 0, 0], [1, 1, 1]], "cells": [3, 2, 2], "element": element},
                             "material": {"model": "linear_elastic", "E": 1e9, "nu": 0.3}},
                      beams=[{"curve": {"line": [[0.05, 0.4, 0.55], [0.95, 0.6, 0.45]]}, "elements": 3,
                              "model": "simo_reissner", "section": SECTION}],
@@ -177,9 +177,9 @@ def coupled_rod():
                      analysis={"kinematics": "nonlinear"})
 
 
-def rod_coupling(kind, **options):
+def rod_coupling(kind, element="hexahedron", **options):
     """The model of :func:`coupled_rod`, its beam group and a RotationalCoupling of it."""
-    model = Model(coupled_rod()).prepare()
+    model = Model(coupled_rod(element)).prepare()
     g = model.groups[0]
     return model, g, RotationalCoupling(g.operators, g.physics, model.solid_mesh, g.rotations.start,
                                         model.n_displacement_dofs, triad=kind, **options)
@@ -190,12 +190,13 @@ def _spin(psi, theta):
     return np.array([(Rotation.from_rotvec(t) * Rotation.from_rotvec(p)).as_rotvec() for p, t in zip(psi, theta)])
 
 
-@pytest.mark.parametrize("kind", ["polar", "deformation_gradient"])
-def test_constraint_vanishes_in_the_reference_and_under_rigid_motions(kind):
-    model, g, rc = rod_coupling(kind, penalty=1e4)
+@pytest.mark.parametrize("kind, element", [("polar", "hexahedron"), ("deformation_gradient", "hexahedron"),
+                                           ("polar", "tetra"), ("deformation_gradient", "hexahedron27")])
+def test_constraint_vanishes_in_the_reference_and_under_rigid_motions(kind, element):
+    model, g, rc = rod_coupling(kind, element, penalty=1e4)
     X = model.solid_mesh.points
     n_rot = g.physics.n_rotation_nodes
-    assert np.abs(rc.relative_rotations(np.zeros(X.size), np.zeros((n_rot, 3)))).max() < 1e-15
+    assert np.abs(rc.relative_rotations(np.zeros(X.size), np.zeros((n_rot, 3)))).max() < 1e-14     # round-off
     Q = Rotation.from_rotvec([0.9, -1.3, 0.6])
     u = (Q.apply(X) + [0.3, -2.0, 5.0] - X).ravel()
     psi = np.tile(Q.as_rotvec(), (n_rot, 1))
@@ -211,9 +212,10 @@ def test_constraint_vanishes_in_the_reference_and_under_rigid_motions(kind):
                                                                                            rel=1e-12)
 
 
-@pytest.mark.parametrize("kind", ["polar", "deformation_gradient"])
-def test_tangent_matches_central_differences(kind):
-    model, g, rc = rod_coupling(kind, penalty=1e3, lm="line2")
+@pytest.mark.parametrize("kind, element", [("polar", "hexahedron"), ("deformation_gradient", "hexahedron"),
+                                           ("polar", "tetra"), ("deformation_gradient", "hexahedron27")])
+def test_tangent_matches_central_differences(kind, element):
+    model, g, rc = rod_coupling(kind, element, penalty=1e3, lm="line2")
     nS, n_rot = 3 * model.n_solid_nodes, g.physics.n_rotation_nodes
     rng = np.random.default_rng(1)
     u, psi = 0.03 * rng.standard_normal(nS), 0.2 * rng.standard_normal((n_rot, 3))
@@ -237,7 +239,7 @@ def test_tangent_matches_central_differences(kind):
         worst_r = max(worst_r, abs(fd - r[c]) / np.abs(r).max())
         column = (rc.evaluate(*states[0], tangent=False)[0] - rc.evaluate(*states[1], tangent=False)[0]) / (2 * h)
         worst_K = max(worst_K, np.abs(column - K[:, c].toarray().ravel()).max() / abs(K).max())
-    assert worst_r < 1e-8 and worst_K < 1e-8          # measured 7e-11, 6e-11 (polar)
+    assert worst_r < 1e-8 and worst_K < 1e-8          # measured 7e-11, 6e-11 (polar, hexahedron)
 
 
 @pytest.mark.parametrize("kind", ["polar", "deformation_gradient"])
