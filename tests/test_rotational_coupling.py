@@ -294,3 +294,44 @@ def test_rotational_coupling_needs_beams_with_rotations(model_name):
 def test_bad_rotational_coupling_keys(change, message):
     with pytest.raises(SceneError, match=message):
         block(2, 2, change)
+
+
+def test_rotational_coupling_from_a_toml_scene(tmp_path):
+    path = tmp_path / "fibre.toml"
+    path.write_text("""
+[solid]
+mesh = { box = [[0, -0.1, -0.1], [1, 0.1, 0.1]], cells = [2, 3, 3] }
+material = { model = "linear_elastic", E = 1e9, nu = 0.3 }
+
+[[beams]]
+curve = { line = [[0, 0, 0], [1, 0, 0]] }
+elements = 4
+model = "simo_reissner"
+section = { E = 2e11, nu = 0.3, radius = 0.01 }
+
+[coupling.rotational]
+triad = "deformation_gradient"
+lm = "line2"
+penalty = 2e4
+
+[[dirichlet]]
+on = "solid:x_min"
+
+[[load]]
+type = "traction"
+on = "solid:x_max"
+value = [0, 0, -1e5]
+
+[analysis]
+kinematics = "linear"
+""", encoding="utf-8")
+    scene = m13.Scene.from_toml(path)
+    assert scene.coupling["rotational"] == {"triad": "deformation_gradient", "enforcement": "penalty",
+                                            "lm": "line2", "penalty": 2e4}
+    result = m13.solve(path)               # no rotation support: the rotational coupling holds the twist
+    assert result.model.counts["coupling.rotational_penalty"] >= 2
+    g = result.model.groups[0]
+    u_beam = np.linalg.norm(result.beam_displacement, axis=1).max()
+    u_solid = np.linalg.norm(result.solid_displacement, axis=1).max()
+    assert 0.5 * u_solid < u_beam < u_solid
+    assert g.rotational.triad == "deformation_gradient"
