@@ -368,7 +368,8 @@ def _required(table, key, path):
 
 def _coupling(value):
     path = "coupling"
-    _table(value, path, ("constraint", "integration", "enforcement", "penalty", "lm", "n_gauss", "search_points"))
+    _table(value, path, ("constraint", "integration", "enforcement", "penalty", "lm", "n_gauss", "search_points",
+                         "rotational"))
     out = {"constraint": _choice(value.get("constraint", "mortar"), "coupling.constraint", ("mortar", "gauss_point")),
            "integration": _choice(value.get("integration", "segment"), "coupling.integration", ("segment", "element", "auto")),
            "enforcement": _choice(value.get("enforcement", "penalty"), "coupling.enforcement", ("penalty", "lagrange")),
@@ -380,6 +381,22 @@ def _coupling(value):
         out["penalty"] = _number(value["penalty"], "coupling.penalty", low=0.0, low_open=True)
     if out["constraint"] == "gauss_point" and out["enforcement"] != "penalty":
         _fail("coupling.enforcement", "the gauss_point constraint is enforced by penalty only")
+    out["rotational"] = _rotational(value["rotational"]) if "rotational" in value else None
+    return out
+
+
+def _rotational(value):
+    """``coupling.rotational``: cross-sections of beams with rotations tied to a solid triad."""
+    path = "coupling.rotational"
+    _table(value, path, ("triad", "enforcement", "penalty", "lm"))
+    out = {"triad": _choice(value.get("triad", "polar"), f"{path}.triad", ("polar", "deformation_gradient")),
+           "enforcement": _choice(value.get("enforcement", "penalty"), f"{path}.enforcement", ("penalty", "lagrange")),
+           "lm": _choice(value.get("lm", "line3"), f"{path}.lm", ("line2", "line3")),
+           "penalty": None}
+    if out["enforcement"] == "lagrange":
+        _fail(f"{path}.enforcement", "only 'penalty' is implemented for the rotational coupling")
+    if "penalty" in value:
+        out["penalty"] = _number(value["penalty"], f"{path}.penalty", low=0.0, low_open=True)
     return out
 
 
@@ -535,6 +552,12 @@ class Scene:
                         and item["on"].count(":") != 2):
                     _fail(f"load[{i}].on", f"a moment on a {self.beams[beam]['model']} beam acts on a beam end: use "
                                            "'beam:<i>:start' or 'beam:<i>:end'")
+        if self.coupling["rotational"] is not None:
+            for i, b in enumerate(self.beams):
+                if BEAM_TYPES[b["model"]].triads is None:
+                    _fail("coupling.rotational", f"beams[{i}] is a {b['model']} beam, which has no cross-section "
+                                                 "rotations to couple; use model = \"simo_reissner\" or leave out "
+                                                 "coupling.rotational")
         for i, d in enumerate(self.dirichlet):
             if d["rotation"] is not None:
                 beam = int(d["on"].split(":")[1])

@@ -38,6 +38,7 @@ class BeamGroup:
     physics: object = None             # the type's physics (BeamModel)
     operators: object = None           # MortarOperators
     coupling: object = None            # Coupling
+    rotational: object = None          # RotationalCoupling (coupling.rotational, groups with rotations)
 
     @property
     def model(self):

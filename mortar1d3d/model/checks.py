@@ -14,6 +14,7 @@ Each takes the :class:`~mortar1d3d.model.Model` and uses its DOF map, supports a
 import warnings
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import LargeDeformationWarning, format_ids
 from ..scene import SceneError
@@ -205,6 +206,9 @@ def check_zero_energy_modes(model):
             else:
                 rows = g.operators.D.tocsr()[g.coupling.coupled_rows]
         if g.rotations.size:
+            if g.rotational is not None:
+                # the rotational coupling's rows act on the spins (after the centreline DOFs)
+                rows = _with_spin_rows(rows, g.rotational.beam_rows(), g.mesh.n_centreline_dofs)
             found = find_mechanisms(g.mesh, rows, np.concatenate([fixed[g.dofs.slice], fixed[g.rotations.slice]]),
                                     rotation_nodes=g.type.rotation_nodes(g.mesh))
         else:
@@ -215,6 +219,17 @@ def check_zero_energy_modes(model):
         more = len(model.zero_energy_modes) - 1
         raise SceneError(mechanism_message(model, g, m, chains(g.mesh)[1])
                          + (f" ({more} more chain(s) of beam elements have such modes)" if more else ""))
+
+
+def _with_spin_rows(rows, spin_rows, n_centreline):
+    """Coupling rows over ``[centreline | spins]``: the positional rows (centreline columns, or
+    None) stacked on the rotational coupling's rows (spin columns)."""
+    spin = sp.hstack([sp.csr_matrix((spin_rows.shape[0], n_centreline)), spin_rows], format="csr")
+    if rows is None:
+        return spin
+    rows = sp.csr_matrix(rows)
+    rows = sp.hstack([rows, sp.csr_matrix((rows.shape[0], spin_rows.shape[1]))], format="csr")
+    return sp.vstack([rows, spin], format="csr")
 
 
 def mechanism_message(model, g, m, label):
@@ -245,8 +260,8 @@ def mechanism_message(model, g, m, label):
                 f"no solver can determine that motion): its cross-sections turn about the centreline (a twist "
                 f"about its axis, nodes {format_ids(np.sort(local))}); the coupling ties the centreline only, not the "
                 f"rotation of the cross-sections. Support the rotation at one node ([[dirichlet]] on = "
-                f"\"{entry_nodes}\", rotation = [0, 0, 0]); rotational coupling to the solid would hold it too "
-                "(not implemented yet)")
+                f"\"{entry_nodes}\", rotation = [0, 0, 0]), or tie the cross-sections to the solid "
+                "(coupling.rotational)")
     if outside.all() and model.solid_mesh is None:
         why = "nothing but the beam itself holds the moving nodes"
         advice = (f"a {g.model} has no bending stiffness, so between supports its nodes are held only along its bars: "

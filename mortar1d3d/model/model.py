@@ -245,6 +245,7 @@ class Model:
                                       constraint=c["constraint"], enforcement=c["enforcement"], penalty=self.penalty)
                 self.counts["coupling.lagrange" if self.lagrange else f"coupling.{c['constraint']}_penalty"] += 1
                 self._check_coupled_lengths(g)
+            self._prepare_rotational()
             if self.lagrange:
                 self.constraint_matrix = sp.vstack([g.coupling.constraint_matrix() for g in self.groups], format="csr")
                 self.n_multipliers = self.constraint_matrix.shape[0]
@@ -289,6 +290,19 @@ class Model:
                 warnings.warn(f"beams[{entry}]: {1.0 - coupled / total:.1%} of this beam ({total - coupled:.4g} of "
                               f"length {total:.4g}) lies outside the solid and is not coupled there",
                               CouplingWarning, stacklevel=4)
+
+    def _prepare_rotational(self):
+        """Rotational coupling (``coupling.rotational``) of every group with rotations."""
+        rot = self.scene.coupling["rotational"]
+        if rot is None:
+            return
+        from ..physics.rotational_coupling import RotationalCoupling
+        for g in self.groups:
+            if g.rotations.size:
+                g.rotational = RotationalCoupling(g.operators, g.physics, self.solid_mesh, g.rotations.start,
+                                                  self.n_displacement_dofs, triad=rot["triad"],
+                                                  penalty=rot["penalty"], lm=rot["lm"])
+                self.counts["coupling.rotational_penalty"] += 1
 
     def _check_operators(self, operators):
         """Validate precomputed operators against the groups' meshes and the scene's LM type."""
@@ -515,6 +529,14 @@ class Model:
             r += self.coupling_stiffness @ d
             if tangent:
                 K = K + self.coupling_stiffness
+        for g in self.groups:
+            if g.rotational is not None:
+                f, Kr = g.rotational.evaluate(d[:3 * self.n_solid_nodes], d[g.rotations.slice].reshape(-1, 3),
+                                              tangent=tangent)
+                self.counts["coupling.rotational_penalty"] += 1
+                r += f
+                if tangent:
+                    K = K + Kr
         return r, K
 
     def update(self, z, free, dz):

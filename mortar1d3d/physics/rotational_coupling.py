@@ -1,0 +1,231 @@
+"""Rotational coupling of Simo–Reissner beams to the solid (penalty), after Steinbrecher, Popp &
+Meier, "Consistent coupling of positions and rotations for embedding 1D Cosserat beams into 3D
+solid volumes", Comput Mech 69 (2022).
+
+The positional mortar coupling (:mod:`.coupling`) ties the centreline to the solid; the cross-
+sections of a beam with rotations stay free to turn about it (a straight fibre's twist is a
+zero-energy mode). This module ties them to a *solid triad* Λ_S, built from the solid's
+deformation gradient at the centreline (:mod:`.rotational_coupling_kernel`: the polar
+decomposition, or the deformed reference base vectors averaged), by the relative rotation vector
+``ψ = log(Λ_B Λ_Sᵀ)`` at the integration points of the positional coupling:
+
+- weighted constraints per rotational LM node j (``line2``/``line3`` functions Φ_j on the beam,
+  independent of the positional LM): ``g_j = Σ_p Φ_j(η_p) w_p ψ_p`` (≈ ``∫ Φ_j ψ ds``),
+  ``κ_j = Σ_p Φ_j(η_p) w_p``;
+- penalty energy ``Π = ε/2 Σ_j κ_j⁻¹ |g_j|²`` (ε: moment per length per radian, a force), so
+  the line moment at LM node j is ``λ_j = ε κ_j⁻¹ g_j``;
+- residual ``∂Π/∂(u_S, θ_B) = Σ_p w_p J_pᵀ λ_p`` with ``λ_p = Σ_j Φ_j(η_p) λ_j`` and the point
+  Jacobians ``J_p = ∂ψ_p/∂(u, θ)``; tangent ``ε Σ_j κ_j⁻¹ G_jᵀ G_j + Σ_p w_p ∂(J_pᵀ λ_p)``,
+  ``G_j = Σ_p Φ_j w_p J_p`` (spins multiplicative, like the beam's own tangent: not symmetric
+  away from equilibrium).
+
+Energy, residual and tangent are objective: a rigid rotation of the whole scene turns ψ and
+leaves |ψ| (hence Π) unchanged.
+"""
+import numpy as np
+import scipy.sparse as sp
+
+from ..elements.multiplier import multiplier as multiplier_type
+from ..elements.multiplier import shape as lm_shape
+from ..mortar.assemble import lm_numbering
+from . import rotational_coupling_kernel as kernel
+from .simo_reissner import _lagrange_tables
+
+__all__ = ["RotationalCoupling", "DEFAULT_PENALTY_FACTOR", "TRIADS", "LMS"]
+
+#: default ε = DEFAULT_PENALTY_FACTOR × max GI_T / h² of the beams (h: mean beam element length):
+#: the coupling over one element is then 1e3 times stiffer than the element's own torsion
+DEFAULT_PENALTY_FACTOR = 1e3
+TRIADS = tuple(kernel.TRIADS)
+LMS = ("line2", "line3")
+
+
+class RotationalCoupling:
+    """Penalty rotational coupling of one group of Simo–Reissner beams to one solid.
+
+    Parameters
+    ----------
+    ops : MortarOperators
+        The positional coupling's operators: their integration points (beam element, η, solid
+        element, ξ, weight) are reused.
+    beam : SimoReissnerBeam
+        The beams' physics (rotation nodes, reference triads, ``triads(ψ)``).
+    solid : SolidMesh
+    rotation_offset : int
+        Global index of the group's first rotation unknown (the solid's displacements are the
+        global unknowns ``0 .. 3 n_solid_nodes - 1``).
+    n_dofs : int
+        Size of the global displacement vector.
+    triad : {"polar", "deformation_gradient"}
+    penalty : float, optional
+        ε (force: moment per length per radian); default :data:`DEFAULT_PENALTY_FACTOR` × the
+        largest ``GI_T`` over the squared mean element length.
+    lm : {"line3", "line2"}
+        Rotational multiplier functions on the beam elements. ``line3`` (default) holds as many
+        rotations per element as the beam's three triads; ``line2`` leaves the twist a mesh-scale
+        oscillation (docs/theory.md: 4.6e-2 torsion error against 2.5e-3 with 8 beam elements).
+    """
+
+    def __init__(self, ops, beam, solid, rotation_offset, n_dofs, triad="polar", penalty=None, lm="line3"):
+        if triad not in kernel.TRIADS:
+            raise ValueError(f"coupling.rotational.triad must be one of {TRIADS}, got {triad!r}")
+        if lm not in LMS:
+            raise ValueError(f"coupling.rotational.lm must be one of {LMS}, got {lm!r}")
+        if penalty is None:
+            penalty = DEFAULT_PENALTY_FACTOR * float(beam.CM[:, 0].max()) / float(np.mean(beam.beams.lengths)) ** 2
+        if not (np.isfinite(penalty) and penalty > 0):
+            raise ValueError(f"coupling.rotational.penalty must be a finite number > 0, got {penalty!r}")
+        self.beam, self.solid, self.triad, self.kind = beam, solid, triad, kernel.TRIADS[triad]
+        self.penalty, self.lm = float(penalty), lm
+        self.rotation_offset, self.n_dofs = int(rotation_offset), int(n_dofs)
+        p = ops.point_fields
+        self.beam_element = np.ascontiguousarray(p["beam_element"], dtype=np.int64)
+        self.eta = np.ascontiguousarray(p["eta"], dtype=np.float64)
+        self.weight = np.ascontiguousarray(p["weight"], dtype=np.float64)
+        solid_element = np.ascontiguousarray(p["solid_element"], dtype=np.int64)
+        xi = np.ascontiguousarray(p["xi"], dtype=np.float64)
+        n_pts = len(self.eta)
+        self.n_points = n_pts
+        m = kernel.solid_types.MAX_NODES
+        self.G = np.zeros((n_pts, m, 3))
+        self.nodes = np.zeros((n_pts, m), dtype=np.int64)
+        self.n_local = np.zeros(n_pts, dtype=np.int64)
+        X = np.ascontiguousarray(solid.points, dtype=np.float64)
+        kernel.reference_gradients(solid.element_codes, solid.connectivity, X, solid_element, xi, self.G, self.nodes,
+                                   self.n_local)
+        self.lag = _lagrange_tables(self.eta)[0]
+        self.rotation_nodes = beam.rotation_nodes
+        self.L0 = np.empty((n_pts, 3, 3))
+        status = np.empty(n_pts, dtype=np.int64)
+        kernel.reference_triads_at(beam.triads0, self.rotation_nodes, self.beam_element, self.lag, self.L0, status)
+        # rotational multipliers: Φ_j(η_p) and κ_j
+        lm_t = multiplier_type(lm)
+        index, self.n_lm = lm_numbering(beam.beams, lm_t)
+        Phi = np.empty((n_pts, lm_t.n_functions))
+        for k in range(n_pts):
+            lm_shape(lm_t.n_functions, self.eta[k], Phi[k])
+        rows = index[self.beam_element, :lm_t.n_functions]
+        self.Phi = sp.csr_matrix((Phi.ravel(), (rows.ravel(), np.repeat(np.arange(n_pts), lm_t.n_functions))),
+                                 shape=(self.n_lm, n_pts))
+        self.kappa = np.asarray(self.Phi @ self.weight).ravel()
+        self.kappa_inverse = np.divide(1.0, self.kappa, out=np.zeros_like(self.kappa), where=self.kappa > 0)
+        self.X = X
+        self.n_evaluations = 0
+
+    # -- state -------------------------------------------------------------------------------------
+    def _columns(self):
+        """Global unknown of every local column per point (n_pts, 3 MAX_NODES + 9): three per solid
+        node slot (-1 for slots the element does not have), then the nine spins."""
+        m = self.nodes.shape[1]
+        cols = (3 * self.nodes[:, :, None] + np.arange(3)).reshape(self.n_points, 3 * m)
+        cols[np.repeat(np.arange(m)[None, :] >= self.n_local[:, None], 3, axis=1)] = -1
+        rot = (self.rotation_offset + 3 * self.rotation_nodes[self.beam_element][:, :, None]
+               + np.arange(3)).reshape(-1, 9)
+        return np.hstack([cols, rot])
+
+    def _local_jacobian(self, J):
+        """``∂ψ/∂(F, θ)`` (n_pts, 3, 18) → ``∂ψ/∂(u, θ)`` (n_pts, 3, 3 MAX_NODES + 9), with
+        ``∂F_ij/∂u_ak = δ_ik G_aj``."""
+        n = self.n_points
+        Ju = np.einsum("prij,paj->prai", J[:, :, :9].reshape(n, 3, 3, 3), self.G).reshape(n, 3, -1)
+        return np.concatenate([Ju, J[:, :, 9:]], axis=2)
+
+    def _local_hessian(self, H):
+        """``∂²/∂(F, θ)²`` (n_pts, 18, 18) → ``∂²/∂(u, θ)²`` (n_pts, 3 MAX_NODES + 9, same)."""
+        n, G = self.n_points, self.G
+        HFF = H[:, :9, :9].reshape(n, 3, 3, 3, 3)
+        uu = np.einsum("pijkl,paj,pbl->paibk", HFF, G, G).reshape(n, 3 * G.shape[1], 3 * G.shape[1])
+        ut = np.einsum("pijt,paj->pait", H[:, :9, 9:].reshape(n, 3, 3, 9), G).reshape(n, -1, 9)
+        tu = np.einsum("ptij,paj->ptai", H[:, 9:, :9].reshape(n, 9, 3, 3), G).reshape(n, 9, -1)
+        return np.concatenate([np.concatenate([uu, ut], axis=2), np.concatenate([tu, H[:, 9:, 9:]], axis=2)], axis=1)
+
+    def _run(self, u_solid, psi, want):
+        x = np.ascontiguousarray(self.X + np.asarray(u_solid, dtype=float).reshape(-1, 3))
+        triads = self.beam.triads(psi)
+        psi_p = np.zeros((self.n_points, 3))
+        J = np.zeros((self.n_points, 3, 18) if want else (0, 3, 18))
+        status = np.empty(self.n_points, dtype=np.int64)
+        kernel.jacobian_range(self.kind, x, self.nodes, self.n_local, self.G, self.L0, triads, self.rotation_nodes,
+                              self.beam_element, self.lag, want, psi_p, J, status)
+        self._check(status, psi_p)
+        return x, triads, psi_p, J
+
+    @staticmethod
+    def _check(status, psi_p):
+        if np.any(status != kernel.OK) or not np.isfinite(psi_p).all():
+            raise FloatingPointError("rotational coupling: the solid triad or the beam triad could not be formed at "
+                                     f"{int(np.count_nonzero(status != kernel.OK))} integration points (the polar "
+                                     "decomposition did not converge, or a beam element turned too far)")
+
+    # -- public ------------------------------------------------------------------------------------
+    def relative_rotations(self, u_solid, psi):
+        """ψ = log(Λ_B Λ_Sᵀ) (n_points, 3) at the integration points."""
+        return self._run(u_solid, psi, False)[2]
+
+    def weighted_gap(self, u_solid, psi):
+        """``g_j`` (n_lm, 3): the relative rotations weighted with the rotational LM functions."""
+        return np.asarray(self.Phi @ (self.weight[:, None] * self.relative_rotations(u_solid, psi)))
+
+    def line_moment(self, u_solid, psi):
+        """Coupling line moments ``λ_j = ε κ_j⁻¹ g_j`` (n_lm, 3) at the rotational LM nodes (spatial)."""
+        return self.penalty * self.kappa_inverse[:, None] * self.weighted_gap(u_solid, psi)
+
+    def energy(self, u_solid, psi):
+        """Penalty energy ``ε/2 Σ_j κ_j⁻¹ |g_j|²``."""
+        g = self.weighted_gap(u_solid, psi)
+        return 0.5 * self.penalty * float(np.sum(self.kappa_inverse[:, None] * g * g))
+
+    def evaluate(self, u_solid, psi, tangent=True):
+        """Residual (n_dofs,) and tangent (n_dofs, n_dofs, csr, or None) in the global displacement
+        unknowns: solid displacements (additive) and the group's rotation spins (multiplicative).
+
+        Parameters
+        ----------
+        u_solid : (3 n_solid_nodes,) solid displacements.
+        psi : (n_rotation_nodes, 3) total rotation vectors of the group.
+        """
+        self.n_evaluations += 1
+        x, triads, psi_p, J18 = self._run(u_solid, psi, True)
+        J = self._local_jacobian(J18)
+        cols = self._columns()
+        lam_j = self.penalty * self.kappa_inverse[:, None] * np.asarray(self.Phi @ (self.weight[:, None] * psi_p))
+        lam_p = np.asarray(self.Phi.T @ lam_j)                                       # (n_pts, 3)
+        used = cols >= 0
+        local = np.einsum("pic,pi->pc", J, lam_p) * self.weight[:, None]
+        r = np.bincount(cols[used], weights=local[used], minlength=self.n_dofs)
+        if not tangent:
+            return r, None
+        # G_j = Σ_p Φ_j w_p J_p (3 n_lm, n_dofs), then ε Gᵀ κ⁻¹ G
+        Phi = self.Phi.tocoo()
+        k, pts = Phi.row, Phi.col
+        scale = Phi.data * self.weight[pts]
+        rows = (3 * k[:, None, None] + np.arange(3)[None, :, None]) + 0 * cols[pts][:, None, :]
+        vals = scale[:, None, None] * J[pts]
+        cc = np.broadcast_to(cols[pts][:, None, :], vals.shape)
+        mask = cc >= 0
+        Gm = sp.csr_matrix((vals[mask], (rows[mask], cc[mask])), shape=(3 * self.n_lm, self.n_dofs))
+        K = self.penalty * (Gm.T @ sp.diags(np.repeat(self.kappa_inverse, 3)) @ Gm)
+        H = np.zeros((self.n_points, 18, 18))
+        status = np.empty(self.n_points, dtype=np.int64)
+        kernel.hessian_range(self.kind, x, self.nodes, self.n_local, self.G, self.L0, triads, self.rotation_nodes,
+                             self.beam_element, self.lag, np.ascontiguousarray(lam_p), H, status)
+        self._check(status, psi_p)
+        H = self._local_hessian(H * self.weight[:, None, None])
+        both = used[:, :, None] & used[:, None, :]
+        ri = np.broadcast_to(cols[:, :, None], H.shape)[both]
+        ci = np.broadcast_to(cols[:, None, :], H.shape)[both]
+        K = K + sp.csr_matrix((H[both], (ri, ci)), shape=(self.n_dofs, self.n_dofs))
+        return r, K.tocsr()
+
+    def beam_rows(self):
+        """Linearised constraint rows on the group's rotation spins at the reference state, solid
+        held: ``G_j`` restricted to the rotation columns (3 n_lm, 3 n_rotation_nodes), for the
+        zero-energy-mode check."""
+        n_rot = self.beam.n_rotation_nodes
+        J = self._run(np.zeros(self.X.size), np.zeros((n_rot, 3)), True)[3][:, :, 9:]
+        cols = self._columns()[:, -9:] - self.rotation_offset
+        Phi = self.Phi.tocoo()
+        rows = 3 * Phi.row[:, None, None] + np.arange(3)[None, :, None] + np.zeros((1, 1, 9), dtype=np.int64)
+        vals = (Phi.data * self.weight[Phi.col])[:, None, None] * J[Phi.col]
+        cc = np.broadcast_to(cols[Phi.col][:, None, :], vals.shape)
+        return sp.csr_matrix((vals.ravel(), (rows.ravel(), cc.ravel())), shape=(3 * self.n_lm, 3 * n_rot))

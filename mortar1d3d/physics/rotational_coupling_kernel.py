@@ -1,0 +1,364 @@
+"""Point kernels of the rotational beam-to-solid coupling (Numba, float64 or complex128).
+
+At an integration point of the beam centreline (beam element e, parameter η; solid element s,
+parameter ξ) the coupling compares two triads (Steinbrecher, Popp & Meier, Comput Mech 2022):
+
+- the beam's cross-section triad Λ_B(η), interpolated from the element's three nodal triads
+  exactly as the Simo–Reissner element does (:func:`.simo_reissner_kernel.element_setup`,
+  ``Λ_B = Λ_2 exp(Σ L_k ψ_k)``);
+- a solid triad Λ_S built from the solid's deformation gradient ``F = Σ_a x_a ⊗ G_a`` at ξ
+  (``G_a = J0⁻ᵀ ∂N_a/∂ξ``, the reference gradients of the shape functions) and the point's
+  reference triad Λ_S0 (taken equal to the beam's reference triad there):
+
+  ``POLAR``
+      ``Λ_S = R Λ_S0`` with the rotation R of the polar decomposition ``F = R U``, by Newton's
+      iteration ``R ← ½ (R + R⁻ᵀ)`` (quadratic convergence; each step is an analytic map, so a
+      complex step passes through it).
+  ``DEFORMATION_GRADIENT``
+      From the deformed reference base vectors ``a_i = F g_i0``: ``e1 = a1/|a1|``; the parts of
+      a2 and a3 normal to e1 give two candidate directions of the second base vector, ``b2`` (a2's)
+      and ``b3 × e1`` (a3's, turned back by a quarter turn about e1), each the second base vector
+      of a Gram–Schmidt triad (from a1, a2 and from a1, a3 respectively); ``e2`` is their
+      normalised mean (the mean of the two triads, which share e1), ``e3 = e1 × e2``. No base
+      vector of the section is preferred, and a rigid rotation Q of the solid (``F → Q F``)
+      turns every a_i and so the triad.
+
+The constraint measure is the spatial relative rotation vector ``ψ = log(Λ_B Λ_Sᵀ)``: zero in the
+reference configuration (``Λ_S0 = Λ_B0``), turned with any rigid rotation of the whole scene (its
+norm, which the penalty energy sees, unchanged).
+
+Derivatives. ψ depends on the solid only through F, so the kernels differentiate with respect to
+18 local parameters: the nine entries of F and the spatial spins of the beam element's three triads
+(multiplicative, ``Λ_k ← exp(Δθ_k) Λ_k``, like the Newton update of the beam); the caller chains
+F to the nodal displacements with ``∂F/∂x_a = I ⊗ G_a`` (any element type, at no extra cost per
+node). :func:`point_jacobian` returns ψ and ``J = ∂ψ/∂(F, θ)`` by the complex step (every map
+above is complex-analytic). The second derivative ``∂(Jᵀλ)/∂(F, θ)`` for a fixed λ (the geometric
+part of the tangent, :func:`point_hessian`) is the central difference of these exact gradients:
+truncation ``O(h²)`` and round-off ``eps/h`` are both about 1e-10 relative with ``h`` =
+:data:`FD_STEP`.
+"""
+import numpy as np
+
+from .._config import njit
+from ..elements.solid import dispatch as solid_types
+from .rotations import exp, log
+from .simo_reissner_kernel import _matmul, element_setup
+
+__all__ = ["POLAR", "DEFORMATION_GRADIENT", "TRIADS", "point_psi", "point_jacobian", "point_hessian",
+           "reference_gradients", "OK", "NOT_CONVERGED", "STEP", "FD_STEP"]
+
+POLAR, DEFORMATION_GRADIENT = 0, 1
+#: triad names of the scene (``coupling.rotational.triad``) → kernel codes
+TRIADS = {"polar": POLAR, "deformation_gradient": DEFORMATION_GRADIENT}
+OK, NOT_CONVERGED = 0, 1
+#: complex step of the Jacobian
+STEP = 1e-30
+#: central-difference step of the geometric tangent (entries of F, and spins in radians)
+FD_STEP = 1e-5
+#: Newton iterations of the polar decomposition: stop when the real part changes by less than this
+#: (relative), then iterate twice more so that a complex perturbation converges too
+POLAR_TOL = 1e-14
+POLAR_MAX_ITERATIONS = 60
+
+
+@njit
+def reference_gradients(codes, conn, X, solid_element, xi, G, nodes, n_local):
+    """Reference gradients ``G[p, a] = ∂N_a/∂X`` (n_pts, MAX_NODES, 3) of the solid shape functions
+    at every point p (solid element ``solid_element[p]``, parameter ``xi[p]``), its node ids
+    ``nodes[p, a]`` and node count ``n_local[p]``."""
+    dN = np.empty((solid_types.MAX_NODES, 3))
+    J0 = np.empty((3, 3))
+    Ji = np.empty((3, 3))
+    for p in range(len(solid_element)):
+        s = solid_element[p]
+        code = codes[s]
+        n = solid_types.N_NODES[code]
+        solid_types.deriv(code, xi[p], dN)
+        for i in range(3):
+            for j in range(3):
+                acc = 0.0
+                for a in range(n):
+                    acc += X[conn[s, a], i] * dN[a, j]
+                J0[i, j] = acc
+        _inverse3(J0, Ji)
+        for a in range(n):
+            nodes[p, a] = conn[s, a]
+            for j in range(3):
+                G[p, a, j] = dN[a, 0] * Ji[0, j] + dN[a, 1] * Ji[1, j] + dN[a, 2] * Ji[2, j]
+        n_local[p] = n
+
+
+@njit
+def _inverse3(A, B):
+    """B = A⁻¹ (3 × 3) by cofactors (analytic, complex-safe)."""
+    c00 = A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1]
+    c01 = A[1, 2] * A[2, 0] - A[1, 0] * A[2, 2]
+    c02 = A[1, 0] * A[2, 1] - A[1, 1] * A[2, 0]
+    det = A[0, 0] * c00 + A[0, 1] * c01 + A[0, 2] * c02
+    B[0, 0] = c00 / det
+    B[1, 0] = c01 / det
+    B[2, 0] = c02 / det
+    B[0, 1] = (A[0, 2] * A[2, 1] - A[0, 1] * A[2, 2]) / det
+    B[1, 1] = (A[0, 0] * A[2, 2] - A[0, 2] * A[2, 0]) / det
+    B[2, 1] = (A[0, 1] * A[2, 0] - A[0, 0] * A[2, 1]) / det
+    B[0, 2] = (A[0, 1] * A[1, 2] - A[0, 2] * A[1, 1]) / det
+    B[1, 2] = (A[0, 2] * A[1, 0] - A[0, 0] * A[1, 2]) / det
+    B[2, 2] = (A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]) / det
+
+
+@njit
+def _unit(v):
+    s = np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])      # no conjugate: complex-analytic
+    v[0] /= s
+    v[1] /= s
+    v[2] /= s
+
+
+@njit
+def polar_rotation(F, R, work):
+    """Rotation R of the polar decomposition ``F = R U`` (det F > 0) by ``R ← ½ (R + R⁻ᵀ)``.
+    ``work``: (2, 3, 3) scratch. Returns OK or NOT_CONVERGED."""
+    for i in range(3):
+        for j in range(3):
+            R[i, j] = F[i, j]
+    extra = 0
+    for _ in range(POLAR_MAX_ITERATIONS):
+        _inverse3(R, work[0])
+        change = 0.0
+        for i in range(3):
+            for j in range(3):
+                new = 0.5 * (R[i, j] + work[0, j, i])
+                change = max(change, abs((new - R[i, j]).real))
+                R[i, j] = new
+        if change < POLAR_TOL:
+            extra += 1
+            if extra > 2:
+                return OK
+    return NOT_CONVERGED
+
+
+@njit
+def solid_triad(kind, F, L0, L, work):
+    """Solid triad ``L`` (3, 3) of type ``kind`` from F and the reference triad ``L0`` (real).
+    ``work``: (4, 3, 3) scratch. Returns a status."""
+    status = OK
+    if kind == POLAR:
+        status = polar_rotation(F, work[2], work[:2])
+        _matmul(work[2], L0.astype(F.dtype), L)
+        return status
+    a = work[0]
+    for i in range(3):
+        for k in range(3):
+            a[i, k] = F[i, 0] * L0[0, k] + F[i, 1] * L0[1, k] + F[i, 2] * L0[2, k]
+    e1 = work[1, 0]
+    b2 = work[1, 1]
+    b3 = work[1, 2]
+    for i in range(3):
+        e1[i] = a[i, 0]
+    _unit(e1)
+    p2 = a[0, 1] * e1[0] + a[1, 1] * e1[1] + a[2, 1] * e1[2]
+    p3 = a[0, 2] * e1[0] + a[1, 2] * e1[1] + a[2, 2] * e1[2]
+    for i in range(3):
+        b2[i] = a[i, 1] - p2 * e1[i]
+        b3[i] = a[i, 2] - p3 * e1[i]
+    _unit(b2)
+    _unit(b3)
+    c = work[2, 0]
+    c[0] = b3[1] * e1[2] - b3[2] * e1[1]        # b3 × e1: a3's candidate for the second base vector
+    c[1] = b3[2] * e1[0] - b3[0] * e1[2]
+    c[2] = b3[0] * e1[1] - b3[1] * e1[0]
+    e2 = work[2, 1]
+    for i in range(3):
+        e2[i] = b2[i] + c[i]
+    _unit(e2)
+    for i in range(3):
+        L[i, 0] = e1[i]
+        L[i, 1] = e2[i]
+    L[0, 2] = e1[1] * e2[2] - e1[2] * e2[1]
+    L[1, 2] = e1[2] * e2[0] - e1[0] * e2[2]
+    L[2, 2] = e1[0] * e2[1] - e1[1] * e2[0]
+    return status
+
+
+@njit
+def beam_triad(triads, lag, L, work):
+    """Interpolated beam triad ``L`` (3, 3) at a point with Lagrange values ``lag`` (3,) from the
+    element's nodal triads (3, 3, 3) in line3 order. ``work``: (4, 3, 3) scratch."""
+    psi_nodes = work[0]
+    status = element_setup(triads, psi_nodes, work[1])
+    psi = work[2, 0]
+    for i in range(3):
+        psi[i] = lag[0] * psi_nodes[0, i] + lag[1] * psi_nodes[1, i]
+    exp(psi, work[3])
+    _matmul(triads[2], work[3], L)
+    return status
+
+
+@njit
+def point_psi(kind, F, L0, triads, lag, psi, work):
+    """ψ = log(Λ_B Λ_Sᵀ) (3,) at one point.
+
+    Parameters
+    ----------
+    kind : int
+        POLAR or DEFORMATION_GRADIENT.
+    F : (3, 3)
+        Deformation gradient of the solid at the point.
+    L0 : (3, 3) float64
+        Reference triad of the point.
+    triads : (3, 3, 3)
+        Current nodal triads of the beam element (line3 order).
+    lag : (3,) float64
+        Line3 Lagrange functions at the point.
+    work : (8, 3, 3) scratch of the type of F.
+    """
+    LS = work[1]
+    status = solid_triad(kind, F, L0, LS, work[4:8])
+    LB = work[2]
+    status = max(status, beam_triad(triads, lag, LB, work[4:8]))
+    P = work[3]
+    for i in range(3):
+        for j in range(3):
+            P[i, j] = LB[i, 0] * LS[j, 0] + LB[i, 1] * LS[j, 1] + LB[i, 2] * LS[j, 2]
+    log(P, psi)
+    return status
+
+
+@njit
+def _turn(k, v, triads, R, out):
+    """``out`` = the triads with triad k turned by ``exp(v)`` (spatial spin)."""
+    exp(v, R)
+    for m in range(3):
+        for i in range(3):
+            for j in range(3):
+                out[m, i, j] = triads[m, i, j]
+    for i in range(3):
+        for j in range(3):
+            out[k, i, j] = R[i, 0] * triads[k, 0, j] + R[i, 1] * triads[k, 1, j] + R[i, 2] * triads[k, 2, j]
+
+
+@njit
+def _gradient(kind, F, L0, triads, lag, lam, out, cF, ct, R, psi, work):
+    """``out[r] = λ_r · ∂ψ/∂p`` (rows r of ``lam``; 18 columns p: the 9 entries ``F[i, j]`` at
+    ``3 i + j``, then the spins of the three triads) by the complex step."""
+    status = OK
+    v = np.zeros(3, dtype=np.complex128)
+    for c in range(18):
+        for i in range(3):
+            for j in range(3):
+                cF[i, j] = F[i, j]
+        if c < 9:
+            cF[c // 3, c % 3] += 1j * STEP
+            for m in range(3):
+                for i in range(3):
+                    for j in range(3):
+                        ct[m, i, j] = triads[m, i, j]
+        else:
+            v[:] = 0.0
+            v[(c - 9) % 3] = 1j * STEP
+            _turn((c - 9) // 3, v, triads, R, ct)
+        status = max(status, point_psi(kind, cF, L0, ct, lag, psi, work))
+        for r in range(lam.shape[0]):
+            out[r, c] = (psi[0].imag * lam[r, 0] + psi[1].imag * lam[r, 1] + psi[2].imag * lam[r, 2]) / STEP
+    return status
+
+
+@njit
+def point_jacobian(kind, F, L0, triads, lag, psi, J):
+    """ψ (3,) and ``J = ∂ψ/∂(F, θ)`` (3, 18) at one point (real inputs); returns a status."""
+    work = np.empty((8, 3, 3), dtype=np.complex128)
+    cF = np.empty((3, 3), dtype=np.complex128)
+    ct = np.empty((3, 3, 3), dtype=np.complex128)
+    R = np.empty((3, 3), dtype=np.complex128)
+    cpsi = np.empty(3, dtype=np.complex128)
+    status = _gradient(kind, F, L0, triads, lag, np.eye(3), J, cF, ct, R, cpsi, work)
+    return max(status, point_psi(kind, F, L0, triads, lag, psi, np.empty((8, 3, 3))))
+
+
+@njit
+def point_hessian(kind, F, L0, triads, lag, lam, H):
+    """``H = ∂(Jᵀλ)/∂(F, θ)`` (18, 18) for a fixed λ (3,): central differences (step
+    :data:`FD_STEP`, F being dimensionless and spins in radians) of the complex-step gradients.
+    H must hold zeros on entry."""
+    work = np.empty((8, 3, 3), dtype=np.complex128)
+    cF = np.empty((3, 3), dtype=np.complex128)
+    ct = np.empty((3, 3, 3), dtype=np.complex128)
+    R = np.empty((3, 3), dtype=np.complex128)
+    cpsi = np.empty(3, dtype=np.complex128)
+    Fs = np.empty((3, 3))
+    ts = np.empty((3, 3, 3))
+    Rr = np.empty((3, 3))
+    v = np.zeros(3)
+    g = np.empty((1, 18))
+    lam2 = lam.reshape(1, 3)
+    status = OK
+    for l in range(18):
+        for sign in (1.0, -1.0):
+            Fs[:, :] = F
+            if l < 9:
+                Fs[l // 3, l % 3] += sign * FD_STEP
+                ts[:, :, :] = triads
+            else:
+                v[:] = 0.0
+                v[(l - 9) % 3] = sign * FD_STEP
+                _turn((l - 9) // 3, v, triads, Rr, ts)
+            status = max(status, _gradient(kind, Fs, L0, ts, lag, lam2, g, cF, ct, R, cpsi, work))
+            for c in range(18):
+                H[c, l] += sign * g[0, c] / (2.0 * FD_STEP)
+    return status
+
+
+@njit
+def _point_state(p, x, nodes, n_local, G, triads, rotation_nodes, beam_element, F, tl):
+    """F (3, 3) from the current positions x and the element's nodal triads ``tl`` of point p."""
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for a in range(n_local[p]):
+                acc += x[nodes[p, a], i] * G[p, a, j]
+            F[i, j] = acc
+    e = beam_element[p]
+    for k in range(3):
+        tl[k] = triads[rotation_nodes[e, k]]
+
+
+@njit
+def reference_triads_at(triads0, rotation_nodes, beam_element, lag, L0, status):
+    """Reference beam triads ``L0`` (n_pts, 3, 3) at the points (the solid triads' reference)."""
+    work = np.empty((4, 3, 3))
+    tl = np.empty((3, 3, 3))
+    for p in range(len(beam_element)):
+        e = beam_element[p]
+        for k in range(3):
+            tl[k] = triads0[rotation_nodes[e, k]]
+        status[p] = beam_triad(tl, lag[p], L0[p], work)
+
+
+@njit
+def jacobian_range(kind, x, nodes, n_local, G, L0, triads, rotation_nodes, beam_element, lag, want, psi, J, status):
+    """ψ (n_pts, 3) at every point and, when ``want``, ``J = ∂ψ/∂(F, θ)`` (n_pts, 3, 18): columns
+    ``3 i + j`` the entries F[i, j], then the spins of the point's beam element's rotation nodes
+    (line3 order). x: current solid positions (n_solid_nodes, 3)."""
+    F = np.empty((3, 3))
+    tl = np.empty((3, 3, 3))
+    work = np.empty((8, 3, 3))
+    for p in range(len(beam_element)):
+        _point_state(p, x, nodes, n_local, G, triads, rotation_nodes, beam_element, F, tl)
+        if want:
+            status[p] = point_jacobian(kind, F, L0[p], tl, lag[p], psi[p], J[p])
+        else:
+            status[p] = point_psi(kind, F, L0[p], tl, lag[p], psi[p], work)
+
+
+@njit
+def hessian_range(kind, x, nodes, n_local, G, L0, triads, rotation_nodes, beam_element, lag, lam, H, status):
+    """``H[p] = ∂(J_pᵀ λ_p)/∂(F, θ)`` (n_pts, 18, 18) in the layout of :func:`jacobian_range`;
+    H must hold zeros on entry."""
+    F = np.empty((3, 3))
+    tl = np.empty((3, 3, 3))
+    for p in range(len(beam_element)):
+        status[p] = OK
+        if lam[p, 0] == 0.0 and lam[p, 1] == 0.0 and lam[p, 2] == 0.0:
+            continue
+        _point_state(p, x, nodes, n_local, G, triads, rotation_nodes, beam_element, F, tl)
+        status[p] = point_hessian(kind, F, L0[p], tl, lag[p], lam[p], H[p])

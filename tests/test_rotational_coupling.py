@@ -1,0 +1,337 @@
+"""Issue 18 item 4: rotational coupling of Simo–Reissner beams to the solid (penalty).
+
+A straight fibre along the axis of a block whose every node is prescribed by a finite twist (and
+bend) field carries the torsion the solid imposes with rotational coupling and none without it;
+both solid triads are objective, vanish in the reference and under rigid motions, reproduce a
+constant rotation exactly; the tangent matches central differences; the two triads and the two
+rotational multiplier types are compared on coarse and fine solid meshes."""
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import mortar1d3d as m13
+from mortar1d3d import SceneError
+from mortar1d3d.model import Model, plan
+from mortar1d3d.physics import rotational_coupling_kernel as kernel
+from mortar1d3d.physics.rotational_coupling import RotationalCoupling
+from mortar1d3d.solvers.newton import solve_load_steps
+
+SECTION = {"E": 2e11, "nu": 0.3, "radius": 0.01}
+TAU = 0.2            # twist rate of the prescribed solid field (rad per unit length)
+ALL = {"inside": [[-1, -1, -1], [2, 1, 1]]}
+
+
+def twist_bend(X, tau, k):
+    """Positions of the block's points after a twist about the x axis (rate tau), then a bend in
+    the x-z plane with curvature k (the axis becomes a circular arc of radius 1/k)."""
+    x, y, z = X.T
+    c, s = np.cos(tau * x), np.sin(tau * x)
+    y, z = c * y - s * z, s * y + c * z
+    if k == 0.0:
+        return np.column_stack([x, y, z])
+    R = 1.0 / k
+    return np.column_stack([(R - z) * np.sin(k * x), y, R - (R - z) * np.cos(k * x)])
+
+
+def block(n, beam_elements, rotational, support=False, beams=None):
+    """A block [0, 1] × [-0.1, 0.1]² with n × 3 × 3 hex8 cells, a straight fibre on its axis."""
+    coupling = {} if rotational is None else {"rotational": rotational}
+    dirichlet = [{"on": ALL}] + ([{"on": "beam:0:start", "rotation": [0, 0, 0]}] if support else [])
+    return m13.Scene(solid={"mesh": {"box": [[0, -0.1, -0.1], [1, 0.1, 0.1]], "cells": [n, 3, 3]},
+                            "material": {"model": "linear_elastic", "E": 1e9, "nu": 0.3}},
+                     beams=beams or [{"curve": {"line": [[0, 0, 0], [1, 0, 0]]}, "elements": beam_elements,
+                                      "model": "simo_reissner", "section": SECTION}],
+                     coupling=coupling, dirichlet=dirichlet, analysis={"kinematics": "nonlinear", "steps": 2})
+
+
+def solve_prescribed(scene, positions):
+    """Solve with every solid node prescribed at ``positions(X)``; returns the model, the
+    displacement unknowns and the Newton iterations per step."""
+    model = Model(scene).prepare()
+    X = model.solid_mesh.points
+    nS = X.size
+    assert np.array_equal(model.fixed_dofs[:nS], np.arange(nS))
+    model.fixed_values[:nS] = (positions(X) - X).ravel()
+    z, records, _ = solve_load_steps(model, np.zeros(model.n_unknowns), 2, rtol=1e-10, increment_rtol=1e-10)
+    return model, z[:model.n_displacement_dofs], [r.iterations for r in records]
+
+
+def moments(model, d, eta=(-0.5, 0.0, 0.5)):
+    """Material moments (GI_T K1, EI2 K2, EI3 K3) of the fibre at ``eta`` of every element (n_el, k, 3)."""
+    g = model.groups[0]
+    return g.physics.sample(d[g.dofs.slice], d[g.rotations.slice].reshape(-1, 3), np.array(eta))["M"]
+
+
+def middle(M):
+    """The samples of the middle half of the fibre (away from its free ends)."""
+    n = len(M)
+    return M[n // 4: n - n // 4].reshape(-1, 3)
+
+
+def errors(n, beam_elements, triad, lm, k=0.0):
+    """Torsion and bending moment errors in the middle half of the fibre, relative to GI_T τ and EI k."""
+    rotational = None if triad is None else {"triad": triad, "lm": lm}
+    model, d, _ = solve_prescribed(block(n, beam_elements, rotational, support=triad is None),
+                                   lambda X: twist_bend(X, TAU, k))
+    section = model.groups[0].physics.sections[0]
+    M = middle(moments(model, d))
+    torsion = np.abs(M[:, 0] / (section.GI_T * TAU) - 1.0).max()
+    bending = np.abs(np.hypot(M[:, 1], M[:, 2]) / (section.EI2 * k) - 1.0).max() if k else np.nan
+    return torsion, bending
+
+
+# -- the fibre twisted with the solid ----------------------------------------------------------
+
+def test_fibre_twisted_with_the_solid_carries_its_torsion_only_with_rotational_coupling():
+    section = None
+    results = {}
+    for n in (4, 8):
+        model, d, iterations = solve_prescribed(block(n, 2 * n, {"triad": "polar"}),
+                                                lambda X: twist_bend(X, TAU, 0.0))
+        section = model.groups[0].physics.sections[0]
+        M = moments(model, d)
+        results[n] = np.abs(middle(M)[:, 0] / (section.GI_T * TAU) - 1.0).max()
+        assert np.abs(M[..., 1:]).max() < 1e-8 * section.GI_T * TAU       # no bending
+        assert max(iterations) <= 3
+        assert model.counts["coupling.rotational_penalty"] > 0
+    # measured: 2.5e-3 (solid 4 cells / beam 8 elements), 1.2e-4 (8 / 16)
+    assert results[4] < 4e-3 and results[8] < 3e-4 and results[8] < 0.1 * results[4]
+    # without rotational coupling (a rotation support instead) the fibre does not twist at all
+    model, d, _ = solve_prescribed(block(4, 8, None, support=True), lambda X: twist_bend(X, TAU, 0.0))
+    assert np.abs(moments(model, d)).max() < 1e-10 * section.GI_T * TAU
+
+
+def test_line3_rotational_multipliers_beat_line2_on_the_twisted_fibre():
+    """line2 multipliers constrain fewer rotations than the line3 triads have, so the fibre's
+    twist keeps a mesh-scale oscillation. Torsion errors in the middle half (solid 4 cells),
+    measured: line2 4.6e-2 / 9.9e-3 with 8 / 16 beam elements, line3 2.5e-3 / 3.5e-4."""
+    line2 = [errors(4, b, "polar", "line2")[0] for b in (8, 16)]
+    line3 = [errors(4, b, "polar", "line3")[0] for b in (8, 16)]
+    assert line2[0] > 0.03 and line2[1] < 0.5 * line2[0]
+    assert line3[0] < 0.1 * line2[0] and line3[1] < 0.1 * line2[1]
+
+
+def test_comparison_of_the_solid_triads_on_coarse_and_fine_solid_meshes():
+    """Twist (0.2 rad per unit length) and bend (curvature 0.5) of the solid; a fibre of 4
+    elements; solid of 4 and 16 cells along it. Measured (torsion error, bending error) in the
+    middle half, relative to GI_T τ and EI k (2 / 8 cells: polar 1.0e-2, 1.00 / 9.5e-3, 3.7e-2;
+    deformation_gradient 9.1e-3, 1.28 / 9.2e-3, 6.2e-2):
+
+    ========================  =================  =================
+    triad (lm = line3)        solid 4 cells      solid 16 cells
+    ========================  =================  =================
+    polar                     9.9e-3, 0.111      9.4e-3, 1.87e-2
+    deformation_gradient      8.7e-3, 0.208      9.4e-3, 2.47e-2
+    none (rotation support)   1 (no torsion), 0.136   1, 0.135
+    ========================  =================  =================
+
+    The torsion error is the 4-element fibre's own (its free ends); the bending error falls with
+    the solid's refinement with either triad, by 1.2 to 2 times less with the polar one, while
+    without rotational coupling it stays at the fibre's discretisation error.
+    """
+    table = {triad: [errors(n, 4, triad, "line3", k=0.5) for n in (4, 16)] for triad in ("polar", "deformation_gradient")}
+    plain = [errors(n, 4, None, None, k=0.5) for n in (4, 16)]
+    polar, gradient = table["polar"], table["deformation_gradient"]
+    for torsion, _ in polar + gradient:
+        assert torsion < 1.2e-2
+    assert polar[1][1] < 0.025 and gradient[1][1] < 0.035
+    assert polar[0][1] < 0.7 * gradient[0][1] and polar[1][1] < 0.9 * gradient[1][1]      # polar bends better
+    assert polar[1][1] < 0.2 * polar[0][1]
+    assert min(plain[0][1], plain[1][1]) > 0.1 and plain[0][0] == pytest.approx(1.0)
+
+
+# -- triads, constraint, tangent ------------------------------------------------------------------
+
+def _triad(kind, F, L0):
+    L = np.empty((3, 3))
+    assert kernel.solid_triad(kernel.TRIADS[kind], np.ascontiguousarray(F), L0, L, np.empty((4, 3, 3))) == kernel.OK
+    return L
+
+
+@pytest.mark.parametrize("kind", ["polar", "deformation_gradient"])
+def test_solid_triads_are_objective_rotations_and_exact_for_rigid_rotations(kind):
+    rng = np.random.default_rng(3)
+    L0 = Rotation.from_rotvec([0.4, -0.2, 1.1]).as_matrix()
+    Q = Rotation.from_rotvec([-0.7, 0.5, 0.3]).as_matrix()
+    for _ in range(5):
+        F = np.eye(3) + 0.3 * rng.standard_normal((3, 3))
+        L = _triad(kind, F, L0)
+        assert np.abs(L.T @ L - np.eye(3)).max() < 1e-14 and np.linalg.det(L) > 0
+        assert np.abs(_triad(kind, Q @ F, L0) - Q @ L).max() < 1e-14             # objective
+        # a stretch along the reference base vectors does not turn the triad
+        S = L0 @ np.diag(rng.uniform(0.5, 2.0, 3)) @ L0.T
+        assert np.abs(_triad(kind, Q @ S, L0) - Q @ L0).max() < 1e-14
+    # the triads differ under shear in the section plane (polar turns, the bisector stays)
+    shear = L0 @ np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.5], [0.0, 0.0, 1.0]]) @ L0.T
+    angle = np.linalg.norm(Rotation.from_matrix(_triad(kind, shear, L0) @ L0.T).as_rotvec())
+    assert angle == pytest.approx({"polar": 0.2449786631, "deformation_gradient": 0.2318238045}[kind], rel=1e-8)
+
+
+def coupled_rod(element="hexahedron"):
+    """A straight fibre in a 3 × 2 × 2 block, skew to its axes."""
+    return m13.Scene(solid={"mesh": {"box": [[0, 0, 0], [1, 1, 1]], "cells": [3, 2, 2], "element": element},
+                            "material": {"model": "linear_elastic", "E": 1e9, "nu": 0.3}},
+                     beams=[{"curve": {"line": [[0.05, 0.4, 0.55], [0.95, 0.6, 0.45]]}, "elements": 3,
+                             "model": "simo_reissner", "section": SECTION}],
+                     dirichlet=[{"on": "solid:x_min"}], coupling={"rotational": {}},
+                     analysis={"kinematics": "nonlinear"})
+
+
+def rod_coupling(kind, element="hexahedron", **options):
+    """The model of :func:`coupled_rod`, its beam group and a RotationalCoupling of it."""
+    model = Model(coupled_rod(element)).prepare()
+    g = model.groups[0]
+    return model, g, RotationalCoupling(g.operators, g.physics, model.solid_mesh, g.rotations.start,
+                                        model.n_displacement_dofs, triad=kind, **options)
+
+
+def _spin(psi, theta):
+    """Rotation vectors after the multiplicative update exp(θ) exp(ψ) (rows)."""
+    return np.array([(Rotation.from_rotvec(t) * Rotation.from_rotvec(p)).as_rotvec() for p, t in zip(psi, theta)])
+
+
+@pytest.mark.parametrize("kind, element", [("polar", "hexahedron"), ("deformation_gradient", "hexahedron"),
+                                           ("polar", "tetra"), ("deformation_gradient", "hexahedron27")])
+def test_constraint_vanishes_in_the_reference_and_under_rigid_motions(kind, element):
+    model, g, rc = rod_coupling(kind, element, penalty=1e4)
+    X = model.solid_mesh.points
+    n_rot = g.physics.n_rotation_nodes
+    assert np.abs(rc.relative_rotations(np.zeros(X.size), np.zeros((n_rot, 3)))).max() < 1e-14     # round-off
+    Q = Rotation.from_rotvec([0.9, -1.3, 0.6])
+    u = (Q.apply(X) + [0.3, -2.0, 5.0] - X).ravel()
+    psi = np.tile(Q.as_rotvec(), (n_rot, 1))
+    assert np.abs(rc.relative_rotations(u, psi)).max() < 1e-14
+    r, _ = rc.evaluate(u, psi, tangent=False)
+    assert np.abs(r).max() < 1e-9                                       # penalty 1e4 × ψ ~ 1e-15
+    # a deformed state and the same state rigidly rotated: the same energy (objective measure)
+    rng = np.random.default_rng(5)
+    ud = 0.03 * rng.standard_normal(X.size)
+    psid = 0.2 * rng.standard_normal((n_rot, 3))
+    uq = (Q.apply(X + ud.reshape(-1, 3)) - X).ravel()
+    assert rc.energy(uq, _spin(psid, np.tile(Q.as_rotvec(), (n_rot, 1)))) == pytest.approx(rc.energy(ud, psid),
+                                                                                           rel=1e-12)
+
+
+@pytest.mark.parametrize("kind, element", [("polar", "hexahedron"), ("deformation_gradient", "hexahedron"),
+                                           ("polar", "tetra"), ("deformation_gradient", "hexahedron27")])
+def test_tangent_matches_central_differences(kind, element):
+    model, g, rc = rod_coupling(kind, element, penalty=1e3, lm="line2")
+    nS, n_rot = 3 * model.n_solid_nodes, g.physics.n_rotation_nodes
+    rng = np.random.default_rng(1)
+    u, psi = 0.03 * rng.standard_normal(nS), 0.2 * rng.standard_normal((n_rot, 3))
+    r, K = rc.evaluate(u, psi)
+    h = 1e-6
+    columns = [int(c) for c in rng.choice(nS, 6, replace=False)] + list(g.rotations.start + np.arange(0, 3 * n_rot, 2))
+    worst_r = worst_K = 0.0
+    for c in columns:
+        states = []
+        for s in (h, -h):
+            uu, pp = u.copy(), psi.copy()
+            if c < nS:
+                uu[c] += s
+            else:
+                k, i = divmod(c - g.rotations.start, 3)
+                theta = np.zeros((n_rot, 3))
+                theta[k, i] = s
+                pp = _spin(psi, theta)
+            states.append((uu, pp))
+        fd = (rc.energy(*states[0]) - rc.energy(*states[1])) / (2 * h)
+        worst_r = max(worst_r, abs(fd - r[c]) / np.abs(r).max())
+        column = (rc.evaluate(*states[0], tangent=False)[0] - rc.evaluate(*states[1], tangent=False)[0]) / (2 * h)
+        worst_K = max(worst_K, np.abs(column - K[:, c].toarray().ravel()).max() / abs(K).max())
+    assert worst_r < 1e-8 and worst_K < 1e-8          # measured 7e-11, 6e-11 (polar, hexahedron)
+
+
+@pytest.mark.parametrize("kind", ["polar", "deformation_gradient"])
+def test_a_constant_rotation_of_the_solid_is_reproduced_exactly(kind):
+    """The solid rigidly turned by 0.8 rad: the free fibre's triads all become Q Λ0 (consistency)."""
+    Q = Rotation.from_rotvec([0.2, 0.5, -0.6])
+    model, d, iterations = solve_prescribed(block(2, 4, {"triad": kind}), lambda X: Q.apply(X))
+    g = model.groups[0]
+    psi = d[g.rotations.slice].reshape(-1, 3)
+    assert np.abs(psi - Q.as_rotvec()).max() < 1e-10
+    assert np.abs(moments(model, d)).max() < 1e-6
+
+
+# -- scene, plan, mechanism check -----------------------------------------------------------------
+
+def test_rotational_coupling_holds_the_free_twist_and_is_planned_only_when_asked():
+    scene = block(2, 4, {"triad": "deformation_gradient", "penalty": 5e3})
+    names = [e.name for e in plan(scene)]
+    assert "coupling.rotational_penalty" in names
+    effect = next(e for e in plan(scene) if e.name == "coupling.rotational_penalty")
+    assert "deformation_gradient" in effect.detail and "5000" in effect.detail
+    model = Model(scene).prepare()                          # no twist mechanism: no rotation support needed
+    assert model.zero_energy_modes == []
+    assert model.groups[0].rotational.penalty == 5e3
+    assert "coupling.rotational_penalty" not in [e.name for e in plan(block(2, 4, None, support=True))]
+    with pytest.raises(SceneError, match=r"zero-energy mode .*or tie the cross-sections to the solid "
+                                         r"\(coupling.rotational\)"):
+        Model(block(2, 4, None)).prepare()
+    # default: 1e3 GI_T / h² with the mean element length h = 0.25
+    model = Model(block(2, 4, {})).prepare()
+    rc = model.groups[0].rotational
+    assert rc.penalty == pytest.approx(1e3 * model.groups[0].physics.sections[0].GI_T / 0.25 ** 2)
+    assert (rc.triad, rc.lm) == ("polar", "line3")
+
+
+@pytest.mark.parametrize("model_name", ["truss", "torsion_free"])
+def test_rotational_coupling_needs_beams_with_rotations(model_name):
+    beams = [{"curve": {"line": [[0, 0, 0], [1, 0, 0]]}, "elements": 2, "model": model_name,
+              "section": {"E": 2e11, "radius": 0.01}}]
+    with pytest.raises(SceneError, match=rf"^coupling.rotational: beams\[0\] is a {model_name} beam, which has no "
+                                         "cross-section rotations"):
+        block(2, 2, {}, beams=beams)
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"enforcement": "lagrange"}, r"^coupling.rotational.enforcement: only 'penalty' is implemented"),
+    ({"triad": "gram_schmidt"}, r"^coupling.rotational.triad: unknown value 'gram_schmidt'"),
+    ({"lm": "line4"}, r"^coupling.rotational.lm: unknown value 'line4'"),
+    ({"penalty": -1.0}, r"^coupling.rotational.penalty"),
+    ({"tirad": "polar"}, r"^coupling.rotational.tirad: unknown key"),
+])
+def test_bad_rotational_coupling_keys(change, message):
+    with pytest.raises(SceneError, match=message):
+        block(2, 2, change)
+
+
+def test_rotational_coupling_from_a_toml_scene(tmp_path):
+    path = tmp_path / "fibre.toml"
+    path.write_text("""
+[solid]
+mesh = { box = [[0, -0.1, -0.1], [1, 0.1, 0.1]], cells = [2, 3, 3] }
+material = { model = "linear_elastic", E = 1e9, nu = 0.3 }
+
+[[beams]]
+curve = { line = [[0, 0, 0], [1, 0, 0]] }
+elements = 4
+model = "simo_reissner"
+section = { E = 2e11, nu = 0.3, radius = 0.01 }
+
+[coupling.rotational]
+triad = "deformation_gradient"
+lm = "line2"
+penalty = 2e4
+
+[[dirichlet]]
+on = "solid:x_min"
+
+[[load]]
+type = "traction"
+on = "solid:x_max"
+value = [0, 0, -1e5]
+
+[analysis]
+kinematics = "linear"
+""", encoding="utf-8")
+    scene = m13.Scene.from_toml(path)
+    assert scene.coupling["rotational"] == {"triad": "deformation_gradient", "enforcement": "penalty",
+                                            "lm": "line2", "penalty": 2e4}
+    result = m13.solve(path)               # no rotation support: the rotational coupling holds the twist
+    assert result.model.counts["coupling.rotational_penalty"] >= 2
+    g = result.model.groups[0]
+    u_beam = np.linalg.norm(result.beam_displacement, axis=1).max()
+    u_solid = np.linalg.norm(result.solid_displacement, axis=1).max()
+    assert 0.5 * u_solid < u_beam < u_solid
+    assert g.rotational.triad == "deformation_gradient"
