@@ -20,7 +20,7 @@ decomposition, or the deformed reference base vectors averaged), by the relative
   away from equilibrium).
 
 Energy, residual and tangent are objective: a rigid rotation of the whole scene turns ψ and
-leaves |ψ| (hence Π) unchanged.
+leaves ``|ψ|`` (hence Π) unchanged.
 """
 import numpy as np
 import scipy.sparse as sp
