@@ -307,12 +307,6 @@ def _beam(value, i, base_dir):
     return out
 
 
-#: shear correction factor of a solid circular section, ``6(1 + ν) / (7 + 6ν)`` (Cowper, J Appl
-#: Mech 33, 1966), used when a section is given by its radius
-def circular_shear_correction(nu):
-    return 6.0 * (1.0 + nu) / (7.0 + 6.0 * nu)
-
-
 def _shear_torsion_section(value, path):
     """Section of a beam with shear and torsion (``simo_reissner``), normalised to the six
     stiffnesses ``EA, GA2, GA3, GI_T, EI2, EI3`` (plus ``EI`` = the mean bending stiffness).
@@ -349,8 +343,9 @@ def _shear_torsion_section(value, path):
                     _fail(f"{path}.{k}", "a circular section (radius) defines A, I2, I3, I_T and its shear "
                                          "correction; leave it out or give A, I2, I3, I_T instead of radius")
             r = _number(value["radius"], f"{path}.radius", low=0.0, low_open=True)
+            from .physics.simo_reissner import cowper_shear_correction
             A, I2, I_T = math.pi * r * r, math.pi * r ** 4 / 4.0, math.pi * r ** 4 / 2.0
-            I3, k = I2, circular_shear_correction(nu) if -1.0 < nu < 0.5 else 1.0
+            I3, k = I2, cowper_shear_correction(nu) if -1.0 < nu < 0.5 else 1.0
         else:
             A, I2, I3, I_T = (_number(_required(value, key, path), f"{path}.{key}", low=0.0, low_open=True)
                               for key in ("A", "I2", "I3", "I_T"))

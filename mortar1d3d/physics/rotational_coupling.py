@@ -26,8 +26,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..elements.multiplier import multiplier as multiplier_type
-from ..elements.multiplier import shape as lm_shape
 from ..mortar.assemble import lm_numbering
+from .coupling import _lm_projection
 from . import rotational_coupling_kernel as kernel
 from .simo_reissner import _lagrange_tables
 
@@ -101,12 +101,12 @@ class RotationalCoupling:
         # rotational multipliers: Φ_j(η_p) and κ_j
         lm_t = multiplier_type(lm)
         index, self.n_lm = lm_numbering(beam.beams, lm_t)
-        Phi = np.empty((n_pts, lm_t.n_functions))
-        for k in range(n_pts):
-            lm_shape(lm_t.n_functions, self.eta[k], Phi[k])
-        rows = index[self.beam_element, :lm_t.n_functions]
-        self.Phi = sp.csr_matrix((Phi.ravel(), (rows.ravel(), np.repeat(np.arange(n_pts), lm_t.n_functions))),
-                                 shape=(self.n_lm, n_pts))
+        # Φ_j(η_p) by the positional coupling's kernel (unit weights: the weights enter where used)
+        n = n_pts * lm_t.n_functions
+        rows, cols, vals = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
+        _lm_projection(self.beam_element, self.eta, np.ones(n_pts), np.ascontiguousarray(index), lm_t.n_functions,
+                       rows, cols, vals)
+        self.Phi = sp.csr_matrix((vals, (rows, cols)), shape=(self.n_lm, n_pts))
         self.kappa = np.asarray(self.Phi @ self.weight).ravel()
         self.kappa_inverse = np.divide(1.0, self.kappa, out=np.zeros_like(self.kappa), where=self.kappa > 0)
         self.X = X

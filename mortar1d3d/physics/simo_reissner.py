@@ -114,8 +114,7 @@ class Section:
         G = _shear_modulus(E, G, nu, "section")
         r = _positive(radius, "section.radius")
         if shear_correction is None:
-            nu_ = E / (2.0 * G) - 1.0
-            shear_correction = 6.0 * (1.0 + nu_) / (7.0 + 6.0 * nu_)
+            shear_correction = cowper_shear_correction(E / (2.0 * G) - 1.0)
         A, I = math.pi * r * r, math.pi * r ** 4 / 4.0
         return cls.from_properties(E, A, I, I, 2.0 * I, shear_correction, G=G)
 
@@ -128,6 +127,12 @@ class Section:
     def moment_stiffness(self):
         """``(GI_T, EI2, EI3)`` (3,) float64: the diagonal of C_M."""
         return np.array([self.GI_T, self.EI2, self.EI3])
+
+
+def cowper_shear_correction(nu):
+    """Shear correction factor of a solid circular section, ``6(1 + ν) / (7 + 6ν)`` (Cowper, J Appl
+    Mech 33, 1966)."""
+    return 6.0 * (1.0 + nu) / (7.0 + 6.0 * nu)
 
 
 # -- reference triads ------------------------------------------------------------------------------
