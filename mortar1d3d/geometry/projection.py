@@ -8,7 +8,7 @@ All buffers come from the caller; nothing here allocates.
 import numpy as np
 from numba import prange
 
-from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit, njit_parallel
+from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit, njit_inline, njit_parallel
 from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
@@ -324,7 +324,7 @@ def search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN):
 _NEAR_BOUNDARY = 1e-6
 
 
-@njit
+@njit_inline
 def locate_point(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack):
     """INSIDE, OUTSIDE or NOT_CONVERGED of the local point p in the non-affine element s (nodes ``X``).
 
@@ -334,9 +334,28 @@ def locate_point(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, sta
     folds beyond its faces, and Newton found another branch): :func:`search_inside` decides.
     On INSIDE or OUTSIDE ``xi`` holds a solution of x(ξ) = p; NOT_CONVERGED: no solution known
     (and none inside the element unless the search was undecided).
+
+    This function holds only the common case (Newton converges from the linearised estimate, away
+    from the element's faces) and is inlined into the loops that call it, which saves the reference
+    counting of eight array arguments per call; every other case continues in :func:`locate_rare`,
+    a call of its own.
     """
     converged = (linear_parameters(code, table, s, p0, p1, p2, xi)
                  and project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) == CONVERGED)
+    if converged and not abs(solid.outside_distance(code, xi)) <= _NEAR_BOUNDARY:
+        if solid.is_inside(code, xi, tol):
+            return INSIDE
+        if certified_outside(code, table, s, xi):
+            return OUTSIDE
+    return locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged)
+
+
+@njit
+def locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged):
+    """:func:`locate_point` from where its common case stops: Newton did not converge from the
+    linearised estimate (``converged`` False; restart from the centre), or its solution lies
+    within ``_NEAR_BOUNDARY`` of a face (polished before the inside test), or outside the
+    certified box (the subdivision search decides)."""
     if not converged:
         solid.centre(code, xi)
         converged = project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) == CONVERGED
@@ -384,6 +403,36 @@ def polish(code, X, p0, p1, p2, h, xi, trial, N, dN):
         xi[0], xi[1], xi[2] = trial[0], trial[1], trial[2]
 
 
+#: largest inside tolerance (parameter units) for which :func:`excluded` holds (its radius is
+#: computed on the element's box grown by this much)
+_EXCLUSION_TOL = 1e-6
+
+
+@njit
+def excluded(code, table, s, x0, x1, x2, tol):
+    """Whether the local point x provably lies outside element s grown by ``tol``, from its
+    linearised estimate alone (no Newton).
+
+    With ρ from :func:`injectivity_bound` on the box B = {|ξ - ξ_c|∞ <= R'}, R' = R + 1e-6
+    (R: the element's radius about its centre), any preimage ξ* in B satisfies
+    |ξ_c + L (x - x_c) - ξ*|∞ = |L (x(ξ*) - x(ξ_c)) - (ξ* - ξ_c)|∞ <= ρ R' = ``table[s, 4, 2]``
+    (mean value theorem on the segment ξ_c ξ* in B). The grown element lies in B, so if the box of
+    that radius about the estimate misses it, x has no preimage in it. Unlike the one-to-one
+    certificate this needs no ρ < 1: a strongly curved element only excludes less.
+    """
+    d = table[s, 4, 2]
+    if not (d >= 0.0 and table[s, 4, 0] == 0.0 and tol <= _EXCLUSION_TOL):
+        return False
+    d0 = x0 - table[s, 3, 0]
+    d1 = x1 - table[s, 3, 1]
+    d2 = x2 - table[s, 3, 2]
+    y0 = solid.CENTRE[code, 0] + table[s, 0, 0] * d0 + table[s, 0, 1] * d1 + table[s, 0, 2] * d2
+    y1 = solid.CENTRE[code, 1] + table[s, 1, 0] * d0 + table[s, 1, 1] * d1 + table[s, 1, 2] * d2
+    y2 = solid.CENTRE[code, 2] + table[s, 2, 0] * d0 + table[s, 2, 1] * d1 + table[s, 2, 2] * d2
+    # slack for the round-off of the estimate and of the bound
+    return not solid.box_meets(code, y0, y1, y2, d * (1.0 + 1e-6) + 1e-10, tol)
+
+
 @njit
 def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points, solid_origin,
                      solid_h, linear, tol, X, xi, trial, N, dN, a, stack, only):
@@ -393,8 +442,8 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
     With ``only`` >= 0, tests just that element. On success ``xi`` holds the point's ξ.
     This is the ownership rule of both integrations (docs/conventions.md §1-§2): a point on a face,
     edge or node shared by several elements belongs to the lowest-index one. Affine elements
-    are located with their inverse map (``linear``, :func:`linear_maps`), the others by
-    :func:`locate_point` (``a``, ``stack``: :func:`search_buffers`), which finds a point inside a
+    are located with their inverse map (``linear``, :func:`linear_maps`); the others, unless their
+    linearised estimate rules the point out (:func:`excluded`), by :func:`locate_point` (``a``, ``stack``: :func:`search_buffers`), which finds a point inside a
     curved element whatever branch Newton takes; ``X`` is left holding the nodes of the last
     element tested.
     """
@@ -412,7 +461,7 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
             linear_parameters(code, linear, s, x0, x1, x2, xi)
             if solid.is_inside(code, xi, tol):
                 return s
-        else:
+        elif not excluded(code, linear, s, x0, x1, x2, tol):
             load_element(points, conn, s, code, solid_origin, X)
             if locate_point(code, X, x0, x1, x2, solid_h[s], tol, linear, s, xi, trial, N, dN, a, stack) == INSIDE:
                 return s
@@ -474,7 +523,7 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
     Newton start close to the answer), NaN where the Jacobian at the centre is singular. Row 4,
     column 1: the margin δ of the element's one-to-one certificate (:func:`certified_margin`; -1 if
     none), with which a Newton solution outside the element proves a point outside
-    (:func:`certified_outside`).
+    (:func:`certified_outside`); column 2: the radius of :func:`excluded` (0 where affine).
     """
     n = conn.shape[0]
     claims = new_claims(n, workers)
@@ -499,6 +548,8 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
                 if inverse3(j00, j01, j02, j10, j11, j12, j20, j21, j22, table[s, :3]) > 0.0:
                     table[s, 4, 0] = 0.0
                     table[s, 4, 1] = certified_margin(code, X, table[s, :3], a)
+                    radius = solid.RADIUS[code] + _EXCLUSION_TOL
+                    table[s, 4, 2] = injectivity_bound(code, a, table[s, :3], radius) * radius
                 else:
                     table[s, :, :] = np.nan
             begin, stop = claim(claims, n, worker)
