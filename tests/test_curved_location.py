@@ -174,31 +174,3 @@ def test_validity_bound_agrees_with_dense_sampling(name):
     assert np.all(outcome[bad] != VALID)
     if d.degree == 2:
         assert bad.any() and (~bad).any()           # both kinds are exercised
-
-
-def _excluded(solid, points, tol):
-    from mortar1d3d.geometry.projection import excluded
-    table = np.empty((solid.n_elements, 5, 3))
-    _, h, origin = solid_frames(solid)
-    linear_maps(solid.points, solid.connectivity, solid.element_codes, origin, h, table, 1)
-    return np.array([[excluded(int(solid.element_codes[s]), table, s, *(p - origin[s]), tol)
-                      for s in range(solid.n_elements)] for p in points])
-
-
-def test_linear_estimate_rules_out_far_points_and_keeps_points_inside():
-    """Candidate elements are rejected without Newton when the linearised estimate is farther
-    outside than the element's curvature allows (``projection.excluded``): on a distorted hex8
-    mesh, points x(ξ) inside an element are never rejected by it, and the neighbours more than
-    a cell away reject them (the rejection does its job: without it every candidate ran Newton)."""
-    solid = m13.generate.distort(m13.generate.box((0, 0, 0), (4, 4, 4), (4, 4, 4)), 0.2, seed=5)
-    rng = np.random.default_rng(7)
-    xi = np.sign(u := rng.uniform(-1, 1, (60, 3))) * (1 - np.abs(u) ** 4)     # mostly near the faces
-    centres = solid.points[solid.connectivity[:, :8]].mean(axis=1)
-    for s in range(0, solid.n_elements, 3):
-        X = solid.points[solid.connectivity[s, :8]]
-        points = hc.shape_values("hexahedron", xi)[0] @ X
-        flags = _excluded(solid, points, 1e-9)
-        assert not flags[:, s].any()
-        # elements whose centres are more than 1.9 cells away from this one's (cells of size 1)
-        far = np.linalg.norm(centres - centres[s], axis=1) > 1.9
-        assert far.any() and flags[:, far].all()

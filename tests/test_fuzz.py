@@ -453,28 +453,3 @@ def test_fuzz_corner_and_edge_cuts_at_every_depth(scene):
         for e, eta in at:
             s = ops.segments[ops.segments["beam_element"] == e]
             assert np.any((s["eta_start"] <= eta + 1e-9) & (s["eta_end"] >= eta - 1e-9)), (depth, e, eta, s)
-
-
-def _excluded_flags(name, X, points, tol):
-    """`excluded` of every point (global coordinates) against the single element with nodes X."""
-    from mortar1d3d.geometry.projection import excluded, linear_maps
-    from mortar1d3d.geometry.search import solid_frames
-    solid = SolidMesh(X, {name: np.arange(len(X))[None]})
-    _, h, origin = solid_frames(solid)
-    table = np.empty((1, 5, 3))
-    linear_maps(solid.points, solid.connectivity, solid.element_codes, origin, h, table, 1)
-    code = int(solid.element_codes[0])
-    local = points - origin[0]
-    return np.array([excluded(code, table, 0, p[0], p[1], p[2], tol) for p in local])
-
-
-@given(element=curved_elements(), seed=st.integers(0, 2 ** 16))
-def test_fuzz_linear_estimate_never_excludes_a_point_inside(element, seed):
-    """The Newton-free rejection of candidate elements (``projection.excluded``): a point x(ξ) with ξ
-    in the element (most of them near faces, edges and corners, where the linearised estimate is
-    worst) is never ruled out, on curved elements up to 0.98 of their validity limit."""
-    from mortar1d3d._config import PARAMETER_TOL
-    from mortar1d3d.elements.solid.dispatch import SOLID_ELEMENTS
-    name, X = element
-    xi = _biased_parameters(SOLID_ELEMENTS[name], np.random.default_rng(seed), 300)
-    assert not _excluded_flags(name, X, _mapped(name, X, xi), PARAMETER_TOL).any()

@@ -403,36 +403,6 @@ def polish(code, X, p0, p1, p2, h, xi, trial, N, dN):
         xi[0], xi[1], xi[2] = trial[0], trial[1], trial[2]
 
 
-#: largest inside tolerance (parameter units) for which :func:`excluded` holds (its radius is
-#: computed on the element's box grown by this much)
-_EXCLUSION_TOL = 1e-6
-
-
-@njit
-def excluded(code, table, s, x0, x1, x2, tol):
-    """Whether the local point x provably lies outside element s grown by ``tol``, from its
-    linearised estimate alone (no Newton).
-
-    With ρ from :func:`injectivity_bound` on the box B = {|ξ - ξ_c|∞ <= R'}, R' = R + 1e-6
-    (R: the element's radius about its centre), any preimage ξ* in B satisfies
-    |ξ_c + L (x - x_c) - ξ*|∞ = |L (x(ξ*) - x(ξ_c)) - (ξ* - ξ_c)|∞ <= ρ R' = ``table[s, 4, 2]``
-    (mean value theorem on the segment ξ_c ξ* in B). The grown element lies in B, so if the box of
-    that radius about the estimate misses it, x has no preimage in it. Unlike the one-to-one
-    certificate this needs no ρ < 1: a strongly curved element only excludes less.
-    """
-    d = table[s, 4, 2]
-    if not (d >= 0.0 and table[s, 4, 0] == 0.0 and tol <= _EXCLUSION_TOL):
-        return False
-    d0 = x0 - table[s, 3, 0]
-    d1 = x1 - table[s, 3, 1]
-    d2 = x2 - table[s, 3, 2]
-    y0 = solid.CENTRE[code, 0] + table[s, 0, 0] * d0 + table[s, 0, 1] * d1 + table[s, 0, 2] * d2
-    y1 = solid.CENTRE[code, 1] + table[s, 1, 0] * d0 + table[s, 1, 1] * d1 + table[s, 1, 2] * d2
-    y2 = solid.CENTRE[code, 2] + table[s, 2, 0] * d0 + table[s, 2, 1] * d1 + table[s, 2, 2] * d2
-    # slack for the round-off of the estimate and of the bound
-    return not solid.box_meets(code, y0, y1, y2, d * (1.0 + 1e-6) + 1e-10, tol)
-
-
 @njit
 def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points, solid_origin,
                      solid_h, linear, tol, X, xi, trial, N, dN, a, stack, only):
@@ -442,8 +412,8 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
     With ``only`` >= 0, tests just that element. On success ``xi`` holds the point's ξ.
     This is the ownership rule of both integrations (docs/conventions.md §1-§2): a point on a face,
     edge or node shared by several elements belongs to the lowest-index one. Affine elements
-    are located with their inverse map (``linear``, :func:`linear_maps`); the others, unless their
-    linearised estimate rules the point out (:func:`excluded`), by :func:`locate_point` (``a``, ``stack``: :func:`search_buffers`), which finds a point inside a
+    are located with their inverse map (``linear``, :func:`linear_maps`), the others by
+    :func:`locate_point` (``a``, ``stack``: :func:`search_buffers`), which finds a point inside a
     curved element whatever branch Newton takes; ``X`` is left holding the nodes of the last
     element tested.
     """
@@ -461,7 +431,7 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
             linear_parameters(code, linear, s, x0, x1, x2, xi)
             if solid.is_inside(code, xi, tol):
                 return s
-        elif not excluded(code, linear, s, x0, x1, x2, tol):
+        else:
             load_element(points, conn, s, code, solid_origin, X)
             if locate_point(code, X, x0, x1, x2, solid_h[s], tol, linear, s, xi, trial, N, dN, a, stack) == INSIDE:
                 return s
@@ -523,7 +493,7 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
     Newton start close to the answer), NaN where the Jacobian at the centre is singular. Row 4,
     column 1: the margin δ of the element's one-to-one certificate (:func:`certified_margin`; -1 if
     none), with which a Newton solution outside the element proves a point outside
-    (:func:`certified_outside`); column 2: the radius of :func:`excluded` (0 where affine).
+    (:func:`certified_outside`).
     """
     n = conn.shape[0]
     claims = new_claims(n, workers)
@@ -548,8 +518,6 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
                 if inverse3(j00, j01, j02, j10, j11, j12, j20, j21, j22, table[s, :3]) > 0.0:
                     table[s, 4, 0] = 0.0
                     table[s, 4, 1] = certified_margin(code, X, table[s, :3], a)
-                    radius = solid.RADIUS[code] + _EXCLUSION_TOL
-                    table[s, 4, 2] = injectivity_bound(code, a, table[s, :3], radius) * radius
                 else:
                     table[s, :, :] = np.nan
             begin, stop = claim(claims, n, worker)
