@@ -8,7 +8,7 @@ All buffers come from the caller; nothing here allocates.
 import numpy as np
 from numba import prange
 
-from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit, njit_parallel
+from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit, njit_inline, njit_parallel
 from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
@@ -324,7 +324,7 @@ def search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN):
 _NEAR_BOUNDARY = 1e-6
 
 
-@njit
+@njit_inline
 def locate_point(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack):
     """INSIDE, OUTSIDE or NOT_CONVERGED of the local point p in the non-affine element s (nodes ``X``).
 
@@ -334,9 +334,28 @@ def locate_point(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, sta
     folds beyond its faces, and Newton found another branch): :func:`search_inside` decides.
     On INSIDE or OUTSIDE ``xi`` holds a solution of x(ξ) = p; NOT_CONVERGED: no solution known
     (and none inside the element unless the search was undecided).
+
+    This function holds only the common case (Newton converges from the linearised estimate, away
+    from the element's faces) and is inlined into the loops that call it, which saves the reference
+    counting of eight array arguments per call; every other case continues in :func:`locate_rare`,
+    a call of its own.
     """
     converged = (linear_parameters(code, table, s, p0, p1, p2, xi)
                  and project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) == CONVERGED)
+    if converged and not abs(solid.outside_distance(code, xi)) <= _NEAR_BOUNDARY:
+        if solid.is_inside(code, xi, tol):
+            return INSIDE
+        if certified_outside(code, table, s, xi):
+            return OUTSIDE
+    return locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged)
+
+
+@njit
+def locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged):
+    """:func:`locate_point` from where its common case stops: Newton did not converge from the
+    linearised estimate (``converged`` False; restart from the centre), or its solution lies
+    within ``_NEAR_BOUNDARY`` of a face (polished before the inside test), or outside the
+    certified box (the subdivision search decides)."""
     if not converged:
         solid.centre(code, xi)
         converged = project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) == CONVERGED
