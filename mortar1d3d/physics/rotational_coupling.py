@@ -109,6 +109,10 @@ class RotationalCoupling:
         X = np.ascontiguousarray(solid.points, dtype=np.float64)
         kernel.reference_gradients(solid.element_codes, solid.connectivity, X, solid_element, xi, self.G, self.nodes,
                                    self.n_local)
+        # only as many node slots as the largest element has: the local Hessian's chain to the nodes
+        # costs (3 slots)² per point, 11x more with hex8 in MAX_NODES (27) slots than in 8
+        used = max(int(self.n_local.max(initial=0)), 1)
+        self.G, self.nodes = np.ascontiguousarray(self.G[:, :used]), np.ascontiguousarray(self.nodes[:, :used])
         self.lag = _lagrange_tables(self.eta)[0]
         self.rotation_nodes = beam.rotation_nodes
         self.L0 = np.empty((n_pts, 3, 3))
@@ -133,8 +137,9 @@ class RotationalCoupling:
 
     # -- state -------------------------------------------------------------------------------------
     def _columns(self):
-        """Global unknown of every local column per point (n_pts, 3 MAX_NODES + 9): three per solid
-        node slot (-1 for slots the element does not have), then the nine spins."""
+        """Global unknown of every local column per point (n_pts, 3 m + 9; m: node slots, the most
+        nodes of the solid elements touched): three per solid node slot (-1 for slots the element
+        does not have), then the nine spins."""
         m = self.nodes.shape[1]
         cols = (3 * self.nodes[:, :, None] + np.arange(3)).reshape(self.n_points, 3 * m)
         cols[np.repeat(np.arange(m)[None, :] >= self.n_local[:, None], 3, axis=1)] = -1
@@ -143,14 +148,14 @@ class RotationalCoupling:
         return np.hstack([cols, rot])
 
     def _local_jacobian(self, J):
-        """``∂ψ/∂(F, θ)`` (n_pts, 3, 18) → ``∂ψ/∂(u, θ)`` (n_pts, 3, 3 MAX_NODES + 9), with
+        """``∂ψ/∂(F, θ)`` (n_pts, 3, 18) → ``∂ψ/∂(u, θ)`` (n_pts, 3, 3 m + 9), with
         ``∂F_ij/∂u_ak = δ_ik G_aj``."""
         n = self.n_points
         Ju = np.einsum("prij,paj->prai", J[:, :, :9].reshape(n, 3, 3, 3), self.G).reshape(n, 3, -1)
         return np.concatenate([Ju, J[:, :, 9:]], axis=2)
 
     def _local_hessian(self, H):
-        """``∂²/∂(F, θ)²`` (n_pts, 18, 18) → ``∂²/∂(u, θ)²`` (n_pts, 3 MAX_NODES + 9, same)."""
+        """``∂²/∂(F, θ)²`` (n_pts, 18, 18) → ``∂²/∂(u, θ)²`` (n_pts, 3 m + 9, same)."""
         n, G = self.n_points, self.G
         HFF = H[:, :9, :9].reshape(n, 3, 3, 3, 3)
         uu = np.einsum("pijkl,paj,pbl->paibk", HFF, G, G).reshape(n, 3 * G.shape[1], 3 * G.shape[1])
