@@ -211,3 +211,24 @@ def test_line_moment_is_absent_without_rotational_coupling():
                                                              "value": [0, 0, -1e5]}])
     result = m13.solve(sc)
     assert result.line_moment.shape == (0, 3)
+
+
+def test_coupling_tangent_does_not_depend_on_the_thread_count():
+    """The second-derivative kernel runs chunks of points in parallel; each point by the same
+    serial code: bit-identical tangents with 1 thread and with all."""
+    import numba
+    model, z, _, _ = twisted(scene({"enforcement": "lagrange"}))
+    g = model.groups[0]
+    u, psi = z[:3 * model.n_solid_nodes], z[g.rotations.slice].reshape(-1, 3)
+    lam = z[model.n_displacement_dofs:]
+    assert g.rotational.n_points > 2 * 8                       # more than two chunks of points
+    threads = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        one = g.rotational.constraint(u, psi, lam)
+        numba.set_num_threads(threads)
+        many = g.rotational.constraint(u, psi, lam)
+    finally:
+        numba.set_num_threads(threads)
+    assert np.array_equal(one[0], many[0]) and np.array_equal(one[3].toarray(), many[3].toarray())
+    assert np.abs(one[3].toarray()).max() > 0
