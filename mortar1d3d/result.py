@@ -28,6 +28,14 @@ class Result:
     line_load : (n_lm, 3) float64
         Coupling line load λ at the LM nodes (beam groups in order of first appearance;
         zero at LM nodes no integration point touched).
+    line_moment : (n_rotational_lm, 3) float64
+        Rotational coupling (``coupling.rotational``) line moments at the rotational LM nodes,
+        spatial components, moment per length (N·m/m): ``ε κ⁻¹ g`` with penalty (``g``
+        linearised at the reference state in a linear analysis), the multipliers with Lagrange
+        enforcement. Beam groups with rotational coupling in order; LM nodes in the order of the
+        rotational multiplier functions (``coupling.rotational.lm``) along each group's elements;
+        zero at LM nodes no integration point touched. Empty (0 rows) without rotational
+        coupling. ``line_moments(k)`` gives them after load step k.
     steps : list of StepRecord
         Per converged load step: load factor, Newton residual norms, iterations, cuts.
     reactions : list of (3,) float64
@@ -64,6 +72,7 @@ class Result:
         self.beam_tangent_displacement = np.vstack(tan) if tan else np.zeros((0, 3))
         self.beam_rotation = np.vstack(rot) if rot else np.zeros((0, 3))
         self.line_load = self._line_load(z)
+        self.line_moment = self._line_moment(z)
         n_beams = len(self.scene.beams)
         coupled = getattr(model, "coupled_length", None)
         self.coupled_length = np.array(coupled, dtype=float) if coupled is not None else np.zeros(n_beams)
@@ -98,6 +107,27 @@ class Result:
                 start += k
             parts.append(g.coupling.line_load(z[:n], lam))
         return np.vstack(parts) if parts else np.zeros((0, 3))
+
+    def _line_moment(self, z):
+        model = self.model
+        n, nS = model.n_displacement_dofs, 3 * model.n_solid_nodes
+        # rotational multipliers follow the positional ones
+        start = n + sum(g.coupling.n_multipliers for g in model.groups if g.coupling is not None)
+        parts = []
+        for g in model.groups:
+            rc = g.rotational
+            if rc is None:
+                continue
+            k = rc.n_multipliers
+            parts.append(rc.line_moment(z[:nS], z[g.rotations.slice].reshape(-1, 3), z[start: start + k],
+                                        linear=model.linear))
+            start += k
+        return np.vstack(parts) if parts else np.zeros((0, 3))
+
+    def line_moments(self, step=-1):
+        """Rotational line moments (as :attr:`line_moment`) after load step ``step`` (an index of
+        :attr:`steps`; default the last)."""
+        return self._line_moment(self.history[step])
 
     def coupling_summary(self, max_lines=10):
         """Lines of text: the coupled length of every beam (at most ``max_lines`` beams listed,
@@ -138,7 +168,9 @@ class Result:
         the coupling ``line_load`` λ(η), the scene ``beam`` index, the ``fibre`` and the
         ``arc_length`` along it; beams with rotations also the triad ``g1``, ``g2``, ``g3``, the
         spatial force and moment resultants ``n``, ``m`` and the elastic strains ``Gamma``
-        (Γ − Γ0: axial and shear) and ``K`` (K − K0: torsion and bending) in the material frame),
+        (Γ − Γ0: axial and shear) and ``K`` (K − K0: torsion and bending) in the material frame,
+        and with ``coupling.rotational`` its ``line_moment`` (:attr:`line_moment` interpolated
+        with the rotational multiplier functions)),
         ``segments_<k>.vtu`` and ``points_<k>.vtu`` (the coupling's segments and integration points
         at their reference positions, with the beams' ``displacement``). Open ``result.pvd`` and
         apply *Warp By Vector* with ``displacement``: solid, beams, segments and points all move.
@@ -170,16 +202,23 @@ class Result:
                                              point_data={"displacement": u.reshape(-1, 3)}, cell_data=cell,
                                              compression=compression).name)
                 lam_all = self._line_load(z)
-                lm_start = 0
+                moments_all = self._line_moment(z)
+                lm_start = moment_start = 0
                 for gi, g in enumerate(model.groups):
                     suffix = f"{gi}_" if len(model.groups) > 1 else ""
                     d = z[g.dofs.slice]         # the group's centreline unknowns (rotations are a block of their own)
                     data = self._beam_samples(g, z, samples_per_element)
                     data["beam"] = np.repeat(g.entries, [b - a for a, b in g.entry_elements])
                     if g.coupling is not None:
-                        data["line_load"] = self._line_load_samples(g, lam_all[lm_start: lm_start + g.coupling.n_lm],
-                                                                    samples_per_element)
+                        data["line_load"] = self._lm_samples(g.mesh, g.operators.lm,
+                                                             lam_all[lm_start: lm_start + g.coupling.n_lm],
+                                                             samples_per_element)
                         lm_start += g.coupling.n_lm
+                    if g.rotational is not None:
+                        data["line_moment"] = self._lm_samples(
+                            g.mesh, g.rotational.lm, moments_all[moment_start: moment_start + g.rotational.n_lm],
+                            samples_per_element)
+                        moment_start += g.rotational.n_lm
                     files.append(write_beams(tmp / f"beams_{suffix}{k:04d}.vtu", g.mesh, samples_per_element,
                                              point_data=data, compression=compression).name)
                     if g.operators is not None:
@@ -220,9 +259,11 @@ class Result:
         return out
 
     @staticmethod
-    def _line_load_samples(g, lam, s):
-        lm = multiplier_type(g.operators.lm)
-        index, _ = lm_numbering(g.mesh, lm)
+    def _lm_samples(mesh, lm_name, lam, s):
+        """Values (n_lm, 3) at the LM nodes of multiplier functions ``lm_name``, interpolated at
+        ``s`` points of every element: (n_elements s, 3)."""
+        lm = multiplier_type(lm_name)
+        index, _ = lm_numbering(mesh, lm)
         eta = np.linspace(-1.0, 1.0, s)
         Phi = np.zeros((s, 4))
         for i, e in enumerate(eta):

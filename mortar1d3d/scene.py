@@ -388,8 +388,6 @@ def _rotational(value):
            "enforcement": _choice(value.get("enforcement", "penalty"), f"{path}.enforcement", ("penalty", "lagrange")),
            "lm": _choice(value.get("lm", "line3"), f"{path}.lm", ("line2", "line3")),
            "penalty": None}
-    if out["enforcement"] == "lagrange":
-        _fail(f"{path}.enforcement", "only 'penalty' is implemented for the rotational coupling")
     if "penalty" in value:
         out["penalty"] = _number(value["penalty"], f"{path}.penalty", low=0.0, low_open=True)
     return out

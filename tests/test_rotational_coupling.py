@@ -285,7 +285,7 @@ def test_rotational_coupling_needs_beams_with_rotations(model_name):
 
 
 @pytest.mark.parametrize("change, message", [
-    ({"enforcement": "lagrange"}, r"^coupling.rotational.enforcement: only 'penalty' is implemented"),
+    ({"enforcement": "nitsche"}, r"^coupling.rotational.enforcement: unknown value 'nitsche'"),
     ({"triad": "gram_schmidt"}, r"^coupling.rotational.triad: unknown value 'gram_schmidt'"),
     ({"lm": "line4"}, r"^coupling.rotational.lm: unknown value 'line4'"),
     ({"penalty": -1.0}, r"^coupling.rotational.penalty"),

@@ -80,8 +80,12 @@ def effects(model):
     if sc.coupled and sc.coupling["rotational"] is not None:
         r = sc.coupling["rotational"]
         penalty = f"{r['penalty']:.4g}" if r["penalty"] is not None else "1e3 GI_T / h² (default)"
-        out.append(Effect("coupling.rotational_penalty", every, f"{r['triad']} solid triad, lm={r['lm']}, penalty "
-                                                                 f"{penalty}"))
+        if r["enforcement"] == "lagrange":
+            out.append(Effect("coupling.rotational_lagrange", every, f"{r['triad']} solid triad, lm={r['lm']}, "
+                                                                      "multipliers (nonlinear constraint rows)"))
+        else:
+            out.append(Effect("coupling.rotational_penalty", every, f"{r['triad']} solid triad, lm={r['lm']}, "
+                                                                     f"penalty {penalty}"))
     out.append(Effect("check.rigid_body_modes", "once", "before any solve"))
     if model.groups:
         out.append(Effect("check.zero_energy_modes", "once", "beam mechanisms, before any solve"))

@@ -8,7 +8,8 @@ that :mod:`mortar1d3d.solvers.newton` solves (``fixed``, ``free``, ``prescribed`
 the centreline DOFs of each beam group (Hermite ``[r, t]`` per node for ``torsion_free``,
 positions for ``truss``), rotations (the total spatial rotation vectors ψ of the rotation nodes
 of ``simo_reissner`` groups), then Lagrange multipliers (coupled LM rows) when the coupling is
-enforced with Lagrange multipliers. Rotations are updated multiplicatively (:meth:`Model.update`):
+enforced with Lagrange multipliers, followed by the rotational coupling's multipliers (per group,
+coupled rotational LM nodes × 3) when ``coupling.rotational.enforcement = "lagrange"``. Rotations are updated multiplicatively (:meth:`Model.update`):
 the residual and tangent are taken with respect to spatial spins, so a Newton increment of a
 rotation node is a spin Δθ and ψ ← log(exp(Δθ) exp(ψ)).
 
@@ -166,6 +167,11 @@ class Model:
             raise SceneError(f"analysis.solver: {solver!r} runs CG or MINRES, which need a symmetric tangent; the "
                              f"{framed[0]} beam's tangent is not symmetric away from its reference state, so a "
                              "nonlinear analysis with it uses 'direct' (or 'auto', which picks it)")
+        rot = self.scene.coupling.get("rotational") if self.scene.coupled else None
+        if rot is not None and rot["enforcement"] == "lagrange" and solver in ("amg", "block"):
+            raise SceneError(f"analysis.solver: {solver!r} is not implemented with coupling.rotational.enforcement = "
+                             "\"lagrange\" (its constraint rows act on rotations, which the block preconditioner does "
+                             "not know); use 'direct' or 'auto' (which picks it), or enforcement = \"penalty\"")
         if solver == "amg" and lagrange:
             raise SceneError("analysis.solver: Lagrange-multiplier coupling gives a saddle point; use 'auto', "
                              "'direct' or 'block' (MINRES, the auxiliary-space AMG inside a block preconditioner)")
@@ -181,6 +187,8 @@ class Model:
         if solver != "auto":
             return solver
         from ..solvers.direct import DIRECT_MAX_DOFS
+        if self.rotational_lagrange:
+            return "direct"         # the only solver of rotational multipliers (see _check_solver)
         n = self.n_displacement_dofs if n_unknowns is None else n_unknowns
         if n <= DIRECT_MAX_DOFS:
             return "direct"
@@ -254,6 +262,8 @@ class Model:
                 for g in self.groups[1:]:
                     K = K + g.coupling.K
                 self.coupling_stiffness = K.tocsr()
+            # rotational multipliers follow the positional ones, group by group
+            self.n_multipliers += sum(g.rotational.n_multipliers for g in self.groups if g.rotational is not None)
         self._prepare_loads()
         self.dofmap = self.dofmap.with_multipliers(self.n_multipliers)
         self.n_unknowns = self.dofmap.n_unknowns
@@ -301,8 +311,9 @@ class Model:
             if g.rotations.size:
                 g.rotational = RotationalCoupling(g.operators, g.physics, self.solid_mesh, g.rotations.start,
                                                   self.n_displacement_dofs, triad=rot["triad"],
-                                                  penalty=rot["penalty"], lm=rot["lm"])
-                self.counts["coupling.rotational_penalty"] += 1
+                                                  penalty=rot["penalty"], lm=rot["lm"],
+                                                  enforcement=rot["enforcement"])
+                self.counts[f"coupling.rotational_{rot['enforcement']}"] += 1
 
     def _check_operators(self, operators):
         """Validate precomputed operators against the groups' meshes and the scene's LM type."""
@@ -530,7 +541,7 @@ class Model:
             if tangent:
                 K = K + self.coupling_stiffness
         for g in self.groups:
-            if g.rotational is not None:
+            if g.rotational is not None and g.rotational.enforcement == "penalty":
                 f, Kr = g.rotational.evaluate(d[:3 * self.n_solid_nodes], d[g.rotations.slice].reshape(-1, 3),
                                               tangent=tangent)
                 self.counts["coupling.rotational_penalty"] += 1
@@ -591,14 +602,57 @@ class Model:
                 r[dofs] -= f
                 if tangent:
                     K = K - sp.csr_matrix((Km.ravel(), (np.repeat(dofs, 3), np.tile(dofs, 3))), shape=K.shape)
-        if self.lagrange:
+        if self.lagrange and not self.rotational_lagrange:
             B, lam = self.constraint_matrix, z[n:]
             r = np.concatenate([r + B.T @ lam, B @ d])
             if tangent:
                 K = sp.bmat([[K, B.T], [B, None]], format="csr")
+        elif self.n_multipliers:
+            r, K = self._saddle_residual(z, d, r, K, tangent)
         r, K = self.basis.to_unknowns(r), self.basis.matrix(K)
         self.last_residual = r
         return r, (K.tocsr() if tangent else None)
+
+    @property
+    def rotational_lagrange(self):
+        """True when ``coupling.rotational.enforcement = "lagrange"``: rotational multipliers follow
+        the positional ones among the unknowns."""
+        rot = self.scene.coupling.get("rotational") if self.scene.coupled else None
+        return rot is not None and rot["enforcement"] == "lagrange"
+
+    def _saddle_residual(self, z, d, r, K, tangent):
+        """Residual and tangent with the constraint rows of all multipliers: the positional ones
+        (``B d``, if ``coupling.enforcement = "lagrange"``), then each group's rotational ones
+        (the nonlinear ``g(u_S, θ_B)``, linearised to ``G``; the multipliers add ``λᵀ ∂²g`` to the
+        stiffness block)."""
+        n, nS = self.n_displacement_dofs, 3 * self.n_solid_nodes
+        lam, rows, blocks, start = z[n:], [], [], 0
+        r = r.copy()
+        if self.lagrange:
+            B = self.constraint_matrix
+            start = B.shape[0]
+            r += B.T @ lam[:start]
+            rows.append(B @ d)
+            blocks.append(B)
+        for g in self.groups:
+            if g.rotational is None or g.rotational.enforcement != "lagrange":
+                continue
+            k = g.rotational.n_multipliers
+            f, c, G, K_lam = g.rotational.constraint(d[:nS], d[g.rotations.slice].reshape(-1, 3),
+                                                     lam[start: start + k], tangent=tangent)
+            self.counts["coupling.rotational_lagrange"] += 1
+            start += k
+            r += f
+            rows.append(c)
+            if tangent:
+                K = K + K_lam
+                blocks.append(G)
+        r = np.concatenate([r] + rows)
+        if tangent:
+            B = sp.vstack(blocks, format="csr")
+            self.last_constraint_rows = B
+            K = sp.bmat([[K, B.T], [B, None]], format="csr")
+        return r, K
 
     def _auxiliary_space(self, lagrange=False):
         """True when the AMG path uses the auxiliary-space preconditioner: beams penalty-coupled
@@ -641,44 +695,68 @@ class Model:
             from ..solvers.linear import DEPENDENT_ROW_TOLERANCE, dependent_rows
             dep = dependent_rows(B, beam)
             if len(dep):
-                # each row of B: (beam entry, LM node as a row of Result.line_load, component)
-                entry, lm_node, comp, first = [], [], [], 0
+                # each row of B: (beam entry, LM node as a row of Result.line_load or, rotational, of
+                # Result.line_moment, component, rotational?)
+                entry, lm_node, comp, rotational, first = [], [], [], [], [0, 0]
                 for g in self.groups:
-                    index, n_lm = lm_numbering(g.mesh, multiplier(self.scene.coupling["lm"]))
-                    owner = np.zeros(n_lm, dtype=np.int64)
-                    for k, (start, stop) in enumerate(g.entry_elements):
-                        owner[index[start:stop][index[start:stop] >= 0]] = g.entries[k]
-                    rows = g.coupling.coupled_rows
-                    entry.append(owner[rows // 3])
-                    lm_node.append(first + rows // 3)
-                    comp.append(rows % 3)
-                    first += n_lm
-                entry, lm_node, comp = (np.concatenate(v)[dep.rows] for v in (entry, lm_node, comp))
+                    for kind, part in ((0, g.coupling if self.lagrange else None),
+                                       (1, g.rotational if self.rotational_lagrange else None)):
+                        if part is None:
+                            continue
+                        if kind:
+                            index, n_lm = part.lm_index, part.n_lm
+                        else:
+                            index, n_lm = lm_numbering(g.mesh, multiplier(self.scene.coupling["lm"]))
+                        owner = np.zeros(n_lm, dtype=np.int64)
+                        for k, (start, stop) in enumerate(g.entry_elements):
+                            owner[index[start:stop][index[start:stop] >= 0]] = g.entries[k]
+                        rows = part.coupled_rows
+                        entry.append(owner[rows // 3])
+                        lm_node.append(first[kind] + rows // 3)
+                        comp.append(rows % 3)
+                        rotational.append(np.full(len(rows), kind, dtype=bool))
+                        first[kind] += n_lm
+                # the rotational rows follow all positional rows (the order of the multipliers)
+                order = np.argsort(np.concatenate(rotational), kind="stable")
+                is_rotational = np.concatenate(rotational)[order]
+                entry, lm_node, comp, rot = (np.concatenate(v)[order][dep.rows]
+                                             for v in (entry, lm_node, comp, rotational))
                 parts = []
                 for e in np.unique(entry):
-                    nodes = [f"{j} ({', '.join('xyz'[c] for c in comp[(entry == e) & (lm_node == j)])})"
-                             for j in np.unique(lm_node[entry == e])]
-                    parts.append(f"beams[{e}] LM nodes {', '.join(nodes)}")
+                    for kind in np.unique(rot[entry == e]):
+                        at = (entry == e) & (rot == kind)
+                        nodes = [f"{j} ({', '.join('xyz'[c] for c in comp[at & (lm_node == j)])})"
+                                 for j in np.unique(lm_node[at])]
+                        parts.append(f"beams[{e}] {'rotational ' if kind else ''}LM nodes {', '.join(nodes)}")
                 what = "; ".join(parts)
+                C = dep.combinations
                 # prescribed values must satisfy the dropped rows through the kept ones
-                # (fixed DOFs and values are in the unknowns' basis: clamped tangents in rotated frames)
-                Bu = self.constraint_matrix @ self.basis.matrix_T(self.n_displacement_dofs) if self.basis \
-                    else self.constraint_matrix
-                Bf, v, C = Bu.tocsc()[:, self.fixed_dofs], self.fixed_values, dep.combinations
-                gap = np.abs(C @ (Bf @ v))
-                size = abs(C) @ (abs(Bf) @ np.abs(v))
-                # entries of B that vanish in exact arithmetic (the integral of a shape function against a
-                # multiplier shape it is orthogonal to) come out as round-off of their row's size: where
-                # a combination sees only such entries on the prescribed DOFs, gap and size are both
-                # round-off, so the row sizes' round-off at the largest prescribed value counts too
-                row_size = np.asarray(abs(Bu).sum(axis=1)).ravel()
-                roundoff = 64 * np.finfo(float).eps * (abs(C) @ row_size) * np.abs(v).max(initial=0.0)
-                if np.any(gap > DEPENDENT_ROW_TOLERANCE * size + roundoff):
-                    raise SceneError(f"dirichlet: the prescribed values contradict the coupling: the rows of {what} "
-                                     "are combinations of other coupling rows, and the prescribed displacements "
-                                     "satisfy those but not these (prescribe values the embedded beams can follow)")
-                warnings.warn(f"coupling.lm: the coupling rows of {what} are combinations of the other rows (the "
-                              f"multipliers, lm = {self.scene.coupling['lm']!r}, are richer than what the solid mesh "
+                # (fixed DOFs and values are in the unknowns' basis: clamped tangents in rotated frames);
+                # checked on the linear positional rows only: the rotational constraint is nonlinear
+                positional = np.asarray(abs(C) @ is_rotational.astype(float)).ravel() == 0
+                if self.lagrange and positional.any():
+                    Bu = self.constraint_matrix @ self.basis.matrix_T(self.n_displacement_dofs) if self.basis \
+                        else self.constraint_matrix
+                    Cp = C[positional][:, :Bu.shape[0]]
+                    Bf, v = Bu.tocsc()[:, self.fixed_dofs], self.fixed_values
+                    gap = np.abs(Cp @ (Bf @ v))
+                    size = abs(Cp) @ (abs(Bf) @ np.abs(v))
+                    # entries of B that vanish in exact arithmetic (the integral of a shape function against a
+                    # multiplier shape it is orthogonal to) come out as round-off of their row's size: where
+                    # a combination sees only such entries on the prescribed DOFs, gap and size are both
+                    # round-off, so the row sizes' round-off at the largest prescribed value counts too
+                    row_size = np.asarray(abs(Bu).sum(axis=1)).ravel()
+                    roundoff = 64 * np.finfo(float).eps * (abs(Cp) @ row_size) * np.abs(v).max(initial=0.0)
+                    if np.any(gap > DEPENDENT_ROW_TOLERANCE * size + roundoff):
+                        raise SceneError(f"dirichlet: the prescribed values contradict the coupling: the rows of "
+                                         f"{what} are combinations of other coupling rows, and the prescribed "
+                                         "displacements satisfy those but not these (prescribe values the embedded "
+                                         "beams can follow)")
+                key, lm = "coupling.lm", self.scene.coupling["lm"]
+                if rot.any():
+                    key, lm = "coupling.rotational.lm", self.scene.coupling["rotational"]["lm"]
+                warnings.warn(f"{key}: the coupling rows of {what} are combinations of the other rows (the "
+                              f"multipliers, lm = {lm!r}, are richer than what the solid mesh "
                               "resolves along the beam, or supports fixed what they act on); they are left out, and "
                               "λ there is the least-norm line load transferring the same forces. A lower lm "
                               "(line2) or a finer solid mesh avoids this", CouplingWarning, stacklevel=4)
@@ -701,7 +779,7 @@ class Model:
         # AMG aggregates 3×3 blocks only when every node keeps all or none of its components
         triplets = np.bincount(free // 3, minlength=self.n_unknowns // 3 + 1)
         block = 3 if np.isin(triplets, (0, 3)).all() else 1
-        if not self.lagrange:
+        if not self.n_multipliers:
             options = dict(method=method, rtol=rtol)
             if method == "amg":
                 options.update(near_nullspace=self.rigid_body_modes()[free], block_size=block)
@@ -716,7 +794,10 @@ class Model:
         m_idx = np.flatnonzero(~primal)
         K = A[p_idx][:, p_idx]
         B = A[m_idx][:, p_idx]
-        kappa = np.concatenate([np.repeat(g.operators.kappa[g.coupling.coupled], 3) for g in self.groups])
+        kappa = np.concatenate([np.repeat(g.operators.kappa[g.coupling.coupled], 3) for g in self.groups
+                                if self.lagrange]
+                               + [g.rotational.kappa[g.rotational.coupled_rows // 3] for g in self.groups
+                                  if g.rotational is not None and g.rotational.enforcement == "lagrange"])
         solid = np.flatnonzero(free[p_idx] < 3 * self.n_solid_nodes)
         beam = np.flatnonzero(free[p_idx] >= 3 * self.n_solid_nodes)
         R = self.rigid_body_modes()[free[p_idx]]

@@ -1,4 +1,4 @@
-"""Rotational coupling of Simo–Reissner beams to the solid (penalty), after Steinbrecher, Popp &
+"""Rotational coupling of Simo–Reissner beams to the solid (penalty or Lagrange), after Steinbrecher, Popp &
 Meier, "Consistent coupling of positions and rotations for embedding 1D Cosserat beams into 3D
 solid volumes", Comput Mech 69 (2022).
 
@@ -19,6 +19,15 @@ decomposition, or the deformed reference base vectors averaged), by the relative
   ``G_j = Σ_p Φ_j w_p J_p`` (spins multiplicative, like the beam's own tangent: not symmetric
   away from equilibrium).
 
+- Lagrange enforcement (:meth:`RotationalCoupling.constraint`): multipliers λ_j at the coupled LM
+  nodes (κ_j > 0) with the Lagrangian ``Σ_j λ_j · g_j``; the constraint rows are the nonlinear
+  ``g_j``, their linearisation ``G_j`` the saddle point's constraint block, and ``λᵀ ∂²g`` (the
+  same point sums as the penalty's geometric part) joins the stiffness block. The multipliers
+  are the line moments, as ``ε κ_j⁻¹ g_j`` is with penalty, and penalty tends to them like 1/ε.
+
+λ_j is the line moment the beam puts on the solid (the solid's on the beam is −λ_j), like the
+positional coupling's line load.
+
 Energy, residual and tangent are objective: a rigid rotation of the whole scene turns ψ and
 leaves ``|ψ|`` (hence Π) unchanged.
 """
@@ -31,17 +40,18 @@ from .coupling import _lm_projection
 from . import rotational_coupling_kernel as kernel
 from .simo_reissner import _lagrange_tables
 
-__all__ = ["RotationalCoupling", "DEFAULT_PENALTY_FACTOR", "TRIADS", "LMS"]
+__all__ = ["RotationalCoupling", "DEFAULT_PENALTY_FACTOR", "TRIADS", "LMS", "ENFORCEMENTS"]
 
 #: default ε = DEFAULT_PENALTY_FACTOR × max GI_T / h² of the beams (h: mean beam element length):
 #: the coupling over one element is then 1e3 times stiffer than the element's own torsion
 DEFAULT_PENALTY_FACTOR = 1e3
 TRIADS = tuple(kernel.TRIADS)
 LMS = ("line2", "line3")
+ENFORCEMENTS = ("penalty", "lagrange")
 
 
 class RotationalCoupling:
-    """Penalty rotational coupling of one group of Simo–Reissner beams to one solid.
+    """Rotational coupling of one group of Simo–Reissner beams to one solid.
 
     Parameters
     ----------
@@ -64,9 +74,15 @@ class RotationalCoupling:
         Rotational multiplier functions on the beam elements. ``line3`` (default) holds as many
         rotations per element as the beam's three triads; ``line2`` leaves the twist a mesh-scale
         oscillation (docs/theory.md: 4.6e-2 torsion error against 2.5e-3 with 8 beam elements).
+    enforcement : {"penalty", "lagrange"}
+        Penalty (:meth:`evaluate`) or Lagrange multipliers (:meth:`constraint`, the model adds
+        :attr:`n_multipliers` unknowns); ``penalty`` is then not used.
     """
 
-    def __init__(self, ops, beam, solid, rotation_offset, n_dofs, triad="polar", penalty=None, lm="line3"):
+    def __init__(self, ops, beam, solid, rotation_offset, n_dofs, triad="polar", penalty=None, lm="line3",
+                 enforcement="penalty"):
+        if enforcement not in ENFORCEMENTS:
+            raise ValueError(f"coupling.rotational.enforcement must be one of {ENFORCEMENTS}, got {enforcement!r}")
         if triad not in kernel.TRIADS:
             raise ValueError(f"coupling.rotational.triad must be one of {TRIADS}, got {triad!r}")
         if lm not in LMS:
@@ -76,7 +92,7 @@ class RotationalCoupling:
         if not (np.isfinite(penalty) and penalty > 0):
             raise ValueError(f"coupling.rotational.penalty must be a finite number > 0, got {penalty!r}")
         self.beam, self.solid, self.triad, self.kind = beam, solid, triad, kernel.TRIADS[triad]
-        self.penalty, self.lm = float(penalty), lm
+        self.penalty, self.lm, self.enforcement = float(penalty), lm, enforcement
         self.rotation_offset, self.n_dofs = int(rotation_offset), int(n_dofs)
         p = ops.point_fields
         self.beam_element = np.ascontiguousarray(p["beam_element"], dtype=np.int64)
@@ -93,6 +109,10 @@ class RotationalCoupling:
         X = np.ascontiguousarray(solid.points, dtype=np.float64)
         kernel.reference_gradients(solid.element_codes, solid.connectivity, X, solid_element, xi, self.G, self.nodes,
                                    self.n_local)
+        # only as many node slots as the largest element has: the local Hessian's chain to the nodes
+        # costs (3 slots)² per point, 11x more with hex8 in MAX_NODES (27) slots than in 8
+        used = max(int(self.n_local.max(initial=0)), 1)
+        self.G, self.nodes = np.ascontiguousarray(self.G[:, :used]), np.ascontiguousarray(self.nodes[:, :used])
         self.lag = _lagrange_tables(self.eta)[0]
         self.rotation_nodes = beam.rotation_nodes
         self.L0 = np.empty((n_pts, 3, 3))
@@ -101,6 +121,7 @@ class RotationalCoupling:
         # rotational multipliers: Φ_j(η_p) and κ_j
         lm_t = multiplier_type(lm)
         index, self.n_lm = lm_numbering(beam.beams, lm_t)
+        self.lm_index = index
         # Φ_j(η_p) by the positional coupling's kernel (unit weights: the weights enter where used)
         n = n_pts * lm_t.n_functions
         rows, cols, vals = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
@@ -109,13 +130,16 @@ class RotationalCoupling:
         self.Phi = sp.csr_matrix((vals, (rows, cols)), shape=(self.n_lm, n_pts))
         self.kappa = np.asarray(self.Phi @ self.weight).ravel()
         self.kappa_inverse = np.divide(1.0, self.kappa, out=np.zeros_like(self.kappa), where=self.kappa > 0)
+        # LM nodes some integration point touched: only they carry a Lagrange multiplier (three rows each)
+        self.coupled_rows = np.flatnonzero(np.repeat(self.kappa > 0, 3))
         self.X = X
         self.n_evaluations = 0
 
     # -- state -------------------------------------------------------------------------------------
     def _columns(self):
-        """Global unknown of every local column per point (n_pts, 3 MAX_NODES + 9): three per solid
-        node slot (-1 for slots the element does not have), then the nine spins."""
+        """Global unknown of every local column per point (n_pts, 3 m + 9; m: node slots, the most
+        nodes of the solid elements touched): three per solid node slot (-1 for slots the element
+        does not have), then the nine spins."""
         m = self.nodes.shape[1]
         cols = (3 * self.nodes[:, :, None] + np.arange(3)).reshape(self.n_points, 3 * m)
         cols[np.repeat(np.arange(m)[None, :] >= self.n_local[:, None], 3, axis=1)] = -1
@@ -124,14 +148,14 @@ class RotationalCoupling:
         return np.hstack([cols, rot])
 
     def _local_jacobian(self, J):
-        """``∂ψ/∂(F, θ)`` (n_pts, 3, 18) → ``∂ψ/∂(u, θ)`` (n_pts, 3, 3 MAX_NODES + 9), with
+        """``∂ψ/∂(F, θ)`` (n_pts, 3, 18) → ``∂ψ/∂(u, θ)`` (n_pts, 3, 3 m + 9), with
         ``∂F_ij/∂u_ak = δ_ik G_aj``."""
         n = self.n_points
         Ju = np.einsum("prij,paj->prai", J[:, :, :9].reshape(n, 3, 3, 3), self.G).reshape(n, 3, -1)
         return np.concatenate([Ju, J[:, :, 9:]], axis=2)
 
     def _local_hessian(self, H):
-        """``∂²/∂(F, θ)²`` (n_pts, 18, 18) → ``∂²/∂(u, θ)²`` (n_pts, 3 MAX_NODES + 9, same)."""
+        """``∂²/∂(F, θ)²`` (n_pts, 18, 18) → ``∂²/∂(u, θ)²`` (n_pts, 3 m + 9, same)."""
         n, G = self.n_points, self.G
         HFF = H[:, :9, :9].reshape(n, 3, 3, 3, 3)
         uu = np.einsum("pijkl,paj,pbl->paibk", HFF, G, G).reshape(n, 3 * G.shape[1], 3 * G.shape[1])
@@ -166,36 +190,61 @@ class RotationalCoupling:
         """``g_j`` (n_lm, 3): the relative rotations weighted with the rotational LM functions."""
         return np.asarray(self.Phi @ (self.weight[:, None] * self.relative_rotations(u_solid, psi)))
 
-    def line_moment(self, u_solid, psi):
-        """Coupling line moments ``λ_j = ε κ_j⁻¹ g_j`` (n_lm, 3) at the rotational LM nodes (spatial)."""
-        return self.penalty * self.kappa_inverse[:, None] * self.weighted_gap(u_solid, psi)
+    @property
+    def n_multipliers(self):
+        """Number of Lagrange multiplier unknowns (three per coupled LM node); 0 for penalty."""
+        return len(self.coupled_rows) if self.enforcement == "lagrange" else 0
+
+    def line_moment(self, u_solid, psi, multipliers=None, linear=False):
+        """Coupling line moments λ_j (n_lm, 3) at the rotational LM nodes (spatial, moment per length).
+
+        Penalty: ``λ_j = ε κ_j⁻¹ g_j``; with ``linear=True`` (a linear analysis) ``g_j`` is the
+        constraint linearised at the reference state, ``G(0) [u_S; ψ]``, the one that analysis
+        solves with (the nonlinear ``g_j`` of its small-rotation solution is not zero but of
+        the third order in the rotations, which ε would magnify). Lagrange: the
+        ``multipliers`` (:attr:`n_multipliers`, three per coupled LM node), zero at the LM nodes
+        no integration point touched.
+        """
+        if self.enforcement == "lagrange":
+            out = np.zeros(3 * self.n_lm)
+            out[self.coupled_rows] = multipliers
+            return out.reshape(-1, 3)
+        if linear:
+            if getattr(self, "_reference_rows", None) is None:
+                n_rot = self.beam.n_rotation_nodes
+                self._reference_rows = self._linearise(np.zeros(self.X.size), np.zeros((n_rot, 3)),
+                                                       lambda g: np.zeros_like(g), True)[2]
+            d = np.zeros(self.n_dofs)
+            d[:self.X.size] = u_solid
+            psi = np.asarray(psi, dtype=float).ravel()
+            d[self.rotation_offset: self.rotation_offset + psi.size] = psi
+            gap = (self._reference_rows @ d).reshape(-1, 3)
+        else:
+            gap = self.weighted_gap(u_solid, psi)
+        return self.penalty * self.kappa_inverse[:, None] * gap
 
     def energy(self, u_solid, psi):
         """Penalty energy ``ε/2 Σ_j κ_j⁻¹ |g_j|²``."""
         g = self.weighted_gap(u_solid, psi)
         return 0.5 * self.penalty * float(np.sum(self.kappa_inverse[:, None] * g * g))
 
-    def evaluate(self, u_solid, psi, tangent=True):
-        """Residual (n_dofs,) and tangent (n_dofs, n_dofs, csr, or None) in the global displacement
-        unknowns: solid displacements (additive) and the group's rotation spins (multiplicative).
-
-        Parameters
-        ----------
-        u_solid : (3 n_solid_nodes,) solid displacements.
-        psi : (n_rotation_nodes, 3) total rotation vectors of the group.
-        """
+    def _linearise(self, u_solid, psi, moments, tangent):
+        """What both enforcements share: the weighted gaps ``g`` (n_lm, 3), the forces ``Gᵀλ``
+        (n_dofs,) of the line moments ``λ = moments(g)`` (n_lm, 3), and with ``tangent`` the
+        constraint's linearisation ``G`` (3 n_lm, n_dofs, csr) and ``λᵀ ∂²g`` (n_dofs, n_dofs, csr)."""
         self.n_evaluations += 1
         x, triads, psi_p, J18 = self._run(u_solid, psi, True)
         J = self._local_jacobian(J18)
         cols = self._columns()
-        lam_j = self.penalty * self.kappa_inverse[:, None] * np.asarray(self.Phi @ (self.weight[:, None] * psi_p))
+        g = np.asarray(self.Phi @ (self.weight[:, None] * psi_p))
+        lam_j = moments(g)
         lam_p = np.asarray(self.Phi.T @ lam_j)                                       # (n_pts, 3)
         used = cols >= 0
         local = np.einsum("pic,pi->pc", J, lam_p) * self.weight[:, None]
         r = np.bincount(cols[used], weights=local[used], minlength=self.n_dofs)
         if not tangent:
-            return r, None
-        # G_j = Σ_p Φ_j w_p J_p (3 n_lm, n_dofs), then ε Gᵀ κ⁻¹ G
+            return g, r, None, None
+        # G_j = Σ_p Φ_j w_p J_p (3 n_lm, n_dofs)
         Phi = self.Phi.tocoo()
         k, pts = Phi.row, Phi.col
         scale = Phi.data * self.weight[pts]
@@ -204,7 +253,6 @@ class RotationalCoupling:
         cc = np.broadcast_to(cols[pts][:, None, :], vals.shape)
         mask = cc >= 0
         Gm = sp.csr_matrix((vals[mask], (rows[mask], cc[mask])), shape=(3 * self.n_lm, self.n_dofs))
-        K = self.penalty * (Gm.T @ sp.diags(np.repeat(self.kappa_inverse, 3)) @ Gm)
         H = np.zeros((self.n_points, 18, 18))
         status = np.empty(self.n_points, dtype=np.int64)
         kernel.hessian_range(self.kind, x, self.nodes, self.n_local, self.G, self.L0, triads, self.rotation_nodes,
@@ -214,8 +262,47 @@ class RotationalCoupling:
         both = used[:, :, None] & used[:, None, :]
         ri = np.broadcast_to(cols[:, :, None], H.shape)[both]
         ci = np.broadcast_to(cols[:, None, :], H.shape)[both]
-        K = K + sp.csr_matrix((H[both], (ri, ci)), shape=(self.n_dofs, self.n_dofs))
+        return g, r, Gm, sp.csr_matrix((H[both], (ri, ci)), shape=(self.n_dofs, self.n_dofs))
+
+    def evaluate(self, u_solid, psi, tangent=True):
+        """Penalty: residual (n_dofs,) and tangent (n_dofs, n_dofs, csr, or None) in the global
+        displacement unknowns: solid displacements (additive) and the group's rotation spins
+        (multiplicative).
+
+        Parameters
+        ----------
+        u_solid : (3 n_solid_nodes,) solid displacements.
+        psi : (n_rotation_nodes, 3) total rotation vectors of the group.
+        """
+        _, r, Gm, K_lam = self._linearise(u_solid, psi, lambda g: self.penalty * self.kappa_inverse[:, None] * g,
+                                          tangent)
+        if not tangent:
+            return r, None
+        # ε Gᵀ κ⁻¹ G, plus the geometric part of the constraint's second derivative
+        K = self.penalty * (Gm.T @ sp.diags(np.repeat(self.kappa_inverse, 3)) @ Gm)
+        K = K + K_lam
         return r, K.tocsr()
+
+    def constraint(self, u_solid, psi, multipliers, tangent=True):
+        """Lagrange: the multipliers' forces, the constraint rows and their linearisation.
+
+        The constraint ``g_j(u_S, θ_B) = 0`` is nonlinear; with multipliers λ (line moments, three
+        per coupled LM node, :attr:`n_multipliers`) the Lagrangian adds ``Σ_j λ_j · g_j``.
+
+        Returns
+        -------
+        r : (n_dofs,) ``Gᵀλ``, the moments the multipliers put on the solid and the beam's spins.
+        c : (n_multipliers,) the constraint values ``g_j`` at the coupled LM nodes.
+        G : (n_multipliers, n_dofs) csr or None
+            ``∂g/∂(u, θ)`` (spins multiplicative): the constraint rows of the saddle point.
+        K : (n_dofs, n_dofs) csr or None
+            ``λᵀ ∂²g``, the multipliers' part of the tangent.
+        """
+        lam = np.zeros(3 * self.n_lm)
+        lam[self.coupled_rows] = multipliers
+        g, r, Gm, K = self._linearise(u_solid, psi, lambda _: lam.reshape(-1, 3), tangent)
+        c = g.ravel()[self.coupled_rows]
+        return r, c, (Gm[self.coupled_rows] if tangent else None), K
 
     def beam_rows(self):
         """Linearised constraint rows on the group's rotation spins at the reference state, solid

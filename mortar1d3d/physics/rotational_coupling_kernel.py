@@ -38,14 +38,15 @@ truncation ``O(h²)`` and round-off ``eps/h`` are both about 1e-10 relative with
 :data:`FD_STEP`.
 """
 import numpy as np
+from numba import prange
 
-from .._config import njit
+from .._config import njit, njit_parallel
 from ..elements.solid import dispatch as solid_types
 from .rotations import exp, log
 from .simo_reissner_kernel import _matmul, element_setup
 
 __all__ = ["POLAR", "DEFORMATION_GRADIENT", "TRIADS", "point_psi", "point_jacobian", "point_hessian",
-           "reference_gradients", "OK", "NOT_CONVERGED", "STEP", "FD_STEP"]
+           "reference_gradients", "OK", "NOT_CONVERGED", "STEP", "FD_STEP", "POINT_CHUNK"]
 
 POLAR, DEFORMATION_GRADIENT = 0, 1
 #: triad names of the scene (``coupling.rotational.triad``) → kernel codes
@@ -55,6 +56,9 @@ OK, NOT_CONVERGED = 0, 1
 STEP = 1e-30
 #: central-difference step of the geometric tangent (entries of F, and spins in radians)
 FD_STEP = 1e-5
+#: points per parallel chunk of :func:`hessian_range`: a point costs about a millisecond there
+#: (648 complex evaluations of ψ), so small chunks keep the threads busy at no measurable overhead
+POINT_CHUNK = 8
 #: Newton iterations of the polar decomposition: stop when the real part changes by less than this
 #: (relative), then iterate twice more so that a complex perturbation converges too
 POLAR_TOL = 1e-14
@@ -351,14 +355,25 @@ def jacobian_range(kind, x, nodes, n_local, G, L0, triads, rotation_nodes, beam_
 
 
 @njit
-def hessian_range(kind, x, nodes, n_local, G, L0, triads, rotation_nodes, beam_element, lag, lam, H, status):
-    """``H[p] = ∂(J_pᵀ λ_p)/∂(F, θ)`` (n_pts, 18, 18) in the layout of :func:`jacobian_range`;
-    H must hold zeros on entry."""
+def _hessian_points(begin, stop, kind, x, nodes, n_local, G, L0, triads, rotation_nodes, beam_element, lag, lam, H,
+                    status):
+    """:func:`hessian_range` of the points ``begin .. stop - 1``."""
     F = np.empty((3, 3))
     tl = np.empty((3, 3, 3))
-    for p in range(len(beam_element)):
+    for p in range(begin, stop):
         status[p] = OK
         if lam[p, 0] == 0.0 and lam[p, 1] == 0.0 and lam[p, 2] == 0.0:
             continue
         _point_state(p, x, nodes, n_local, G, triads, rotation_nodes, beam_element, F, tl)
         status[p] = point_hessian(kind, F, L0[p], tl, lag[p], lam[p], H[p])
+
+
+@njit_parallel
+def hessian_range(kind, x, nodes, n_local, G, L0, triads, rotation_nodes, beam_element, lag, lam, H, status):
+    """``H[p] = ∂(J_pᵀ λ_p)/∂(F, θ)`` (n_pts, 18, 18) in the layout of :func:`jacobian_range`;
+    H must hold zeros on entry. Chunks of :data:`POINT_CHUNK` points run in parallel; every point
+    is computed by the same serial code, so the result does not depend on the thread count."""
+    n = len(beam_element)
+    for c in prange((n + POINT_CHUNK - 1) // POINT_CHUNK):
+        _hessian_points(c * POINT_CHUNK, min(n, (c + 1) * POINT_CHUNK), kind, x, nodes, n_local, G, L0, triads,
+                        rotation_nodes, beam_element, lag, lam, H, status)
