@@ -42,7 +42,7 @@ from .dependent import DEPENDENT_ROW_TOLERANCE, DependentRows, dependent_rows
 from .direct import (BANDED_MAX_BANDWIDTH, DIRECT_MAX_DOFS, BandedCholesky, bandwidth, factorize,  # noqa: F401
                      factorize_spd_block)
 from .krylov import cg_with_fallback, raise_not_converged, roundoff_level
-from .preconditioners import AUXILIARY_STRENGTH, AuxiliarySpacePreconditioner  # noqa: F401
+from .preconditioners import AuxiliarySpacePreconditioner
 from .rigid import rigid_body_modes
 from .saddle import AUGMENTATION_FACTOR, AUXILIARY_AUGMENTATION_FACTOR, SADDLE_DIRECT_MAX_DOFS, solve_saddle
 

@@ -9,11 +9,7 @@ from ._common import check_square, split_dofs
 from .amg import build_amg
 from .direct import factorize_spd_block
 
-__all__ = ["AuxiliarySpacePreconditioner", "AUXILIARY_STRENGTH"]
-
-#: strength-of-connection threshold θ of the AMG on the auxiliary matrix (see
-#: :class:`AuxiliarySpacePreconditioner`, Notes)
-AUXILIARY_STRENGTH = 0.02
+__all__ = ["AuxiliarySpacePreconditioner"]
 
 
 class AuxiliarySpacePreconditioner:
@@ -64,14 +60,13 @@ class AuxiliarySpacePreconditioner:
       :func:`~mortar1d3d.solvers.direct.factorize_spd_block`).
 
     ``A_aux`` connects solid nodes further apart than ``K_SS`` does (``Pᵀ K_BB P`` ties the
-    elements a beam element crosses): on ``fibre_cube(20, 1000, 20)`` it has 2.5x the entries of
-    the solid alone, the extra ones weak (median 1e-6 of ``√(a_ii a_jj)``, 2 % of the Frobenius
-    norm). Aggregating along every entry (θ = 0, right for the solid alone) then builds
-    aggregates twice as large as the solid's (1314 coarse unknowns against 2058): CG on
-    ``A_aux`` with its V-cycle needed 18 iterations, the coupled system 20. With the strength
-    threshold θ = :data:`AUXILIARY_STRENGTH` = 0.02 the aggregates are again about the solid's
-    (2040 coarse unknowns), and CG needs 12 and 17 (θ = 0.005-0.05 alike, 0.1 coarsens
-    too little: 28).
+    elements a beam element crosses): on ``fibre_cube(n, 1000, 20)`` it has 2.5x (n = 20) and
+    2.3x (n = 40) the entries of the solid alone, which makes its V-cycle and set-up costlier than
+    the solid's. The extra entries are weak (median 1e-6 of ``√(a_ii a_jj)``, 2 % of the Frobenius
+    norm at n = 20), but neither leaving them out of the aggregation (strength threshold θ = 0.02:
+    20 -> 17 CG iterations at n = 20, 33 -> 32 at n = 40 with a denser coarse level and 40 % more
+    set-up) nor out of the matrix (kept SPD by adding their absolute row sums to the diagonal:
+    37-40 iterations at n = 20) paid off; aggregation along every entry it is.
 
     Because ``P`` keeps the gap of ``E d_S`` small, the coupling between the two spaces is of
     the order of the beam stiffness, not of ε. One application is the symmetric multiplicative
@@ -119,7 +114,7 @@ class AuxiliarySpacePreconditioner:
         # "local" weighting: the spectral-radius estimate of the default took up to a third of the AMG
         # setup of fibre_cube(40) (CPU 14-18 s against 12.4 s, loaded machine), same 33 CG iterations
         self.amg = build_amg(self.auxiliary, null, block_size=block_size, weighting="local",
-                             theta=AUXILIARY_STRENGTH, improve_candidates=False)
+                             improve_candidates=False)
         self._cycle = self.amg.aspreconditioner(cycle="V")
         self.timings["amg set-up"] = time.perf_counter() - t
         t = time.perf_counter()
