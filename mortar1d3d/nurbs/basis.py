@@ -161,3 +161,6 @@ def evaluate_bezier(p0, p1, p2, control, weights, xi, x, status):
                 for a in range(n):
                     s += R[a] * control[e, a, i]
                 x[e, q, i] = s
+
+
+__all__ = ["bernstein", "rational_bernstein", "local_bsplines", "rational_local", "evaluate_bezier"]

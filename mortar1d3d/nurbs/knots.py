@@ -172,3 +172,7 @@ def bernstein_values(degree, x):
     x = np.atleast_1d(np.asarray(x, dtype=np.float64))
     t = 0.5 * (1.0 + x)
     return np.stack([comb(degree, a) * (1.0 - t) ** (degree - a) * t ** a for a in range(degree + 1)], axis=1)
+
+
+__all__ = ["check_knots", "n_functions", "spans", "find_span", "bspline_values", "insertion_matrix",
+           "elevation_matrix", "extraction_operators", "bernstein_values"]

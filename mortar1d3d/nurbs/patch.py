@@ -260,3 +260,6 @@ class NurbsSolid:
 
     def __repr__(self):
         return f"NurbsSolid({len(self.patches)} patches, {self.n_elements} elements, {self.n_control} control points)"
+
+
+__all__ = ["NurbsPatch", "NurbsSolid"]
