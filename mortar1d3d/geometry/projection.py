@@ -13,7 +13,7 @@ from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from .linalg import inverse3, norm3, solve3
-from .rational import rational_coefficients, rational_curvature_bound, uniform_weights
+from .rational import normalise_coefficients, rational_coefficients, rational_curvature_bound, uniform_weights
 
 CONVERGED = 0
 FAILED = 1
@@ -187,17 +187,16 @@ def certified_margin(code, X, L, a):
     box |ξ - ξ_c|∞ <= R + δ (R: the element's radius about its centre); -1 if none.
 
     ``L`` (3, 3) is J(ξ_c)⁻¹; ``a`` receives the monomial coefficients (scratch). A rational
-    element: ‖L J(ξ) - I‖∞ <= ‖L‖∞ K |ξ - ξ_c|∞ with K of :func:`.rational.rational_curvature_bound`.
+    element: ‖L J(ξ) - I‖∞ <= K_z |ξ - ξ_c|∞ with K_z the curvature bound of z = L (x - x_c)
+    (:func:`.rational.normalise_coefficients`, :func:`.rational.rational_curvature_bound`).
     """
     if solid.RATIONAL[code]:
         rational_coefficients(code, X, a)
-        norm_l = 0.0
-        for i in range(3):
-            norm_l = max(norm_l, abs(L[i, 0]) + abs(L[i, 1]) + abs(L[i, 2]))
+        normalise_coefficients(code, a, L)
         c0, c1, c2 = solid.CENTRE[code, 0], solid.CENTRE[code, 1], solid.CENTRE[code, 2]
         for delta in _CERTIFIED_MARGINS:
             reach = solid.RADIUS[code] + delta
-            if norm_l * rational_curvature_bound(code, a, c0, c1, c2, reach) * reach < 1.0:
+            if rational_curvature_bound(code, a, c0, c1, c2, reach) * reach < 1.0:
                 return delta
         return -1.0
     monomial_coefficients(code, X, a)

@@ -91,6 +91,28 @@ def rational_curvature_bound(code, a, m0, m1, m2, r):
 
 
 @njit
+def normalise_coefficients(code, a, L):
+    """Turn the coefficients of X̃, W (:func:`rational_coefficients`) into those of the numerator of
+    z = L (x - x_c) = L (X̃ - x_c W) / W, x_c = x(ξ_c): a map with Dz(ξ_c) = L J(ξ_c) = I whose
+    curvature bound gives ‖L J(ξ) - I‖∞ <= K_z |ξ - ξ_c|∞ directly (no factor ‖L‖, and |z| is
+    small near ξ_c), as :func:`~.projection.injectivity_bound` does for polynomial maps."""
+    const = -1
+    for k in range(solid.n_nodes(code)):
+        if solid.MONOMIALS[code, k, 0] + solid.MONOMIALS[code, k, 1] + solid.MONOMIALS[code, k, 2] == 0:
+            const = k
+    x0 = a[const, 0] / a[const, 3]
+    x1 = a[const, 1] / a[const, 3]
+    x2 = a[const, 2] / a[const, 3]
+    for k in range(solid.n_nodes(code)):
+        v0 = a[k, 0] - x0 * a[k, 3]
+        v1 = a[k, 1] - x1 * a[k, 3]
+        v2 = a[k, 2] - x2 * a[k, 3]
+        a[k, 0] = L[0, 0] * v0 + L[0, 1] * v1 + L[0, 2] * v2
+        a[k, 1] = L[1, 0] * v0 + L[1, 1] * v1 + L[1, 2] * v2
+        a[k, 2] = L[2, 0] * v0 + L[2, 1] * v1 + L[2, 2] * v2
+
+
+@njit
 def uniform_weights(code, X):
     """Whether the rational element's weights (column 3 of ``X``) are all equal: then its map is the
     polynomial Bernstein map, affine when its control points are."""
