@@ -41,25 +41,16 @@ def bernstein(p, x, v, dv):
 
 
 @njit
-def rational_bernstein(p0, p1, p2, xi, weights, R, dR):
-    """Rational tensor Bernstein basis R_a (and ∂R_a/∂ξ_d) of one element at ``xi`` (3,).
-
-    ``weights`` (n,) are the element's Bézier weights (n = (p0+1)(p1+1)(p2+1)); writes ``R[:n]``
-    and ``dR[:n, :3]``. Returns W(ξ) = Σ w_a B_a (> 0 inside an element with positive weights).
-    """
-    v = np.empty((3, 8))
-    dv = np.empty((3, 8))
-    bernstein(p0, xi[0], v[0], dv[0])
-    bernstein(p1, xi[1], v[1], dv[1])
-    bernstein(p2, xi[2], v[2], dv[2])
+def _rational_tensor(p0, p1, p2, v, dv, weights, R, dR):
+    """R_a = w_a B_a / W and its derivatives from the 1D values ``v`` and derivatives ``dv`` (3, 8) of
+    any tensor-product basis; returns W."""
     W = W0 = W1 = W2 = 0.0
     a = 0
     for i in range(p0 + 1):
         for j in range(p1 + 1):
             for k in range(p2 + 1):
                 w = weights[a]
-                b = v[0, i] * v[1, j] * v[2, k]
-                R[a] = w * b
+                R[a] = w * v[0, i] * v[1, j] * v[2, k]
                 dR[a, 0] = w * dv[0, i] * v[1, j] * v[2, k]
                 dR[a, 1] = w * v[0, i] * dv[1, j] * v[2, k]
                 dR[a, 2] = w * v[0, i] * v[1, j] * dv[2, k]
@@ -76,6 +67,21 @@ def rational_bernstein(p0, p1, p2, xi, weights, R, dR):
         dR[a, 2] = (dR[a, 2] - r * W2) * inv
         R[a] = r
     return W
+
+
+@njit
+def rational_bernstein(p0, p1, p2, xi, weights, R, dR):
+    """Rational tensor Bernstein basis R_a (and ∂R_a/∂ξ_d) of one element at ``xi`` (3,).
+
+    ``weights`` (n,) are the element's Bézier weights (n = (p0+1)(p1+1)(p2+1)); writes ``R[:n]``
+    and ``dR[:n, :3]``. Returns W(ξ) = Σ w_a B_a (> 0 inside an element with positive weights).
+    """
+    v = np.empty((3, 8))
+    dv = np.empty((3, 8))
+    bernstein(p0, xi[0], v[0], dv[0])
+    bernstein(p1, xi[1], v[1], dv[1])
+    bernstein(p2, xi[2], v[2], dv[2])
+    return _rational_tensor(p0, p1, p2, v, dv, weights, R, dR)
 
 
 @njit
@@ -118,29 +124,7 @@ def rational_local(p0, p1, p2, xi, k0, k1, k2, weights, R, dR):
     local_bsplines(p0, k0, xi[0], v[0], dv[0])
     local_bsplines(p1, k1, xi[1], v[1], dv[1])
     local_bsplines(p2, k2, xi[2], v[2], dv[2])
-    W = W0 = W1 = W2 = 0.0
-    a = 0
-    for i in range(p0 + 1):
-        for j in range(p1 + 1):
-            for k in range(p2 + 1):
-                w = weights[a]
-                R[a] = w * v[0, i] * v[1, j] * v[2, k]
-                dR[a, 0] = w * dv[0, i] * v[1, j] * v[2, k]
-                dR[a, 1] = w * v[0, i] * dv[1, j] * v[2, k]
-                dR[a, 2] = w * v[0, i] * v[1, j] * dv[2, k]
-                W += R[a]
-                W0 += dR[a, 0]
-                W1 += dR[a, 1]
-                W2 += dR[a, 2]
-                a += 1
-    inv = 1.0 / W
-    for a in range((p0 + 1) * (p1 + 1) * (p2 + 1)):
-        r = R[a] * inv
-        dR[a, 0] = (dR[a, 0] - r * W0) * inv
-        dR[a, 1] = (dR[a, 1] - r * W1) * inv
-        dR[a, 2] = (dR[a, 2] - r * W2) * inv
-        R[a] = r
-    return W
+    return _rational_tensor(p0, p1, p2, v, dv, weights, R, dR)
 
 
 @njit

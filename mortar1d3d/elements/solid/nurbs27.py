@@ -16,9 +16,9 @@ import numpy as np
 from ..._config import njit
 from ...quadrature import hexahedron_rule
 from ..descriptor import SolidElementType
-from .hex_family import HEXAHEDRON, QUADRATIC_LATTICE, QUADRATIC_NODES, triquadratic_bernstein_matrix
+from .hex_family import (HEXAHEDRON, QUADRATIC_LATTICE, QUADRATIC_NODES, lattice_gradients, lattice_values,
+                         triquadratic_bernstein_matrix)
 
-_LATTICE = QUADRATIC_LATTICE
 #: B_a at the reference nodes (27, 27): row = node; maps Bernstein coefficients to nodal values
 NODE_VALUES = np.linalg.inv(triquadratic_bernstein_matrix())
 
@@ -42,8 +42,7 @@ def shape(xi, N):
     dv = np.empty((3, 3))
     for i in range(3):
         _bernstein2(xi[i], v[i], dv[i])
-    for a in range(27):
-        N[a] = v[0, _LATTICE[a, 0]] * v[1, _LATTICE[a, 1]] * v[2, _LATTICE[a, 2]]
+    lattice_values(v, N)
 
 
 @njit
@@ -53,11 +52,7 @@ def deriv(xi, dN):
     dv = np.empty((3, 3))
     for i in range(3):
         _bernstein2(xi[i], v[i], dv[i])
-    for a in range(27):
-        l0, l1, l2 = _LATTICE[a, 0], _LATTICE[a, 1], _LATTICE[a, 2]
-        dN[a, 0] = dv[0, l0] * v[1, l1] * v[2, l2]
-        dN[a, 1] = v[0, l0] * dv[1, l1] * v[2, l2]
-        dN[a, 2] = v[0, l0] * v[1, l1] * dv[2, l2]
+    lattice_gradients(v, dv, dN)
 
 
 def bernstein_values(xi):
@@ -67,7 +62,7 @@ def bernstein_values(xi):
     s = 1.0 - t
     v = np.stack([s * s, 2 * s * t, t * t], axis=-1)                  # (k, 3 directions, 3)
     dv = np.stack([-s, s - t, t], axis=-1)
-    L = _LATTICE
+    L = QUADRATIC_LATTICE
     B = v[:, 0, L[:, 0]] * v[:, 1, L[:, 1]] * v[:, 2, L[:, 2]]
     dB = np.stack([dv[:, 0, L[:, 0]] * v[:, 1, L[:, 1]] * v[:, 2, L[:, 2]],
                    v[:, 0, L[:, 0]] * dv[:, 1, L[:, 1]] * v[:, 2, L[:, 2]],
