@@ -13,7 +13,8 @@ from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from .linalg import inverse3, norm3, solve3
-from .rational import normalise_coefficients, rational_coefficients, rational_curvature_bound, uniform_weights
+from .rational import (centre_point, normalise_coefficients, rational_coefficients, rational_curvature_bound,
+                       uniform_weights)
 
 CONVERGED = 0
 FAILED = 1
@@ -192,7 +193,8 @@ def certified_margin(code, X, L, a):
     """
     if solid.RATIONAL[code]:
         rational_coefficients(code, X, a)
-        normalise_coefficients(code, a, L)
+        x0, x1, x2 = centre_point(code, a)
+        normalise_coefficients(code, a, L, x0, x1, x2, a)
         c0, c1, c2 = solid.CENTRE[code, 0], solid.CENTRE[code, 1], solid.CENTRE[code, 2]
         for delta in _CERTIFIED_MARGINS:
             reach = solid.RADIUS[code] + delta
@@ -251,12 +253,15 @@ def search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN):
 
     Returns INSIDE (``xi`` holds the preimage, polished), OUTSIDE (proved: no preimage with
     outside_distance <= tol) or NOT_CONVERGED (a box reached the depth limit undecided: a singular
-    Jacobian inside the element). Rational elements bound K by
-    :func:`.rational.rational_curvature_bound`.
+    Jacobian inside the element). Rational elements bound ρ by the curvature of z = L (x - x(m))
+    (:func:`.rational.normalise_coefficients`, :func:`.rational.rational_curvature_bound`).
     """
     rational = solid.RATIONAL[code]
+    b = a
+    L = np.empty((3, 3))
     if rational:
         rational_coefficients(code, X, a)
+        b = np.empty((solid.MAX_NODES, 4))        # the coefficients of z = L (x - x(m)) per box
     else:
         monomial_coefficients(code, X, a)
     c0, c1, c2 = solid.CENTRE[code, 0], solid.CENTRE[code, 1], solid.CENTRE[code, 2]
@@ -292,10 +297,14 @@ def search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN):
             norm_l = max(abs(l00) + abs(l01) + abs(l02), abs(l10) + abs(l11) + abs(l12), abs(l20) + abs(l21) + abs(l22))
             reach = max(abs(m0 - c0), abs(m1 - c1), abs(m2 - c2)) + 2.0 * r      # the doubled box about ξ_c
             if rational:
-                K = rational_curvature_bound(code, a, m0, m1, m2, 2.0 * r)
+                # ‖L (J(ξ) - J(m))‖∞ <= K_z r on C, K_z bounding z = L (x - x(m)) on the doubled box
+                L[0, 0], L[0, 1], L[0, 2] = l00, l01, l02
+                L[1, 0], L[1, 1], L[1, 2] = l10, l11, l12
+                L[2, 0], L[2, 1], L[2, 2] = l20, l21, l22
+                normalise_coefficients(code, a, L, x0, x1, x2, b)
+                rho = rational_curvature_bound(code, b, m0, m1, m2, 2.0 * r) * r
             else:
-                K = curvature_bound(code, a, reach)
-            rho = norm_l * K * r
+                rho = norm_l * curvature_bound(code, a, reach) * r
             e0, e1, e2 = p0 - x0, p1 - x1, p2 - x2
             d0 = l00 * e0 + l01 * e1 + l02 * e2
             d1 = l10 * e0 + l11 * e1 + l12 * e2

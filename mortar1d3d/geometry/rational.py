@@ -91,25 +91,32 @@ def rational_curvature_bound(code, a, m0, m1, m2, r):
 
 
 @njit
-def normalise_coefficients(code, a, L):
-    """Turn the coefficients of X̃, W (:func:`rational_coefficients`) into those of the numerator of
-    z = L (x - x_c) = L (X̃ - x_c W) / W, x_c = x(ξ_c): a map with Dz(ξ_c) = L J(ξ_c) = I whose
-    curvature bound gives ‖L J(ξ) - I‖∞ <= K_z |ξ - ξ_c|∞ directly (no factor ‖L‖, and |z| is
-    small near ξ_c), as :func:`~.projection.injectivity_bound` does for polynomial maps."""
-    const = -1
+def centre_point(code, a):
+    """x(ξ_c) = X̃(ξ_c) / W(ξ_c) from the coefficients of :func:`rational_coefficients` (their constant terms)."""
+    const = 0
     for k in range(solid.n_nodes(code)):
         if solid.MONOMIALS[code, k, 0] + solid.MONOMIALS[code, k, 1] + solid.MONOMIALS[code, k, 2] == 0:
             const = k
-    x0 = a[const, 0] / a[const, 3]
-    x1 = a[const, 1] / a[const, 3]
-    x2 = a[const, 2] / a[const, 3]
+    return a[const, 0] / a[const, 3], a[const, 1] / a[const, 3], a[const, 2] / a[const, 3]
+
+
+@njit
+def normalise_coefficients(code, a, L, x0, x1, x2, out):
+    """The coefficients (into ``out``, which may be ``a``) of the numerator of z = L (x - x0) =
+    L (X̃ - x0 W) / W from those of X̃, W (:func:`rational_coefficients`; ``out[:, 3]`` keeps W).
+
+    With L = J(m)⁻¹ and x0 = x(m), Dz(m) = I and z(m) = 0: the curvature bound of z gives
+    ‖L (J(ξ) - J(m))‖∞ <= K_z |ξ - m|∞ directly (no factor ‖L‖, and |z| is small near m), as
+    :func:`~.projection.injectivity_bound` does for polynomial maps.
+    """
     for k in range(solid.n_nodes(code)):
         v0 = a[k, 0] - x0 * a[k, 3]
         v1 = a[k, 1] - x1 * a[k, 3]
         v2 = a[k, 2] - x2 * a[k, 3]
-        a[k, 0] = L[0, 0] * v0 + L[0, 1] * v1 + L[0, 2] * v2
-        a[k, 1] = L[1, 0] * v0 + L[1, 1] * v1 + L[1, 2] * v2
-        a[k, 2] = L[2, 0] * v0 + L[2, 1] * v1 + L[2, 2] * v2
+        out[k, 3] = a[k, 3]
+        out[k, 0] = L[0, 0] * v0 + L[0, 1] * v1 + L[0, 2] * v2
+        out[k, 1] = L[1, 0] * v0 + L[1, 1] * v1 + L[1, 2] * v2
+        out[k, 2] = L[2, 0] * v0 + L[2, 1] * v1 + L[2, 2] * v2
 
 
 @njit
