@@ -17,7 +17,8 @@ no Python loop over elements, fibres or nodes, so benchmark scenes build in well
 """
 import numpy as np
 
-from .elements.solid.dispatch import SOLID_ELEMENTS, SOLID_MODULES
+from .elements.solid.dispatch import NODAL_ELEMENTS as SOLID_ELEMENTS
+from .elements.solid.dispatch import SOLID_MODULES
 from .mesh import BeamMesh, SolidMesh
 
 __all__ = ["box", "distort", "fibre_cube", "random_curved_beams", "splitmix64", "splitmix64_uniforms",

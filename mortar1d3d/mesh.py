@@ -10,7 +10,7 @@ from numba import prange
 from ._config import njit, njit_parallel
 from .elements.beam import BEAM_ELEMENTS, MAX_FUNCTIONS, beam_element
 from .elements.beam import evaluate as _beam_functions
-from .elements.solid.dispatch import MAX_NODES, N_NODES, SOLID_ELEMENTS, solid_element
+from .elements.solid.dispatch import MAX_NODES, N_NODES, NODAL_ELEMENTS, solid_element
 from .elements.validity import DEGENERATE, FOLDED, INVERTED, jacobian_validity
 from .errors import MeshError, format_ids
 from .quadrature import gauss_legendre
@@ -61,6 +61,10 @@ class SolidMesh:
     cells : dict
         ``{meshio_type: (m, n_nodes_per_element) int array}``, e.g. ``{"hexahedron": cells}``.
         Elements are numbered block by block in the dict's order.
+    weights : (n_nodes,) array_like of float, optional
+        Positive node weights, required by rational element types (``nurbs27``: the nodes are
+        Bézier control points; :func:`mortar1d3d.nurbs.bezier_mesh` builds such meshes from NURBS
+        patches) and ignored by the others.
 
     Raises
     ------
@@ -70,7 +74,7 @@ class SolidMesh:
         proved with Bernstein bounds of det J, not only at sample points).
     """
 
-    def __init__(self, points, cells, *, point_sets=None):
+    def __init__(self, points, cells, *, point_sets=None, weights=None):
         self.points = _as_points(points, "solid points")
         if not isinstance(cells, dict) or not cells:
             raise MeshError("solid cells: expected a non-empty dict {meshio_type: connectivity}")
@@ -92,7 +96,36 @@ class SolidMesh:
             self.connectivity[start:start + len(c), : d.n_nodes] = c
             start += len(c)
         self.point_sets = dict(point_sets or {})
+        self.weights = None
+        if any(d.rational for d, _ in self.blocks) or weights is not None:
+            self.weights = self._check_weights(weights)
+        self._kernel_points = None
         self._check_jacobians()
+
+    def _check_weights(self, weights):
+        rational = ", ".join(d.name for d, _ in self.blocks if d.rational)
+        if weights is None:
+            raise MeshError(f"solid weights: {rational} elements need one weight per node (weights=...)")
+        try:
+            w = np.ascontiguousarray(weights, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise MeshError(f"solid weights: cannot convert to a float array ({exc})") from None
+        if w.shape != (self.n_nodes,):
+            raise MeshError(f"solid weights: expected shape ({self.n_nodes},), got {w.shape}")
+        bad = np.flatnonzero(~(np.isfinite(w) & (w > 0.0)))
+        if bad.size:
+            raise MeshError(f"solid weights: must be finite and > 0, not at nodes {format_ids(bad)}")
+        return w
+
+    @property
+    def kernel_points(self):
+        """What the geometry kernels read as node coordinates: ``points`` (n_nodes, 3), or with rational
+        elements (n_nodes, 4) with the weights in column 3."""
+        if self.weights is None:
+            return self.points
+        if self._kernel_points is None:
+            self._kernel_points = np.ascontiguousarray(np.column_stack([self.points, self.weights]))
+        return self._kernel_points
 
     @property
     def n_nodes(self):
@@ -111,7 +144,7 @@ class SolidMesh:
             X = self.points[conn]
             h = np.linalg.norm(X.max(axis=1) - X.min(axis=1), axis=1)
             ids = np.arange(start, start + len(conn))
-            outcome = jacobian_validity(d, X, h)
+            outcome = jacobian_validity(d, X, h, None if self.weights is None else self.weights[conn])
             outcome[h == 0.0] = DEGENERATE
             for kind, text in ((INVERTED, "inverted {} elements (negative Jacobian determinant at a corner; "
                                           "check the VTK node order)"),
@@ -132,13 +165,13 @@ class SolidMesh:
         """
         cells, skipped = {}, {}
         for block in mesh.cells:
-            if block.type in SOLID_ELEMENTS:
+            if block.type in NODAL_ELEMENTS:
                 cells.setdefault(block.type, []).append(np.asarray(block.data))
             elif block.type in _LOWER_DIMENSIONAL:
                 skipped[block.type] = skipped.get(block.type, 0) + len(block.data)
             else:
                 raise MeshError(f"unsupported cell type {block.type!r} in meshio mesh; supported solid "
-                                f"types: {', '.join(SOLID_ELEMENTS)}")
+                                f"types: {', '.join(NODAL_ELEMENTS)}")
         if skipped:
             warnings.warn("SolidMesh.from_meshio: skipped lower-dimensional cells "
                           + ", ".join(f"{n} {t}" for t, n in skipped.items()), stacklevel=2)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .elements.solid.dispatch import SOLID_ELEMENTS
+from .elements.solid.dispatch import NODAL_ELEMENTS as SOLID_ELEMENTS
 from .errors import SceneError  # noqa: F401 (raised here; mortar1d3d.scene.SceneError stays importable)
 from .generate import FACE_SETS as BOX_FACES  # noqa: F401 (the face set names of a generated box)
 from .mesh import BeamMesh, SolidMesh

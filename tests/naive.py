@@ -788,3 +788,51 @@ def spin_jacobian(psi, h=1e-6):
         W = (rotation_exp(psi + e) - rotation_exp(psi - e)) / (2.0 * h) @ R.T
         T[:, j] = [W[2, 1], W[0, 2], W[1, 0]]
     return T
+
+
+# --------------------------------------------------------------------------------------------
+# NURBS solids (issue 19): the exact cylinder sector and the patch functions by Cox–de Boor
+# --------------------------------------------------------------------------------------------
+def in_sector(x, r_inner, r_outer, angle, height):
+    """Whether points x (n, 3) lie in the hollow cylinder sector 0 <= θ <= angle (degrees),
+    r_inner <= r <= r_outer, 0 <= z <= height (the exact set a NURBS pipe generator represents)."""
+    x = np.atleast_2d(x)
+    r = np.hypot(x[:, 0], x[:, 1])
+    theta = np.degrees(np.arctan2(x[:, 1], x[:, 0]))
+    theta = np.where(theta < -1e-12, theta + 360.0, theta)
+    return (r >= r_inner) & (r <= r_outer) & (theta <= angle) & (x[:, 2] >= 0.0) & (x[:, 2] <= height)
+
+
+def indicator_crossings(curve, inside, n=4001, tol=1e-15):
+    """Parameters η ∈ (-1, 1) where ``inside(curve(η))`` changes: dense sampling, then bisection of
+    each change to ``tol``; ``curve`` maps (k,) η to (k, 3) points."""
+    eta = np.linspace(-1.0, 1.0, n)
+    flag = inside(curve(eta))
+    out = []
+    for k in np.flatnonzero(flag[1:] != flag[:-1]):
+        a, b = eta[k], eta[k + 1]
+        fa = flag[k]
+        while b - a > tol:
+            m = 0.5 * (a + b)
+            if inside(curve(np.array([m])))[0] == fa:
+                a = m
+            else:
+                b = m
+        out.append(0.5 * (a + b))
+    return np.array(out)
+
+
+def nurbs_functions(patch, element, xi):
+    """Values (n_control,) of all NURBS functions of ``patch`` at the parameters ``xi`` of its element
+    ``element`` (last direction fastest), by Cox–de Boor over the knot vectors (no extraction)."""
+    from mortar1d3d.nurbs.knots import bspline_values
+
+    span = np.unravel_index(element, patch.element_shape)
+    values = []
+    for d in range(3):
+        U, p = patch.knots[d], patch.degrees[d]
+        distinct = np.unique(U)
+        lo, hi = distinct[span[d]], distinct[span[d] + 1]
+        values.append(bspline_values(U, p, [lo + 0.5 * (xi[d] + 1.0) * (hi - lo)])[0])
+    N = np.einsum("i,j,k->ijk", *values) * patch.weights
+    return (N / N.sum()).ravel()

@@ -166,7 +166,7 @@ def _local_nodes(solid, s):
     return np.ascontiguousarray(X - X[0]), float(np.linalg.norm(X.max(0) - X.min(0))), int(solid.element_codes[s])
 
 
-@pytest.mark.parametrize("element", list(SOLID_ELEMENTS))
+@pytest.mark.parametrize("element", [n for n, d in SOLID_ELEMENTS.items() if not d.rational])
 def test_affine_inverse_maps_nodes_to_their_reference_coordinates(element):
     solid = sheared(generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1), element))
     X, h, code = _local_nodes(solid, 0)

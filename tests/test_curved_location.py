@@ -153,7 +153,7 @@ def test_wedge_folded_between_its_nodes_is_rejected():
         m13.SolidMesh(X, {"wedge": np.arange(6)[None]})
 
 
-@pytest.mark.parametrize("name", list(SOLID_ELEMENTS))
+@pytest.mark.parametrize("name", [n for n, d in SOLID_ELEMENTS.items() if not d.rational])
 def test_validity_bound_agrees_with_dense_sampling(name):
     """Random perturbations of every node (and of the mid-side nodes far beyond validity): every element
     the Bernstein bound accepts has det J > 0 at 11³ sample points, and every element with a non-positive

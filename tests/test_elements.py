@@ -21,7 +21,7 @@ import naive
 # ``__init__``, which shadows the submodule of the same name: fetch the module itself.
 multiplier = importlib.import_module("mortar1d3d.elements.multiplier")
 
-NAMES = list(dispatch.SOLID_ELEMENTS)
+NAMES = list(dispatch.NODAL_ELEMENTS)      # nurbs27 (rational Bézier): tests/test_nurbs_engine.py
 QUADRATIC = [n for n in NAMES if dispatch.SOLID_ELEMENTS[n].degree == 2]
 LINEAR = [n for n in NAMES if dispatch.SOLID_ELEMENTS[n].degree == 1]
 TOL = 1e-9  # parameter tolerance of the inside test (docs/conventions.md §2)
@@ -386,7 +386,7 @@ def test_registry_codes_and_sizes():
         assert dispatch.solid_element(name) is d
         assert d.dim == 3
     expected = {"hexahedron": (8, 1, "hex"), "hexahedron20": (20, 2, "hex"), "hexahedron27": (27, 2, "hex"),
-                "tetra": (4, 1, "tet"), "tetra10": (10, 2, "tet"), "wedge": (6, 1, "wedge")}
+                "tetra": (4, 1, "tet"), "tetra10": (10, 2, "tet"), "wedge": (6, 1, "wedge"), "nurbs27": (27, 2, "hex")}
     assert {n: (d.n_nodes, d.degree, d.family) for n, d in dispatch.SOLID_ELEMENTS.items()} == expected
 
 

@@ -15,7 +15,7 @@ from mortar1d3d.elements.solid.dispatch import SOLID_MODULES
 from naive import domain_rule, reference_splitmix64
 
 MODULES = SOLID_MODULES
-TYPES = list(MODULES)
+TYPES = [n for n in MODULES if not MODULES[n].DESCRIPTOR.rational]     # nurbs27: from mortar1d3d.nurbs
 L, R = 0.3, 0.03
 
 

@@ -19,7 +19,7 @@ from mortar1d3d.study.reference import newton_projection
 
 from naive import arc_length, brute_force_pairs, constraint_residual, outside_distance, reference_samples
 
-SOLID_TYPES = list(SOLID_ELEMENTS)
+SOLID_TYPES = [n for n, d in SOLID_ELEMENTS.items() if not d.rational]     # nurbs27: test_nurbs_engine
 LM_TYPES = ["line2", "line3", "line4"]
 INTEGRATIONS = ["segment", "element"]
 N_INTERIOR = {"line2": 0, "line3": 1, "line4": 2}

@@ -25,7 +25,7 @@ from mortar1d3d.geometry.search import beam_bounding_boxes, find_candidate_pairs
 
 import naive
 
-SOLID_TYPES = list(dispatch.SOLID_ELEMENTS)
+SOLID_TYPES = list(dispatch.NODAL_ELEMENTS)     # nurbs27: test_nurbs_engine
 BEAM_TYPES = ["hermite", "line", "line3"]
 
 

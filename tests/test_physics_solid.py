@@ -13,7 +13,7 @@ from mortar1d3d.physics.solid import InvertedElementsError, SolidModel
 
 from naive import central_differences
 
-ELEMENTS = list(m13.elements.SOLID_ELEMENTS)
+ELEMENTS = [n for n, d in m13.elements.SOLID_ELEMENTS.items() if not d.rational]     # nurbs27: test_nurbs_model
 HYPERELASTIC = ["saint_venant_kirchhoff", "neo_hooke"]
 E_MODULUS, NU = 200.0, 0.3
 

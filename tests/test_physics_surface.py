@@ -12,7 +12,7 @@ from mortar1d3d.quadrature import quadrilateral_rule, triangle_rule, wedge_rule
 
 from naive import surface_loads
 
-TYPES = list(SOLID_ELEMENTS)
+TYPES = [n for n, d in SOLID_ELEMENTS.items() if not d.rational]     # nurbs27: test_nurbs_model
 SIDES = {"x_min": (0, -1.0), "x_max": (0, 1.0), "y_min": (1, -1.0), "y_max": (1, 1.0),
          "z_min": (2, -1.0), "z_max": (2, 1.0)}
 

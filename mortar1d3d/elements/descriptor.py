@@ -141,6 +141,11 @@ class SolidElementType:
     quadrature : tuple of (points (q, 3), weights (q,))
         The volume rule of the solid model (:mod:`mortar1d3d.physics.solid_reference`), from
         :mod:`mortar1d3d.quadrature`.
+    rational : bool
+        True for rational Bernstein (Bézier) elements: ``shape``/``deriv`` give the polynomial
+        Bernstein basis B_a and every node carries a weight w_a; the element's functions are
+        R_a = w_a B_a / Σ_b w_b B_b (:func:`mortar1d3d.elements.solid.dispatch.rational_shape`). Their
+        nodes are control points, not points of the element.
     """
 
     name: str
@@ -153,6 +158,7 @@ class SolidElementType:
     monomials: np.ndarray = field(repr=False)
     quadrature: tuple = field(repr=False)
     dim: int = 3
+    rational: bool = False
 
     def __post_init__(self):
         exps = np.asarray(self.monomials, dtype=np.int64)
@@ -192,7 +198,11 @@ class SolidElementType:
     def jacobian_degree(self):
         """Polynomial degree of det J for this element's shape functions, as the family's validity
         cells count it: per direction on a box (det J ∈ Q_p), total on a simplex (P_p), one degree
-        per factor on a product of such domains."""
+        per factor on a product of such domains. A rational element's check uses W⁴ det J, the
+        determinant of the homogeneous Jacobian [[W, ∇W], [X̃, ∇X̃]]: degree 4p - 1 per direction
+        for tensor degree p."""
+        if self.rational:
+            return 4 * int(self.monomials.max()) - 1
         return self.family_type.cells.jacobian_degree(self.monomials)
 
     @property

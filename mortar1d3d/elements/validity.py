@@ -73,7 +73,7 @@ def _determinants(descriptor, X, points):
     return _jacobian_determinant(X, dN)
 
 
-def jacobian_validity(descriptor, X, h):
+def jacobian_validity(descriptor, X, h, weights=None):
     """Classify elements by the sign of det J over the whole element.
 
     Parameters
@@ -83,6 +83,10 @@ def jacobian_validity(descriptor, X, h):
         Node coordinates of m elements of this type.
     h : (m,) float
         Element sizes (bounding-box diagonals): |det J| <= 1e-12 h³ counts as zero.
+    weights : (m, n_nodes) float, optional
+        Node weights of rational elements (``descriptor.rational``): their check bounds the
+        determinant of the homogeneous Jacobian, W⁴ det J (a polynomial, of degree
+        ``descriptor.jacobian_degree``), with the weights scaled to a largest weight of 1.
 
     Returns
     -------
@@ -99,7 +103,11 @@ def jacobian_validity(descriptor, X, h):
     zero = 1e-12 * np.asarray(h, dtype=float) ** 3
     for start in range(0, m, _BATCH):
         sl = slice(start, min(start + _BATCH, m))
-        out[sl] = _classify(descriptor, X[sl], zero[sl])
+        if descriptor.rational:
+            w = np.asarray(weights, dtype=float)[sl]
+            out[sl] = _bernstein(descriptor, X[sl] - X[sl, :1, :], zero[sl], w / w.max(axis=1, keepdims=True))
+        else:
+            out[sl] = _classify(descriptor, X[sl], zero[sl])
     return out
 
 
@@ -147,15 +155,20 @@ def _classify(descriptor, X, zero):
     return out
 
 
-def _bernstein(descriptor, X, zero):
+def _bernstein(descriptor, X, zero, weights=None):
     m = len(X)
     out = np.full(m, VALID, dtype=np.int64)
     cells = descriptor.family_type.cells
     p = descriptor.jacobian_degree
     lattice, to_bernstein = cells.lattice(p)
     corners = cells.corner_rows(p)
-    dN = shape_gradients(descriptor, cells.points(cells.whole(1), lattice)[0])
-    det = _jacobian_determinant(X, dN)
+    if descriptor.rational:
+        from .solid.dispatch import SOLID_MODULES
+        det = SOLID_MODULES[descriptor.name].homogeneous_determinants(X, weights, cells.points(cells.whole(1),
+                                                                                               lattice)[0])
+    else:
+        dN = shape_gradients(descriptor, cells.points(cells.whole(1), lattice)[0])
+        det = _jacobian_determinant(X, dN)
     threshold = zero[:, None]
     # negative at a corner of the element: a node order that is not VTK's (or a corner folded over);
     # negative only inside: a fold

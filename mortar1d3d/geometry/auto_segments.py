@@ -51,7 +51,7 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
     tol = PARAMETER_TOL
     claims = new_claims(n_beam, workers)
     for worker in prange(workers):
-        X = np.empty((solid.MAX_NODES, 3))
+        X = np.empty((solid.MAX_NODES, 4))
         H = np.empty(MAX_FUNCTIONS)
         dH = np.empty(MAX_FUNCTIONS)
         ddH = np.empty(MAX_FUNCTIONS)

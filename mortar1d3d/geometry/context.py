@@ -25,8 +25,8 @@ class KernelInput:
 
     Attributes
     ----------
-    points : (n_nodes, 3) float64
-        Solid node coordinates (``solid.points``, global frame).
+    points : (n_nodes, 3) or (n_nodes, 4) float64
+        Solid node coordinates (``solid.kernel_points``, global frame; column 3: weights of rational elements).
     codes : (n,) int64
         Element code of every solid element (``solid.element_codes``).
     conn : (n, MAX_NODES) int64
@@ -67,7 +67,7 @@ class KernelInput:
     """
 
     def __init__(self, beams, solid):
-        self.points = solid.points
+        self.points = solid.kernel_points
         self.codes = solid.element_codes
         self.conn = solid.connectivity
         self.solid_boxes, self.solid_h, self.solid_origin = solid_frames(solid)

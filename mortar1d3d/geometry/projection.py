@@ -13,6 +13,8 @@ from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from .linalg import inverse3, norm3, solve3
+from .rational import (centre_point, normalise_coefficients, rational_coefficients, rational_curvature_bound,
+                       uniform_weights)
 
 CONVERGED = 0
 FAILED = 1
@@ -27,8 +29,13 @@ _ROUND_OFF = 4 * 2.220446049250313e-16
 
 @njit
 def map_point(code, X, xi, N):
-    """x(ξ) = Σ_a N_a(ξ) X_a for element type ``code`` with local nodes ``X``; returns (x0, x1, x2)."""
-    solid.shape(code, xi, N)
+    """x(ξ) = Σ_a N_a(ξ) X_a for element type ``code`` with local nodes ``X``; returns (x0, x1, x2).
+
+    Rational types take their node weights from ``X[:, 3]`` (``N`` then holds R_a)."""
+    if solid.RATIONAL[code]:
+        solid.rational_shape(code, xi, X, N)
+    else:
+        solid.shape(code, xi, N)
     x0 = x1 = x2 = 0.0
     for a in range(solid.n_nodes(code)):
         x0 += N[a] * X[a, 0]
@@ -40,7 +47,10 @@ def map_point(code, X, xi, N):
 @njit
 def jacobian(code, X, xi, dN):
     """J[i, k] = ∂x_i/∂ξ_k as a 9-tuple, row by row."""
-    solid.deriv(code, xi, dN)
+    if solid.RATIONAL[code]:
+        solid.rational_deriv(code, xi, X, np.empty(solid.MAX_NODES), dN)
+    else:
+        solid.deriv(code, xi, dN)
     j00 = j01 = j02 = j10 = j11 = j12 = j20 = j21 = j22 = 0.0
     for a in range(solid.n_nodes(code)):
         x0, x1, x2 = X[a, 0], X[a, 1], X[a, 2]
@@ -103,12 +113,16 @@ def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
 
 @njit
 def load_element(points, conn, element, code, origin, X):
-    """Copy the local (origin-relative) node coordinates of ``element`` into ``X``."""
+    """Copy the local (origin-relative) node coordinates of ``element`` into ``X``; a rational element's
+    node weights (column 3 of ``points``, :attr:`mortar1d3d.mesh.SolidMesh.kernel_points`) into ``X[:, 3]``."""
     for a in range(solid.n_nodes(code)):
         node = conn[element, a]
         X[a, 0] = points[node, 0] - origin[element, 0]
         X[a, 1] = points[node, 1] - origin[element, 1]
         X[a, 2] = points[node, 2] - origin[element, 2]
+    if solid.RATIONAL[code] and points.shape[1] > 3 and X.shape[1] > 3:
+        for a in range(solid.n_nodes(code)):
+            X[a, 3] = points[conn[element, a], 3]
 
 
 @njit
@@ -173,8 +187,20 @@ def certified_margin(code, X, L, a):
     """Largest δ of ``_CERTIFIED_MARGINS`` for which the element's map is provably one-to-one on the
     box |ξ - ξ_c|∞ <= R + δ (R: the element's radius about its centre); -1 if none.
 
-    ``L`` (3, 3) is J(ξ_c)⁻¹; ``a`` receives the monomial coefficients (scratch).
+    ``L`` (3, 3) is J(ξ_c)⁻¹; ``a`` receives the monomial coefficients (scratch). A rational
+    element: ‖L J(ξ) - I‖∞ <= K_z |ξ - ξ_c|∞ with K_z the curvature bound of z = L (x - x_c)
+    (:func:`.rational.normalise_coefficients`, :func:`.rational.rational_curvature_bound`).
     """
+    if solid.RATIONAL[code]:
+        rational_coefficients(code, X, a)
+        x0, x1, x2 = centre_point(code, a)
+        normalise_coefficients(code, a, L, x0, x1, x2, a)
+        c0, c1, c2 = solid.CENTRE[code, 0], solid.CENTRE[code, 1], solid.CENTRE[code, 2]
+        for delta in _CERTIFIED_MARGINS:
+            reach = solid.RADIUS[code] + delta
+            if rational_curvature_bound(code, a, c0, c1, c2, reach) * reach < 1.0:
+                return delta
+        return -1.0
     monomial_coefficients(code, X, a)
     for delta in _CERTIFIED_MARGINS:
         if injectivity_bound(code, a, L, solid.RADIUS[code] + delta) < 1.0:
@@ -206,8 +232,9 @@ _CHORD_ITERATIONS = 64
 
 @njit
 def search_buffers():
-    """Scratch of :func:`search_inside`: monomial coefficients (MAX_NODES, 3) and the box stack."""
-    return np.empty((solid.MAX_NODES, 3)), np.empty((8 * _SEARCH_DEPTH + 8, 4))
+    """Scratch of :func:`search_inside`: monomial coefficients (MAX_NODES, 4: a rational map's numerator
+    and denominator) and the box stack."""
+    return np.empty((solid.MAX_NODES, 4)), np.empty((8 * _SEARCH_DEPTH + 8, 4))
 
 
 @njit
@@ -226,9 +253,17 @@ def search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN):
 
     Returns INSIDE (``xi`` holds the preimage, polished), OUTSIDE (proved: no preimage with
     outside_distance <= tol) or NOT_CONVERGED (a box reached the depth limit undecided: a singular
-    Jacobian inside the element).
+    Jacobian inside the element). Rational elements bound ρ by the curvature of z = L (x - x(m))
+    (:func:`.rational.normalise_coefficients`, :func:`.rational.rational_curvature_bound`).
     """
-    monomial_coefficients(code, X, a)
+    rational = solid.RATIONAL[code]
+    b = a
+    L = np.empty((3, 3))
+    if rational:
+        rational_coefficients(code, X, a)
+        b = np.empty((solid.MAX_NODES, 4))        # the coefficients of z = L (x - x(m)) per box
+    else:
+        monomial_coefficients(code, X, a)
     c0, c1, c2 = solid.CENTRE[code, 0], solid.CENTRE[code, 1], solid.CENTRE[code, 2]
     lo = solid.PARAMETER_BOX[code, 0]
     hi = solid.PARAMETER_BOX[code, 1]
@@ -261,7 +296,15 @@ def search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN):
             l20, l21, l22 = inv * (j10 * j21 - j11 * j20), inv * (j01 * j20 - j00 * j21), inv * (j00 * j11 - j01 * j10)
             norm_l = max(abs(l00) + abs(l01) + abs(l02), abs(l10) + abs(l11) + abs(l12), abs(l20) + abs(l21) + abs(l22))
             reach = max(abs(m0 - c0), abs(m1 - c1), abs(m2 - c2)) + 2.0 * r      # the doubled box about ξ_c
-            rho = norm_l * curvature_bound(code, a, reach) * r
+            if rational:
+                # ‖L (J(ξ) - J(m))‖∞ <= K_z r on C, K_z bounding z = L (x - x(m)) on the doubled box
+                L[0, 0], L[0, 1], L[0, 2] = l00, l01, l02
+                L[1, 0], L[1, 1], L[1, 2] = l10, l11, l12
+                L[2, 0], L[2, 1], L[2, 2] = l20, l21, l22
+                normalise_coefficients(code, a, L, x0, x1, x2, b)
+                rho = rational_curvature_bound(code, b, m0, m1, m2, 2.0 * r) * r
+            else:
+                rho = norm_l * curvature_bound(code, a, reach) * r
             e0, e1, e2 = p0 - x0, p1 - x1, p2 - x2
             d0 = l00 * e0 + l01 * e1 + l02 * e2
             d1 = l10 * e0 + l11 * e1 + l12 * e2
@@ -450,7 +493,10 @@ def affine_inverse(code, X, h, rel_tol, Ainv):
     Affine means x(ξ) = A (ξ - ξ_0) for every node to ``rel_tol · h`` (tet4 always; a hex8
     that is a parallelepiped; quadratic elements with straight edges and centred mid-nodes).
     On success ``Ainv`` (3, 3) holds A⁻¹, so ξ(x) = ξ_0 + A⁻¹ x exactly (no Newton needed).
+    A rational element is affine only with equal weights (then it is its polynomial Bernstein map).
     """
+    if solid.RATIONAL[code] and not uniform_weights(code, X):
+        return False
     axes = solid.AXIS_NODES[code]
     span = solid.AXIS_SPAN[code]
     a00 = X[axes[0], 0] / span[0]
@@ -498,10 +544,10 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
     n = conn.shape[0]
     claims = new_claims(n, workers)
     for worker in prange(workers):
-        X = np.empty((solid.MAX_NODES, 3))
+        X = np.empty((solid.MAX_NODES, 4))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
-        a = np.empty((solid.MAX_NODES, 3))
+        a = np.empty((solid.MAX_NODES, 4))
         xc = np.empty(3)
         begin, stop = claim(claims, n, worker)
         while begin < stop:
@@ -527,10 +573,11 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
 def point_buffers():
     """Work buffers of the kernels that follow beam points into solid elements (one set per worker).
 
-    ``X`` (element nodes), ``N``, ``dN`` (shape functions and derivatives), ``H``, ``dH`` (beam
-    functions and derivatives), ``xi`` (parameters), ``trial`` (Newton trial point).
+    ``X`` (element nodes; column 3: a rational element's weights), ``N``, ``dN`` (shape functions and
+    derivatives), ``H``, ``dH`` (beam functions and derivatives), ``xi`` (parameters), ``trial``
+    (Newton trial point).
     """
-    return (np.empty((solid.MAX_NODES, 3)), np.empty(solid.MAX_NODES), np.empty((solid.MAX_NODES, 3)),
+    return (np.empty((solid.MAX_NODES, 4)), np.empty(solid.MAX_NODES), np.empty((solid.MAX_NODES, 3)),
             np.empty(MAX_FUNCTIONS), np.empty(MAX_FUNCTIONS), np.empty(3), np.empty(3))
 
 
@@ -655,9 +702,9 @@ def project_points(solid, points, elements):
         raise MeshError(f"elements: ids out of range [0, {solid.n_elements}) at points {format_ids(bad)}")
     _, solid_h, solid_origin = solid_frames(solid)
     linear = np.empty((solid.n_elements, 5, 3))
-    linear_maps(solid.points, solid.connectivity, solid.element_codes, solid_origin, solid_h, linear, workers())
+    linear_maps(solid.kernel_points, solid.connectivity, solid.element_codes, solid_origin, solid_h, linear, workers())
     xi = np.zeros((len(x), 3))
     status = np.empty(len(x), dtype=np.int64)
-    _project_points_kernel(solid.points, solid.connectivity, solid.element_codes, solid_origin, solid_h, linear, x,
+    _project_points_kernel(solid.kernel_points, solid.connectivity, solid.element_codes, solid_origin, solid_h, linear, x,
                            elements, PARAMETER_TOL, xi, status, workers())
     return xi, status

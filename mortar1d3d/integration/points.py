@@ -247,7 +247,7 @@ def _auto_gauss_counts(seg_beam, seg_solid, codes, conn, points, solid_origin, s
     n_seg = seg_beam.shape[0]
     claims = new_claims(n_seg, workers)
     for worker in prange(workers):
-        X = np.empty((solid.MAX_NODES, 3))
+        X = np.empty((solid.MAX_NODES, 4))
         Ainv = np.empty((3, 3))
         begin, stop = claim(claims, n_seg, worker)
         while begin < stop:

@@ -121,8 +121,8 @@ class MortarOperators:
 
 @njit_parallel
 def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
-                     codes, m_offsets, D_local, M_local, kappa_local, workers):
-    """Local D, M and κ of every group of points."""
+                     codes, conn, points, m_offsets, D_local, M_local, kappa_local, workers):
+    """Local D, M and κ of every group of points (``conn``, ``points``: a rational element's weights)."""
     n_groups = group_start.shape[0] - 1
     nH = beam_n_functions(beam_code)
     claims = new_claims(n_groups, workers)
@@ -146,6 +146,7 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
                     lm_shape(n_phi, eta[q], Phi)
                     beam_shape(beam_code, eta[q], lengths[e], H)
                     solid_types.shape(codes[s], xi[q], N)
+                    solid_types.weighted_values(codes[s], conn[s], points, N)
                     w = weight[q]
                     for j in range(n_phi):
                         wj = w * Phi[j]
@@ -347,6 +348,7 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     D_local, M_local, kappa_local = carve(((n_groups, n_phi * nH), np.float64), (m_offsets[-1], np.float64),
                                           ((n_groups, n_phi), np.float64))
     _group_operators(group_start, p_beam, p_solid, eta, xi, weight, ctx.beam_code, ctx.lengths, n_phi, ctx.codes,
+                     ctx.conn, ctx.points,
                      m_offsets, D_local, M_local, kappa_local, workers())
     lm_index, n_lm = lm_numbering(beams, lm_type)
     src_offsets, src = row_sources(lm_index, n_phi, n_lm)

@@ -98,8 +98,8 @@ class SolidModel:
 
         self._codes = np.ascontiguousarray(mesh.element_codes, dtype=np.int64)
         self._connectivity = np.ascontiguousarray(mesh.connectivity, dtype=np.int64)
-        self._gp_ptr, self._dn_ptr, self._dNdX, self._wJ = reference_gauss_points(mesh.points, self._connectivity,
-                                                                                  self._codes)
+        self._gp_ptr, self._dn_ptr, self._dNdX, self._wJ = reference_gauss_points(mesh.kernel_points,
+                                                                                  self._connectivity, self._codes)
         graph = assembly_graph(self._connectivity, self._codes, mesh.n_nodes, self.assembly_block)
         self._node_ptr, self._slot_ptr, self._slots = graph.node_ptr, graph.slot_ptr, graph.slots
         self._colour_ptr, self._colour_blocks = graph.colour_ptr, graph.colour_blocks
@@ -195,7 +195,12 @@ class SolidModel:
                 n_gp = len(RULES[descriptor.code][1])
                 g0 = self._gp_ptr[start]
                 wJ = self._wJ[g0:g0 + m * n_gp].reshape(m, n_gp)
-                np.add.at(volume, conn, wJ @ shape_table(descriptor.code))
+                if descriptor.rational:
+                    # R_a = w_a B_a / W differs from element to element
+                    B = shape_table(descriptor.code)[None] * self.mesh.weights[conn][:, None, :]
+                    np.add.at(volume, conn, np.einsum("mq,mqa->ma", wJ, B / B.sum(axis=2, keepdims=True)))
+                else:
+                    np.add.at(volume, conn, wJ @ shape_table(descriptor.code))
                 start += m
             self._nodal_volume = volume
         return self._nodal_volume

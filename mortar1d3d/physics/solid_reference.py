@@ -14,7 +14,7 @@ from numba import prange
 
 from .._config import CHUNK, njit_parallel
 from .._schedule import n_chunks
-from ..elements.solid.dispatch import BY_CODE, MAX_NODES, N_NODES, SOLID_MODULES, deriv
+from ..elements.solid.dispatch import BY_CODE, MAX_NODES, N_NODES, RATIONAL, SOLID_MODULES, deriv, weighted_derivatives
 from ..errors import MeshError, format_ids
 
 #: volume rule per element code (from the element descriptors): (points (n_gp, 3), weights (n_gp,))
@@ -45,6 +45,8 @@ def reference_gauss_points(points, connectivity, codes):
     Parameters
     ----------
     points : (n_nodes, 3) float64
+        Or (n_nodes, 4) with the node weights of rational elements in column 3
+        (:attr:`mortar1d3d.mesh.SolidMesh.kernel_points`).
     connectivity : (n_elements, MAX_NODES) int64, C-contiguous
     codes : (n_elements,) int64, C-contiguous
         Element type codes.
@@ -87,13 +89,17 @@ def reference_kernel(points, connectivity, codes, gp_ptr, dn_ptr, rule_ptr, rule
     n_el = codes.shape[0]
     for c in prange(n_chunks(n_el, CHUNK)):
         dN = np.empty((MAX_NODES, 3))
+        N = np.empty(MAX_NODES)
         for e in range(c * CHUNK, min(n_el, (c + 1) * CHUNK)):
             code = codes[e]
             n = N_NODES[code]
             status[e] = 0
             for q in range(gp_ptr[e + 1] - gp_ptr[e]):
                 r = rule_ptr[code] + q
-                deriv(code, rule_xi[r], dN)
+                if RATIONAL[code]:
+                    weighted_derivatives(code, rule_xi[r], connectivity[e], points, N, dN)
+                else:
+                    deriv(code, rule_xi[r], dN)
                 j00 = j01 = j02 = j10 = j11 = j12 = j20 = j21 = j22 = 0.0
                 for a in range(n):
                     x = points[connectivity[e, a]]

@@ -20,6 +20,10 @@ from .registry import FAMILIES, SOLID_TYPES
 
 SOLID_MODULES = {m.DESCRIPTOR.name: m for m in SOLID_TYPES}
 SOLID_ELEMENTS = {name: m.DESCRIPTOR for name, m in SOLID_MODULES.items()}
+#: the types whose nodes are points of the element (Lagrange interpolation): what meshes from files,
+#: :func:`mortar1d3d.generate.box` and scenes' ``solid.mesh.element`` take (rational Bézier types come
+#: from :mod:`mortar1d3d.nurbs`)
+NODAL_ELEMENTS = {name: d for name, d in SOLID_ELEMENTS.items() if not d.rational}
 BY_CODE = {d.code: d for d in SOLID_ELEMENTS.values()}
 if sorted(BY_CODE) != list(range(len(SOLID_TYPES))) or [f.code for f in FAMILIES] != list(range(len(FAMILIES))):
     raise ImportError("solid element registry: codes must be 0, 1, 2, ... in registry order")
@@ -32,6 +36,8 @@ N_NODES = np.array([BY_CODE[c].n_nodes for c in range(_N_CODES)], dtype=np.int64
 FAMILY = np.array([BY_CODE[c].family_type.code for c in range(_N_CODES)], dtype=np.int64)
 N_FACES = np.array([BY_CODE[c].n_faces for c in range(_N_CODES)], dtype=np.int64)
 LINE_DEGREE = np.array([BY_CODE[c].line_degree for c in range(_N_CODES)], dtype=np.int64)
+#: per code: whether the type is rational (nodes carry weights; :func:`rational_shape`)
+RATIONAL = np.array([BY_CODE[c].rational for c in range(_N_CODES)], dtype=np.bool_)
 
 
 def _face_tables():
@@ -109,7 +115,9 @@ def _monomial_tables():
 
     ``a = TO_MONOMIAL[code] @ X`` (nodes X, one row per node) inverts the Vandermonde matrix of the
     shape functions' space at the reference nodes; the geometry kernels bound derivatives of the
-    map with these coefficients (:func:`mortar1d3d.geometry.projection.derivative_bounds`).
+    map with these coefficients (:func:`mortar1d3d.geometry.projection.derivative_bounds`). For a
+    rational type the matrix takes the Bernstein coefficients (w_a X_a, and w_a) of the homogeneous
+    map instead of nodal values: its module's ``NODE_VALUES`` (B_a at the nodes) comes first.
     """
     n_codes = len(BY_CODE)
     exps = np.zeros((n_codes, MAX_NODES, 3), dtype=np.int64)
@@ -122,6 +130,8 @@ def _monomial_tables():
         vandermonde = np.prod(y[:, None, :] ** d.monomials[None, :, :], axis=2)     # [node, monomial]
         exps[c, : d.n_nodes] = d.monomials
         to_monomial[c, : d.n_nodes, : d.n_nodes] = np.linalg.inv(vandermonde)
+        if d.rational:
+            to_monomial[c, : d.n_nodes, : d.n_nodes] = np.linalg.inv(vandermonde) @ SOLID_MODULES[d.name].NODE_VALUES
         centre[c] = d.centre
         box[c] = d.parameter_box
         radius[c] = np.abs(y).max()
@@ -234,3 +244,90 @@ def control_points(code, X, C):
                 v2 += w * X[a, 2]
         C[k, 0], C[k, 1], C[k, 2] = v0, v1, v2
     return n
+
+
+@njit
+def _divide_by_weight(n, N):
+    """N[:n] holds w_a B_a: make it R_a = w_a B_a / W; returns W."""
+    W = 0.0
+    for a in range(n):
+        W += N[a]
+    inv = 1.0 / W
+    for a in range(n):
+        N[a] *= inv
+    return W
+
+
+@njit
+def _quotient_rule(n, N, dN):
+    """N[:n], dN[:n] hold w_a B_a and w_a ∂B_a: make them R_a and ∂R_a = (w_a ∂B_a - R_a ∂W) / W."""
+    W0 = W1 = W2 = 0.0
+    for a in range(n):
+        W0 += dN[a, 0]
+        W1 += dN[a, 1]
+        W2 += dN[a, 2]
+    W = _divide_by_weight(n, N)
+    inv = 1.0 / W
+    for a in range(n):
+        dN[a, 0] = (dN[a, 0] - N[a] * W0) * inv
+        dN[a, 1] = (dN[a, 1] - N[a] * W1) * inv
+        dN[a, 2] = (dN[a, 2] - N[a] * W2) * inv
+    return W
+
+
+@njit
+def rational_shape(code, xi, X, N):
+    """The functions of element type ``code`` at ``xi`` into ``N``, rational ones with the node weights
+    in column 3 of ``X`` (R_a = w_a B_a / W); returns W (1 for polynomial types)."""
+    shape(code, xi, N)
+    if not RATIONAL[code]:
+        return 1.0
+    for a in range(N_NODES[code]):
+        N[a] *= X[a, 3]
+    return _divide_by_weight(N_NODES[code], N)
+
+
+@njit
+def rational_deriv(code, xi, X, N, dN):
+    """∂R_a/∂ξ_i of a rational type (weights in column 3 of ``X``) into ``dN``; ``N`` receives R_a.
+
+    R_a = w_a B_a / W gives ∂R_a = (w_a ∂B_a - R_a ∂W) / W.
+    """
+    shape(code, xi, N)
+    deriv(code, xi, dN)
+    for a in range(N_NODES[code]):
+        w = X[a, 3]
+        N[a] *= w
+        dN[a, 0] *= w
+        dN[a, 1] *= w
+        dN[a, 2] *= w
+    return _quotient_rule(N_NODES[code], N, dN)
+
+
+@njit
+def weighted_values(code, nodes, points, N):
+    """Turn the polynomial values ``N`` (from :func:`shape`) of a rational element with global node
+    ids ``nodes`` into R_a = w_a B_a / W, weights ``points[node, 3]`` (the mesh's ``kernel_points``);
+    polynomial types unchanged."""
+    if not RATIONAL[code]:
+        return
+    for a in range(N_NODES[code]):
+        N[a] *= points[nodes[a], 3]
+    _divide_by_weight(N_NODES[code], N)
+
+
+@njit
+def weighted_derivatives(code, xi, nodes, points, N, dN):
+    """∂N_a/∂ξ of element type ``code`` at ``xi`` into ``dN`` (``N`` receives the values), rational ones
+    with the weights ``points[nodes[a], 3]`` (the mesh's ``kernel_points``)."""
+    shape(code, xi, N)
+    deriv(code, xi, dN)
+    if not RATIONAL[code]:
+        return
+    for a in range(N_NODES[code]):
+        w = points[nodes[a], 3]
+        N[a] *= w
+        dN[a, 0] *= w
+        dN[a, 1] *= w
+        dN[a, 2] *= w
+    _quotient_rule(N_NODES[code], N, dN)

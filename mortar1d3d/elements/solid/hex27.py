@@ -9,10 +9,10 @@ import numpy as np
 from ..._config import njit
 from ...quadrature import hexahedron_rule
 from ..descriptor import SolidElementType
-from .hex_family import HEXAHEDRON, QUADRATIC_LATTICE, QUADRATIC_NODES, triquadratic_bernstein_matrix
+from .hex_family import (HEXAHEDRON, QUADRATIC_NODES, lattice_gradients, lattice_values,
+                         triquadratic_bernstein_matrix)
 
 REFERENCE_NODES = QUADRATIC_NODES
-_LATTICE = QUADRATIC_LATTICE
 
 
 @njit
@@ -32,8 +32,7 @@ def shape(xi, N):
     dv = np.empty((3, 3))
     for i in range(3):
         _line3(xi[i], v[i], dv[i])
-    for a in range(27):
-        N[a] = v[0, _LATTICE[a, 0]] * v[1, _LATTICE[a, 1]] * v[2, _LATTICE[a, 2]]
+    lattice_values(v, N)
 
 
 @njit
@@ -43,11 +42,7 @@ def deriv(xi, dN):
     dv = np.empty((3, 3))
     for i in range(3):
         _line3(xi[i], v[i], dv[i])
-    for a in range(27):
-        l0, l1, l2 = _LATTICE[a, 0], _LATTICE[a, 1], _LATTICE[a, 2]
-        dN[a, 0] = dv[0, l0] * v[1, l1] * v[2, l2]
-        dN[a, 1] = v[0, l0] * dv[1, l1] * v[2, l2]
-        dN[a, 2] = v[0, l0] * v[1, l1] * dv[2, l2]
+    lattice_gradients(v, dv, dN)
 
 
 DESCRIPTOR = SolidElementType(

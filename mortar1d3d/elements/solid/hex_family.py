@@ -157,6 +157,24 @@ QUADRATIC_NODES = np.array([
 QUADRATIC_LATTICE = (QUADRATIC_NODES + 1).astype(np.int64)
 
 
+@njit
+def lattice_values(v, N):
+    """N_a = v[0, l0] v[1, l1] v[2, l2] over the 27 nodes (lattice indices l of QUADRATIC_LATTICE), from
+    the three 1D quadratic functions per direction ``v`` (3, 3): the tensor products of hex27 and nurbs27."""
+    for a in range(27):
+        N[a] = v[0, QUADRATIC_LATTICE[a, 0]] * v[1, QUADRATIC_LATTICE[a, 1]] * v[2, QUADRATIC_LATTICE[a, 2]]
+
+
+@njit
+def lattice_gradients(v, dv, dN):
+    """∂N_a/∂ξ_i (27, 3) of the tensor products of :func:`lattice_values`, with the 1D derivatives ``dv``."""
+    for a in range(27):
+        l0, l1, l2 = QUADRATIC_LATTICE[a, 0], QUADRATIC_LATTICE[a, 1], QUADRATIC_LATTICE[a, 2]
+        dN[a, 0] = dv[0, l0] * v[1, l1] * v[2, l2]
+        dN[a, 1] = v[0, l0] * dv[1, l1] * v[2, l2]
+        dN[a, 2] = v[0, l0] * v[1, l1] * dv[2, l2]
+
+
 def quadratic_bernstein_1d():
     """Map values at (-1, 0, +1) of a 1D quadratic to its Bernstein control points."""
     return np.array([[1.0, 0.0, 0.0], [-0.5, 2.0, -0.5], [0.0, 0.0, 1.0]])

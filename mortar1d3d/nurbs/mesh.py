@@ -1,0 +1,105 @@
+"""From NURBS patches to the engine: a mesh of rational Bézier elements and the map to control points.
+
+Every quadratic NURBS element becomes a ``nurbs27`` element (:mod:`mortar1d3d.elements.solid.nurbs27`):
+its 27 Bézier control points and weights from Bézier extraction, in hexahedron27 order. Bézier
+points that coincide (same position and weight: the shared faces, edges and corners of neighbouring
+elements, which are the same rational functions there) are one mesh node. The NURBS functions are
+combinations of the Bézier ones, R_i = Σ_a E_ia R^b_a, so anything the engine or the model computes
+on the Bézier mesh maps to the control points by the sparse matrix ``T`` (n_mesh_nodes, n_control):
+
+    node values = T @ control-point values,   M_control = M_mesh (T ⊗ I₃),   K_control = Tᵀ K_mesh T
+
+(the mesh's nodes are ``T @ control``, so the constraint residual D q_B - M X_S is the same in both).
+"""
+import numpy as np
+import scipy.sparse as sp
+
+from ..elements.solid.hex_family import QUADRATIC_LATTICE
+from ..mesh import SolidMesh
+from .patch import NurbsSolid
+
+#: tensor (C-order 3 × 3 × 3) index of each hexahedron27 node
+VTK_FROM_TENSOR = (QUADRATIC_LATTICE[:, 0] * 3 + QUADRATIC_LATTICE[:, 1]) * 3 + QUADRATIC_LATTICE[:, 2]
+
+
+class BezierMesh:
+    """The engine's view of a :class:`~mortar1d3d.nurbs.NurbsSolid` (quadratic patches).
+
+    Attributes
+    ----------
+    solid : SolidMesh
+        ``nurbs27`` elements (patch by patch, each patch's elements with the last parameter
+        direction fastest), nodes = Bézier control points, with weights.
+    T : scipy.sparse.csr_matrix (n_nodes, n_control)
+        Mesh node values from control-point values (module docstring).
+    element_patch : (n_elements,) int64
+        The patch of every element.
+    element_span : (n_elements, 3) int64
+        The element's span index per parameter direction within its patch.
+    nurbs : NurbsSolid
+    """
+
+    def __init__(self, nurbs, tol=1e-10):
+        if not isinstance(nurbs, NurbsSolid):
+            raise TypeError(f"expected a NurbsSolid, got {type(nurbs).__name__}")
+        ids, vals = [], []
+        control, weights, patch_of, spans = [], [], [], []
+        for k, patch in enumerate(nurbs.patches):
+            if patch.degrees != (2, 2, 2):
+                raise ValueError(f"patches[{k}]: the engine takes quadratic NURBS (nurbs27 elements), got degrees "
+                                 f"{patch.degrees}")
+            P, w, functions, E = patch.bezier_elements()
+            ids.append(nurbs.patch_ids[k][functions])                    # (m, 27) global control points
+            control.append(P[:, VTK_FROM_TENSOR])
+            weights.append(w[:, VTK_FROM_TENSOR])
+            vals.append(E[:, :, VTK_FROM_TENSOR])                         # [element, function, vtk node]
+            patch_of.append(np.full(len(P), k, dtype=np.int64))
+            spans.append(np.stack(np.unravel_index(np.arange(len(P)), patch.element_shape), axis=1))
+        P = np.concatenate(control)                                       # (n_el, 27, 3)
+        w = np.concatenate(weights)
+        n_el = len(P)
+        extent = max(float(np.ptp(P.reshape(-1, 3), axis=0).max()), 1e-300)
+        key = np.round(np.column_stack([P.reshape(-1, 3) / (tol * extent), w.reshape(-1) / tol])).astype(np.int64)
+        _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+        order = np.argsort(first)
+        rank = np.empty_like(order)
+        rank[order] = np.arange(len(order))
+        node = rank[inverse.ravel()].reshape(n_el, 27)
+        keep = np.sort(first)
+        points = P.reshape(-1, 3)[keep]
+        node_weights = w.reshape(-1)[keep]
+        # T: the row of a mesh node from the first element that has it (the others agree to round-off)
+        E = np.concatenate(vals)
+        flat_rows = np.broadcast_to(27 * np.arange(n_el)[:, None, None] + np.arange(27)[None, None, :], E.shape).ravel()
+        flat_cols = np.broadcast_to(np.concatenate(ids)[:, :, None], E.shape).ravel()
+        flat_vals = E.ravel()
+        local_to_node = np.full(n_el * 27, -1, dtype=np.int64)
+        local_to_node[keep] = np.arange(len(keep))
+        take = local_to_node[flat_rows] >= 0
+        nonzero = take & (flat_vals != 0.0)
+        self.T = sp.csr_matrix((flat_vals[nonzero], (local_to_node[flat_rows[nonzero]], flat_cols[nonzero])),
+                               shape=(len(keep), nurbs.n_control))
+        self.solid = SolidMesh(points, {"nurbs27": node}, weights=node_weights)
+        self.element_patch = np.concatenate(patch_of)
+        self.element_span = np.concatenate(spans).astype(np.int64)
+        self.nurbs = nurbs
+
+    def control_to_nodes(self, values):
+        """Mesh node values (n_nodes, k) from control-point values (n_control, k) (e.g. displacements)."""
+        return self.T @ np.asarray(values, dtype=np.float64)
+
+    def nodes_to_control(self, M):
+        """An operator on mesh node DOFs (columns 3 a + i, e.g. the mortar M) as one on control-point DOFs."""
+        return sp.csr_matrix(M @ sp.kron(self.T, sp.identity(3), format="csr"))
+
+    def __repr__(self):
+        return f"BezierMesh({self.solid.n_elements} nurbs27 elements, {self.solid.n_nodes} nodes, " \
+               f"{self.nurbs.n_control} control points)"
+
+
+def bezier_mesh(nurbs, tol=1e-10):
+    """The engine's mesh of a quadratic :class:`~mortar1d3d.nurbs.NurbsSolid`: a :class:`BezierMesh`."""
+    return BezierMesh(nurbs, tol)
+
+
+__all__ = ["BezierMesh", "bezier_mesh", "VTK_FROM_TENSOR"]

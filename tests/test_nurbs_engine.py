@@ -1,0 +1,148 @@
+"""The engine on NURBS solids (issue 19 item 3): quadratic NURBS spans as rational Bézier elements
+(``nurbs27``) in point location, segmentation, integration, assembly and the certificates.
+
+References: the exact hollow-cylinder sector (a point's radius, angle and height) with crossings by
+bisection (tests/naive.py), and the NURBS functions by Cox–de Boor over the knot vectors.
+"""
+import numpy as np
+import pytest
+
+import mortar1d3d as m13
+from mortar1d3d import nurbs
+from mortar1d3d.elements.validity import FOLDED, INVERTED, VALID, jacobian_validity
+from mortar1d3d.elements.solid.dispatch import SOLID_ELEMENTS
+from mortar1d3d.geometry.projection import INSIDE, OUTSIDE
+
+import naive
+
+NURBS27 = SOLID_ELEMENTS["nurbs27"]
+
+
+def sector(angle=90.0, elements=(1, 1, 1), r=(0.1, 0.2), height=0.3):
+    return nurbs.bezier_mesh(nurbs.hollow_cylinder(r[0], r[1], height, angle=angle, elements=elements))
+
+
+def jittered(seed):
+    """A closed pipe with control points moved by up to 2 % of the wall and weights scaled by 0.8…1.25:
+    genuinely rational, curved elements of unequal weights (still valid)."""
+    rng = np.random.default_rng(seed)
+    patch = nurbs.hollow_cylinder(0.1, 0.2, 0.3, angle=360.0, elements=(2, 4, 2)).patches[0]
+    control = patch.control + rng.uniform(-0.002, 0.002, patch.control.shape)
+    control[:, -1] = control[:, 0]                   # keep the seam closed
+    weights = patch.weights * rng.uniform(0.8, 1.25, patch.weights.shape)
+    weights[:, -1] = weights[:, 0]
+    return nurbs.bezier_mesh(nurbs.NurbsSolid([nurbs.NurbsPatch(control, weights, patch.knots, patch.degrees)]))
+
+
+@pytest.mark.parametrize("mesh", ["sector90", "pipe120", "jittered"])
+def test_points_are_found_where_they_are(mesh):
+    """The trust property on NURBS spans: x(ξ) for random ξ inside is INSIDE at ξ to 1e-10, and
+    x(ξ) just beyond a face (1e-6 in ξ) is never INSIDE (OUTSIDE at that ξ, or no solution found:
+    NOT_CONVERGED, after the search proved that none lies inside)."""
+    bm = {"sector90": lambda: sector(), "pipe120": lambda: sector(360.0, (1, 3, 1), r=(0.2, 0.3), height=1.0),
+          "jittered": lambda: jittered(3)}[mesh]()
+    rng = np.random.default_rng(11)
+    patch = bm.nurbs.patches[0]
+    xi = rng.uniform(-1, 1, (60, 3))
+    x = patch.evaluate_elements(xi)
+    elements = np.repeat(np.arange(patch.n_elements), len(xi))
+    found, status = m13.project_points(bm.solid, x.reshape(-1, 3), elements)
+    assert (status == INSIDE).all()
+    assert np.abs(found - np.tile(xi, (patch.n_elements, 1))).max() < 1e-10
+    out = xi.copy()
+    axis = rng.integers(0, 3, len(out))
+    out[np.arange(len(out)), axis] = np.where(rng.uniform(size=len(out)) < 0.5, -1.0, 1.0) * (1 + 1e-6)
+    x = patch.evaluate_elements(out)
+    found, status = m13.project_points(bm.solid, x.reshape(-1, 3), elements)
+    # outside: proved (OUTSIDE with the solution beyond the face) or no solution found at all
+    assert not (status == INSIDE).any()
+    hit = status == OUTSIDE
+    assert hit.mean() > 0.95
+    assert (np.abs(found[hit]).max(axis=1) > 1 + 1e-7).all()
+    # mostly the solution beyond the face; a strongly rational element may have another one farther out
+    assert (np.abs(found[hit] - np.tile(out, (patch.n_elements, 1))[hit]).max(axis=1) < 1e-10).mean() > 0.95
+
+
+def _crossing_beam(points):
+    """One Hermite element through a quadratic curve (reproduced exactly by the cubic)."""
+    a, m, b = (np.asarray(p, dtype=float) for p in points)
+    f = lambda t: (1 - t) ** 2 * a + 2 * t * (1 - t) * m + t * t * b
+    df = lambda t: 2 * (1 - t) * (m - a) + 2 * t * (b - m)
+    return m13.BeamMesh.from_curve(f, df, 0.0, 1.0, 1)
+
+
+def test_curved_beam_crossing_the_inner_face_twice_has_two_pieces():
+    """A curved Hermite line through the 90° hollow-cylinder element (radii 0.1 / 0.2, height 0.3):
+    it enters through θ = 0, dips into the hole (the curved inner face, twice) and leaves through
+    θ = 90°. Two pieces, at the crossings found by bisection of the exact sector."""
+    bm = sector()
+    beams = _crossing_beam([[0.16, -0.02, 0.05], [0.06, 0.06, 0.2], [-0.02, 0.16, 0.1]])
+    reference = naive.indicator_crossings(lambda eta: beams.evaluate(0, eta),
+                                          lambda x: naive.in_sector(x, 0.1, 0.2, 90.0, 0.3))
+    assert len(reference) == 4
+    ops = m13.assemble_mortar(beams, bm.solid, integration="segment", n_gauss=6)
+    seg = np.sort(ops.segments, order="eta_start")
+    assert len(seg) == 2 and (seg["solid_element"] == 0).all()
+    found = np.column_stack([seg["eta_start"], seg["eta_end"]]).ravel()
+    assert np.abs(found - reference).max() < 1e-12
+    assert ops.constraint_residual < 1e-14
+    length = naive.arc_length(beams, 0, reference[0], reference[1]) + naive.arc_length(beams, 0, reference[2],
+                                                                                         reference[3])
+    assert abs(ops.embedded_length - length) < 1e-9 * length     # 6 Gauss points on |r'| (not a polynomial)
+
+
+@pytest.mark.parametrize("integration", ["segment", "element", "auto"])
+def test_operators_on_a_closed_pipe(integration):
+    """Curved beams through a closed pipe of 2 × 6 × 2 elements: the certificates hold, the segments
+    tile the beam inside the pipe (coupled length = the length inside, by bisection), and M on the
+    control points equals Σ w Φ_j R_i with R_i by Cox–de Boor."""
+    bm = nurbs.bezier_mesh(nurbs.hollow_cylinder(0.2, 0.3, 1.0, angle=360.0, elements=(2, 6, 2)))
+    beams = m13.BeamMesh.join([_crossing_beam([[0.35, -0.05, 0.1], [0.0, 0.45, 0.5], [-0.35, 0.05, 0.9]]),
+                               _crossing_beam([[0.28, -0.2, 0.3], [0.1, 0.1, 0.6], [-0.28, 0.2, 0.45]])])
+    ops = m13.assemble_mortar(beams, bm.solid, integration=integration, n_gauss=6)
+    assert ops.constraint_residual < 1e-13
+    M = bm.nodes_to_control(ops.M)
+    Dq = ops.D @ beams.centreline_dofs()
+    assert np.linalg.norm(Dq - M @ bm.nurbs.control.ravel()) < 1e-13 * np.linalg.norm(Dq)
+    patch = bm.nurbs.patches[0]
+    ids = bm.nurbs.patch_ids[0]
+    lm_rows, _ = naive.lm_rows(beams, 2)
+    expected = np.zeros((ops.n_lm, bm.nurbs.n_control))
+    for p in ops.points:
+        R = naive.nurbs_functions(patch, int(p["solid_element"]), p["xi"])
+        Phi = naive.multiplier_values("line2", p["eta"])
+        rows = lm_rows[int(p["beam_element"])]
+        np.add.at(expected, (rows[:, None], ids[None, :]), p["weight"] * np.outer(Phi, R))
+    assert np.abs(M.toarray()[0::3, 0::3] - expected).max() < 1e-14
+    if integration != "element":
+        # the segments of each beam element, joined where they meet, are the parts inside the pipe
+        for e in range(beams.n_elements):
+            eta = naive.indicator_crossings(lambda t: beams.evaluate(e, t),
+                                            lambda x: naive.in_sector(x, 0.2, 0.3, 360.0, 1.0))
+            bounds = np.concatenate([[-1.0], eta, [1.0]])
+            start_inside = naive.in_sector(beams.evaluate(e, [-1.0]), 0.2, 0.3, 360.0, 1.0)[0]
+            expected = bounds[(0 if start_inside else 1):][: 2 * ((len(bounds) - (0 if start_inside else 1)) // 2)]
+            seg = np.sort(ops.segments[ops.segments["beam_element"] == e], order="eta_start")
+            joined = [seg["eta_start"][0]]
+            for a, b in zip(seg["eta_end"][:-1], seg["eta_start"][1:]):
+                if b - a > 1e-12:
+                    joined += [a, b]
+            joined.append(seg["eta_end"][-1])
+            assert len(joined) == len(expected) and np.abs(np.array(joined) - expected).max() < 1e-12
+            assert len(seg) > len(expected) // 2          # cut at the element faces inside the wall too
+
+
+def test_validity_of_rational_elements():
+    bm = jittered(5)
+    X = bm.solid.points[bm.solid.connectivity[:, :27]]
+    W = bm.solid.weights[bm.solid.connectivity[:, :27]]
+    h = np.linalg.norm(X.max(axis=1) - X.min(axis=1), axis=1)
+    assert (jacobian_validity(NURBS27, X, h, W) == VALID).all()
+    # mirrored: inverted at the corners
+    assert (jacobian_validity(NURBS27, X * [1, 1, -1], h, W) == INVERTED).all()
+    # the centre control point of one element pushed through a face: folded inside, fine at the corners
+    Y = X[:1].copy()
+    Y[0, 26] = Y[0, 20] + 3.0 * (Y[0, 20] - Y[0, 21])
+    assert jacobian_validity(NURBS27, Y, h[:1], W[:1])[0] == FOLDED
+    with pytest.raises(m13.MeshError, match="weights"):
+        m13.SolidMesh(bm.solid.points, {"nurbs27": bm.solid.connectivity[:, :27]})
