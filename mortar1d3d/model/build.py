@@ -141,6 +141,12 @@ def build_solid_mesh(spec):
             mesh = reader(mesh).read_solid(mesh, "solid.mesh")
     except (MeshError, OSError) as exc:
         raise SceneError(f"solid.mesh: {exc}") from None
+    rational = sorted({d.name for d, _ in mesh.blocks if d.rational})
+    if rational:
+        # surface loads, the Gauss-point and rotational couplings and the VTU output evaluate the
+        # polynomial part of an element only: a rational one would be silently wrong there
+        raise SceneError(f"solid.mesh: rational element types {rational} (NURBS spans) are not supported in "
+                         "scenes yet; run them with mortar1d3d.nurbs.NurbsSolidModel and assemble_mortar")
     check_solid_nodes(mesh, "solid.mesh")
     return mesh
 
