@@ -756,10 +756,11 @@ class Model:
                 if rot.any():
                     key, lm = "coupling.rotational.lm", self.scene.coupling["rotational"]["lm"]
                 warnings.warn(f"{key}: the coupling rows of {what} are combinations of the other rows (the "
-                              f"multipliers, lm = {lm!r}, are richer than what the solid mesh "
-                              "resolves along the beam, or supports fixed what they act on); they are left out, and "
-                              "λ there is the least-norm line load transferring the same forces. A lower lm "
-                              "(line2) or a finer solid mesh avoids this", CouplingWarning, stacklevel=4)
+                              f"multipliers, lm = {lm!r}, are richer than what the solid mesh, or the "
+                              "integration points along the beam (n_gauss), resolve, or supports fixed what they act "
+                              "on); they are left out, and λ there is the least-norm line load transferring the same "
+                              "forces. A lower lm (line2), more integration points or a finer solid mesh avoids this",
+                              CouplingWarning, stacklevel=4)
             self._dependent = dep
         return self._dependent
 
