@@ -345,7 +345,12 @@ def _shear_torsion_section(value, path):
             r = _number(value["radius"], f"{path}.radius", low=0.0, low_open=True)
             from .physics.simo_reissner import cowper_shear_correction
             A, I2, I_T = math.pi * r * r, math.pi * r ** 4 / 4.0, math.pi * r ** 4 / 2.0
-            I3, k = I2, cowper_shear_correction(nu) if -1.0 < nu < 0.5 else 1.0
+            if not -1.0 < nu < 0.5:
+                # Cowper's correction needs the Poisson's ratio of an isotropic material
+                _fail(f"{path}.G", f"E/(2G) - 1 = {nu:.6g} is not a Poisson's ratio in (-1, 0.5), which the circular "
+                                   "section's shear correction needs; give A, I2, I3, I_T and shear_correction "
+                                   "instead of radius")
+            I3, k = I2, cowper_shear_correction(nu)
         else:
             A, I2, I3, I_T = (_number(_required(value, key, path), f"{path}.{key}", low=0.0, low_open=True)
                               for key in ("A", "I2", "I3", "I_T"))

@@ -97,6 +97,13 @@ def test_cylinder_is_exact(angle, elements, degree):
     theta = np.arctan2(x[..., 1], x[..., 0]) % (2 * np.pi)
     if angle < 360:
         assert theta.max() < np.radians(angle)
+        # the end faces: θ = 0 on the first circumferential span's side -1, θ = angle on the last's side +1
+        second = np.unravel_index(np.arange(patch.n_elements), patch.element_shape)[1]
+        for side, expected, ids in ((-1.0, 0.0, second == 0), (1.0, np.radians(angle), second == elements[1] - 1)):
+            on = xi.copy()
+            on[:, 1] = side
+            y = patch.evaluate_elements(on)[ids]
+            assert np.abs(np.arctan2(y[..., 1], y[..., 0]) - expected).max() < 1e-14
 
 
 def test_closed_pipe_seam_is_identified():

@@ -488,6 +488,8 @@ def test_results_do_not_depend_on_the_thread_count():
     model = SimoReissnerBeam(beams, SECTION)
     d, psi = deformed_state(model, seed=9, size=0.01, turn=0.05)
     threads = numba.get_num_threads()
+    if threads < 2:
+        pytest.skip("one Numba thread: nothing to compare with")
     try:
         numba.set_num_threads(1)
         f1, K1 = model.evaluate(d, psi)

@@ -226,6 +226,8 @@ def test_sections_of_a_simo_reissner_beam():
 @pytest.mark.parametrize("change, message", [
     (dict(section={"E": 1.0, "G": 0.4, "A": 1.0, "I2": 0.1, "I3": 0.1}), r"^beams\[0\]\.section\.I_T: missing"),
     (dict(section={"E": 1.0, "nu": 0.3, "G": 0.4, "radius": 0.1}), r"^beams\[0\]\.section\.G: give exactly one of G"),
+    # G = E/4 means ν = 1: no isotropic material, so no Cowper correction (it used to fall back to k = 1 silently)
+    (dict(section={"E": 1.0, "G": 0.25, "radius": 0.1}), r"^beams\[0\]\.section\.G: E/\(2G\) - 1 = 1 is not a Poisson"),
     (dict(section={"EA": 1.0, "GA2": 1.0, "GA3": 1.0, "GI_T": 1.0, "EI2": 1.0}), r"^beams\[0\]\.section\.EI3: missing"),
     (dict(section={"EA": 1.0, "GA2": 1.0, "GA3": 1.0, "GI_T": 1.0, "EI2": 1.0, "EI3": 1.0, "E": 1.0}),
      r"^beams\[0\]\.section\.E: give either the stiffnesses"),

@@ -71,7 +71,7 @@ def intersect_face(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, 
             return CONVERGED
         if not converged and it >= NEWTON_MAX_ITERATIONS:
             return FAILED
-        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(solid_code, X, xi, dN)
+        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(solid_code, X, xi, N, dN)
         a, b = face[1], face[2]
         det, s_eta, s_u, s_v = solve3(
             -d0, j00 * a[0] + j01 * a[1] + j02 * a[2], j00 * b[0] + j01 * b[1] + j02 * b[2],

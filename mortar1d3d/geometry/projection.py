@@ -45,10 +45,11 @@ def map_point(code, X, xi, N):
 
 
 @njit
-def jacobian(code, X, xi, dN):
-    """J[i, k] = ∂x_i/∂ξ_k as a 9-tuple, row by row."""
+def jacobian(code, X, xi, N, dN):
+    """J[i, k] = ∂x_i/∂ξ_k as a 9-tuple, row by row. ``N`` is scratch: a rational type leaves R_a(ξ)
+    there (polynomial types do not touch it)."""
     if solid.RATIONAL[code]:
-        solid.rational_deriv(code, xi, X, np.empty(solid.MAX_NODES), dN)
+        solid.rational_deriv(code, xi, X, N, dN)
     else:
         solid.deriv(code, xi, dN)
     j00 = j01 = j02 = j10 = j11 = j12 = j20 = j21 = j22 = 0.0
@@ -82,7 +83,7 @@ def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
     for _ in range(NEWTON_MAX_ITERATIONS):
         if rn <= tol:
             return CONVERGED
-        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, dN)
+        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, N, dN)
         det, d0, d1, d2 = solve3(j00, j01, j02, j10, j11, j12, j20, j21, j22, r0, r1, r2)
         if det == 0.0:
             return FAILED
@@ -258,10 +259,11 @@ def search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN):
     """
     rational = solid.RATIONAL[code]
     b = a
-    L = np.empty((3, 3))
+    L = a               # polynomial types use neither b nor L: no allocation on their path
     if rational:
         rational_coefficients(code, X, a)
         b = np.empty((solid.MAX_NODES, 4))        # the coefficients of z = L (x - x(m)) per box
+        L = np.empty((3, 3))
     else:
         monomial_coefficients(code, X, a)
     c0, c1, c2 = solid.CENTRE[code, 0], solid.CENTRE[code, 1], solid.CENTRE[code, 2]
@@ -286,7 +288,7 @@ def search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN):
             continue
         trial[0], trial[1], trial[2] = m0, m1, m2
         x0, x1, x2 = map_point(code, X, trial, N)
-        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, trial, dN)
+        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, trial, N, dN)
         det = j00 * (j11 * j22 - j12 * j21) - j01 * (j10 * j22 - j12 * j20) + j02 * (j10 * j21 - j11 * j20)
         split = True
         if det > 0.0:
@@ -436,7 +438,7 @@ def polish(code, X, p0, p1, p2, h, xi, trial, N, dN):
     r0, r1, r2 = p0 - x0, p1 - x1, p2 - x2
     if norm3(r0, r1, r2) <= _ROUND_OFF * h:
         return      # already at round-off (affine elements after one Newton step): nothing to gain
-    j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, dN)
+    j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, N, dN)
     det, d0, d1, d2 = solve3(j00, j01, j02, j10, j11, j12, j20, j21, j22, r0, r1, r2)
     if det == 0.0:
         return
@@ -560,7 +562,7 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
                 if affine_inverse(code, X, solid_h[s], EXACT_AFFINE_TOL, table[s, :3]):
                     table[s, 4, 0] = 1.0
                     continue
-                j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xc, dN)
+                j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xc, N, dN)
                 if inverse3(j00, j01, j02, j10, j11, j12, j20, j21, j22, table[s, :3]) > 0.0:
                     table[s, 4, 0] = 0.0
                     table[s, 4, 1] = certified_margin(code, X, table[s, :3], a)

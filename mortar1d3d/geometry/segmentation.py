@@ -258,7 +258,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                             xi[:] = start
                     if ok[k]:
                         xi_s[k] = xi
-                        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, dN)
+                        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, N, dN)
                         det, dxi_s[k, 0], dxi_s[k, 1], dxi_s[k, 2] = solve3(j00, j01, j02, j10, j11, j12, j20, j21,
                                                                            j22, d0, d1, d2)
                     else:

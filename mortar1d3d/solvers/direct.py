@@ -96,9 +96,10 @@ def factorize_spd_block(A):
     against the solid alone"). A matrix that the banded Cholesky finds not positive definite goes
     to SuperLU as well (diagonal pivots: it fails there too if a pivot is exactly zero).
     """
-    if bandwidth(A) <= BANDED_MAX_BANDWIDTH:
+    k = bandwidth(A)
+    if k <= BANDED_MAX_BANDWIDTH:
         try:
-            return BandedCholesky(A, bandwidth(A))
+            return BandedCholesky(A, k)
         except np.linalg.LinAlgError:
             pass
     return factorize(A, symmetric_positive=True)
