@@ -6,14 +6,14 @@ local frame without cancellation (the position functions sum to one).
 """
 import numpy as np
 
-from .._config import njit
+from .._config import njit, njit_inline
 from ..elements import beam as beam_functions
 
 #: a map counts as affine when its nonlinear part is below AFFINE_TOL times the element size
 AFFINE_TOL = 1e-12
 
 
-@njit
+@njit_inline
 def beam_point(code, Q, length, s0, s1, s2, eta, H, dH):
     """(r0, r1, r2, dr0, dr1, dr2): r(η) + shift and dr/dη for coefficients ``Q`` (4, 3)."""
     beam_functions.shape(code, eta, length, H)

@@ -9,7 +9,7 @@ O(n_beam + n_solid) for meshes of comparable element sizes, not O(n_beam · n_so
 import numpy as np
 from numba import prange
 
-from .._config import PARAMETER_TOL, njit, njit_parallel
+from .._config import PARAMETER_TOL, njit, njit_parallel, njit_inline
 from .._memory import carve
 from .._schedule import claim, new_claims, workers
 from ..elements import beam as beam_functions
@@ -56,7 +56,7 @@ def beam_frames(beams, padding=PARAMETER_TOL):
     return Q, origin, boxes, size
 
 
-@njit
+@njit_inline
 def _hull_box(points, n, box):
     """The box (2, 3) of the first ``n`` rows of ``points``: a curve or element inside their convex hull
     is inside it."""

@@ -139,6 +139,8 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
                 e = p_beam[group_start[g]]
                 s = p_solid[group_start[g]]
                 nN = solid_types.n_nodes(codes[s])
+                # a call per point only for rational elements (their weights)
+                rational = solid_types.RATIONAL[codes[s]]
                 Dg[:] = 0.0
                 Mg[:] = 0.0
                 kg[:] = 0.0
@@ -146,7 +148,8 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
                     lm_shape(n_phi, eta[q], Phi)
                     beam_shape(beam_code, eta[q], lengths[e], H)
                     solid_types.shape(codes[s], xi[q], N)
-                    solid_types.weighted_values(codes[s], conn[s], points, N)
+                    if rational:
+                        solid_types.weighted_values(codes[s], conn[s], points, N)
                     w = weight[q]
                     for j in range(n_phi):
                         wj = w * Phi[j]

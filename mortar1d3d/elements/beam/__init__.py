@@ -19,7 +19,7 @@ derived from that list.
 import numpy as np
 from numba import literal_unroll
 
-from ..._config import njit
+from ..._config import njit, njit_inline
 from ..descriptor import BeamElementType
 from ..selector import kernel_selector
 from .registry import BEAM_TYPES
@@ -94,7 +94,7 @@ def control_points(code, Qe, length, ctrl):
     return n
 
 
-@njit
+@njit_inline
 def n_functions(code):
     return N_FUNCTIONS[code]
 

@@ -9,7 +9,7 @@ entering H2, H4, so that dr/dη = L/2 · t at the nodes:
 L is the arc length of the curve it defines (see :func:`mortar1d3d.mesh.hermite_lengths`).
 Coefficients per element: r1, t1, r2, t2; 6 centreline DOFs per node ``[r, t]``.
 """
-from ..._config import njit
+from ..._config import njit, njit_inline
 from ..descriptor import BeamElementType
 
 
@@ -40,7 +40,7 @@ def deriv2(eta, length, ddH):
     ddH[3] = 0.125 * length * (2.0 + 6.0 * eta)
 
 
-@njit
+@njit_inline
 def coefficients(positions, tangents, nodes, origin, Qe):
     """Coefficients (r1, t1, r2, t2) of element ``nodes`` into ``Qe`` (4, 3), positions minus ``origin``."""
     n0, n1 = nodes[0], nodes[1]
@@ -51,7 +51,7 @@ def coefficients(positions, tangents, nodes, origin, Qe):
         Qe[3, i] = tangents[n1, i]
 
 
-@njit
+@njit_inline
 def control_points(Qe, length, ctrl):
     """Bézier control points r1, r1 + L/3 t1, r2 - L/3 t2, r2 of coefficients ``Qe`` into ``ctrl``; returns 4."""
     for i in range(3):

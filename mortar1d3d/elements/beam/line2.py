@@ -3,7 +3,7 @@
 Coefficients per element: r1, r2; 3 centreline DOFs per node. ``length`` is unused (the
 functions do not depend on it) and kept for one signature across centreline types.
 """
-from ..._config import njit
+from ..._config import njit, njit_inline
 from ..descriptor import BeamElementType
 
 
@@ -25,7 +25,7 @@ def deriv2(eta, length, ddH):
     ddH[1] = 0.0
 
 
-@njit
+@njit_inline
 def coefficients(positions, tangents, nodes, origin, Qe):
     """Coefficients (r1, r2) of element ``nodes`` into ``Qe`` (4, 3), minus ``origin``; rows 2, 3 zero."""
     for i in range(3):
@@ -35,7 +35,7 @@ def coefficients(positions, tangents, nodes, origin, Qe):
         Qe[3, i] = 0.0
 
 
-@njit
+@njit_inline
 def control_points(Qe, length, ctrl):
     """Bézier control points of coefficients ``Qe``: the two nodes; returns 2."""
     for i in range(3):

@@ -2,7 +2,7 @@
 
 Coefficients per element: r1, r2, r_mid; 3 centreline DOFs per node. ``length`` is unused.
 """
-from ..._config import njit
+from ..._config import njit, njit_inline
 from ..descriptor import BeamElementType
 
 
@@ -27,7 +27,7 @@ def deriv2(eta, length, ddH):
     ddH[2] = -2.0
 
 
-@njit
+@njit_inline
 def coefficients(positions, tangents, nodes, origin, Qe):
     """Coefficients (r1, r2, r_mid) of element ``nodes`` into ``Qe`` (4, 3), minus ``origin``; row 3 zero."""
     for i in range(3):
@@ -37,7 +37,7 @@ def coefficients(positions, tangents, nodes, origin, Qe):
         Qe[3, i] = 0.0
 
 
-@njit
+@njit_inline
 def control_points(Qe, length, ctrl):
     """Bézier control points r1, 2 r_mid - (r1 + r2)/2, r2 of coefficients ``Qe``; returns 3."""
     for i in range(3):

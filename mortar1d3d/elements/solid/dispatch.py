@@ -14,7 +14,7 @@ code as a hand-written ``if`` chain, generated from the list.
 import numpy as np
 from numba import literal_unroll
 
-from ..._config import njit
+from ..._config import njit, njit_inline
 from ..selector import kernel_selector
 from .registry import FAMILIES, SOLID_TYPES
 
@@ -162,6 +162,9 @@ _type_kernel = kernel_selector(SOLID_TYPES)
 _family_kernel = kernel_selector(FAMILIES)
 
 
+# The dispatchers over the registry (``literal_unroll``) are never inlined at Numba IR level:
+# inlined into a prange loop they stop Numba from parallelising it (the test suite turns that
+# warning into an error). Table look-ups without a loop (n_nodes, centre) are inlined.
 @njit
 def shape(code, xi, N):
     """Shape function values of element type ``code`` at ``xi`` into ``N[:n_nodes]``."""
@@ -178,7 +181,7 @@ def deriv(code, xi, dN):
             _type_kernel(k, "deriv")(xi, dN)
 
 
-@njit
+@njit_inline
 def n_nodes(code):
     return N_NODES[code]
 
@@ -216,7 +219,7 @@ def faces(code):
     return FACES[code, : N_FACES[code]]
 
 
-@njit
+@njit_inline
 def centre(code, xi):
     """Write the parameter-space centre (Newton start) of type ``code`` into ``xi``."""
     xi[0], xi[1], xi[2] = CENTRE[code, 0], CENTRE[code, 1], CENTRE[code, 2]
