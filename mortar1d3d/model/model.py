@@ -174,7 +174,7 @@ class Model:
                              "not know); use 'direct' or 'auto' (which picks it), or enforcement = \"penalty\"")
         if solver == "amg" and lagrange:
             raise SceneError("analysis.solver: Lagrange-multiplier coupling gives a saddle point; use 'auto', "
-                             "'direct' or 'block' (MINRES, the auxiliary-space AMG inside a block preconditioner)")
+                             "'direct' or 'block' (GMRES, the auxiliary-space AMG inside a block preconditioner)")
 
     # -- solver choice --------------------------------------------------------------------------
     @property

@@ -9,8 +9,8 @@ caller), ordered ``[d_S; d_B]`` (solid first):
   with the auxiliary-space preconditioner :class:`AuxiliarySpacePreconditioner` that stays
   robust at large penalties).
 - **Lagrange multipliers**: the saddle point ``[[K, Bᵀ], [B, 0]] [x; λ] = [b; c]``:
-  :func:`solve_saddle` (sparse direct, or MINRES with an augmented-Lagrangian block
-  preconditioner: AMG on the solid, a sparse factorisation on the beams, ``κ/γ`` for ``λ``).
+  :func:`solve_saddle` (sparse direct, or GMRES with an augmented-Lagrangian block-triangular
+  preconditioner: the auxiliary space or AMG on the augmented stiffness, ``κ/γ`` for ``λ``).
 
 :func:`rigid_body_modes` gives the near null space that AMG needs for elasticity, and
 :func:`build_amg` the AMG hierarchy, which a Newton loop may build once and pass to
@@ -23,7 +23,7 @@ One idea per module, all importable from here as before:
   Cholesky of the beam blocks;
 - :mod:`~mortar1d3d.solvers.amg`: smoothed-aggregation AMG set-up;
 - :mod:`~mortar1d3d.solvers.preconditioners`: the auxiliary-space preconditioner;
-- :mod:`~mortar1d3d.solvers.krylov`: CG/MINRES to the caller's tolerance, breakdown fallback,
+- :mod:`~mortar1d3d.solvers.krylov`: CG/MINRES/GMRES to the caller's tolerance, breakdown fallback,
   round-off floor;
 - :mod:`~mortar1d3d.solvers.dependent`: dependent constraint rows;
 - :mod:`~mortar1d3d.solvers.saddle`: the saddle-point solver;
