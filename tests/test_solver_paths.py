@@ -412,12 +412,20 @@ def test_cg_breakdown_switches_to_minres_and_says_so(capsys):
 
 
 def test_newton_asks_the_linear_solver_for_a_tenth_of_its_target():
-    """The linear solves of a Newton iteration used a fixed rtol of 1e-10, whatever the analysis."""
+    """The linear solves of a Newton iteration used a fixed rtol of 1e-10, whatever the analysis,
+    then a tenth of the analysis's rtol relative to the current residual; now a tenth of what the
+    step's residual target still needs."""
     scene = triaxial_block("amg")
     scene.analysis["rtol"] = 1e-7
     for load in scene.loads:                     # σ = 0.1 E: far from the indefinite range, CG alone
         load["value"] = load["value"] / 7
     result = m13.solve(scene)
-    from mortar1d3d.solvers.newton import LINEAR_RTOL_FACTOR
-    assert math.isclose(result.model.last_linear_info["rtol"], LINEAR_RTOL_FACTOR * 1e-7)
+    from mortar1d3d.solvers.newton import LINEAR_RTOL_FACTOR, LINEAR_RTOL_MAX
+    # the last solve of the last step: a tenth of the step's target rtol ‖r_0‖ relative to its ‖r_k‖
+    residuals = result.steps[-1].residuals
+    assert len(residuals) >= 3                                      # so r_k < r_0: looser than rtol / 10
+    expected = min(LINEAR_RTOL_MAX, LINEAR_RTOL_FACTOR * 1e-7 * residuals[0] / residuals[-2])
+    assert math.isclose(result.model.last_linear_info["rtol"], expected)
+    assert expected > 10 * LINEAR_RTOL_FACTOR * 1e-7
     assert "fallback" not in result.model.last_linear_info
+    assert result.steps[-1].residuals[-1] <= 1e-7 * residuals[0]

@@ -18,7 +18,7 @@ from .direct import DIRECT_MAX_DOFS, factorize
 from .krylov import raise_not_converged, roundoff_level, run_krylov
 from .preconditioners import AuxiliarySpacePreconditioner
 
-__all__ = ["solve_saddle", "SADDLE_DIRECT_MAX_DOFS", "AUGMENTATION_FACTOR", "AUXILIARY_AUGMENTATION_FACTOR"]
+__all__ = ["solve_saddle", "SaddlePreconditioner", "SADDLE_DIRECT_MAX_DOFS", "AUGMENTATION_FACTOR", "AUXILIARY_AUGMENTATION_FACTOR"]
 
 #: ``method="auto"`` of :func:`solve_saddle`: direct up to this many unknowns (primal + λ).
 #: The same crossover as :data:`~mortar1d3d.solvers.direct.DIRECT_MAX_DOFS` (λ adds few unknowns;
@@ -33,6 +33,26 @@ AUGMENTATION_FACTOR = 0.3
 #: default ``γ = AUXILIARY_AUGMENTATION_FACTOR * (stiffness scale of all coupled DOFs)`` of the
 #: block preconditioner with the auxiliary-space preconditioner on the augmented stiffness
 AUXILIARY_AUGMENTATION_FACTOR = 10.0
+
+
+class SaddlePreconditioner:
+    """The primal block of :func:`solve_saddle`'s block preconditioner with the γ it was built
+    for, so that later solves with a similar stiffness can reuse it.
+
+    Attributes
+    ----------
+    gamma : float
+        The augmentation ``K_γ = K + γ BᵀWB`` the primal block approximates.
+    primal : str
+        ``"aux"``, ``"monolithic"`` or ``"split"`` (see :func:`solve_saddle`).
+    apply : callable
+        ``(n,) -> (n,)``: one application of the primal preconditioner.
+    levels : int
+        AMG levels.
+    """
+
+    def __init__(self, gamma, primal, apply, levels):
+        self.gamma, self.primal, self.apply, self.levels = gamma, primal, apply, levels
 
 
 def _constraint_rows(B, kappa):
@@ -67,7 +87,7 @@ def _stiffness_scale(K, BtWB, dofs):
 
 def solve_saddle(K, B, kappa, b, c, method="auto", *, solid=None, beam=None, penalty_scale=None,
                  near_nullspace=None, rtol=1e-10, maxiter=1000, primal=None, dependent=None, prolongation=None,
-                 block_size=None, krylov="gmres"):
+                 block_size=None, krylov="gmres", preconditioner=None):
     """Solve the mortar saddle point ``[[K, Bᵀ], [B, 0]] [x; λ] = [b; c]``.
 
     Parameters
@@ -125,6 +145,10 @@ def solve_saddle(K, B, kappa, b, c, method="auto", *, solid=None, beam=None, pen
         Block method: right-preconditioned GMRES with the block upper-triangular preconditioner
         (default), or MINRES with the block-diagonal one (kept for comparison: 3-4x the
         iterations, see Notes).
+    preconditioner : SaddlePreconditioner, optional
+        ``info["preconditioner"]`` of an earlier block solve with the same ``B`` and a similar
+        ``K`` (a later Newton iteration), reused instead of building the primal block anew: its
+        γ replaces ``penalty_scale``, its primal preconditioner stands for ``K_γ``.
 
     Returns
     -------
@@ -140,7 +164,8 @@ def solve_saddle(K, B, kappa, b, c, method="auto", *, solid=None, beam=None, pen
         dependent ones too), ``n_multipliers`` (independent rows solved for), ``dependent_rows``
         (ids), ``status`` (``"converged"`` or ``"roundoff"``, see
         :func:`~mortar1d3d.solvers.linear.solve_linear`), and after a breakdown of the Krylov method
-        ``fallback`` (``"direct"``) and ``note``.
+        ``fallback`` (``"direct"``) and ``note``; the block method adds ``preconditioner`` (a
+        :class:`SaddlePreconditioner`, for ``preconditioner`` of a later call).
 
     Raises
     ------
@@ -263,7 +288,9 @@ def solve_saddle(K, B, kappa, b, c, method="auto", *, solid=None, beam=None, pen
     cc = c[rows]
     W = sp.diags(1.0 / kappa_rows[rows])
     BtWB = (Bc.T @ W @ Bc).tocsr()
-    if penalty_scale is not None:
+    if preconditioner is not None:
+        gamma = preconditioner.gamma
+    elif penalty_scale is not None:
         gamma = float(penalty_scale)
     elif primal == "aux":
         gamma = AUXILIARY_AUGMENTATION_FACTOR * _stiffness_scale(K, BtWB, np.arange(n))
@@ -347,7 +374,9 @@ def solve_saddle(K, B, kappa, b, c, method="auto", *, solid=None, beam=None, pen
         if null is not None and null.shape[0] != n:
             raise ValueError(f"near_nullspace must have shape ({n}, k), got {null.shape}")
         schur_inverse = gamma / kappa_rows[rows]         # S̃⁻¹ = γ W
-        if primal == "aux":
+        if preconditioner is not None:
+            primal, apply_primal, levels = preconditioner.primal, preconditioner.apply, preconditioner.levels
+        elif primal == "aux":
             aux = AuxiliarySpacePreconditioner(K_gamma, solid, beam, prolongation,
                                                None if null is None else null[solid], block_size=block_size)
             levels = aux.levels
@@ -372,6 +401,7 @@ def solve_saddle(K, B, kappa, b, c, method="auto", *, solid=None, beam=None, pen
         info["amg_levels"] = levels
         info["primal"] = primal
         info["krylov"] = krylov
+        info["preconditioner"] = SaddlePreconditioner(gamma, primal, apply_primal, levels)
 
         augmented = sp.bmat([[K_gamma, Bc.T], [Bc, None]], format="csr")
         rhs_aug = np.concatenate([b + gamma * (Bc.T @ (W @ cc)), cc])
