@@ -28,7 +28,6 @@ run of least CPU time of k.
 """
 import argparse
 import os
-import resource
 import sys
 import time
 import warnings
@@ -41,6 +40,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # measure this 
 import mortar1d3d as m13  # noqa: E402
 from mortar1d3d.model import Model  # noqa: E402
 from mortar1d3d.solvers.linear import solve_linear, solve_saddle  # noqa: E402
+from penalty_solve import peak_memory_gb  # noqa: E402
 
 
 def scene(n, fibres, elements, enforcement):
@@ -75,10 +75,6 @@ def saddle_parts(model, A, b):
                    dependent=model._dependent_multipliers(B, beam),
                    prolongation=model._follow_split()["prolongation"])
     return K, B, kappa, b[p], b[q], options, p
-
-
-def peak_memory_gb():
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
 
 
 def timed(solve):

@@ -98,6 +98,8 @@ def main(argv=None):
           f"load average {os.getloadavg()[0]:.2f}")
     print(f"{'enforcement':<12}{'variant':<10}{'newton':>7}{'set-ups':>8}{'its':>6}{'setup s':>9}{'solve s':>9}"
           f"{'cpu s':>8}{'wall s':>8}{'cpu/bef':>8}{'diff':>9}{'load':>6}")
+    for enforcement in args.enforcement:      # compile and import everything before timing
+        run("after", dict(n=2, fibres=4, elements=2, steps=1, enforcement=enforcement))
     for enforcement in args.enforcement:
         first = base = None
         for variant in args.variants:

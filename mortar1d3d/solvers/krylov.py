@@ -1,10 +1,10 @@
-"""The Krylov driver of the linear solvers: CG and MINRES to a relative residual chosen by the
-caller, checked on the true residual, a stall at the round-off level counted as convergence, and
+"""The Krylov driver of the linear solvers: CG, MINRES and GMRES to a relative residual chosen by
+the caller, checked on the true residual, a stall at the round-off level counted as convergence, and
 a breakdown of CG on an indefinite matrix handed on to MINRES and then to a sparse LU.
 
 :func:`run_krylov` restarts the method while its own residual claims more than the true one
 shows; :func:`cg_with_fallback` is what :func:`~mortar1d3d.solvers.linear.solve_linear` runs
-on an SPD system, :func:`run_krylov` with ``"minres"`` what
+on an SPD system, :func:`run_krylov` with ``"gmres"`` (or ``"minres"``) what
 :func:`~mortar1d3d.solvers.saddle.solve_saddle` runs on a saddle point.
 
 **Whose CG and MINRES** (measured with ``benchmarks/krylov_paths.py``, scipy 1.17, see
@@ -26,7 +26,11 @@ benchmarks/README.md, "Krylov methods: scipy's or our own"):
   also scaled by ``diag(1, γ)``) it converged everywhere, but took 5 % longer on that scene
   (54.0 against 51.4 s, medians of 4 alternating runs) and 1403 against 1333 iterations on the
   four Lagrange scene_solve runs (214 against 144 to recognise the round-off stall at rtol 1e-12).
-- GMRES is not needed: every system here is symmetric.
+- GMRES is our own too (:func:`_gmres`, flexible, restarted): the saddle point's block-triangular
+  preconditioner is not symmetric, so MINRES cannot take it; scipy's ``gmres`` would again hide
+  the residual our stopping test needs. With it the Lagrange solves of
+  ``benchmarks/lagrange_solve.py`` need 26 and 40 iterations where block-diagonal MINRES needs 88
+  and 125.
 """
 import numpy as np
 import scipy.sparse.linalg as spla
@@ -259,7 +263,7 @@ def roundoff_level(A, y, rhs, scale=None):
 
 
 def run_krylov(kind, A, rhs, x, apply_preconditioner, rtol, maxiter, residual, floor):
-    """Run CG or MINRES until ``residual(x) <= rtol`` (the caller's true relative residual).
+    """Run CG, MINRES or GMRES until ``residual(x) <= rtol`` (the caller's true relative residual).
 
     The Krylov method's own stopping test uses a recursive or a preconditioned residual, which
     can differ from the true one; if it stops early, restart from ``x`` asking for the missing

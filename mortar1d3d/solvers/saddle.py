@@ -18,7 +18,8 @@ from .direct import DIRECT_MAX_DOFS, factorize
 from .krylov import raise_not_converged, roundoff_level, run_krylov
 from .preconditioners import AuxiliarySpacePreconditioner
 
-__all__ = ["solve_saddle", "SaddlePreconditioner", "SADDLE_DIRECT_MAX_DOFS", "AUGMENTATION_FACTOR", "AUXILIARY_AUGMENTATION_FACTOR"]
+__all__ = ["solve_saddle", "SaddlePreconditioner", "SADDLE_DIRECT_MAX_DOFS", "AUGMENTATION_FACTOR",
+           "AUXILIARY_AUGMENTATION_FACTOR"]
 
 #: ``method="auto"`` of :func:`solve_saddle`: direct up to this many unknowns (primal + λ).
 #: The same crossover as :data:`~mortar1d3d.solvers.direct.DIRECT_MAX_DOFS` (λ adds few unknowns;
