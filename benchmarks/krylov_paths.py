@@ -2,10 +2,10 @@
 
     .venv/bin/python benchmarks/krylov_paths.py [--cases tests penalty scenes] [--n 10 20] [--scene-n 20]
 
-``tests``: the problems of tests/test_linear_solvers.py and tests/test_solver_paths.py that run CG
-or MINRES (the clamped hex8 box with a coupled spring chain, 3.9k and 12k unknowns: AMG-CG,
-auxiliary-space CG at ε = 1e3 and 1e4 E, block MINRES with each primal block; the rebar prism and
-fibre_cube(4, 60, 8) through ``solve``; the ν = 0.4999 neo-Hooke block whose tangent breaks CG
+``tests``: the problems of tests/test_linear_solvers.py and tests/test_solver_paths.py that run CG,
+MINRES or GMRES (the clamped hex8 box with a coupled spring chain, 3.9k and 12k unknowns: AMG-CG,
+auxiliary-space CG at ε = 1e3 and 1e4 E, the block solver with each primal block; the rebar prism
+and fibre_cube(4, 60, 8) through ``solve``; the ν = 0.4999 neo-Hooke block whose tangent breaks CG
 down). ``penalty``: the auxiliary-space CG of benchmarks/penalty_solve.py for ``--n``.
 ``scenes``: the eight iterative runs of benchmarks/scene_solve.py on ``fibre_cube(--scene-n, 1000,
 20)``. One row per case: the linear solves it made, their CG/MINRES iterations, statuses and the

@@ -140,8 +140,8 @@ def effects(model):
     amg = ("CG + auxiliary-space preconditioner (AMG on the solid carrying its beams, beam blocks "
            "factorised)" if model._auxiliary_space() else "CG + smoothed aggregation AMG (rigid-body modes)")
     detail = {"direct": "sparse LU (scipy)", "amg": amg,
-              "block": "MINRES + block preconditioner (auxiliary space on the augmented stiffness, Schur "
-                       "from kappa)"}[method]
+              "block": "GMRES + block-triangular preconditioner (auxiliary space on the augmented stiffness, "
+                       "Schur from kappa)"}[method]
     out.append(Effect(f"linear_solver.{method}", every, detail))
     if (method == "amg" and model._auxiliary_space()) or (method == "block" and model._auxiliary_space(True)):
         out.append(Effect("linear_solver.follow_operator", "once", "beam DOFs following the solid "

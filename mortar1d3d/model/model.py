@@ -46,6 +46,10 @@ class Model:
     scene needs. ``counts`` records every stage that ran.
     """
 
+    #: a nonlinear analysis keeps the AMG set-up of one tangent for the next Newton iterations
+    #: (:class:`~mortar1d3d.solvers.reuse.ReusedPreconditioner`); False builds one per solve
+    reuse_preconditioner = True
+
     def __init__(self, built):
         if isinstance(built, Scene):
             built = build(built)
@@ -83,6 +87,7 @@ class Model:
         self.fibre_regions = self.sets.fibre_regions(families)
         self.prepared = False
         self._follow = None          # auxiliary-space split, built on first use (_follow_split)
+        self._preconditioner = None  # ReusedPreconditioner of a nonlinear analysis (_solve_reusing)
 
     # -- sets -----------------------------------------------------------------------------------
     def select(self, spec, path):
@@ -174,7 +179,7 @@ class Model:
                              "not know); use 'direct' or 'auto' (which picks it), or enforcement = \"penalty\"")
         if solver == "amg" and lagrange:
             raise SceneError("analysis.solver: Lagrange-multiplier coupling gives a saddle point; use 'auto', "
-                             "'direct' or 'block' (MINRES, the auxiliary-space AMG inside a block preconditioner)")
+                             "'direct' or 'block' (GMRES, the auxiliary-space AMG inside a block preconditioner)")
 
     # -- solver choice --------------------------------------------------------------------------
     @property
@@ -764,6 +769,16 @@ class Model:
             self._dependent = dep
         return self._dependent
 
+    def _solve_reusing(self, solve, method):
+        """``solve(None)``; in a nonlinear analysis with an iterative method, with the preconditioner
+        of an earlier solve while that serves."""
+        if self.linear or method == "direct" or not self.reuse_preconditioner:
+            return solve(None)
+        if self._preconditioner is None:
+            from ..solvers.reuse import ReusedPreconditioner
+            self._preconditioner = ReusedPreconditioner()
+        return self._preconditioner.solve(solve)
+
     def solve_linear(self, A, b, x0=None, rtol=None):
         """Solve a reduced (Dirichlet DOFs removed) linear system of this model.
 
@@ -786,7 +801,7 @@ class Model:
                 options.update(near_nullspace=self.rigid_body_modes()[free], block_size=block)
                 if self._auxiliary_space():
                     options.update(method="aux", **self._follow_split())
-            x, info = solve_linear(A, b, **options)
+            x, info = self._solve_reusing(lambda kept: solve_linear(A, b, preconditioner=kept, **options), method)
             self.last_linear_info = info
             return x
         n = self.n_displacement_dofs
@@ -807,7 +822,8 @@ class Model:
         if method != "direct" and self._auxiliary_space(lagrange=True) and len(solid) and len(beam):
             options["prolongation"] = self._follow_split()["prolongation"]
         # γ (augmentation and scaling of the constraint rows) from the operators, never the penalty
-        x, lam, info = solve_saddle(K, B, kappa, b[p_idx], b[m_idx], **options)
+        x, lam, info = self._solve_reusing(
+            lambda kept: solve_saddle(K, B, kappa, b[p_idx], b[m_idx], preconditioner=kept, **options), method)
         self.last_linear_info = info
         out = np.empty(len(b))
         out[p_idx], out[m_idx] = x, lam

@@ -9,8 +9,8 @@ caller), ordered ``[d_S; d_B]`` (solid first):
   with the auxiliary-space preconditioner :class:`AuxiliarySpacePreconditioner` that stays
   robust at large penalties).
 - **Lagrange multipliers**: the saddle point ``[[K, Bᵀ], [B, 0]] [x; λ] = [b; c]``:
-  :func:`solve_saddle` (sparse direct, or MINRES with an augmented-Lagrangian block
-  preconditioner: AMG on the solid, a sparse factorisation on the beams, ``κ/γ`` for ``λ``).
+  :func:`solve_saddle` (sparse direct, or GMRES with an augmented-Lagrangian block-triangular
+  preconditioner: the auxiliary space or AMG on the augmented stiffness, ``κ/γ`` for ``λ``).
 
 :func:`rigid_body_modes` gives the near null space that AMG needs for elasticity, and
 :func:`build_amg` the AMG hierarchy, which a Newton loop may build once and pass to
@@ -23,7 +23,7 @@ One idea per module, all importable from here as before:
   Cholesky of the beam blocks;
 - :mod:`~mortar1d3d.solvers.amg`: smoothed-aggregation AMG set-up;
 - :mod:`~mortar1d3d.solvers.preconditioners`: the auxiliary-space preconditioner;
-- :mod:`~mortar1d3d.solvers.krylov`: CG/MINRES to the caller's tolerance, breakdown fallback,
+- :mod:`~mortar1d3d.solvers.krylov`: CG/MINRES/GMRES to the caller's tolerance, breakdown fallback,
   round-off floor;
 - :mod:`~mortar1d3d.solvers.dependent`: dependent constraint rows;
 - :mod:`~mortar1d3d.solvers.saddle`: the saddle-point solver;
@@ -44,11 +44,13 @@ from .direct import (BANDED_MAX_BANDWIDTH, DIRECT_MAX_DOFS, BandedCholesky, band
 from .krylov import cg_with_fallback, raise_not_converged, roundoff_level
 from .preconditioners import AuxiliarySpacePreconditioner
 from .rigid import rigid_body_modes
-from .saddle import AUGMENTATION_FACTOR, AUXILIARY_AUGMENTATION_FACTOR, SADDLE_DIRECT_MAX_DOFS, solve_saddle
+from .saddle import (AUGMENTATION_FACTOR, AUXILIARY_AUGMENTATION_FACTOR, SADDLE_DIRECT_MAX_DOFS,
+                     SaddlePreconditioner, solve_saddle)
 
 __all__ = ["LinearSolverError", "rigid_body_modes", "build_amg", "AMG_SEED", "AuxiliarySpacePreconditioner",
            "solve_linear", "solve_saddle", "dependent_rows", "DependentRows", "DEPENDENT_ROW_TOLERANCE",
-           "DIRECT_MAX_DOFS", "SADDLE_DIRECT_MAX_DOFS", "AUGMENTATION_FACTOR", "AUXILIARY_AUGMENTATION_FACTOR"]
+           "DIRECT_MAX_DOFS", "SADDLE_DIRECT_MAX_DOFS", "AUGMENTATION_FACTOR", "AUXILIARY_AUGMENTATION_FACTOR",
+           "SaddlePreconditioner"]
 
 #: the factorisation under its former private name (``mortar1d3d.study`` imports it from here)
 _factorize = factorize
@@ -101,7 +103,9 @@ def solve_linear(A, b, method="auto", *, near_nullspace=None, rtol=1e-10, maxite
         iterative methods add ``status`` (``"converged"``, or ``"roundoff"``: the residual
         stalled at its round-off level above ``rtol``, which counts as converged), and after a
         breakdown of CG ``breakdown_iteration``, ``fallback`` (``"minres"`` or ``"direct"``)
-        and ``note`` (one line saying what happened, for logs).
+        and ``note`` (one line saying what happened, for logs); ``"amg"`` and ``"aux"`` add
+        ``preconditioner`` (the hierarchy or auxiliary-space preconditioner used, for
+        ``preconditioner`` of a later call).
 
     Raises
     ------
@@ -165,10 +169,12 @@ def solve_linear(A, b, method="auto", *, near_nullspace=None, rtol=1e-10, maxite
                                                           block_size=block_size)
         M = preconditioner
         info["amg_levels"] = preconditioner.levels
+        info["preconditioner"] = preconditioner
     else:
         ml = preconditioner if preconditioner is not None else build_amg(A, near_nullspace, block_size=block_size)
         M = ml.aspreconditioner(cycle="V")
         info["amg_levels"] = len(ml.levels)
+        info["preconditioner"] = ml
     info["setup_time"] = time.perf_counter() - t
     t = time.perf_counter()
     x = np.zeros(n) if x0 is None else check_vector(x0, n, "x0").copy()

@@ -33,10 +33,19 @@ from ..errors import ConvergenceError  # noqa: F401 (raised here; importable fro
 #: (the size of the force terms that cancel in it); see :func:`_newton_step`
 ROUNDOFF_FACTOR = 1e3
 
-#: the linear solve of a Newton iteration reduces its right-hand side (the current residual) by this
-#: times the Newton tolerance ``rtol``: one exactly solved step from the start of a load step then
-#: already meets the residual target, and quadratic convergence is not held back
+#: the linear solve of a Newton iteration leaves a linear residual of at most this times the
+#: Newton target ``rtol ‖r_0‖`` of the load step (relative to its right-hand side, the current
+#: residual ``r_k``: ``LINEAR_RTOL_FACTOR rtol ‖r_0‖ / ‖r_k‖``, at most :data:`LINEAR_RTOL_MAX`):
+#: the step's first solve reduces by a tenth of ``rtol``, so one exactly solved step already meets
+#: the target, and later solves ask only for what the target still needs instead of reducing an
+#: already small residual by ``rtol`` again; their error stays a tenth of the target, so neither the
+#: residual test nor quadratic convergence is held back, and the increment's error (about
+#: ``0.1 rtol ‖Δz_0‖``) stays below ``increment_rtol ‖Δz_0‖`` for the default tolerances
 LINEAR_RTOL_FACTOR = 0.1
+
+#: the loosest relative tolerance a Newton iteration's linear solve gets (an inexact Newton
+#: step reduces the linearised residual by at least this)
+LINEAR_RTOL_MAX = 0.1
 
 
 @dataclass
@@ -134,7 +143,8 @@ def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence)
             raise _StepFailed(f"no convergence in {max_iterations} iterations (residual {r0:.3e} → {rn:.3e}, "
                               f"target {rtol * r0:.3e})")
         try:
-            dz = system.solve_linear(K[free][:, free], -r[free], z[free], rtol=LINEAR_RTOL_FACTOR * rtol)
+            linear_rtol = min(LINEAR_RTOL_MAX, LINEAR_RTOL_FACTOR * rtol * r0 / rn)
+            dz = system.solve_linear(K[free][:, free], -r[free], z[free], rtol=linear_rtol)
         except Exception as exc:  # a singular or unsolvable tangent ends this attempt
             raise _StepFailed(f"the linear solve failed: {exc}") from None
         note = (getattr(system, "last_linear_info", None) or {}).get("note")
@@ -175,8 +185,9 @@ def solve_load_steps(system, z0, steps, *, rtol=1e-8, increment_rtol=1e-8, max_i
         force terms are so large that their round-off exceeds these targets (penalty ≳ 1e7 E,
         follower loads on a model far from the origin), ‖r_k‖ <= ROUNDOFF_FACTOR eps_mach
         ‖|K| (|z| + |X|)‖ (X: ``system.reference()``, if given) once the increments stop
-        contracting (‖Δz_k‖ > ‖Δz_{k-1}‖ / 2). Each linear solve is asked for the relative
-        residual ``LINEAR_RTOL_FACTOR * rtol``.
+        contracting (‖Δz_k‖ > ‖Δz_{k-1}‖ / 2). The linear solve of iteration k is asked for the
+        relative residual ``min(LINEAR_RTOL_MAX, LINEAR_RTOL_FACTOR rtol ‖r_0‖ / ‖r_k‖)``: a tenth
+        of what the step's target still needs.
     progress : callable, optional
         ``progress(record, step_index, n_steps)`` after every converged step.
 
