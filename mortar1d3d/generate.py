@@ -554,7 +554,8 @@ def helices_on_cylinder(count, centre, axis, radius, length, turns, phase=0.0):
     radius, length : float
         Cylinder radius and axial length (> 0).
     turns : float
-        Turns of every helix over ``length`` (>= 0).
+        Turns of every helix over ``length`` (negative: left-handed, the other family of a ±α
+        winding; the winding angle from the axis is arctan(2π radius |turns| / length)).
     phase : float
         Phase of helix 0 in radians.
 
@@ -565,8 +566,8 @@ def helices_on_cylinder(count, centre, axis, radius, length, turns, phase=0.0):
         ``helix`` curve of a scene beam (docs/scene_reference.md); :func:`helix_beams` meshes them.
     """
     count = int(count)
-    if count < 1 or not (radius > 0 and length > 0 and turns >= 0):
-        raise ValueError(f"helices_on_cylinder: need count >= 1, radius > 0, length > 0, turns >= 0, got "
+    if count < 1 or not (radius > 0 and length > 0 and np.isfinite(turns)):
+        raise ValueError(f"helices_on_cylinder: need count >= 1, radius > 0, length > 0, finite turns, got "
                          f"{count}, {radius}, {length}, {turns}")
     axis = np.asarray(axis, dtype=float)
     axis = axis / np.linalg.norm(axis)
