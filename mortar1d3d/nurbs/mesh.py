@@ -17,7 +17,7 @@ import scipy.sparse as sp
 from ..elements.solid.hex_family import QUADRATIC_LATTICE
 from ..mesh import SolidMesh
 from ..physics.rational_surface import polynomial_values, rational_values
-from .patch import NurbsSolid
+from .patch import NurbsSolid, merge_coincident
 
 #: tensor (C-order 3 × 3 × 3) index of each hexahedron27 node
 VTK_FROM_TENSOR = (QUADRATIC_LATTICE[:, 0] * 3 + QUADRATIC_LATTICE[:, 1]) * 3 + QUADRATIC_LATTICE[:, 2]
@@ -59,14 +59,8 @@ class BezierMesh:
         P = np.concatenate(control)                                       # (n_el, 27, 3)
         w = np.concatenate(weights)
         n_el = len(P)
-        extent = max(float(np.ptp(P.reshape(-1, 3), axis=0).max()), 1e-300)
-        key = np.round(np.column_stack([P.reshape(-1, 3) / (tol * extent), w.reshape(-1) / tol])).astype(np.int64)
-        _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
-        order = np.argsort(first)
-        rank = np.empty_like(order)
-        rank[order] = np.arange(len(order))
-        node = rank[inverse.ravel()].reshape(n_el, 27)
-        keep = np.sort(first)
+        merged, keep = merge_coincident(P.reshape(-1, 3), w.reshape(-1), tol)
+        node = merged.reshape(n_el, 27)
         points = P.reshape(-1, 3)[keep]
         node_weights = w.reshape(-1)[keep]
         # T: the row of a mesh node from the first element that has it (the others agree to round-off)
