@@ -25,9 +25,11 @@ Three studies:
     expansion, axial strain, twist and fibre force against α. Netting theory (fibres alone carry
     the load: hoop σ_θ = p r / t = N sin²α, axial σ_z = p r / (2t) = N cos²α) balances the two at
     tan²α = 2, α = arctan √2 ≈ 54.74°: below it the pipe swells and shortens, above it lengthens.
-    The zero crossing of the axial strain is found by linear interpolation between sweep angles and
-    moves towards 54.74° as the fibres get stiffer; the matrix alone lengthens the pipe
-    (ε_z = σ_z (1 − 2ν) / E > 0), so the crossing lies below the netting angle.
+    For this wall, with the pressure on r_i and the fibres on R_f, the same balance reads
+    tan²α = 2 R_f / r_i, α ≈ 56.01°. The zero crossing of the axial strain (from shortening to
+    lengthening) is found by linear interpolation between sweep angles and moves up towards the
+    netting angle as the fibres get stiffer: the matrix alone lengthens the pipe
+    (ε_z = σ_z (1 − 2ν) / E > 0), so with softer fibres the crossing lies lower.
 (c) Plots ``reinforced_pipe.png`` (radial expansion against pressure for several α, nonlinear
     kinematics with follower pressure; axial strain against α with the netting angle marked), a VTU
     series per case of the sweep's stiffest ratio, and the run time of every case.
@@ -57,8 +59,11 @@ FIBRE_RADIUS = 0.002
 PRESSURE = 1e3
 SIGMA_Z = PRESSURE * R_INNER ** 2 / (R_OUTER ** 2 - R_INNER ** 2)     # closed end: cap force / wall area
 NETTING_ANGLE = math.degrees(math.atan(math.sqrt(2.0)))
+# netting theory with this wall: the pressure on r_i gives the hoop force p r_i per length, the cap
+# force p π r_i² spread over the fibre cylinder's circumference p r_i² / (2 R_f): tan²α = 2 R_f / r_i
+NETTING_ANGLE_WALL = math.degrees(math.atan(math.sqrt(2.0 * R_FIBRE / R_INNER)))
 
-FULL = {"elements": (1, 16, 8), "fibres": 8, "angles": (15, 25, 35, 45, 50, 55, 60, 65, 75, 85),
+FULL = {"elements": (1, 16, 8), "fibres": 8, "angles": (15, 25, 35, 45, 50, 52.5, 55, 57.5, 60, 65, 75, 85),
         "ratios": (100, 1000, 10000), "lame_levels": (1, 2, 4, 8), "pressure_steps": 5,
         "pressure_angles": (35, 55, 75)}
 QUICK = {"elements": (1, 8, 4), "fibres": 4, "angles": (35, 55, 75), "ratios": (1000,), "lame_levels": (1, 2),
@@ -137,13 +142,14 @@ def measures(result, EA=0.0):
 
 
 def zero_crossing(angles, strains):
-    """The first angle where the axial strain changes sign (linear interpolation), or None."""
+    """The angle where the axial strain turns from shortening to lengthening (the last sign change from
+    negative to positive, linear interpolation between sweep angles), or None. A soft fibre family can
+    give a second, low-angle change (nearly axial fibres too weak to stop the matrix's lengthening)."""
+    found = None
     for a0, a1, s0, s1 in zip(angles[:-1], angles[1:], strains[:-1], strains[1:]):
-        if s0 == 0.0:
-            return float(a0)
-        if s0 * s1 < 0.0:
-            return float(a0 - s0 * (a1 - a0) / (s1 - s0))
-    return None
+        if s0 < 0.0 <= s1:
+            found = float(a0 - s0 * (a1 - a0) / (s1 - s0))
+    return found
 
 
 def lame_study(levels):
@@ -198,7 +204,7 @@ def sweep(config, out=None):
             rows.append(dict(measures(result, EA), ratio=ratio, angle=angle, seconds=seconds,
                              coupled=float(sum(result.coupled_length) / sum(result.beam_length))))
             if out is not None and ratio == max(config["ratios"]):
-                result.write(os.path.join(out, f"vtu_alpha{angle:02d}"))
+                result.write(os.path.join(out, f"vtu_alpha{angle:04.1f}"))
     t0 = time.perf_counter()
     plain = measures(m13.solve(pipe_scene(None, elements=config["elements"])))
     plain["seconds"] = time.perf_counter() - t0
@@ -244,7 +250,8 @@ def report(lame, rows, plain, config):
         lines.append(f"  {row['ratio']:5g}  {row['angle']:5.1f}  {row['radial']:.4e}  {row['strain']:+.4e}  "
                      f"{row['twist']:+.3e}     {row['force']:+.3e}   {row['coupled']:.4f}  {row['seconds']:.1f}")
     lines.append("")
-    lines.append(f"  zero crossing of eps_z (netting theory: {NETTING_ANGLE:.2f}°):")
+    lines.append(f"  zero crossing of eps_z, shortening to lengthening (netting theory: {NETTING_ANGLE:.2f}° thin wall, "
+                 f"{NETTING_ANGLE_WALL:.2f}° for this wall):")
     crossings = {}
     for ratio in config["ratios"]:
         sel = [r for r in rows if r["ratio"] == ratio]
@@ -271,7 +278,9 @@ def plot(rows, curves, config, path):
         sel = [r for r in rows if r["ratio"] == ratio]
         right.plot([r["angle"] for r in sel], [r["strain"] * 1e3 for r in sel], "o-", label=f"E_f / E_m = {ratio:g}")
     right.axhline(0.0, color="0.5", lw=0.8)
-    right.axvline(NETTING_ANGLE, color="k", ls="--", lw=1.0, label=f"netting angle {NETTING_ANGLE:.1f}°")
+    right.axvline(NETTING_ANGLE, color="k", ls="--", lw=1.0, label=f"netting angle arctan √2 = {NETTING_ANGLE:.1f}°")
+    right.axvline(NETTING_ANGLE_WALL, color="k", ls=":", lw=1.0,
+                  label=f"netting, this wall: arctan √(2 R_f / r_i) = {NETTING_ANGLE_WALL:.1f}°")
     right.set_xlabel("winding angle α from the axis (°)")
     right.set_ylabel("axial strain (‰)")
     right.set_title("closed-end pressure: shortening below, lengthening above")

@@ -555,7 +555,7 @@ def helices_on_cylinder(count, centre, axis, radius, length, turns, phase=0.0):
         Cylinder radius and axial length (> 0).
     turns : float
         Turns of every helix over ``length`` (negative: left-handed, the other family of a ±α
-        winding; the winding angle from the axis is arctan(2π radius |turns| / length)).
+        winding; the winding angle from the axis is arctan(2π radius abs(turns) / length)).
     phase : float
         Phase of helix 0 in radians.
 
@@ -628,7 +628,7 @@ def helical_fibres(radius, length, angle, count, elements, phase=0.0, z0=0.0):
     radius, length : float
         Radius of the fibres' cylinder and axial length (m), both > 0.
     angle : float
-        Winding angle α in degrees, 0 < |α| < 90.
+        Winding angle α in degrees, 0 < abs(α) < 90.
     count : int
         Fibres of the family (>= 1), evenly spaced in phase.
     elements : int

@@ -46,6 +46,10 @@ def test_axial_strain_changes_sign_below_the_netting_angle(quick, pipe):
 def test_zero_crossing_interpolation(pipe):
     assert pipe.zero_crossing([10, 20, 30], [-2.0, -1.0, 1.0]) == pytest.approx(25.0)
     assert pipe.zero_crossing([10, 20], [1.0, 2.0]) is None
+    # a soft family's low-angle change (lengthening to shortening) is not the one reported
+    assert pipe.zero_crossing([10, 20, 30, 40], [1.0, -1.0, -1.0, 3.0]) == pytest.approx(32.5)
+    assert pipe.NETTING_ANGLE == pytest.approx(54.7356, abs=1e-4)
+    assert pipe.NETTING_ANGLE_WALL == pytest.approx(56.0122, abs=1e-3)
 
 
 def test_scene_file_is_the_example_at_the_netting_angle(pipe):
