@@ -43,7 +43,7 @@ def expand(value, i):
             count, _vector(c["centre"], f"{path}.cylinder.centre"), axis,
             _number(c["radius"], f"{path}.cylinder.radius", low=0.0, low_open=True),
             _number(c["length"], f"{path}.cylinder.length", low=0.0, low_open=True),
-            _number(c["turns"], f"{path}.cylinder.turns", low=0.0),
+            _number(c["turns"], f"{path}.cylinder.turns"),
             _number(c.get("phase", 0.0), f"{path}.cylinder.phase"))
         return [dict(common, curve={"helix": h}) for h in helices]
     box = _points(value["box"], f"{path}.box")

@@ -22,7 +22,8 @@ from .elements.solid.dispatch import SOLID_MODULES
 from .mesh import BeamMesh, SolidMesh
 
 __all__ = ["box", "distort", "fibre_cube", "random_curved_beams", "splitmix64", "splitmix64_uniforms",
-           "fibres_in_box", "helices_on_cylinder", "straight_beams", "helix_beams", "segment_distances",
+           "fibres_in_box", "helices_on_cylinder", "straight_beams", "helix_beams", "helical_fibres",
+           "segment_distances",
            "FIBRE_LENGTH", "FIBRE_MARGIN", "HELIX_RADIUS", "HELIX_TURNS", "FACE_SETS"]
 
 # docs/conventions.md §5: fixed so that every code builds the same scene from (n, fibres, m, curved, seed)
@@ -553,7 +554,8 @@ def helices_on_cylinder(count, centre, axis, radius, length, turns, phase=0.0):
     radius, length : float
         Cylinder radius and axial length (> 0).
     turns : float
-        Turns of every helix over ``length`` (>= 0).
+        Turns of every helix over ``length`` (negative: left-handed, the other family of a ±α
+        winding; the winding angle from the axis is arctan(2π radius abs(turns) / length)).
     phase : float
         Phase of helix 0 in radians.
 
@@ -564,8 +566,8 @@ def helices_on_cylinder(count, centre, axis, radius, length, turns, phase=0.0):
         ``helix`` curve of a scene beam (docs/scene_reference.md); :func:`helix_beams` meshes them.
     """
     count = int(count)
-    if count < 1 or not (radius > 0 and length > 0 and turns >= 0):
-        raise ValueError(f"helices_on_cylinder: need count >= 1, radius > 0, length > 0, turns >= 0, got "
+    if count < 1 or not (radius > 0 and length > 0 and np.isfinite(turns)):
+        raise ValueError(f"helices_on_cylinder: need count >= 1, radius > 0, length > 0, finite turns, got "
                          f"{count}, {radius}, {length}, {turns}")
     axis = np.asarray(axis, dtype=float)
     axis = axis / np.linalg.norm(axis)
@@ -610,3 +612,50 @@ def helix_beams(helices, elements):
     positions, tangents = _helices(get("centre"), get("axis"), get("length"), get("radius"), get("turns"),
                                    get("phase"), m)
     return BeamMesh.hermite(positions, tangents, _chain_elements(len(helices), m))
+
+
+def helical_fibres(radius, length, angle, count, elements, phase=0.0, z0=0.0):
+    """One family of helical fibres in a pipe wall about the z axis, as Hermite beams with exact nodes and
+    tangents (a winding of a filament-wound pipe).
+
+    Fibre k: ``x(z) = (radius cos φ, radius sin φ, z)``, ``φ = phase + 2π k / count + (z - z0) tan(angle) / radius``
+    for ``z0 <= z <= z0 + length``: a helix at ``angle`` from the axis (the winding angle α;
+    ``tan α = radius dφ/dz``). ``angle > 0`` winds counter-clockwise seen from +z as z grows
+    (right-handed), ``angle < 0`` clockwise: the two families of a ±α winding.
+
+    Parameters
+    ----------
+    radius, length : float
+        Radius of the fibres' cylinder and axial length (m), both > 0.
+    angle : float
+        Winding angle α in degrees, 0 < abs(α) < 90.
+    count : int
+        Fibres of the family (>= 1), evenly spaced in phase.
+    elements : int
+        Hermite elements per fibre (>= 1), equal steps in z.
+    phase : float
+        Angle (radians, from the x axis) of fibre 0 at ``z0``.
+    z0 : float
+        Axial start of the fibres.
+
+    Returns
+    -------
+    BeamMesh
+        Fibre k uses nodes ``k (m+1)`` ... ``k (m+1) + m`` (m = ``elements``), starting at ``z0``. The
+        nodes lie on the cylinder and the tangents make the angle α with the axis, both to
+        round-off; between the nodes the cubic Hermite centreline approximates the helix.
+    """
+    radius, length, angle = float(radius), float(length), float(angle)
+    count, m = int(count), int(elements)
+    if not (radius > 0 and length > 0 and 0.0 < abs(angle) < 90.0 and count >= 1 and m >= 1):
+        raise ValueError(f"helical_fibres: need radius > 0, length > 0, 0 < |angle| < 90 degrees, count >= 1, "
+                         f"elements >= 1, got {radius}, {length}, {angle}, {count}, {m}")
+    tan_a = np.tan(np.radians(angle))
+    z = float(z0) + length * np.arange(m + 1) / m
+    phi = float(phase) + 2.0 * np.pi * np.arange(count)[:, None] / count + ((z - float(z0)) * tan_a / radius)[None, :]
+    cos, sin = np.cos(phi).ravel(), np.sin(phi).ravel()
+    positions = np.column_stack([radius * cos, radius * sin, np.tile(z, count)])
+    # dx/dz = (-tan α sin φ, tan α cos φ, 1), normalised: cos α (-tan α sin φ, tan α cos φ, 1)
+    c, s_ = np.cos(np.radians(angle)), np.sin(np.radians(angle))
+    tangents = np.column_stack([-s_ * sin, s_ * cos, np.full(len(cos), c)])
+    return BeamMesh.hermite(positions, tangents, _chain_elements(count, m))

@@ -142,8 +142,12 @@ def _solid(value, base_dir):
         if not file.exists():
             _fail("solid.mesh", f"mesh file {str(file)!r} does not exist")
         mesh_spec = file
+    elif isinstance(mesh, dict) and "pipe" in mesh:
+        from .nurbs.scene import validate_pipe      # an exact NURBS pipe (section)
+        _table(mesh, "solid.mesh", ("pipe",))
+        mesh_spec = {"pipe": validate_pipe(mesh["pipe"])}
     else:
-        _table(mesh, "solid.mesh", ("box", "cells", "element"), required=("box", "cells"))
+        _table(mesh, "solid.mesh", ("box", "cells", "element", "pipe"), required=("box", "cells"))
         box = _points(mesh["box"], "solid.mesh.box")
         if len(box) != 2:
             _fail("solid.mesh.box", f"expected two corners [[x0, y0, z0], [x1, y1, z1]], got {len(box)} points")
@@ -217,7 +221,7 @@ def _curve(value, path):
         return {"helix": {"centre": _vector(h["centre"], f"{path}.helix.centre"), "axis": axis / np.linalg.norm(axis),
                           "radius": _number(h["radius"], f"{path}.helix.radius", low=0.0, low_open=True),
                           "length": _number(h["length"], f"{path}.helix.length", low=0.0, low_open=True),
-                          "turns": _number(h["turns"], f"{path}.helix.turns", low=0.0),
+                          "turns": _number(h["turns"], f"{path}.helix.turns"),      # < 0: left-handed
                           "phase": _number(h.get("phase", 0.0), f"{path}.helix.phase")}}
     f, df = value["function"], value.get("derivative", _MISSING)
     if not callable(f):

@@ -56,7 +56,7 @@ def test_pressure_resultant_and_volume():
     model = NurbsSolidModel(solid, material("linear_elastic", E, NU), kinematics="linear")
     # the inner quarter surface pushed outwards: resultant P A H along (1, 1, 0); n dA is rational, the
     # Gauss rule converges exponentially
-    for n_gauss, tol in ((4, 1e-6), (10, 1e-13)):
+    for n_gauss, tol in ((4, 1e-7), (10, 1e-13)):
         f = model.pressure(0, "u0_min", P, n_gauss=n_gauss).reshape(-1, 3)
         assert np.abs(f.sum(axis=0) - [P * A * H, P * A * H, 0.0]).max() < tol * P * A * H
     volume = np.pi / 4 * (B * B - A * A) * H
@@ -87,14 +87,3 @@ def test_vtu_of_sampled_spans(tmp_path):
     assert np.abs(r[[0, 3, 4, 7, 11, 15]] - A).max() < 1e-15           # the inner face's corners and edge middles
     d = mesh.point_data["displacement"]
     assert np.abs(d[0] - [lame_radial(A), 0, 0]).max() < 0.02 * lame_radial(A)
-
-
-def test_scene_with_nurbs_spans_is_a_clear_error():
-    """Surface loads, the Gauss-point and rotational couplings and the VTU output do not evaluate
-    rational elements yet: a scene with nurbs27 spans must stop at solid.mesh, not run half right."""
-    import mortar1d3d as m13
-    mesh = nurbs.bezier_mesh(nurbs.hollow_cylinder(A, B, H, angle=90.0, elements=(1, 2, 1))).solid
-    scene = m13.Scene(solid={"mesh": mesh, "material": {"model": "linear_elastic", "E": E, "nu": NU}},
-                      beams=[], analysis={"kinematics": "linear"})
-    with pytest.raises(m13.SceneError, match=r"solid\.mesh: rational element types \['nurbs27'\]"):
-        m13.solve(scene)

@@ -295,6 +295,9 @@ def write_solid(path, solid, point_data=None, cell_data=None, *, compression="zl
     pathlib.Path
         The file written. Cell data ``solid_element`` (int64, the global element number used by
         :attr:`MortarOperators.segments`) is always written, unless ``cell_data`` overrides it.
+        Rational elements (``nurbs27``) are written as ``hexahedron27`` cells through their exact
+        points at the lattice parameters, the point data interpolated there
+        (:func:`mortar1d3d.nurbs.mesh.sampled_cells`).
     """
     import meshio
     if not isinstance(solid, SolidMesh):
@@ -314,9 +317,14 @@ def write_solid(path, solid, point_data=None, cell_data=None, *, compression="zl
             arr = _data_dict("cell_data", {key: value}, solid.n_elements, "element")[str(key)]
             parts = np.split(arr, splits)
         blocks[str(key)] = parts
-    mesh = meshio.Mesh(solid.points, [(d.name, c) for d, c in solid.blocks],
-                       point_data=_data_dict("point_data", point_data, solid.n_nodes, "solid node"),
-                       cell_data=blocks)
+    point_data = _data_dict("point_data", point_data, solid.n_nodes, "solid node")
+    if any(d.rational for d, _ in solid.blocks):
+        # NURBS spans: their nodes are control points; write each span through its exact points
+        from ..nurbs.mesh import sampled_cells
+        points, cell_blocks, point_data = sampled_cells(solid, point_data)
+    else:
+        points, cell_blocks = solid.points, [(d.name, c) for d, c in solid.blocks]
+    mesh = meshio.Mesh(points, cell_blocks, point_data=point_data, cell_data=blocks)
     return _write_vtu(path, mesh, compression)
 
 

@@ -96,6 +96,8 @@ def build(scene):
     if not isinstance(scene, Scene):
         raise TypeError(f"expected a Scene, got {type(scene).__name__}")
     solid_mesh = build_solid_mesh(scene.solid) if scene.solid is not None else None
+    if solid_mesh is not None:
+        check_rational(scene, solid_mesh)
     types = [beam_type(b["model"]) for b in scene.beams]
     meshes = [build_beam_mesh(b, t, f"beams[{i}]") for i, (b, t) in enumerate(zip(scene.beams, types))]
     for i, (t, mesh) in enumerate(zip(types, meshes)):
@@ -135,20 +137,30 @@ def build_solid_mesh(spec):
     """SolidMesh of a validated ``solid`` entry: generated box, mesh object or file."""
     mesh = spec["mesh"]
     try:
-        if isinstance(mesh, dict):
+        if isinstance(mesh, dict) and "pipe" in mesh:
+            from ..nurbs.scene import pipe_mesh
+            mesh = pipe_mesh(mesh["pipe"])[0]
+        elif isinstance(mesh, dict):
             return box_mesh(mesh["box"][0], mesh["box"][1], mesh["cells"], mesh["element"])
         if not isinstance(mesh, SolidMesh):
             mesh = reader(mesh).read_solid(mesh, "solid.mesh")
     except (MeshError, OSError) as exc:
         raise SceneError(f"solid.mesh: {exc}") from None
-    rational = sorted({d.name for d, _ in mesh.blocks if d.rational})
-    if rational:
-        # surface loads, the Gauss-point and rotational couplings and the VTU output evaluate the
-        # polynomial part of an element only: a rational one would be silently wrong there
-        raise SceneError(f"solid.mesh: rational element types {rational} (NURBS spans) are not supported in "
-                         "scenes yet; run them with mortar1d3d.nurbs.NurbsSolidModel and assemble_mortar")
     check_solid_nodes(mesh, "solid.mesh")
     return mesh
+
+
+def check_rational(scene, mesh):
+    """SceneError naming the coupling key when rational (NURBS) elements meet a coupling that evaluates
+    only the polynomial part of the solid's functions (Gauss-point constraint, rotational coupling)."""
+    rational = sorted({d.name for d, _ in mesh.blocks if d.rational})
+    if not (rational and scene.coupled):
+        return
+    if scene.coupling["constraint"] == "gauss_point":
+        raise SceneError(f"coupling.constraint: 'gauss_point' is not implemented for rational elements {rational} "
+                         "(NURBS spans); use the default 'mortar'")
+    if scene.coupling.get("rotational") is not None:
+        raise SceneError(f"coupling.rotational: not implemented for rational elements {rational} (NURBS spans)")
 
 
 def build_beam_mesh(spec, kind, path):

@@ -16,7 +16,8 @@ import scipy.sparse as sp
 
 from ..elements.solid.hex_family import QUADRATIC_LATTICE
 from ..mesh import SolidMesh
-from .patch import NurbsSolid
+from ..physics.rational_surface import polynomial_values, rational_values
+from .patch import NurbsSolid, merge_coincident
 
 #: tensor (C-order 3 × 3 × 3) index of each hexahedron27 node
 VTK_FROM_TENSOR = (QUADRATIC_LATTICE[:, 0] * 3 + QUADRATIC_LATTICE[:, 1]) * 3 + QUADRATIC_LATTICE[:, 2]
@@ -58,14 +59,8 @@ class BezierMesh:
         P = np.concatenate(control)                                       # (n_el, 27, 3)
         w = np.concatenate(weights)
         n_el = len(P)
-        extent = max(float(np.ptp(P.reshape(-1, 3), axis=0).max()), 1e-300)
-        key = np.round(np.column_stack([P.reshape(-1, 3) / (tol * extent), w.reshape(-1) / tol])).astype(np.int64)
-        _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
-        order = np.argsort(first)
-        rank = np.empty_like(order)
-        rank[order] = np.arange(len(order))
-        node = rank[inverse.ravel()].reshape(n_el, 27)
-        keep = np.sort(first)
+        merged, keep = merge_coincident(P.reshape(-1, 3), w.reshape(-1), tol)
+        node = merged.reshape(n_el, 27)
         points = P.reshape(-1, 3)[keep]
         node_weights = w.reshape(-1)[keep]
         # T: the row of a mesh node from the first element that has it (the others agree to round-off)
@@ -97,9 +92,62 @@ class BezierMesh:
                f"{self.nurbs.n_control} control points)"
 
 
+def element_values(solid, xi, values):
+    """Node fields interpolated at element parameters: ``values`` (n_nodes, k) at the points ``xi`` (q, 3)
+    of every element of ``solid``, with the elements' own functions (rational ones with their node
+    weights): (n_elements, q, k). All blocks must have the same parameter space (``xi`` is shared)."""
+    values = np.asarray(values, dtype=np.float64)
+    out = []
+    for d, conn in solid.blocks:
+        B, dB = polynomial_values(d.code, xi, d.n_nodes)
+        if d.rational:
+            B = rational_values(B, dB, solid.weights[conn[:, : d.n_nodes]])[0]
+        else:
+            B = np.broadcast_to(B, (len(conn),) + B.shape)
+        out.append(np.einsum("mqa,mak->mqk", B, values[conn[:, : d.n_nodes]]))
+    return np.concatenate(out)
+
+
+def sampled_cells(solid, point_data):
+    """A polynomial stand-in of a mesh with rational elements, for output: every rational element becomes
+    a ``hexahedron27`` cell through its exact points at the hexahedron27 lattice parameters (its
+    nodes are control points, mostly off the body), with the node fields interpolated there;
+    polynomial blocks keep their nodes. Returns points (n, 3), cells [(meshio type, conn)], point
+    data {name: (n, ...)}."""
+    from ..elements.solid.hex_family import QUADRATIC_NODES
+
+    rational = [d.rational for d, _ in solid.blocks]
+    keep = not all(rational)                     # polynomial blocks use the original nodes
+    points = [solid.points] if keep else []
+    data = {k: [np.asarray(v, dtype=np.float64).reshape(solid.n_nodes, -1)] if keep else []
+            for k, v in point_data.items()}
+    cells, start = [], solid.n_nodes if keep else 0
+    for (d, conn), is_rational in zip(solid.blocks, rational):
+        if not is_rational:
+            cells.append((d.name, conn))
+            continue
+        if d.family_type.name != "hex" or d.n_nodes != 27:
+            raise ValueError(f"output of rational {d.name} elements: only triquadratic hexahedra are sampled")
+        sub = _single_block(solid, d, conn)
+        points.append(element_values(sub, QUADRATIC_NODES, solid.points).reshape(-1, 3))
+        for k, v in point_data.items():
+            v = np.asarray(v, dtype=np.float64)
+            data[k].append(element_values(sub, QUADRATIC_NODES, v.reshape(solid.n_nodes, -1)).reshape(-1, *v.shape[1:]))
+        cells.append(("hexahedron27", start + np.arange(27 * len(conn)).reshape(-1, 27)))
+        start += 27 * len(conn)
+    return np.concatenate(points), cells, {k: np.concatenate(v) for k, v in data.items()}
+
+
+class _single_block:
+    """One block of a mesh seen as a mesh (``blocks`` and ``weights``) for :func:`element_values`."""
+
+    def __init__(self, solid, d, conn):
+        self.blocks, self.weights = [(d, conn)], solid.weights
+
+
 def bezier_mesh(nurbs, tol=1e-10):
     """The engine's mesh of a quadratic :class:`~mortar1d3d.nurbs.NurbsSolid`: a :class:`BezierMesh`."""
     return BezierMesh(nurbs, tol)
 
 
-__all__ = ["BezierMesh", "bezier_mesh", "VTK_FROM_TENSOR"]
+__all__ = ["BezierMesh", "bezier_mesh", "element_values", "sampled_cells", "VTK_FROM_TENSOR"]

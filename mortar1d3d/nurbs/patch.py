@@ -18,6 +18,27 @@ def _homogeneous(control, weights):
     return np.concatenate([control * weights[..., None], weights[..., None]], axis=-1)
 
 
+def merge_coincident(points, weights, tol=1e-10):
+    """One id per group of coincident weighted points (same position to ``tol`` times the extent of
+    ``points``, same weight to ``tol``), numbered in order of first appearance (so nothing is renumbered
+    where nothing merges).
+
+    Returns
+    -------
+    ids : (n,) int64
+        The id of every point.
+    first : (n_ids,) int64
+        The first point of each id (``points[first]`` are the merged points).
+    """
+    extent = max(float(np.ptp(points, axis=0).max()), 1e-300)
+    keys = np.round(np.column_stack([points / (tol * extent), weights / tol])).astype(np.int64)
+    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return rank[inverse.ravel()], np.sort(first)
+
+
 @dataclass(frozen=True, eq=False)
 class NurbsPatch:
     """One trivariate NURBS patch.
@@ -232,17 +253,9 @@ class NurbsSolid:
             raise ValueError("NurbsSolid needs at least one patch")
         P = np.vstack([p.control.reshape(-1, 3) for p in self.patches])
         w = np.concatenate([p.weights.reshape(-1) for p in self.patches])
-        extent = max(float(np.ptp(P, axis=0).max()), 1e-300)
-        key = np.column_stack([P / (tol * extent), w / tol])
-        keys = np.round(key).astype(np.int64)
-        _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
-        # numbering in order of first appearance, so a single patch keeps its own order where nothing merges
-        order = np.argsort(first)
-        rank = np.empty_like(order)
-        rank[order] = np.arange(len(order))
-        ids = rank[inverse.ravel()]
-        self.control = P[np.sort(first)]
-        self.weights = w[np.sort(first)]
+        ids, keep = merge_coincident(P, w, tol)
+        self.control = P[keep]
+        self.weights = w[keep]
         starts = np.cumsum([0] + [p.n_control for p in self.patches])
         self.patch_ids = [ids[a:b] for a, b in zip(starts[:-1], starts[1:])]
 
@@ -262,4 +275,4 @@ class NurbsSolid:
         return f"NurbsSolid({len(self.patches)} patches, {self.n_elements} elements, {self.n_control} control points)"
 
 
-__all__ = ["NurbsPatch", "NurbsSolid"]
+__all__ = ["NurbsPatch", "NurbsSolid", "merge_coincident"]

@@ -4,21 +4,21 @@
 material, or linear kinematics) on the ``nurbs27`` mesh of the patches
 (:func:`~mortar1d3d.nurbs.bezier_mesh`) and maps everything to the global control points with
 T (mesh node values = T · control values): internal forces Tᵀ f, stiffness Tᵀ K T, since the NURBS
-space is the image of T. Surface loads act on patch faces (:meth:`NurbsSolidModel.pressure`),
-Dirichlet conditions on the control points of patch faces (:meth:`NurbsSolid.face_control`: a
+space is the image of T. Surface loads act on patch faces: follower pressure on the current
+surface (:meth:`NurbsSolidModel.pressure_load`, with its load stiffness) or dead pressure on the
+reference surface (:meth:`NurbsSolidModel.pressure`), both by the surface kernels of
+:mod:`mortar1d3d.physics.surface` with rational face tables. Dirichlet conditions act
+on the control points of patch faces (:meth:`NurbsSolid.face_control`: a
 control net face carries exactly the face's functions, so fixing them fixes the face).
 """
 import numpy as np
 import scipy.sparse as sp
 
 from ..elements.solid import nurbs27
+from ..physics.rational_surface import RATIONAL_FACE_POINTS
 from ..physics.solid import SolidModel
-from ..quadrature import gauss_legendre
-from .mesh import bezier_mesh
-
-#: the faces of a patch by parameter direction and side, as the element faces of :mod:`.hex_family`:
-#: (fixed direction, value of ξ there, the two free directions in right-handed order with the outward normal)
-_FACES = {(0, -1.0): (2, 1), (0, 1.0): (1, 2), (1, -1.0): (0, 2), (1, 1.0): (2, 0), (2, -1.0): (1, 0), (2, 1.0): (0, 1)}
+from ..physics.surface import FACE_DTYPE, Pressure
+from .mesh import bezier_mesh, element_values
 
 
 class NurbsSolidModel:
@@ -55,69 +55,80 @@ class NurbsSolidModel:
         f, K = self.solid.evaluate(self.node_displacement(u), tangent)
         return self.T3.T @ f, (sp.csr_matrix(self.T3.T @ K @ self.T3) if tangent else None)
 
-    def pressure(self, patch, face, p, n_gauss=4):
+    def face_set(self, patch, face):
+        """The Bézier mesh's element faces on face ``face`` (``"u0_min"``, ...) of patch ``patch``: a
+        structured array of :data:`~mortar1d3d.physics.surface.FACE_DTYPE` (surface loads)."""
+        return patch_face_set(self.mesh, patch, face)
+
+    def pressure_load(self, patch, face, p, n_gauss=RATIONAL_FACE_POINTS):
+        """Follower pressure ``p`` (force per current area, pushing into the body) on face ``face`` of
+        patch ``patch``, on control points: a :class:`ControlPointLoad` whose ``evaluate(u, tangent)``
+        gives Tᵀ f(T u) and its derivative Tᵀ K T (``n_gauss`` points per direction on each span face)."""
+        return ControlPointLoad(Pressure(self.mesh.solid, self.face_set(patch, face), p, n_gauss), self.T3)
+
+    def pressure(self, patch, face, p, n_gauss=RATIONAL_FACE_POINTS):
         """Consistent control-point forces of a pressure ``p`` (force per reference area, pushing into the
         body) on face ``face`` (``"u0_min"``, ...) of patch ``patch``, dead load on the reference surface:
         f_i = -∫ p R_i n dA with n the outward normal. Returns (n_dofs,)."""
-        axis, side = int(face[1]), (-1.0 if face.endswith("min") else 1.0)
-        patch_obj = self.nurbs.patches[patch]
-        last = {-1.0: 0, 1.0: patch_obj.element_shape[axis] - 1}[side]
-        elements = np.flatnonzero((self.mesh.element_patch == patch) & (self.mesh.element_span[:, axis] == last))
-        t, w = gauss_legendre(n_gauss)
-        a, b = _FACES[(axis, side)]
-        xi = np.zeros((n_gauss * n_gauss, 3))
-        xi[:, axis] = side
-        xi[:, a] = np.repeat(t, n_gauss)
-        xi[:, b] = np.tile(t, n_gauss)
-        weight = np.outer(w, w).ravel()
-        B, dB = nurbs27.bernstein_values(xi)
-        solid = self.mesh.solid
-        f = np.zeros(3 * solid.n_nodes)
-        for e in elements:
-            nodes = solid.connectivity[e, :27]
-            X, wts = solid.points[nodes], solid.weights[nodes]
-            wB = B * wts
-            W = wB.sum(axis=1)
-            R = wB / W[:, None]
-            dR = (dB * wts[None, :, None] - R[:, :, None] * (dB * wts[None, :, None]).sum(axis=1)[:, None, :]) / W[:, None, None]
-            ta = np.einsum("qa,ai->qi", dR[:, :, a], X)
-            tb = np.einsum("qa,ai->qi", dR[:, :, b], X)
-            n_dA = np.cross(ta, tb) * weight[:, None]          # outward normal times area element
-            np.add.at(f.reshape(-1, 3), nodes, -p * np.einsum("qa,qi->ai", R, n_dA))
-        return self.T3.T @ f
+        return self.pressure_load(patch, face, p, n_gauss).evaluate(None, tangent=False)[0]
 
     def sample(self, u=None, points=3):
         """Points of every element on a ``points``³ lattice of [-1, 1]³ (n_elements, points³, 3), displaced by
         the control-point displacements ``u`` if given (output, error measures)."""
         s = np.linspace(-1.0, 1.0, points)
         xi = np.stack(np.meshgrid(s, s, s, indexing="ij"), axis=-1).reshape(-1, 3)
-        B, _ = nurbs27.bernstein_values(xi)
         solid = self.mesh.solid
-        nodes = solid.connectivity[:, :27]
-        wB = B[None] * solid.weights[nodes][:, None, :]
-        R = wB / wB.sum(axis=2, keepdims=True)
         X = solid.points if u is None else solid.points + self.node_displacement(u).reshape(-1, 3)
-        return np.einsum("mqa,mai->mqi", R, X[nodes])
+        return element_values(solid, xi, X)
 
     def write_vtu(self, path, u=None):
-        """The solid as sampled spans: every element's points at the 27 hexahedron27 lattice parameters
-        (exact points of the NURBS geometry; ParaView interpolates between them), with the
+        """The solid as sampled spans (:func:`mortar1d3d.io.vtu.write_solid`: every element's exact points
+        at the 27 hexahedron27 lattice parameters; ParaView interpolates between them), with the
         ``displacement`` of the control-point displacements ``u`` as point data. Returns the path."""
-        import meshio
+        from ..io.vtu import write_solid
 
-        from ..elements.solid.hex_family import QUADRATIC_NODES
-
-        B, _ = nurbs27.bernstein_values(QUADRATIC_NODES)
         solid = self.mesh.solid
-        nodes = solid.connectivity[:, :27]
-        wB = B[None] * solid.weights[nodes][:, None, :]
-        R = wB / wB.sum(axis=2, keepdims=True)
-        x = np.einsum("mqa,mai->mqi", R, solid.points[nodes]).reshape(-1, 3)
-        d = np.zeros(x.shape) if u is None else \
-            np.einsum("mqa,mai->mqi", R, self.node_displacement(u).reshape(-1, 3)[nodes]).reshape(-1, 3)
-        cells = np.arange(len(x)).reshape(-1, 27)
-        meshio.write(path, meshio.Mesh(x, [("hexahedron27", cells)], point_data={"displacement": d}))
-        return path
+        d = np.zeros((solid.n_nodes, 3)) if u is None else self.node_displacement(u).reshape(-1, 3)
+        return write_solid(path, solid, point_data={"displacement": d})
 
 
-__all__ = ["NurbsSolidModel"]
+def _parse_face(face):
+    """(axis, side) of a patch face name ``"u0_min"`` ... ``"u2_max"``; ValueError otherwise."""
+    if not (isinstance(face, str) and len(face) == 6 and face[0] == "u" and face[1] in "012"
+            and face[2:] in ("_min", "_max")):
+        raise ValueError(f"face {face!r}: expected 'u0_min', 'u0_max', 'u1_min', ..., 'u2_max'")
+    return int(face[1]), (-1.0 if face.endswith("min") else 1.0)
+
+
+def patch_face_set(mesh, patch, face):
+    """Element faces (:data:`~mortar1d3d.physics.surface.FACE_DTYPE`) of a :class:`BezierMesh` that lie on
+    face ``face`` of patch ``patch``: the elements of the first or last span in that direction, with the
+    local face whose outward normal is ± the parameter direction."""
+    axis, side = _parse_face(face)
+    if not 0 <= patch < len(mesh.nurbs.patches):
+        raise ValueError(f"patch {patch}: the solid has {len(mesh.nurbs.patches)} patch(es)")
+    last = {-1.0: 0, 1.0: mesh.nurbs.patches[patch].element_shape[axis] - 1}[side]
+    elements = np.flatnonzero((mesh.element_patch == patch) & (mesh.element_span[:, axis] == last))
+    d = nurbs27.DESCRIPTOR
+    normal = np.zeros(3)
+    normal[axis] = side
+    local = [f for f in range(d.n_faces) if np.allclose(d.faces[f][3], normal)]
+    out = np.empty(len(elements), dtype=FACE_DTYPE)
+    out["element"], out["face"], out["code"] = elements, local[0], d.code
+    return out
+
+
+class ControlPointLoad:
+    """A displacement-dependent load on the Bézier mesh (``evaluate(u_nodes, tangent)``) seen on control
+    points: f_c(u) = Tᵀ f(T u), K_c = Tᵀ K T (T: node values from control values, per component)."""
+
+    def __init__(self, load, T3):
+        self.load, self.T3 = load, T3
+
+    def evaluate(self, u=None, tangent=True):
+        """External force (n_dofs,) and its derivative (csr, or None) at control-point displacements ``u``."""
+        f, K = self.load.evaluate(None if u is None else self.T3 @ np.asarray(u, dtype=np.float64), tangent)
+        return self.T3.T @ f, (sp.csr_matrix(self.T3.T @ K @ self.T3) if tangent else None)
+
+
+__all__ = ["NurbsSolidModel", "ControlPointLoad", "patch_face_set"]

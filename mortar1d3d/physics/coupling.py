@@ -24,6 +24,16 @@ from ..elements.multiplier import shape as lm_shape
 from ..elements.solid import dispatch as solid_types
 from ..mortar.assemble import lm_numbering
 
+
+def rational_guard(solid, what):
+    """ValueError naming ``what`` if ``solid`` has rational (NURBS) elements: the Gauss-point and the
+    rotational couplings evaluate the polynomial part of the solid's functions only."""
+    rational = sorted({d.name for d, _ in solid.blocks if d.rational})
+    if rational:
+        raise ValueError(f"{what}: not implemented for rational elements {rational} (NURBS spans; it would "
+                         "evaluate their polynomial part only); use the mortar constraint without rotational coupling")
+
+
 CONSTRAINTS = ("mortar", "gauss_point")
 ENFORCEMENTS = ("penalty", "lagrange")
 
@@ -163,6 +173,8 @@ class Coupling:
                              "integration point over-constrains a Lagrange multiplier field)")
         if not (np.isfinite(penalty) and penalty > 0):
             raise ValueError(f"coupling penalty must be a finite number > 0, got {penalty!r}")
+        if constraint == "gauss_point":
+            rational_guard(solid, "coupling.constraint = 'gauss_point'")
         self.ops, self.constraint, self.enforcement, self.penalty = ops, constraint, enforcement, float(penalty)
         self.n_dofs = n_dofs
         n_S, n_B = 3 * solid.n_nodes, beams.n_centreline_dofs

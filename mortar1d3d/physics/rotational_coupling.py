@@ -36,7 +36,7 @@ import scipy.sparse as sp
 
 from ..elements.multiplier import multiplier as multiplier_type
 from ..mortar.assemble import lm_numbering
-from .coupling import _lm_projection
+from .coupling import _lm_projection, rational_guard
 from . import rotational_coupling_kernel as kernel
 from .simo_reissner import _lagrange_tables
 
@@ -87,6 +87,7 @@ class RotationalCoupling:
             raise ValueError(f"coupling.rotational.triad must be one of {TRIADS}, got {triad!r}")
         if lm not in LMS:
             raise ValueError(f"coupling.rotational.lm must be one of {LMS}, got {lm!r}")
+        rational_guard(solid, "coupling.rotational")
         if penalty is None:
             penalty = DEFAULT_PENALTY_FACTOR * float(beam.CM[:, 0].max()) / float(np.mean(beam.beams.lengths)) ** 2
         if not (np.isfinite(penalty) and penalty > 0):

@@ -25,7 +25,8 @@ the face: on a 9-node face ``N ∈ Q2``, ``x_,u ∈ Q(1,2)``, ``x_,v ∈ Q(2,1)`
 in ``Q(5,5)``, which 3 points per direction integrate exactly; on a 6-node triangle the degrees are
 2 + 1 + 1 = 4. Both rules are therefore exact for the follower pressure and its tangent on any
 (curved, deformed) face of up to these degrees, and exact for the dead traction on flat faces
-(where ``|X_,u × X_,v|`` is constant).
+(where ``|X_,u × X_,v|`` is constant). Faces of rational (NURBS) elements get per-face tables of
+their rational functions and a Gauss rule that is not exact (:mod:`.rational_surface`).
 
 Assembly. The kernels compute each face's local vector/matrix independently (``prange`` over
 faces, no shared accumulators); the global vector is summed with ``np.bincount`` and the CSR
@@ -41,6 +42,7 @@ from numba import prange
 from .._config import njit, njit_parallel
 from ..elements.solid.dispatch import BY_CODE, MAX_FACES, MAX_NODES, deriv, shape
 from ..geometry.linalg import norm3
+from .rational_surface import RATIONAL_FACE_POINTS, kernel_tables
 
 #: dtype of face lists (see :func:`boundary_faces`)
 FACE_DTYPE = np.dtype([("element", np.int64), ("face", np.int64), ("code", np.int64)])
@@ -416,9 +418,9 @@ def traction_force(solid, faces, t):
         raise ValueError(f"traction: expected finite values of shape (3,) or ({len(fs)}, 3), got {t.shape}")
     if len(fs) == 0:
         return np.zeros(fs.n_dofs)
-    tables = face_tables()
+    code, face, tables = kernel_tables(solid, fs.code, fs.face, fs.element, face_tables())
     local = np.empty(fs.f_offsets[-1])
-    _traction_kernel(solid.points, solid.connectivity, fs.element, fs.code, fs.face, np.ascontiguousarray(t),
+    _traction_kernel(solid.points, solid.connectivity, fs.element, code, face, np.ascontiguousarray(t),
                      tables.nodes, tables.n_nodes, tables.n_points, tables.weights, tables.N, tables.dN_du,
                      tables.dN_dv, fs.f_offsets, local)
     return fs.assemble_vector(local)
@@ -434,6 +436,9 @@ class Pressure:
     p : float
         Pressure (force per current area). Positive ``p`` pushes against the outward normal,
         i.e. into the body, like a gas pressure acting from outside.
+    rational_points : int
+        Gauss points per direction on faces of rational (NURBS) elements
+        (:mod:`mortar1d3d.physics.rational_surface`); polynomial faces use their exact rule.
 
     Attributes
     ----------
@@ -459,7 +464,7 @@ class Pressure:
     integrates both exactly (module docstring).
     """
 
-    def __init__(self, solid, faces, p):
+    def __init__(self, solid, faces, p, rational_points=RATIONAL_FACE_POINTS):
         self.solid = solid
         self._faces = _FaceSet(solid, faces)
         self.faces = np.empty(len(self._faces), dtype=FACE_DTYPE)
@@ -470,6 +475,9 @@ class Pressure:
             raise ValueError(f"pressure must be finite, got {p}")
         self.p = p
         self.n_tangents = 0
+        # rational (NURBS) faces get per-face tables; polynomial ones index the type tables
+        self._kernel_tables = kernel_tables(solid, self._faces.code, self._faces.face, self._faces.element,
+                                            face_tables(), rational_points)
 
     def evaluate(self, u=None, tangent=True):
         """Force (and load stiffness) at displacement ``u``.
@@ -492,11 +500,11 @@ class Pressure:
         if not np.isfinite(x).all():
             raise ValueError("displacement: NaN or infinite values")
         tangent = bool(tangent)
-        tables = face_tables()
+        code, face, tables = self._kernel_tables
         f_local = np.empty(fs.f_offsets[-1])
         k_local = np.empty(fs.k_offsets[-1] if tangent else 0)
         if len(fs):
-            _pressure_kernel(np.ascontiguousarray(x), solid.connectivity, fs.element, fs.code, fs.face, self.p,
+            _pressure_kernel(np.ascontiguousarray(x), solid.connectivity, fs.element, code, face, self.p,
                              tables.nodes, tables.n_nodes, tables.n_points, tables.weights, tables.N,
                              tables.dN_du, tables.dN_dv, tables.orientation, fs.f_offsets, fs.k_offsets,
                              tangent, f_local, k_local)

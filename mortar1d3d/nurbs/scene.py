@@ -1,0 +1,78 @@
+"""The scene key ``solid.mesh = { pipe = {...} }``: an exact NURBS pipe (section) as the scene's solid.
+
+The pipe is :func:`~mortar1d3d.nurbs.hollow_cylinder` (quadratic, about the z axis, from z = 0), and
+the scene runs on its Bézier mesh (:func:`~mortar1d3d.nurbs.bezier_mesh`): the solid's unknowns are
+the displacements of the ``nurbs27`` nodes (Bézier control points), i.e. the C⁰ space of the
+rational Bézier elements on the exact geometry. It contains the smoother NURBS space of the patch
+(``T`` maps one into the other) and is what every path of the model evaluates (the solid, the
+mortar coupling, surface loads and output take rational elements).
+
+Named node sets of the pipe (usable as ``solid:<name>`` by supports and loads): ``inner`` and
+``outer`` (the cylindrical faces), ``start`` and ``end`` (the end faces z = 0 and z = length) and,
+for a section (angle < 360°), ``cut_start`` and ``cut_end`` (the planes at the start angle and
+start + angle). Each is the set of the nodes of the element faces on that surface, so a pressure on
+it acts on exactly that surface and a support on it holds exactly that surface.
+"""
+import math
+
+import numpy as np
+
+from ..physics.surface import face_nodes
+from .generate import MAX_SEGMENT_ANGLE, arc_segments, hollow_cylinder
+from .mesh import bezier_mesh
+from .solid import patch_face_set
+
+#: keys of ``solid.mesh.pipe``
+PIPE_KEYS = ("r_inner", "r_outer", "length", "angle", "start", "elements")
+#: most elements a scene's pipe generates (the box key's limit)
+MAX_PIPE_ELEMENTS = 1_000_000
+#: set name -> patch face of :func:`hollow_cylinder` (directions: 0 radial, 1 circumferential, 2 axial)
+PIPE_FACES = {"inner": "u0_min", "outer": "u0_max", "cut_start": "u1_min", "cut_end": "u1_max",
+              "start": "u2_min", "end": "u2_max"}
+
+
+def validate_pipe(value, path="solid.mesh.pipe"):
+    """The checked ``pipe`` table: radii, length, angle (degrees, default 360), start angle (default 0)
+    and ``elements = [radial, circumferential, axial]``. SceneError naming the key otherwise."""
+    from ..scene import _fail, _integer, _list, _number, _table
+
+    _table(value, path, PIPE_KEYS, required=("r_inner", "r_outer", "length", "elements"))
+    r_inner = _number(value["r_inner"], f"{path}.r_inner", low=0.0, low_open=True)
+    r_outer = _number(value["r_outer"], f"{path}.r_outer", low=0.0, low_open=True)
+    if not r_outer > r_inner:
+        _fail(f"{path}.r_outer", f"must be greater than r_inner ({r_inner}), got {r_outer}")
+    length = _number(value["length"], f"{path}.length", low=0.0, low_open=True)
+    angle = _number(value.get("angle", 360.0), f"{path}.angle", low=0.0, high=360.0, low_open=True)
+    start = _number(value.get("start", 0.0), f"{path}.start")
+    elements = [_integer(c, f"{path}.elements[{i}]", 1, MAX_PIPE_ELEMENTS)
+                for i, c in enumerate(_list(value["elements"], f"{path}.elements", 3))]
+    if math.prod(elements) > MAX_PIPE_ELEMENTS:
+        _fail(f"{path}.elements", f"{elements} gives {math.prod(elements)} elements; at most {MAX_PIPE_ELEMENTS}")
+    try:
+        arc_segments(angle, elements[1])
+    except ValueError:
+        _fail(f"{path}.elements[1]", f"{elements[1]} element(s) cannot cover {angle}° with arcs of at most "
+                                     f"{MAX_SEGMENT_ANGLE}°; use at least {math.ceil(angle / MAX_SEGMENT_ANGLE)}")
+    return {"r_inner": r_inner, "r_outer": r_outer, "length": length, "angle": angle, "start": start,
+            "elements": elements}
+
+
+def pipe_mesh(spec):
+    """The :class:`~mortar1d3d.SolidMesh` (``nurbs27``, with the named sets of the module docstring) of a
+    validated ``pipe`` table, and its :class:`~mortar1d3d.nurbs.BezierMesh`."""
+    solid = hollow_cylinder(spec["r_inner"], spec["r_outer"], spec["length"], angle=spec["angle"],
+                            elements=spec["elements"], start=spec["start"])
+    mesh = bezier_mesh(solid)
+    closed = abs(spec["angle"] - 360.0) < 1e-12
+    sets = {}
+    for name, face in PIPE_FACES.items():
+        if closed and name.startswith("cut"):
+            continue                      # the seam is inside a closed pipe
+        faces = patch_face_set(mesh, 0, face)
+        local = face_nodes(int(faces["code"][0]), int(faces["face"][0]))       # the same local face throughout
+        sets[name] = np.unique(mesh.solid.connectivity[faces["element"][:, None], local[None, :]])
+    mesh.solid.point_sets.update(sets)
+    return mesh.solid, mesh
+
+
+__all__ = ["validate_pipe", "pipe_mesh", "PIPE_FACES", "PIPE_KEYS"]
