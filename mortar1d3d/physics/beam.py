@@ -43,7 +43,7 @@ from ..quadrature import gauss_legendre
 from ..mesh import BeamMesh
 from .beam_types import beam_type
 
-__all__ = ["Section", "section", "BeamModel", "end_moment", "reference_curvature", "curved_elements",
+__all__ = ["Section", "section", "BeamModel", "end_moment", "line_force", "reference_curvature", "curved_elements",
            "N_GAUSS", "AXIAL_GAUSS"]
 
 #: Gauss points per Hermite element (see :class:`BeamModel`)
@@ -724,3 +724,44 @@ def end_moment(t, moment):
     Mxt = np.cross(M, t)
     skew = np.array([[0.0, -M[2], M[1]], [M[2], 0.0, -M[0]], [-M[1], M[0], 0.0]])
     return Mxt / tt, skew / tt - 2.0 * np.outer(Mxt, t) / (tt * tt)
+
+
+#: Gauss points per element of :func:`line_force` (exact for a straight element: a cubic integrand)
+LINE_LOAD_GAUSS = 6
+
+
+def line_force(beams, elements, value):
+    """Consistent nodal forces of a dead line load (force per reference length) on beam elements.
+
+    Parameters
+    ----------
+    beams : BeamMesh
+    elements : (m,) int array_like
+        The loaded elements.
+    value : (3,) array_like of float
+        Force per unit reference arc length.
+
+    Returns
+    -------
+    dofs : (m · 3 n_f,) int64
+        Centreline DOFs of ``beams`` (its :meth:`~mortar1d3d.mesh.BeamMesh.centreline_dofs` layout).
+    f : (m · 3 n_f,) float64
+        ``∫ H_k q ds`` per element function k and component, with ``ds = |r0'| dη`` and
+        :data:`LINE_LOAD_GAUSS` Gauss points (for Hermite elements the tangent functions get their
+        share too).
+    """
+    elements = np.asarray(elements, dtype=np.int64)
+    q = np.asarray(value, dtype=float).reshape(3)
+    kind = beams.element_type
+    n_f = kind.n_functions
+    eta, w = gauss_legendre(LINE_LOAD_GAUSS)
+    H, dH, _ = _tables(kind, eta, beams.lengths[elements])
+    cols = beams.function_columns()[elements, :n_f]
+    Q0 = beams.coefficients(elements)[:, :n_f]
+    position = np.array(kind.function_offset[:n_f]) == 0
+    # r0' from positions relative to each element's first node (no cancellation against |X|)
+    Q0 = Q0 - position[None, :, None] * Q0[:, :1, :]
+    J = np.linalg.norm(np.einsum("egk,eki->egi", dH[..., :n_f], Q0), axis=2)
+    weights = np.einsum("egk,eg->ek", H[..., :n_f], J * w[None, :])
+    dofs = (3 * cols[:, :, None] + np.arange(3)).ravel()
+    return dofs, (weights[:, :, None] * q[None, None, :]).ravel()
