@@ -168,8 +168,8 @@ def test_cli_check_exit_codes(tmp_path):
 
 
 @pytest.mark.parametrize("coupling, extra, key", [
-    ("  CONTACT_DISCRETIZATION: mortar\n  CONSTRAINT_STRATEGY: lagrange\n  LAGRANGE_FORMULATION: regularized\n"
-     "  MORTAR_SHAPE_FUNCTION: line2\n", "", "LAGRANGE_FORMULATION: 'regularized' is not supported"),
+    ("  CONTACT_DISCRETIZATION: mortar\n  CONSTRAINT_STRATEGY: lagrange\n  LAGRANGE_FORMULATION: mixed\n"
+     "  MORTAR_SHAPE_FUNCTION: line2\n", "", "LAGRANGE_FORMULATION: 'mixed' is not supported"),
     ("  CONTACT_DISCRETIZATION: mortar\n  CONSTRAINT_STRATEGY: penalty\n  MORTAR_SHAPE_FUNCTION: line2\n"
      "  PENALTY_PARAMETER: 1\n  ROTATION_COUPLING: polar_decomposition_2d\n", "",
      "ROTATION_COUPLING: 'polar_decomposition_2d' is not supported"),
@@ -285,7 +285,8 @@ def test_line_load_needs_a_whole_beam():
 
 # -- 4C's files -------------------------------------------------------------------------------------
 @needs_inputs
-@pytest.mark.parametrize("name", ["mortar_penalty_line3", "mortar_lagrange_saddlepoint_line3"])
+@pytest.mark.parametrize("name", ["mortar_penalty_line3", "mortar_lagrange_saddlepoint_line3",
+                                  "mortar_lagrange_regularized_line3"])
 def test_4c_beam3eb_line3_bar_passes(name):
     report = fourc.check(FOLDER / f"{EB}{name}.4C.yaml")
     assert report.passed, report.table()
@@ -293,9 +294,33 @@ def test_4c_beam3eb_line3_bar_passes(name):
 
 
 @needs_inputs
-def test_4c_unsupported_file_names_the_feature():
-    with pytest.raises(FourCError, match="LAGRANGE_FORMULATION: 'regularized'"):
-        Scene.from_4c(FOLDER / f"{EB}mortar_lagrange_regularized_line3.4C.yaml")
+def test_4c_regularized_lagrange_is_the_penalty_method():
+    """4C's regularised Lagrange formulation is the penalty method: its reference values equal the
+    penalty file's, and the reader maps it to penalty coupling."""
+    scene = Scene.from_4c(FOLDER / f"{EB}mortar_lagrange_regularized_line3.4C.yaml")
+    assert scene.coupling["enforcement"] == "penalty" and scene.coupling["penalty"] == 10.0
+    a = read_4c(FOLDER / f"{EB}mortar_lagrange_regularized_line3.4C.yaml").results
+    b = read_4c(FOLDER / f"{EB}mortar_penalty_line3.4C.yaml").results
+    assert [r.value for r in a] == [r.value for r in b]
+
+
+@needs_inputs
+def test_4c_beam3r_files_become_simo_reissner_scenes():
+    name = ("beam3r_herm2line3_static_beam_to_solid_volume_meshtying_beam_in_solid_column_gauss_point_projection_"
+            "without_boundary_segmentation.4C.yaml")
+    with pytest.warns(m13.errors.AccuracyWarning, match="BEAM3R elements run as the library's simo_reissner"):
+        scene, nodes = scene_from_4c(FOLDER / name)
+    beam = scene.beams[0]
+    assert beam["model"] == "simo_reissner" and beam["mesh"].n_elements == 4
+    # the elements' TRIADS (all the same rotation vector) give the reference triads, g1 the tangents
+    triads = np.array(beam["triads"])
+    np.testing.assert_allclose(triads[:, :, 0], np.tile(beam["mesh"].tangents[0], (len(triads), 1)), atol=1e-12)
+    rotation = [d for d in scene.dirichlet if d["rotation"] is not None]
+    assert len(rotation) == 1 and rotation[0]["components"] == [0, 1, 2]
+    assert scene.coupling["constraint"] == "gauss_point" and scene.coupling["integration"] == "element"
+    with pytest.warns(m13.errors.AccuracyWarning), \
+            pytest.raises(FourCError, match=r"DESIGN POINT DIRICH CONDITIONS\[0\]\.ONOFF: rotation components \[5\]"):
+        Scene.from_4c(FOLDER / "beam3r_herm2line3_static_beam_to_solid_volume_meshtying_mortar_penalty_line2.4C.yaml")
 
 
 def test_input_folder_follows_the_environment_variable(tmp_path, monkeypatch):

@@ -15,15 +15,15 @@ What maps to what:
 ==============================================  ===============================================
 ``SOLID HEX8/HEX20/HEX27/TET4/TET10``           solid mesh (node orders permuted, det J checked)
 ``MAT_Struct_StVenantKirchhoff``                ``saint_venant_kirchhoff``
-``BEAM3EB LINE2`` + ``MAT_BeamKirchhoffTorsion  ``model = "beam3eb"`` beams (one per chain of
-FreeElastHyper``                                elements), ``EA = E A``, ``EI = E I``
+``BEAM3EB LINE2``                               ``model = "beam3eb"``, one beam per chain of elements
+``BEAM3R LINE3``, Hermite centreline            ``model = "simo_reissner"``, ``TRIADS`` as reference triads
 ``DESIGN SURF/VOL/POINT DIRICH CONDITIONS``     ``dirichlet`` on the condition's node set
 ``DESIGN SURF NEUMANN CONDITIONS``              ``traction`` (force per reference area)
 ``DESIGN LINE NEUMANN CONDITIONS`` (beams)      ``line`` load (force per reference length)
-``DESIGN POINT NEUMANN CONDITIONS``             ``point`` load
+``DESIGN POINT NEUMANN CONDITIONS``             ``point`` load, or ``moment`` on BEAM3R nodes
 ``FUNCT<k>`` ``SYMBOLIC_FUNCTION_OF_...: a*t``  load factor ``t / MAXTIME`` (linear in t only)
 ``STRUCTURAL DYNAMIC`` (Statics)                ``analysis.steps = NUMSTEP``
-``BEAM TO SOLID VOLUME MESHTYING``              ``coupling``
+``BEAM TO SOLID VOLUME MESHTYING``              ``coupling`` (see docs/fourc.md)
 ==============================================  ===============================================
 """
 import math
@@ -37,8 +37,8 @@ import numpy as np
 
 from ..errors import SceneError
 
-__all__ = ["FourCError", "FourCInput", "read_4c", "scene_from_4c", "check", "ResultEntry", "ENV_VAR",
-           "input_folder", "FOURC_SOLID_NODES"]
+__all__ = ["FourCError", "FourCInput", "read_4c", "scene_from_4c", "run", "check", "ResultEntry", "CheckRow",
+           "CheckReport", "ENV_VAR", "input_folder", "FOURC_SOLID_NODES"]
 
 #: environment variable naming the folder of 4C input files the tests and the conformance script use
 ENV_VAR = "MORTAR1D3D_4C_INPUTS"
@@ -384,6 +384,81 @@ def _materials(data):
     return out
 
 
+def _material(materials, ids, what):
+    """(law, parameters, key path) of the one material ``ids`` (a set) that ``what`` use."""
+    if len(ids) != 1:
+        _fail("STRUCTURE ELEMENTS", f"{what} use several materials {sorted(ids)}; one is supported")
+    mat = next(iter(ids))
+    if mat not in materials:
+        _fail("MATERIALS", f"material {mat} of the {what} is not defined")
+    return materials[mat]
+
+
+def _beam3eb(info, X, connectivity, params, law, mkey):
+    """Scene entry of a chain of BEAM3EB elements (straight: 4C takes each element's tangents along its chord)."""
+    from ..mesh import BeamMesh
+    eids = [i[0] for i in info]
+    for eid, _, rest, _, _ in info:
+        if rest:
+            _fail("STRUCTURE ELEMENTS", f"element {eid}: options {' '.join(rest)!r} are not supported")
+    if law != "MAT_BeamKirchhoffTorsionFreeElastHyper":
+        _fail(mkey, "BEAM3EB needs MAT_BeamKirchhoffTorsionFreeElastHyper")
+    chords = np.diff(X, axis=0)
+    chords /= np.linalg.norm(chords, axis=1)[:, None]
+    kink = np.linalg.norm(chords[1:] - chords[:-1], axis=1) if len(chords) > 1 else np.zeros(0)
+    if kink.size and kink.max() > 1e-10:
+        k = int(kink.argmax())
+        _fail("STRUCTURE ELEMENTS", f"BEAM3EB elements {eids[k]} and {eids[k + 1]} meet at an angle: the "
+                                    "torsion-free beam needs a straight reference centreline")
+    mesh = BeamMesh.hermite(X, np.vstack([chords, chords[-1:]]), connectivity)
+    E = _num(params["YOUNG"], f"{mkey}.YOUNG")
+    return {"mesh": mesh, "model": "beam3eb", "section": {"EA": E * _num(params["CROSSAREA"], f"{mkey}.CROSSAREA"),
+                                                          "EI": E * _num(params["MOMIN"], f"{mkey}.MOMIN")}}
+
+
+def _beam3r(info, nodes, X, connectivity, params, law, mkey):
+    """Scene entry (``simo_reissner``) of a chain of BEAM3R elements with a Hermite centreline: the
+    end nodes carry positions and tangents (the first base vector of their reference triads), every
+    element's middle node a triad only; TRIADS are the reference rotation vectors of the element's
+    nodes in its node order (end, end, middle)."""
+    from ..mesh import BeamMesh
+    from ..physics.rotations import exp
+    for eid, _, rest, ids, kind in info:
+        options = list(rest)
+        if kind == "BEAM3R LINE3":
+            if "HERMITE_CENTERLINE" not in options or options[options.index("HERMITE_CENTERLINE") + 1] != "true":
+                _fail("STRUCTURE ELEMENTS", f"element {eid}: BEAM3R LINE3 without HERMITE_CENTERLINE true (a Lagrange "
+                                            "centreline) is not supported")
+            at = options.index("HERMITE_CENTERLINE")
+            del options[at:at + 2]
+        if len(ids) != 3:
+            _fail("STRUCTURE ELEMENTS", f"element {eid}: expected three nodes (end, end, middle), got {len(ids)}")
+        if len(options) != 10 or options[0] != "TRIADS":
+            _fail("STRUCTURE ELEMENTS", f"element {eid}: expected TRIADS and nine numbers, got {' '.join(rest)!r}")
+    if law != "MAT_BeamReissnerElastHyper":
+        _fail(mkey, "BEAM3R needs MAT_BeamReissnerElastHyper")
+    triad = np.empty((3, 3))
+    n_nodes, n_el = len(nodes), len(info)
+    triads = np.zeros((n_nodes + n_el, 3, 3))
+    for e, (eid, _, rest, ids, _) in enumerate(info):
+        psi = np.array([float(v) for v in rest[1:10]]).reshape(3, 3)
+        forward = ids[0] == nodes[e]
+        if not forward:
+            _fail("STRUCTURE ELEMENTS", f"element {eid}: its nodes run against the beam's other elements")
+        for slot, p in zip((e, e + 1, n_nodes + e), psi):
+            exp(np.ascontiguousarray(p), triad)
+            if slot < n_nodes and e > 0 and slot == e and np.abs(triads[slot] - triad).max() > 1e-8:
+                _fail("STRUCTURE ELEMENTS", f"element {eid}: its triad at node {ids[0]} differs from the previous "
+                                            "element's")
+            triads[slot] = triad
+    mesh = BeamMesh.hermite(X, triads[:n_nodes, :, 0], connectivity)
+    section = {"E": _num(params["YOUNG"], f"{mkey}.YOUNG"), "nu": _num(params["POISSONRATIO"], f"{mkey}.POISSONRATIO"),
+               "A": _num(params["CROSSAREA"], f"{mkey}.CROSSAREA"), "I2": _num(params["MOMIN2"], f"{mkey}.MOMIN2"),
+               "I3": _num(params["MOMIN3"], f"{mkey}.MOMIN3"), "I_T": _num(params["MOMINPOL"], f"{mkey}.MOMINPOL"),
+               "shear_correction": _num(params.get("SHEARCORR", 1.0), f"{mkey}.SHEARCORR")}
+    return {"mesh": mesh, "model": "simo_reissner", "section": section, "triads": triads.tolist()}
+
+
 def scene_from_4c(source):
     """The :class:`~mortar1d3d.scene.Scene` of a 4C input file, and the map of its result nodes.
 
@@ -403,7 +478,7 @@ def scene_from_4c(source):
     FourCError
         A section, key or value the library does not support: the message names it.
     """
-    from ..mesh import BeamMesh, SolidMesh
+    from ..mesh import SolidMesh
     from ..errors import MeshError
     from ..scene import Scene
     fc = source if isinstance(source, FourCInput) else read_4c(source)
@@ -426,13 +501,7 @@ def scene_from_4c(source):
         _fail("STRUCTURE ELEMENTS", "no solid elements (beam-only models are not read)")
     solid_ids = sorted({n for _, _, ids, _ in fc.solids for n in ids})
     solid_row = {nid: k for k, nid in enumerate(solid_ids)}
-    mats = {m for *_, m in fc.solids}
-    if len(mats) != 1:
-        _fail("STRUCTURE ELEMENTS", f"solid elements use several materials {sorted(mats)}; one is supported")
-    mat = mats.pop()
-    if mat not in materials:
-        _fail("MATERIALS", f"material {mat} of the solid elements is not defined")
-    law, params, mkey = materials[mat]
+    law, params, mkey = _material(materials, {m for *_, m in fc.solids}, "solid elements")
     if law != "MAT_Struct_StVenantKirchhoff":
         _fail(mkey, "solid material law not supported (only MAT_Struct_StVenantKirchhoff)")
     material = {"model": "saint_venant_kirchhoff", "E": _num(params["YOUNG"], f"{mkey}.YOUNG"),
@@ -459,50 +528,37 @@ def scene_from_4c(source):
         raise FourCError(f"STRUCTURE ELEMENTS: {exc}") from None
 
     # -- beams ----------------------------------------------------------------------------------
-    beams, beam_rows, beam_of_node = [], {}, {}
+    beams, beam_rows, beam_of_node, rotation_beams = [], {}, {}, set()
+    hermite_r = {"BEAM3R HERM2LINE3", "BEAM3R LINE3"}
     kinds = {k for _, k, *_ in fc.beams}
-    if kinds - {"BEAM3EB LINE2"}:
-        other = sorted(kinds - {"BEAM3EB LINE2"})
-        _fail("STRUCTURE ELEMENTS", f"beam elements {other} are not supported yet (BEAM3R with a Hermite centreline "
-                                    "needs rotation supports per component and 4C's rotational coupling variants; "
-                                    "see docs/fourc.md)")
+    if kinds - {"BEAM3EB LINE2"} - hermite_r:
+        _fail("STRUCTURE ELEMENTS", f"beam elements {sorted(kinds - {'BEAM3EB LINE2'} - hermite_r)} are not "
+                                    "supported (BEAM3EB LINE2; BEAM3R LINE3 with HERMITE_CENTERLINE true)")
+    if len(kinds) > 1:
+        _fail("STRUCTURE ELEMENTS", f"beam elements of several kinds {sorted(kinds)}; one kind per file is supported")
     if fc.beams:
-        ends = [tuple(ids) for _, _, ids, _, _ in fc.beams]
-        by_pair = {tuple(ids): (eid, mat, rest) for eid, _, ids, mat, rest in fc.beams}
+        # end nodes of each element; BEAM3R LINE3 lists (end, end, middle): the middle node carries a triad only
+        ends = [tuple(ids[:2]) for _, _, ids, _, _ in fc.beams]
+        by_pair = {tuple(ids[:2]): (eid, mat, rest, ids, kind) for eid, kind, ids, mat, rest in fc.beams}
         row = 0
         for nodes, _ in _chains(ends):
             elements = [(nodes[k], nodes[k + 1]) for k in range(len(nodes) - 1)]
             info = [by_pair.get(e) or by_pair.get(e[::-1]) for e in elements]
-            mats = {m for _, m, _ in info}
-            eids = [eid for eid, _, _ in info]
-            for eid, _, rest in info:
-                if rest:
-                    _fail("STRUCTURE ELEMENTS", f"element {eid}: options {' '.join(rest)!r} are not supported")
-            if len(mats) != 1:
-                _fail("STRUCTURE ELEMENTS", f"beam elements {eids}: one material per beam is supported")
-            bmat = mats.pop()
-            if bmat not in materials:
-                _fail("MATERIALS", f"material {bmat} of beam elements {eids} is not defined")
-            law, params, mkey = materials[bmat]
-            if law != "MAT_BeamKirchhoffTorsionFreeElastHyper":
-                _fail(mkey, "BEAM3EB needs MAT_BeamKirchhoffTorsionFreeElastHyper")
-            E = _num(params["YOUNG"], f"{mkey}.YOUNG")
+            law, params, mkey = _material(materials, {i[1] for i in info}, f"beam elements {[i[0] for i in info]}")
             X = np.array([fc.nodes[n] for n in nodes])
-            chords = np.diff(X, axis=0)
-            chords /= np.linalg.norm(chords, axis=1)[:, None]
-            # BEAM3EB takes each element's reference tangents along its chord: a chain must be straight
-            kink = np.linalg.norm(chords[1:] - chords[:-1], axis=1) if len(chords) > 1 else np.zeros(0)
-            if kink.size and kink.max() > 1e-10:
-                k = int(kink.argmax())
-                _fail("STRUCTURE ELEMENTS", f"BEAM3EB elements {eids[k]} and {eids[k + 1]} meet at an angle: the "
-                                            "torsion-free beam needs a straight reference centreline")
-            tangents = np.vstack([chords, chords[-1:]])
-            mesh = BeamMesh.hermite(X, tangents, np.column_stack([np.arange(len(nodes) - 1),
-                                                                  np.arange(1, len(nodes))]))
+            connectivity = np.column_stack([np.arange(len(nodes) - 1), np.arange(1, len(nodes))])
             index = len(beams)
-            beams.append({"mesh": mesh, "model": "beam3eb",
-                          "section": {"EA": E * _num(params["CROSSAREA"], f"{mkey}.CROSSAREA"),
-                                      "EI": E * _num(params["MOMIN"], f"{mkey}.MOMIN")}})
+            if info[0][4] == "BEAM3EB LINE2":
+                beams.append(_beam3eb(info, X, connectivity, params, law, mkey))
+            else:
+                beams.append(_beam3r(info, nodes, X, connectivity, params, law, mkey))
+                rotation_beams.add(index)
+                if index == 0:
+                    import warnings
+                    from ..errors import AccuracyWarning
+                    warnings.warn("BEAM3R elements run as the library's simo_reissner beam, whose element formulation "
+                                  "is not 4C's: results differ from 4C's by the discretisation error (see "
+                                  "docs/conformance.md)", AccuracyWarning, stacklevel=2)
             for k, n in enumerate(nodes):
                 beam_rows[n] = row + k
                 beam_of_node[n] = (index, k, len(nodes))
@@ -551,7 +607,35 @@ def scene_from_4c(source):
             if extra:
                 _fail(f"{ckey}.{sorted(extra)[0]}", "is not supported")
             on, body = target(kind, int(cond["E"]), f"{ckey}.E")
-            comps, values = _condition_components(cond, ckey, functions, final)
+            framed = body == "beam" and int(on.split(":")[1]) in rotation_beams
+            # a Hermite BEAM3R node's DOFs: position (3), rotation (3), tangent (3)
+            comps, values = _condition_components(cond, ckey, functions, final, 6 if framed else 3)
+            rot = [(c - 3, v) for c, v in zip(comps, values) if c >= 3]
+            comps, values = [c for c in comps if c < 3], [v for c, v in zip(comps, values) if c < 3]
+            if rot and what == "NEUMANN":
+                if kind != "POINT":
+                    _fail(f"{ckey}.ONOFF", f"moments distributed over a {kind.lower()} are not supported (point "
+                                           "moments only)")
+                if comps:
+                    _fail(ckey, "forces and moments in one condition are not supported")
+                vec = [0.0, 0.0, 0.0]
+                for c, v in rot:
+                    vec[c] = v
+                loads.append({"type": "moment", "on": on, "value": vec})
+                continue
+            if rot:
+                if [c for c, _ in rot] != [0, 1, 2] or any(v != 0.0 for _, v in rot):
+                    _fail(f"{ckey}.ONOFF", f"rotation components {[c + 3 for c, _ in rot]} with values "
+                                           f"{[v for _, v in rot]}: only all three rotations held at zero are "
+                                           "supported (scenes prescribe a node's whole rotation vector)")
+                entry = {"on": on, "rotation": [0.0, 0.0, 0.0]}
+                if comps:
+                    vec = [0.0, 0.0, 0.0]
+                    for c, v in zip(comps, values):
+                        vec[c] = v
+                    entry.update(components=["xyz"[c] for c in comps], value=vec)
+                dirichlet.append(entry)
+                continue
             if not comps:
                 continue
             if what == "DIRICH":
@@ -594,7 +678,8 @@ def _coupling(block, has_beams):
     block = dict(block)
     allowed = {"CONTACT_DISCRETIZATION", "CONSTRAINT_STRATEGY", "MORTAR_SHAPE_FUNCTION", "PENALTY_PARAMETER",
                "GEOMETRY_PAIR_STRATEGY", "GEOMETRY_PAIR_SEGMENTATION_SEARCH_POINTS", "GAUSS_POINTS",
-               "LAGRANGE_FORMULATION", "ROTATION_COUPLING", "COUPLE_RESTART_STATE"}
+               "LAGRANGE_FORMULATION", "ROTATION_COUPLING", "COUPLE_RESTART_STATE", "ROTATION_COUPLING_PENALTY_PARAMETER",
+               "ROTATION_COUPLING_MORTAR_SHAPE_FUNCTION", "INTEGRATION_POINTS_CIRCUMFERENCE"}
     for k in block:
         if k not in allowed:
             _fail(f"{key}.{k}", f"{block[k]!r} is not supported")
@@ -613,7 +698,9 @@ def _coupling(block, has_beams):
     strategy = str(block.get("GEOMETRY_PAIR_STRATEGY", "segmentation"))
     if strategy == "segmentation":
         out["integration"] = "segment"
-    elif strategy == "gauss_point_projection_without_boundary_segmentation":
+    elif strategy in ("gauss_point_projection_without_boundary_segmentation",
+                      "gauss_point_projection_boundary_segmentation"):
+        # the two differ only where a beam element leaves the solid: run() checks that none does
         out["integration"] = "element"
     else:
         _fail(f"{key}.GEOMETRY_PAIR_STRATEGY", f"{strategy!r} is not supported (segmentation, "
@@ -626,13 +713,33 @@ def _coupling(block, has_beams):
         out["penalty"] = _num(block.get("PENALTY_PARAMETER"), f"{key}.PENALTY_PARAMETER")
     elif constraint == "lagrange":
         form = str(block.get("LAGRANGE_FORMULATION", "saddlepoint"))
-        if form != "saddlepoint":
-            _fail(f"{key}.LAGRANGE_FORMULATION", f"{form!r} is not supported (saddlepoint)")
-        out["enforcement"] = "lagrange"
+        if form in ("saddlepoint", "augmented"):
+            # augmented: the added penalty term vanishes where the constraint holds, so the solution
+            # is the saddle point's (it changes only 4C's linear systems)
+            out["enforcement"] = "lagrange"
+        elif form == "regularized":
+            # the regularised constraint g − κ λ / ε = 0 gives λ = ε κ⁻¹ g: exactly the penalty method
+            out["enforcement"] = "penalty"
+            out["penalty"] = _num(block.get("PENALTY_PARAMETER"), f"{key}.PENALTY_PARAMETER")
+        else:
+            _fail(f"{key}.LAGRANGE_FORMULATION", f"{form!r} is not supported (saddlepoint, augmented, regularized)")
     else:
         _fail(f"{key}.CONSTRAINT_STRATEGY", f"{constraint!r} is not supported (penalty, lagrange)")
-    if str(block.get("ROTATION_COUPLING", "none")) != "none":
-        _fail(f"{key}.ROTATION_COUPLING", f"{block['ROTATION_COUPLING']!r} is not supported")
+    rotation = str(block.get("ROTATION_COUPLING", "none"))
+    if rotation == "deformation_gradient_3d_general":
+        rot = {"triad": "deformation_gradient", "enforcement": "penalty",
+               "penalty": _num(block.get("ROTATION_COUPLING_PENALTY_PARAMETER"),
+                               f"{key}.ROTATION_COUPLING_PENALTY_PARAMETER")}
+        shape = str(block.get("ROTATION_COUPLING_MORTAR_SHAPE_FUNCTION", "none"))
+        if out["constraint"] == "mortar":
+            if shape not in ("line2", "line3"):
+                _fail(f"{key}.ROTATION_COUPLING_MORTAR_SHAPE_FUNCTION", f"{shape!r} is not supported (line2, line3)")
+            rot["lm"] = shape
+        else:
+            _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} with {disc!r} is not supported (mortar only)")
+        out["rotational"] = rot
+    elif rotation != "none":
+        _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} is not supported (deformation_gradient_3d_general)")
     if str(block.get("COUPLE_RESTART_STATE", "false")).lower() not in ("false", "no", "0"):
         _fail(f"{key}.COUPLE_RESTART_STATE", f"{block['COUPLE_RESTART_STATE']!r} is not supported")
     return out
@@ -690,7 +797,14 @@ def run(path, progress=False):
     from ..model import solve
     fc = read_4c(path)
     scene, nodes = scene_from_4c(fc)
-    return solve(scene, progress=progress), nodes, fc
+    result = solve(scene, progress=progress)
+    strategy = (fc.data.get(_COUPLING) or {}).get("GEOMETRY_PAIR_STRATEGY")
+    outside = np.flatnonzero(result.coupled_length < result.beam_length * (1.0 - 1e-12))
+    if strategy == "gauss_point_projection_boundary_segmentation" and outside.size:
+        _fail(f"{_COUPLING}.GEOMETRY_PAIR_STRATEGY", f"{strategy!r} segments the beam elements that leave the solid "
+                                                    f"(beams {outside.tolist()} do), which is not supported; the "
+                                                    "library's element-based integration leaves them unsegmented")
+    return result, nodes, fc
 
 
 def check(path, progress=False):

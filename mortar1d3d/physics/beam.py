@@ -236,6 +236,21 @@ def _gauss_point(a, b, a0, da, J, EA, EI, kappa0, want, grad, hess, work):
 
 
 @njit
+def _current_derivatives(dH, ddH, A0, B0, Qd, e, g, a, b, da):
+    """Current ``r' = A0 + Σ dH_k Qd_k`` (into ``a``), its displacement part (``da``) and
+    ``r'' = B0 + Σ ddH_k Qd_k`` (``b``) of element e at Gauss point g (arrays as in :func:`_element_range`)."""
+    n_f = dH.shape[2]
+    for i in range(3):
+        da[i] = 0.0
+        b[i] = 0.0
+        for k in range(n_f):
+            da[i] += dH[e, g, k] * Qd[e, k, i]
+            b[i] += ddH[e, g, k] * Qd[e, k, i]
+        a[i] = A0[e, g, i] + da[i]
+        b[i] += B0[e, g, i]
+
+
+@njit
 def _element_range(first, last, dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want, energy, fe, ke):
     """Energy, internal force and tangent of elements ``first`` ... ``last - 1``.
 
@@ -278,14 +293,7 @@ def _element_range(first, last, dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want
         if want == 2:
             ke[e, :, :] = 0.0
         for g in range(n_g):
-            for i in range(3):
-                da[i] = 0.0
-                b[i] = 0.0
-                for k in range(n_f):
-                    da[i] += dH[e, g, k] * Qd[e, k, i]
-                    b[i] += ddH[e, g, k] * Qd[e, k, i]
-                a[i] = A0[e, g, i] + da[i]
-                b[i] += B0[e, g, i]
+            _current_derivatives(dH, ddH, A0, B0, Qd, e, g, a, b, da)
             total += _gauss_point(a, b, A0[e, g], da, J[e, g], EA_w[e, g], EI_w[e, g], kappa0[e, g], want, grad,
                                   hess, work)
             if want == 0:

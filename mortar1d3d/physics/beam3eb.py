@@ -26,7 +26,7 @@ import numpy as np
 
 from .._config import njit
 from ..quadrature import gauss_legendre
-from .beam import BeamModel, _tables
+from .beam import BeamModel, _tables, _current_derivatives
 
 __all__ = ["Beam3ebModel", "GAUSS_POINTS", "COLLOCATION"]
 
@@ -140,14 +140,7 @@ def _elements(dH, ddH, A0, B0, dHc, A0c, Jc, Lg, wA, wB, Qd, want, energy, fe, k
                 for i in range(3):
                     deps_c[c, 3 * k + i] = dHc[e, c, k] * a[i] / (na * J)
         for g in range(n_g):
-            for i in range(3):
-                da[i] = 0.0
-                b[i] = 0.0
-                for k in range(n_f):
-                    da[i] += dH[e, g, k] * Qd[e, k, i]
-                    b[i] += ddH[e, g, k] * Qd[e, k, i]
-                a[i] = A0[e, g, i] + da[i]
-                b[i] += B0[e, g, i]
+            _current_derivatives(dH, ddH, A0, B0, Qd, e, g, a, b, da)
             eps = Lg[g, 0] * eps_c[0] + Lg[g, 1] * eps_c[1] + Lg[g, 2] * eps_c[2]
             na = np.sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
             J0 = np.sqrt(A0[e, g, 0] ** 2 + A0[e, g, 1] ** 2 + A0[e, g, 2] ** 2)
