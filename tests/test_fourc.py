@@ -1,6 +1,6 @@
 """4C input files: the reader (node orders, conditions, errors), the beam3eb beam, line loads, and
 4C's own regression files where the folder of them exists (``MORTAR1D3D_4C_INPUTS`` or
-``../shared/4c-inputs``; skipped with the reason otherwise)."""
+``shared/4c-inputs`` beside the repository's folder; skipped with the reason otherwise)."""
 import subprocess
 import sys
 
@@ -17,7 +17,7 @@ from mortar1d3d.scene import Scene, SceneError
 
 FOLDER = fourc.input_folder()
 needs_inputs = pytest.mark.skipif(FOLDER is None, reason=f"no 4C input files: set {fourc.ENV_VAR} or provide "
-                                                         "../shared/4c-inputs next to the repository")
+                                                         "shared/4c-inputs beside the repository's folder")
 EB = "beam3eb_static_beam_to_solid_volume_meshtying_"
 
 
@@ -132,6 +132,7 @@ def test_tiny_file_becomes_the_scene_written_by_hand(tmp_path):
     np.testing.assert_array_equal(loads["line"]["value"], [0.0, 0.5, 0.0])
     assert loads["line"]["on"] == "beam:0"
     assert nodes[15] == ("beam", 2) and nodes[12][0] == "solid"
+    assert "load.line" in str(m13.plan(scene))
     # the same model written as a scene by hand gives the same bits
     solid = scene.solid["mesh"]
     hand = Scene(solid={"mesh": solid, "material": {"model": "saint_venant_kirchhoff", "E": 100, "nu": 0.3}},

@@ -49,8 +49,8 @@ class FourCError(SceneError):
 
 
 def input_folder(repository_root=None):
-    """The folder of 4C input files: ``$MORTAR1D3D_4C_INPUTS``, else ``../shared/4c-inputs`` next to
-    the repository root; None when neither exists."""
+    """The folder of 4C input files: ``$MORTAR1D3D_4C_INPUTS``, else the folder ``shared/4c-inputs``
+    beside the repository's folder (in its parent folder); None when neither exists."""
     env = os.environ.get(ENV_VAR)
     if env:
         return Path(env) if Path(env).is_dir() else None

@@ -15,7 +15,7 @@ reproduced to its own tolerances:
   to first order in the axial strain.
 
 Both terms are integrated with 4 Gauss points per element. At a Gauss point with
-``a = r'``, ``b = r''`` (derivatives with respect to ξ, reference ``J = |r0'|``) and Gauss weight w:
+``a = r'``, ``b = r''`` (derivatives with respect to ξ, reference ``J = |r0'|``) and Gauss weight w::
 
     f_axial = EA w ε̄ ∂|a|/∂q,        f_bending = ½ EI (w / J) ∂P/∂q,   P = |a × b|² / |a|⁴.
 
