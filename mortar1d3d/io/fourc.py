@@ -35,17 +35,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import SceneError
+from ..errors import FourCError  # noqa: F401 (raised here; importable from here)
 
 __all__ = ["FourCError", "FourCInput", "read_4c", "scene_from_4c", "run", "check", "ResultEntry", "CheckRow",
            "CheckReport", "ENV_VAR", "input_folder", "FOURC_SOLID_NODES"]
 
 #: environment variable naming the folder of 4C input files the tests and the conformance script use
 ENV_VAR = "MORTAR1D3D_4C_INPUTS"
-
-
-class FourCError(SceneError):
-    """A 4C input file the library cannot run (as it is): the message names the key and the value."""
 
 
 def input_folder(repository_root=None):
