@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test fuzz bench report docs venv clean
+.PHONY: demo test fuzz bench report docs venv clean conformance
 
 $(STAMP): pyproject.toml
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "$(PYTHON) not found; run 'make PYTHON=python3 ...'"; exit 1; }
@@ -44,6 +44,11 @@ docs: $(DOCS_STAMP)
 # accuracy-vs-time study (issue 5): report/accuracy_vs_time.md + plots; QUICK=1 for the short run
 report: $(STAMP)
 	$(PY) -m mortar1d3d.cli bench report --out report $(if $(QUICK),--quick,)
+
+# every 4C input file of $$MORTAR1D3D_4C_INPUTS (else the folder shared/4c-inputs beside the repository's folder): run, compare with its
+# RESULT DESCRIPTION, regenerate docs/conformance.md (docs/fourc.md)
+conformance: $(STAMP)
+	$(PY) benchmarks/conformance.py
 
 clean:
 	rm -rf $(VENV) results .pytest_cache .benchmarks docs/_build

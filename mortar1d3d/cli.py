@@ -1,4 +1,4 @@
-"""Command line: ``mortar1d3d run|plan scene.toml``, ``mortar1d3d demo``, ``mortar1d3d warmup``,
+"""Command line: ``mortar1d3d run|plan scene.toml`` (or a 4C input file), ``mortar1d3d check input.4C.yaml``, ``mortar1d3d demo``, ``mortar1d3d warmup``,
 ``mortar1d3d bench report``."""
 import argparse
 import os
@@ -13,10 +13,10 @@ from pathlib import Path
 def _run(args):
     from .errors import MeshError
     from .model import solve
-    from .scene import Scene, SceneError
+    from .scene import SceneError
     from .solvers.newton import ConvergenceError
     try:
-        scene = Scene.from_toml(args.scene)
+        scene = _read_scene(args.scene)
         if not args.quiet:
             print(f"mortar1d3d run {args.scene}: {scene!r}", flush=True)
         start = time.perf_counter()
@@ -35,12 +35,43 @@ def _run(args):
     return 0
 
 
+def _read_scene(path):
+    """A TOML scene, or a 4C input file (``.yaml``/``.yml``, read by :mod:`mortar1d3d.io.fourc`)."""
+    from .scene import Scene
+    if str(path).endswith((".yaml", ".yml")):
+        return Scene.from_4c(path)
+    return Scene.from_toml(path)
+
+
+def _check(args):
+    """``mortar1d3d check input.4C.yaml``: run a 4C input file and compare its RESULT DESCRIPTION."""
+    from .errors import MeshError
+    from .io.fourc import check
+    from .scene import SceneError
+    from .solvers.newton import ConvergenceError
+    try:
+        report = check(args.input, progress=not args.quiet)
+    except (SceneError, MeshError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except ConvergenceError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 3
+    print(f"mortar1d3d check {args.input}: {len(report.rows)} result entries, solved in {report.seconds:.2f} s")
+    print(report.table())
+    failed = sum(r.status == "FAIL" for r in report.rows)
+    other = sum(r.status == "not comparable" for r in report.rows)
+    print(f"{'FAILED' if failed else 'passed'}: {len(report.rows) - failed - other} pass, {failed} fail, "
+          f"{other} not comparable; max deviation {report.max_deviation:.3g}")
+    return 1 if failed else 0
+
+
 def _plan(args):
     from .errors import MeshError
     from .model import plan
-    from .scene import Scene, SceneError
+    from .scene import SceneError
     try:
-        effects = plan(Scene.from_toml(args.scene))
+        effects = plan(_read_scene(args.scene))
     except (SceneError, MeshError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -95,12 +126,15 @@ def _main(argv):
     parser.add_argument("--version", action="version", version=f"mortar1d3d {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="solve a scene file and write a ParaView series")
-    run.add_argument("scene", help="TOML scene file")
+    run.add_argument("scene", help="TOML scene file, or a 4C input file (.4C.yaml)")
     run.add_argument("--out", help="output directory (default results/<scene name>)")
     run.add_argument("--samples", type=int, default=8, help="beam samples per element in the output")
     run.add_argument("--quiet", action="store_true", help="no progress output")
     pl = sub.add_parser("plan", help="print what solving a scene file will compute")
     pl.add_argument("scene")
+    chk = sub.add_parser("check", help="run a 4C input file (.4C.yaml) and compare with its RESULT DESCRIPTION")
+    chk.add_argument("input", help="4C input file")
+    chk.add_argument("--quiet", action="store_true", help="no progress output")
     demo = sub.add_parser("demo", help="assemble the benchmark scene, print certificates, write VTU and a plot")
     demo.add_argument("--out", default="results/demo")
     sub.add_parser("warmup", help="compile (or load cached) kernels")
@@ -121,6 +155,8 @@ def _main(argv):
         return _run(args)
     if args.command == "plan":
         return _plan(args)
+    if args.command == "check":
+        return _check(args)
     if args.command == "warmup":
         from .warmup import warmup
         warmup(verbose=True)

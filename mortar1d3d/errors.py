@@ -20,7 +20,7 @@ The modules that raise them re-export them under their old names (``mortar1d3d.s
 """
 import numpy as np
 
-__all__ = ["MeshError", "SceneError", "LinearSolverError", "ConvergenceError", "InvertedElementsError",
+__all__ = ["MeshError", "SceneError", "FourCError", "LinearSolverError", "ConvergenceError", "InvertedElementsError",
            "RotationRangeError", "AccuracyWarning", "CouplingWarning", "LargeDeformationWarning", "format_ids"]
 
 
@@ -70,6 +70,11 @@ class RotationRangeError(FloatingPointError):
     def __init__(self, elements, message):
         self.elements = np.asarray(elements, dtype=np.int64)
         super().__init__(message)
+
+
+class FourCError(SceneError):
+    """A 4C input file the library cannot run as it is (:mod:`mortar1d3d.io.fourc`): the message
+    names the section, key and value."""
 
 
 # ----------------------------------------------------------------------------------- warnings

@@ -22,7 +22,7 @@ MATERIAL_MODELS = ("linear_elastic", "saint_venant_kirchhoff", "neo_hooke")
 #: beam models a scene may name (the registry's, then the planned ones) and those that run
 IMPLEMENTED_BEAM_MODELS = tuple(BEAM_TYPES)
 BEAM_MODELS = IMPLEMENTED_BEAM_MODELS + PLANNED_BEAM_TYPES
-LOAD_TYPES = ("point", "traction", "pressure", "body", "moment")
+LOAD_TYPES = ("point", "traction", "pressure", "body", "moment", "line")
 SOLVERS = ("auto", "direct", "amg", "block")
 
 
@@ -471,6 +471,9 @@ def _load(value, i):
         out["value"] = _vector(value["value"], f"{path}.value")
     if kind in ("traction", "pressure") and not (isinstance(out["on"], str) and out["on"].startswith("solid:")):
         _fail(f"{path}.on", f"a {kind} acts on a solid surface: use 'solid:x_max' or a solid point set")
+    if kind == "line" and not (isinstance(out["on"], str) and out["on"].startswith("beam:")
+                               and out["on"].count(":") == 1):
+        _fail(f"{path}.on", "a line load acts along a whole beam: use 'beam:<i>'")
     if kind == "moment" and not (isinstance(out["on"], str) and out["on"].startswith("beam:")):
         _fail(f"{path}.on", "a moment acts on beam nodes: use 'beam:<i>:start' or 'beam:<i>:end' (or 'beam:<i>' "
                             "for a beam with rotations)")
@@ -595,6 +598,18 @@ class Scene:
         except OSError as exc:      # a directory, no permission, ...
             raise SceneError(f"scene file {str(path)!r} cannot be read: {exc.strerror or exc}") from None
         return cls.from_dict(data, base_dir=path.parent, name=path.stem)
+
+    @classmethod
+    def from_4c(cls, path):
+        """The scene of a 4C input file (``.4C.yaml``; :func:`mortar1d3d.io.fourc.scene_from_4c`).
+
+        Raises
+        ------
+        mortar1d3d.io.fourc.FourCError
+            (a SceneError) naming the section, key and value the library does not support.
+        """
+        from .io.fourc import scene_from_4c
+        return scene_from_4c(path)[0]
 
     def __repr__(self):
         parts = []

@@ -151,11 +151,13 @@ def test_every_mesh_file_goes_through_a_registered_reader(tmp_path, monkeypatch)
 # beam types
 # --------------------------------------------------------------------------------------------
 def test_beam_types_take_their_dofs_from_the_element_type():
+    from mortar1d3d.physics.beam3eb import Beam3ebModel
     from mortar1d3d.physics.simo_reissner import SimoReissnerBeam
     for t in BEAM_TYPES.values():
         assert t.dofs_per_node == t.element.dofs_per_node
         assert t.element is BEAM_ELEMENTS[t.element.name]
-        assert t.physics_class() is (SimoReissnerBeam if t.triads else BeamModel)
+        assert t.physics_class() is (SimoReissnerBeam if t.triads else Beam3ebModel if t.name == "beam3eb"
+                                     else BeamModel)
     assert BEAM_TYPES["torsion_free"].element.has_tangents and not BEAM_TYPES["truss"].element.has_tangents
     # rotation nodes: none without triads; line3 triads: the mesh's nodes, then one middle node per element
     beams = BeamMesh.hermite([[0, 0, 0], [1, 0, 0], [2, 0, 0]], [[1, 0, 0]] * 3, [[0, 1], [1, 2]])

@@ -114,7 +114,8 @@ def effects(model):
     kinds = {item["type"] for item in sc.loads}
     for kind, when, detail in (("point", "once", "dead nodal forces"),
                                ("traction", "once", "dead surface traction"),
-                               ("body", "once", "dead body force")):
+                               ("body", "once", "dead body force"),
+                               ("line", "once", "dead line load per reference length on beams")):
         if kind in kinds:
             out.append(Effect(f"load.{kind}", when, detail))
     if "pressure" in kinds:

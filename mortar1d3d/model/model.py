@@ -167,7 +167,7 @@ class Model:
         if solver == "block" and not lagrange:
             raise SceneError("analysis.solver: 'block' is the saddle-point solver of Lagrange-multiplier coupling; "
                              "use 'auto', 'direct' or 'amg'")
-        framed = [g.model for g in self.groups if g.rotations.size]
+        framed = [g.model for g in self.groups if not g.type.symmetric_tangent]
         if framed and solver in ("amg", "block") and not self.linear:
             raise SceneError(f"analysis.solver: {solver!r} runs CG or MINRES, which need a symmetric tangent; the "
                              f"{framed[0]} beam's tangent is not symmetric away from its reference state, so a "
@@ -197,8 +197,8 @@ class Model:
         n = self.n_displacement_dofs if n_unknowns is None else n_unknowns
         if n <= DIRECT_MAX_DOFS:
             return "direct"
-        if not self.linear and any(g.rotations.size for g in self.groups):
-            # beams with rotations: a non-symmetric tangent, which CG and MINRES do not take
+        if not self.linear and any(not g.type.symmetric_tangent for g in self.groups):
+            # beams with rotations or 4C's beam3eb: a non-symmetric tangent, which CG and MINRES do not take
             return "direct"
         return "block" if self.lagrange else "amg"
 
@@ -396,6 +396,14 @@ class Model:
                     self.counts["load.traction"] += 1
                 else:
                     self.pressures.append(Pressure(self.solid_mesh, faces, item["value"]))
+            elif kind == "line":
+                # force per reference length along a whole beam: consistent nodal forces ∫ H_k q ds
+                from ..physics.beam import line_force
+                g, entry = sel[1], int(item["on"].split(":")[1])
+                a, b = g.entry_elements[g.entries.index(entry)]
+                dofs, f = line_force(g.mesh, np.arange(a, b), item["value"])
+                np.add.at(self.dead_load, g.dofs.start + dofs, f)
+                self.counts["load.line"] += 1
             elif sel[1].rotations.size:
                 # moment on the rotation nodes of a beam with a material frame: virtual work M·δθ
                 # with spatial spins δθ, a dead load on the rotation unknowns

@@ -43,7 +43,7 @@ from ..quadrature import gauss_legendre
 from ..mesh import BeamMesh
 from .beam_types import beam_type
 
-__all__ = ["Section", "section", "BeamModel", "end_moment", "reference_curvature", "curved_elements",
+__all__ = ["Section", "section", "BeamModel", "end_moment", "line_force", "reference_curvature", "curved_elements",
            "N_GAUSS", "AXIAL_GAUSS"]
 
 #: Gauss points per Hermite element (see :class:`BeamModel`)
@@ -236,6 +236,21 @@ def _gauss_point(a, b, a0, da, J, EA, EI, kappa0, want, grad, hess, work):
 
 
 @njit
+def _current_derivatives(dH, ddH, A0, B0, Qd, e, g, a, b, da):
+    """Current ``r' = A0 + Σ dH_k Qd_k`` (into ``a``), its displacement part (``da``) and
+    ``r'' = B0 + Σ ddH_k Qd_k`` (``b``) of element e at Gauss point g (arrays as in :func:`_element_range`)."""
+    n_f = dH.shape[2]
+    for i in range(3):
+        da[i] = 0.0
+        b[i] = 0.0
+        for k in range(n_f):
+            da[i] += dH[e, g, k] * Qd[e, k, i]
+            b[i] += ddH[e, g, k] * Qd[e, k, i]
+        a[i] = A0[e, g, i] + da[i]
+        b[i] += B0[e, g, i]
+
+
+@njit
 def _element_range(first, last, dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want, energy, fe, ke):
     """Energy, internal force and tangent of elements ``first`` ... ``last - 1``.
 
@@ -278,14 +293,7 @@ def _element_range(first, last, dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want
         if want == 2:
             ke[e, :, :] = 0.0
         for g in range(n_g):
-            for i in range(3):
-                da[i] = 0.0
-                b[i] = 0.0
-                for k in range(n_f):
-                    da[i] += dH[e, g, k] * Qd[e, k, i]
-                    b[i] += ddH[e, g, k] * Qd[e, k, i]
-                a[i] = A0[e, g, i] + da[i]
-                b[i] += B0[e, g, i]
+            _current_derivatives(dH, ddH, A0, B0, Qd, e, g, a, b, da)
             total += _gauss_point(a, b, A0[e, g], da, J[e, g], EA_w[e, g], EI_w[e, g], kappa0[e, g], want, grad,
                                   hess, work)
             if want == 0:
@@ -724,3 +732,44 @@ def end_moment(t, moment):
     Mxt = np.cross(M, t)
     skew = np.array([[0.0, -M[2], M[1]], [M[2], 0.0, -M[0]], [-M[1], M[0], 0.0]])
     return Mxt / tt, skew / tt - 2.0 * np.outer(Mxt, t) / (tt * tt)
+
+
+#: Gauss points per element of :func:`line_force` (exact for a straight element: a cubic integrand)
+LINE_LOAD_GAUSS = 6
+
+
+def line_force(beams, elements, value):
+    """Consistent nodal forces of a dead line load (force per reference length) on beam elements.
+
+    Parameters
+    ----------
+    beams : BeamMesh
+    elements : (m,) int array_like
+        The loaded elements.
+    value : (3,) array_like of float
+        Force per unit reference arc length.
+
+    Returns
+    -------
+    dofs : (m · 3 n_f,) int64
+        Centreline DOFs of ``beams`` (its :meth:`~mortar1d3d.mesh.BeamMesh.centreline_dofs` layout).
+    f : (m · 3 n_f,) float64
+        ``∫ H_k q ds`` per element function k and component, with ``ds = |r0'| dη`` and
+        :data:`LINE_LOAD_GAUSS` Gauss points (for Hermite elements the tangent functions get their
+        share too).
+    """
+    elements = np.asarray(elements, dtype=np.int64)
+    q = np.asarray(value, dtype=float).reshape(3)
+    kind = beams.element_type
+    n_f = kind.n_functions
+    eta, w = gauss_legendre(LINE_LOAD_GAUSS)
+    H, dH, _ = _tables(kind, eta, beams.lengths[elements])
+    cols = beams.function_columns()[elements, :n_f]
+    Q0 = beams.coefficients(elements)[:, :n_f]
+    position = np.array(kind.function_offset[:n_f]) == 0
+    # r0' from positions relative to each element's first node (no cancellation against |X|)
+    Q0 = Q0 - position[None, :, None] * Q0[:, :1, :]
+    J = np.linalg.norm(np.einsum("egk,eki->egi", dH[..., :n_f], Q0), axis=2)
+    weights = np.einsum("egk,eg->ek", H[..., :n_f], J * w[None, :])
+    dofs = (3 * cols[:, :, None] + np.arange(3)).ravel()
+    return dofs, (weights[:, :, None] * q[None, None, :]).ravel()

@@ -56,6 +56,9 @@ class BeamType:
         (:meth:`rotation_nodes`): None (no frame, no rotation DOFs) or ``"line3"`` (three triad
         nodes per element: the mesh's nodes, shared by adjacent elements, then one middle node per
         element, numbered ``n_nodes + e``).
+    symmetric_tangent : bool
+        Whether the beam's tangent stiffness is symmetric in nonlinear analyses (CG and MINRES need
+        it; a beam without it runs with the direct solver).
     section_law : str
         Which section keys the scene takes: ``"axial_bending"`` (``{E, radius}`` or ``{EA, EI}``)
         or ``"shear_torsion"`` (axial, shear, torsion and two bending stiffnesses, see
@@ -72,6 +75,7 @@ class BeamType:
     rotations_per_node: int = 0
     triads: str = None
     section_law: str = "axial_bending"
+    symmetric_tangent: bool = True
 
     @property
     def dofs_per_node(self):
@@ -140,7 +144,9 @@ BEAM_TYPES = {t.name: t for t in (
     BeamType("simo_reissner", BEAM_ELEMENTS["hermite"], "Hermite centreline with line3 triads", bending=True,
              curved_reference=True, physics="mortar1d3d.physics.simo_reissner:SimoReissnerBeam",
              output_fields=("displacement", "axial_force", "curvature", "g1", "g2", "g3", "n", "m", "Gamma", "K"),
-             rotations_per_node=3, triads="line3", section_law="shear_torsion"),
+             rotations_per_node=3, triads="line3", section_law="shear_torsion", symmetric_tangent=False),
+    BeamType("beam3eb", BEAM_ELEMENTS["hermite"], "Hermite centreline (4C's BEAM3EB)", bending=True,
+             curved_reference=False, physics="mortar1d3d.physics.beam3eb:Beam3ebModel", symmetric_tangent=False),
 )}
 PLANNED_BEAM_TYPES = ()
 DEFAULT_BEAM_TYPE = "torsion_free"

@@ -1,0 +1,833 @@
+"""Input files of 4C (``.4C.yaml``): read them into a :class:`~mortar1d3d.scene.Scene`, run and check them.
+
+4C (github ``4C-multiphysics/4C``) is the open-source C++ code of the method's authors. Its
+beam-to-solid volume meshtying regression tests are complete models with reference
+displacements (``RESULT DESCRIPTION``). This module reads such a file (plain YAML, PyYAML),
+turns it into a scene with the library's node orders and element types, and compares a solve
+with the file's reference values (:func:`check`). The page ``docs/fourc.md`` lists what is
+supported; everything else stops with a :class:`FourCError` that names the key and its value,
+never with a silent approximation.
+
+What maps to what:
+
+==============================================  ===============================================
+4C                                              scene
+==============================================  ===============================================
+``SOLID HEX8/HEX20/HEX27/TET4/TET10``           solid mesh (node orders permuted, det J checked)
+``MAT_Struct_StVenantKirchhoff``                ``saint_venant_kirchhoff``
+``BEAM3EB LINE2``                               ``model = "beam3eb"``, one beam per chain of elements
+``BEAM3R LINE3``, Hermite centreline            ``model = "simo_reissner"``, ``TRIADS`` as reference triads
+``DESIGN SURF/VOL/POINT DIRICH CONDITIONS``     ``dirichlet`` on the condition's node set
+``DESIGN SURF NEUMANN CONDITIONS``              ``traction`` (force per reference area)
+``DESIGN LINE NEUMANN CONDITIONS`` (beams)      ``line`` load (force per reference length)
+``DESIGN POINT NEUMANN CONDITIONS``             ``point`` load, or ``moment`` on BEAM3R nodes
+``FUNCT<k>`` ``SYMBOLIC_FUNCTION_OF_...: a*t``  load factor ``t / MAXTIME`` (linear in t only)
+``STRUCTURAL DYNAMIC`` (Statics)                ``analysis.steps = NUMSTEP``
+``BEAM TO SOLID VOLUME MESHTYING``              ``coupling`` (see docs/fourc.md)
+==============================================  ===============================================
+"""
+import math
+import os
+import re
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import FourCError  # noqa: F401 (raised here; importable from here)
+
+__all__ = ["FourCError", "FourCInput", "read_4c", "scene_from_4c", "run", "check", "ResultEntry", "CheckRow",
+           "CheckReport", "ENV_VAR", "input_folder", "FOURC_SOLID_NODES"]
+
+#: environment variable naming the folder of 4C input files the tests and the conformance script use
+ENV_VAR = "MORTAR1D3D_4C_INPUTS"
+
+
+def input_folder(repository_root=None):
+    """The folder of 4C input files: ``$MORTAR1D3D_4C_INPUTS``, else the folder ``shared/4c-inputs``
+    beside the repository's folder (in its parent folder); None when neither exists."""
+    env = os.environ.get(ENV_VAR)
+    if env:
+        return Path(env) if Path(env).is_dir() else None
+    root = Path(repository_root) if repository_root else Path(__file__).resolve().parents[2]
+    folder = root.parent / "shared" / "4c-inputs"
+    return folder if folder.is_dir() else None
+
+
+# ----------------------------------------------------------------------------------------------
+# node orders: 4C's reference coordinates of its element nodes (facts of 4C's element
+# definitions); the permutation to the library's order follows by matching coordinates
+# ----------------------------------------------------------------------------------------------
+_HEX_4C = np.array([
+    [-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1], [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1],
+    # edges: the four of the bottom face, the four vertical ones, the four of the top face
+    [0, -1, -1], [1, 0, -1], [0, 1, -1], [-1, 0, -1],
+    [-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0],
+    [0, -1, 1], [1, 0, 1], [0, 1, 1], [-1, 0, 1],
+    # face centres: bottom, front (y = -1), right (x = 1), back, left, top; then the centre
+    [0, 0, -1], [0, -1, 0], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, 0, 1], [0, 0, 0]], dtype=float)
+_TET_4C = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1],
+                    [0.5, 0, 0], [0.5, 0.5, 0], [0, 0.5, 0], [0, 0, 0.5], [0.5, 0, 0.5], [0, 0.5, 0.5]])
+
+#: 4C solid element name -> (library element type, 4C reference coordinates of its nodes)
+FOURC_SOLID_NODES = {"HEX8": ("hexahedron", _HEX_4C[:8]), "HEX20": ("hexahedron20", _HEX_4C[:20]),
+                     "HEX27": ("hexahedron27", _HEX_4C), "TET4": ("tetra", _TET_4C[:4]),
+                     "TET10": ("tetra10", _TET_4C)}
+
+
+def _permutation(fourc_name):
+    """``perm`` with ``library_nodes = fourc_nodes[perm]`` for a 4C solid element type."""
+    from ..elements.solid.dispatch import solid_element
+    name, ref4c = FOURC_SOLID_NODES[fourc_name]
+    ref = np.asarray(solid_element(name).reference_nodes, dtype=float)
+    dist = np.linalg.norm(ref[:, None, :] - ref4c[None, :, :], axis=2)
+    perm = dist.argmin(axis=1)
+    if not (np.sort(perm) == np.arange(len(ref4c))).all() or dist.min(axis=1).max() > 1e-12:
+        raise AssertionError(f"no node permutation from 4C's {fourc_name} to {name}")
+    return perm
+
+
+# ----------------------------------------------------------------------------------------------
+# parsing
+# ----------------------------------------------------------------------------------------------
+def _fail(key, message):
+    raise FourCError(f"{key}: {message}")
+
+
+def _num(value, key):
+    """A number of the file (PyYAML reads ``1e-10`` without a dot as a string)."""
+    if isinstance(value, bool):
+        _fail(key, f"expected a number, got {value!r}")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        _fail(key, f"expected a number, got {value!r}")
+
+
+@dataclass
+class ResultEntry:
+    """One ``RESULT DESCRIPTION`` entry: 4C's value for a node's displacement component.
+
+    ``node`` is None and ``special`` True for 4C's own iteration counts (not comparable)."""
+
+    index: int
+    node: int
+    quantity: str
+    value: float
+    tolerance: float
+    special: bool = False
+
+
+@dataclass
+class FourCInput:
+    """A parsed 4C input file (what :func:`scene_from_4c` needs of it).
+
+    Attributes
+    ----------
+    path : Path
+    data : dict
+        The YAML sections as read.
+    nodes : dict int -> (3,) float64
+        ``NODE COORDS`` by 4C node id.
+    solids : list of (element id, 4C type, node ids, material id)
+    beams : list of (element id, 4C type, node ids, material id, rest of the line)
+    sets : dict (kind, id) -> sorted node ids, kind in ``DNODE, DLINE, DSURF, DVOL``
+    results : list of ResultEntry
+    """
+
+    path: Path
+    data: dict
+    nodes: dict = field(default_factory=dict)
+    solids: list = field(default_factory=list)
+    beams: list = field(default_factory=list)
+    sets: dict = field(default_factory=dict)
+    results: list = field(default_factory=list)
+
+
+_SET_KIND = {"DNODE": "DNODE", "DPOINT": "DNODE", "DLINE": "DLINE", "DSURFACE": "DSURF", "DSURF": "DSURF",
+             "DVOL": "DVOL", "DVOLUME": "DVOL"}
+
+
+def read_4c(path):
+    """Parse a ``.4C.yaml`` file: mesh, node sets and result description (no interpretation yet).
+
+    Raises
+    ------
+    FourCError
+        The file cannot be read, is not YAML, or a mesh line cannot be parsed (the key and the
+        line are named).
+    """
+    import yaml
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise FourCError(f"{path}: cannot be read: {exc.strerror or exc}") from None
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    try:
+        data = yaml.load(text, Loader=loader)
+    except yaml.YAMLError as exc:
+        raise FourCError(f"{path}: not valid YAML: {exc}") from None
+    if not isinstance(data, dict):
+        raise FourCError(f"{path}: expected a YAML mapping of 4C sections")
+    out = FourCInput(path=path, data=data)
+    if "NODE COORDS" not in data:
+        _fail("NODE COORDS", "missing (the file has no nodes)")
+    for line in data["NODE COORDS"] or ():
+        parts = str(line).split()
+        if len(parts) >= 6 and parts[0] == "NODE" and parts[2] == "COORD":
+            out.nodes[int(parts[1])] = np.array([float(v) for v in parts[3:6]])
+        elif parts and parts[0] == "CP":
+            _fail("NODE COORDS", f"{line!r}: NURBS control points (CP) are not supported by the reader yet (NURBS "
+                                 "solids run through mortar1d3d.nurbs, not through scenes)")
+        else:
+            _fail("NODE COORDS", f"cannot parse {line!r}")
+    for line in data.get("STRUCTURE ELEMENTS") or ():
+        parts = str(line).split()
+        if len(parts) < 3:
+            _fail("STRUCTURE ELEMENTS", f"cannot parse {line!r}")
+        eid, family, kind = int(parts[0]), parts[1], parts[2]
+        try:
+            mat_at = parts.index("MAT")
+        except ValueError:
+            _fail("STRUCTURE ELEMENTS", f"element {eid}: no MAT in {line!r}")
+        ids = [int(v) for v in parts[3:mat_at]]
+        material = int(parts[mat_at + 1])
+        rest = parts[mat_at + 2:]
+        if family in ("SOLID", "SOLIDH8", "SOLIDH27", "SOLIDH20", "SOLIDT4", "SOLIDT10"):
+            if family != "SOLID":
+                kind = {"SOLIDH8": "HEX8", "SOLIDH27": "HEX27", "SOLIDH20": "HEX20", "SOLIDT4": "TET4",
+                        "SOLIDT10": "TET10"}[family]
+            if kind == "NURBS27":
+                _fail("STRUCTURE ELEMENTS", f"element {eid}: SOLID NURBS27 is not supported yet (scenes do not run "
+                                            "NURBS solids)")
+            if kind not in FOURC_SOLID_NODES:
+                _fail("STRUCTURE ELEMENTS", f"element {eid}: solid element type {kind!r} is not supported; supported: "
+                                            f"{', '.join(FOURC_SOLID_NODES)}")
+            if "KINEM" in rest and rest[rest.index("KINEM") + 1] != "nonlinear":
+                _fail("STRUCTURE ELEMENTS", f"element {eid}: KINEM {rest[rest.index('KINEM') + 1]!r} is not "
+                                            "supported (only nonlinear)")
+            for word in rest[::2]:
+                if word not in ("KINEM",):
+                    _fail("STRUCTURE ELEMENTS", f"element {eid}: option {word!r} is not supported")
+            out.solids.append((eid, kind, ids, material))
+        elif family in ("BEAM3EB", "BEAM3R"):
+            out.beams.append((eid, f"{family} {kind}", ids, material, rest))
+        else:
+            _fail("STRUCTURE ELEMENTS", f"element {eid}: element {family} {kind} is not supported")
+    for key, value in data.items():
+        if not key.endswith("-NODE TOPOLOGY"):
+            continue
+        for line in value or ():
+            parts = str(line).split()
+            if len(parts) != 4 or parts[0] != "NODE" or parts[2] not in _SET_KIND:
+                _fail(key, f"cannot parse {line!r}")
+            out.sets.setdefault((_SET_KIND[parts[2]], int(parts[3])), []).append(int(parts[1]))
+    out.sets = {k: sorted(set(v)) for k, v in out.sets.items()}
+    for i, entry in enumerate(data.get("RESULT DESCRIPTION") or ()):
+        key = f"RESULT DESCRIPTION[{i}]"
+        if not isinstance(entry, dict) or list(entry) != ["STRUCTURE"]:
+            _fail(key, f"only STRUCTURE results are supported, got {entry!r}")
+        r = entry["STRUCTURE"]
+        if r.get("SPECIAL"):
+            out.results.append(ResultEntry(i, None, str(r.get("QUANTITY")), _num(r.get("VALUE"), f"{key}.VALUE"),
+                                           _num(r.get("TOLERANCE"), f"{key}.TOLERANCE"), special=True))
+            continue
+        if str(r.get("DIS", "structure")) != "structure":
+            _fail(f"{key}.DIS", f"{r.get('DIS')!r} is not supported (only structure)")
+        out.results.append(ResultEntry(i, int(r["NODE"]), str(r["QUANTITY"]), _num(r["VALUE"], f"{key}.VALUE"),
+                                       _num(r["TOLERANCE"], f"{key}.TOLERANCE")))
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# interpretation
+# ----------------------------------------------------------------------------------------------
+#: sections that only steer 4C's output, parallel distribution or its own solvers: read and ignored
+_IGNORED = ("TITLE", "PROBLEM SIZE", "IO", "IO/RUNTIME VTK OUTPUT", "IO/RUNTIME VTK OUTPUT/BEAMS",
+            "IO/RUNTIME VTK OUTPUT/STRUCTURE", "IO/MONITOR STRUCTURE DBC", "SOLVER 1", "BINNING STRATEGY",
+            "MESH PARTITIONING", "DISCRETISATION", "STRUCT NOX/Printing", "STRUCT NOX/Direction/Newton",
+            "STRUCT NOX/Status Test", "BEAM INTERACTION", "BEAM CONTACT",
+            "BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING/RUNTIME VTK OUTPUT",
+            "BEAM INTERACTION/BEAM TO SOLID SURFACE/RUNTIME VTK OUTPUT")
+_MESH = ("NODE COORDS", "STRUCTURE ELEMENTS", "RESULT DESCRIPTION", "MATERIALS",
+         "BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING LINE", "BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING VOLUME")
+_COUPLING = "BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING"
+
+_LINEAR_IN_T = re.compile(r"^\s*(?:([0-9.eE+-]+)\s*\*\s*)?t\s*$")
+
+
+def _functions(data):
+    """``{k: c}`` for every ``FUNCT<k>`` that is ``c * t`` (the only time dependence scenes express:
+    loads in proportion to the load factor)."""
+    out = {}
+    for key, value in data.items():
+        m = re.fullmatch(r"FUNCT(\d+)", key)
+        if not m:
+            continue
+        if not isinstance(value, list) or len(value) != 1 or not isinstance(value[0], dict) or len(value[0]) != 1:
+            _fail(key, f"only a single symbolic function of time is supported, got {value!r}")
+        (kind, expr), = value[0].items()
+        if kind not in ("SYMBOLIC_FUNCTION_OF_SPACE_TIME", "SYMBOLIC_FUNCTION_OF_TIME"):
+            _fail(f"{key}.{kind}", "is not supported (only SYMBOLIC_FUNCTION_OF_[SPACE_]TIME)")
+        match = _LINEAR_IN_T.match(str(expr))
+        if not match:
+            _fail(f"{key}.{kind}", f"{expr!r} is not supported: loads follow the load factor, so a function must "
+                                   "be c * t")
+        out[int(m.group(1))] = float(match.group(1)) if match.group(1) else 1.0
+    return out
+
+
+def _time(data):
+    """(steps, final time) of ``STRUCTURAL DYNAMIC`` (statics only)."""
+    key = "STRUCTURAL DYNAMIC"
+    sd = data.get(key) or {}
+    if str(sd.get("DYNAMICTYPE", "")) != "Statics":
+        _fail(f"{key}.DYNAMICTYPE", f"{sd.get('DYNAMICTYPE')!r} is not supported (only Statics)")
+    steps = int(sd.get("NUMSTEP", 1))
+    dt = _num(sd.get("TIMESTEP", 1.0), f"{key}.TIMESTEP")
+    final = _num(sd.get("MAXTIME", steps * dt), f"{key}.MAXTIME")
+    if not math.isclose(steps * dt, final, rel_tol=1e-12):
+        _fail(f"{key}.MAXTIME", f"{final} is not NUMSTEP × TIMESTEP = {steps} × {dt}: 4C would stop at "
+                                f"{min(final, steps * dt)}; give consistent values")
+    for k in ("PRESTRESS", "RESTART"):
+        if sd.get(k) not in (None, "none", "None", 0):
+            _fail(f"{key}.{k}", f"{sd.get(k)!r} is not supported")
+    return steps, final
+
+
+def _factor(functions, funct, value, key, final):
+    """The value of a condition component at the end time (scene values are reached at load factor 1):
+    ``value × f(final)`` with ``f = c t``; FUNCT 0 (constant) only for a zero value."""
+    funct = int(funct or 0)
+    if funct == 0:
+        if value != 0.0:
+            _fail(key, f"a constant nonzero value {value} (FUNCT 0) is not supported: scene loads and prescribed "
+                       "values grow with the load factor")
+        return 0.0
+    if funct not in functions:
+        _fail(key, f"FUNCT {funct} is not defined")
+    return value * functions[funct] * final
+
+
+def _condition_components(cond, key, functions, final, n_translational=3):
+    """(components, values) of a DIRICH/NEUMANN entry; nonzero entries beyond the translations are
+    an error naming the component."""
+    numdof = int(cond.get("NUMDOF", 3))
+    onoff = list(cond.get("ONOFF") or [0] * numdof)
+    val = [_num(v, f"{key}.VAL") for v in (cond.get("VAL") or [0] * numdof)]
+    funct = list(cond.get("FUNCT") or [0] * numdof)
+    if cond.get("TYPE") not in (None, "Live"):
+        _fail(f"{key}.TYPE", f"{cond.get('TYPE')!r} is not supported (only Live: a fixed vector)")
+    comps, values = [], []
+    for c in range(numdof):
+        if not int(onoff[c]):
+            continue
+        if c >= n_translational:
+            _fail(f"{key}.ONOFF[{c}]", "only the three translational components are supported here")
+        comps.append(c)
+        values.append(_factor(functions, funct[c], val[c], f"{key}.VAL[{c}]", final))
+    return comps, values
+
+
+def _chains(elements):
+    """Beam elements (lists of end-node id pairs, in file order) joined into chains of node ids."""
+    import collections
+    adj = collections.defaultdict(list)
+    for k, (a, b) in enumerate(elements):
+        adj[a].append(k)
+        adj[b].append(k)
+    used, chains = set(), []
+    for k0, (a0, b0) in enumerate(elements):
+        if k0 in used:
+            continue
+        # walk back to the chain's start
+        start, k = a0, k0
+        seen = {k0}
+        while len(adj[start]) == 2:
+            k = next(j for j in adj[start] if j != k)
+            if k in seen:
+                break
+            seen.add(k)
+            a, b = elements[k]
+            start = a if b == start else b
+        nodes, ks, node, prev = [start], [], start, None
+        while True:
+            nxt = [j for j in adj[node] if j != prev and j not in used]
+            if not nxt:
+                break
+            k = nxt[0]
+            used.add(k)
+            ks.append(k)
+            a, b = elements[k]
+            node = b if a == node else a
+            nodes.append(node)
+            prev = k
+        chains.append((nodes, ks))
+    return chains
+
+
+def _materials(data):
+    out = {}
+    for i, entry in enumerate(data.get("MATERIALS") or ()):
+        mid = int(entry["MAT"])
+        rest = {k: v for k, v in entry.items() if k != "MAT"}
+        if len(rest) != 1:
+            _fail(f"MATERIALS[{i}]", f"expected one material law, got {list(rest)}")
+        (law, params), = rest.items()
+        out[mid] = (law, params or {}, f"MATERIALS[{i}].{law}")
+    return out
+
+
+def _material(materials, ids, what):
+    """(law, parameters, key path) of the one material ``ids`` (a set) that ``what`` use."""
+    if len(ids) != 1:
+        _fail("STRUCTURE ELEMENTS", f"{what} use several materials {sorted(ids)}; one is supported")
+    mat = next(iter(ids))
+    if mat not in materials:
+        _fail("MATERIALS", f"material {mat} of the {what} is not defined")
+    return materials[mat]
+
+
+def _beam3eb(info, X, connectivity, params, law, mkey):
+    """Scene entry of a chain of BEAM3EB elements (straight: 4C takes each element's tangents along its chord)."""
+    from ..mesh import BeamMesh
+    eids = [i[0] for i in info]
+    for eid, _, rest, _, _ in info:
+        if rest:
+            _fail("STRUCTURE ELEMENTS", f"element {eid}: options {' '.join(rest)!r} are not supported")
+    if law != "MAT_BeamKirchhoffTorsionFreeElastHyper":
+        _fail(mkey, "BEAM3EB needs MAT_BeamKirchhoffTorsionFreeElastHyper")
+    chords = np.diff(X, axis=0)
+    chords /= np.linalg.norm(chords, axis=1)[:, None]
+    kink = np.linalg.norm(chords[1:] - chords[:-1], axis=1) if len(chords) > 1 else np.zeros(0)
+    if kink.size and kink.max() > 1e-10:
+        k = int(kink.argmax())
+        _fail("STRUCTURE ELEMENTS", f"BEAM3EB elements {eids[k]} and {eids[k + 1]} meet at an angle: the "
+                                    "torsion-free beam needs a straight reference centreline")
+    mesh = BeamMesh.hermite(X, np.vstack([chords, chords[-1:]]), connectivity)
+    E = _num(params["YOUNG"], f"{mkey}.YOUNG")
+    return {"mesh": mesh, "model": "beam3eb", "section": {"EA": E * _num(params["CROSSAREA"], f"{mkey}.CROSSAREA"),
+                                                          "EI": E * _num(params["MOMIN"], f"{mkey}.MOMIN")}}
+
+
+def _beam3r(info, nodes, X, connectivity, params, law, mkey):
+    """Scene entry (``simo_reissner``) of a chain of BEAM3R elements with a Hermite centreline: the
+    end nodes carry positions and tangents (the first base vector of their reference triads), every
+    element's middle node a triad only; TRIADS are the reference rotation vectors of the element's
+    nodes in its node order (end, end, middle)."""
+    from ..mesh import BeamMesh
+    from ..physics.rotations import exp
+    for eid, _, rest, ids, kind in info:
+        options = list(rest)
+        if kind == "BEAM3R LINE3":
+            if "HERMITE_CENTERLINE" not in options or options[options.index("HERMITE_CENTERLINE") + 1] != "true":
+                _fail("STRUCTURE ELEMENTS", f"element {eid}: BEAM3R LINE3 without HERMITE_CENTERLINE true (a Lagrange "
+                                            "centreline) is not supported")
+            at = options.index("HERMITE_CENTERLINE")
+            del options[at:at + 2]
+        if len(ids) != 3:
+            _fail("STRUCTURE ELEMENTS", f"element {eid}: expected three nodes (end, end, middle), got {len(ids)}")
+        if len(options) != 10 or options[0] != "TRIADS":
+            _fail("STRUCTURE ELEMENTS", f"element {eid}: expected TRIADS and nine numbers, got {' '.join(rest)!r}")
+    if law != "MAT_BeamReissnerElastHyper":
+        _fail(mkey, "BEAM3R needs MAT_BeamReissnerElastHyper")
+    triad = np.empty((3, 3))
+    n_nodes, n_el = len(nodes), len(info)
+    triads = np.zeros((n_nodes + n_el, 3, 3))
+    for e, (eid, _, rest, ids, _) in enumerate(info):
+        psi = np.array([float(v) for v in rest[1:10]]).reshape(3, 3)
+        forward = ids[0] == nodes[e]
+        if not forward:
+            _fail("STRUCTURE ELEMENTS", f"element {eid}: its nodes run against the beam's other elements")
+        for slot, p in zip((e, e + 1, n_nodes + e), psi):
+            exp(np.ascontiguousarray(p), triad)
+            if slot < n_nodes and e > 0 and slot == e and np.abs(triads[slot] - triad).max() > 1e-8:
+                _fail("STRUCTURE ELEMENTS", f"element {eid}: its triad at node {ids[0]} differs from the previous "
+                                            "element's")
+            triads[slot] = triad
+    mesh = BeamMesh.hermite(X, triads[:n_nodes, :, 0], connectivity)
+    section = {"E": _num(params["YOUNG"], f"{mkey}.YOUNG"), "nu": _num(params["POISSONRATIO"], f"{mkey}.POISSONRATIO"),
+               "A": _num(params["CROSSAREA"], f"{mkey}.CROSSAREA"), "I2": _num(params["MOMIN2"], f"{mkey}.MOMIN2"),
+               "I3": _num(params["MOMIN3"], f"{mkey}.MOMIN3"), "I_T": _num(params["MOMINPOL"], f"{mkey}.MOMINPOL"),
+               "shear_correction": _num(params.get("SHEARCORR", 1.0), f"{mkey}.SHEARCORR")}
+    return {"mesh": mesh, "model": "simo_reissner", "section": section, "triads": triads.tolist()}
+
+
+def scene_from_4c(source):
+    """The :class:`~mortar1d3d.scene.Scene` of a 4C input file, and the map of its result nodes.
+
+    Parameters
+    ----------
+    source : path or FourCInput
+
+    Returns
+    -------
+    scene : Scene
+    nodes : dict
+        4C node id -> ``("solid", row)`` (row of ``Result.solid_displacement``) or
+        ``("beam", row)`` (row of ``Result.beam_displacement``).
+
+    Raises
+    ------
+    FourCError
+        A section, key or value the library does not support: the message names it.
+    """
+    from ..mesh import SolidMesh
+    from ..errors import MeshError
+    from ..scene import Scene
+    fc = source if isinstance(source, FourCInput) else read_4c(source)
+    data = fc.data
+    pt = data.get("PROBLEM TYPE") or {}
+    if str(pt.get("PROBLEMTYPE", "Structure")) != "Structure":
+        _fail("PROBLEM TYPE.PROBLEMTYPE", f"{pt.get('PROBLEMTYPE')!r} is not supported (only Structure)")
+    known = set(_IGNORED) | set(_MESH) | {"PROBLEM TYPE", "STRUCTURAL DYNAMIC", _COUPLING}
+    for key in data:
+        if (key in known or key.endswith("-NODE TOPOLOGY") or re.fullmatch(r"FUNCT\d+", key)
+                or (key.startswith("DESIGN ") and key.endswith(" CONDITIONS"))):
+            continue
+        _fail(key, "section not supported")
+    functions = _functions(data)
+    steps, final = _time(data)
+    materials = _materials(data)
+
+    # -- solid ----------------------------------------------------------------------------------
+    if not fc.solids:
+        _fail("STRUCTURE ELEMENTS", "no solid elements (beam-only models are not read)")
+    solid_ids = sorted({n for _, _, ids, _ in fc.solids for n in ids})
+    solid_row = {nid: k for k, nid in enumerate(solid_ids)}
+    law, params, mkey = _material(materials, {m for *_, m in fc.solids}, "solid elements")
+    if law != "MAT_Struct_StVenantKirchhoff":
+        _fail(mkey, "solid material law not supported (only MAT_Struct_StVenantKirchhoff)")
+    material = {"model": "saint_venant_kirchhoff", "E": _num(params["YOUNG"], f"{mkey}.YOUNG"),
+                "nu": _num(params["NUE"], f"{mkey}.NUE")}
+    blocks = {}
+    for eid, kind, ids, _ in fc.solids:
+        if len(ids) != len(FOURC_SOLID_NODES[kind][1]):
+            _fail("STRUCTURE ELEMENTS", f"element {eid}: {kind} needs {len(FOURC_SOLID_NODES[kind][1])} nodes, got "
+                                        f"{len(ids)}")
+        blocks.setdefault(kind, []).append([solid_row[n] for n in ids])
+    cells = {}
+    for kind, rows in blocks.items():
+        cells[FOURC_SOLID_NODES[kind][0]] = np.asarray(rows, dtype=np.int64)[:, _permutation(kind)]
+    points = np.array([fc.nodes[n] for n in solid_ids])
+    point_sets = {}
+    for (kind, sid), ids in fc.sets.items():
+        rows = [solid_row[n] for n in ids if n in solid_row]
+        if rows:
+            point_sets[f"{kind.lower()}{sid}"] = np.asarray(rows, dtype=np.int64)
+    try:
+        # SolidMesh proves det J > 0 in every element: the geometric check of the permutation
+        solid_mesh = SolidMesh(points, cells, point_sets=point_sets)
+    except MeshError as exc:
+        raise FourCError(f"STRUCTURE ELEMENTS: {exc}") from None
+
+    # -- beams ----------------------------------------------------------------------------------
+    beams, beam_rows, beam_of_node, rotation_beams = [], {}, {}, set()
+    hermite_r = {"BEAM3R HERM2LINE3", "BEAM3R LINE3"}
+    kinds = {k for _, k, *_ in fc.beams}
+    if kinds - {"BEAM3EB LINE2"} - hermite_r:
+        _fail("STRUCTURE ELEMENTS", f"beam elements {sorted(kinds - {'BEAM3EB LINE2'} - hermite_r)} are not "
+                                    "supported (BEAM3EB LINE2; BEAM3R LINE3 with HERMITE_CENTERLINE true)")
+    if len(kinds) > 1:
+        _fail("STRUCTURE ELEMENTS", f"beam elements of several kinds {sorted(kinds)}; one kind per file is supported")
+    if fc.beams:
+        # end nodes of each element; BEAM3R LINE3 lists (end, end, middle): the middle node carries a triad only
+        ends = [tuple(ids[:2]) for _, _, ids, _, _ in fc.beams]
+        by_pair = {tuple(ids[:2]): (eid, mat, rest, ids, kind) for eid, kind, ids, mat, rest in fc.beams}
+        row = 0
+        for nodes, _ in _chains(ends):
+            elements = [(nodes[k], nodes[k + 1]) for k in range(len(nodes) - 1)]
+            info = [by_pair.get(e) or by_pair.get(e[::-1]) for e in elements]
+            law, params, mkey = _material(materials, {i[1] for i in info}, f"beam elements {[i[0] for i in info]}")
+            X = np.array([fc.nodes[n] for n in nodes])
+            connectivity = np.column_stack([np.arange(len(nodes) - 1), np.arange(1, len(nodes))])
+            index = len(beams)
+            if info[0][4] == "BEAM3EB LINE2":
+                beams.append(_beam3eb(info, X, connectivity, params, law, mkey))
+            else:
+                beams.append(_beam3r(info, nodes, X, connectivity, params, law, mkey))
+                rotation_beams.add(index)
+                if index == 0:
+                    import warnings
+                    from ..errors import AccuracyWarning
+                    warnings.warn("BEAM3R elements run as the library's simo_reissner beam, whose element formulation "
+                                  "is not 4C's: results differ from 4C's by the discretisation error (see "
+                                  "docs/conformance.md)", AccuracyWarning, stacklevel=2)
+            for k, n in enumerate(nodes):
+                beam_rows[n] = row + k
+                beam_of_node[n] = (index, k, len(nodes))
+            row += len(nodes)
+
+    # -- conditions -----------------------------------------------------------------------------
+    dirichlet, loads = [], []
+    entity = {"POINT": "DNODE", "LINE": "DLINE", "SURF": "DSURF", "VOL": "DVOL"}
+
+    def target(kind, eid, key):
+        ids = fc.sets.get((entity[kind], eid))
+        if not ids:
+            _fail(key, f"design {kind.lower()} {eid} has no nodes ({entity[kind]}-NODE TOPOLOGY)")
+        in_solid = [n for n in ids if n in solid_row]
+        in_beam = [n for n in ids if n in beam_of_node]
+        if in_solid and in_beam:
+            _fail(key, f"design {kind.lower()} {eid} holds solid and beam nodes; one kind per condition is supported")
+        if in_solid:
+            return f"solid:{entity[kind].lower()}{eid}", "solid"
+        beams_hit = {beam_of_node[n][0] for n in in_beam}
+        if len(beams_hit) != 1:
+            _fail(key, f"design {kind.lower()} {eid} spans beams {sorted(beams_hit)}; one beam per condition is "
+                       "supported")
+        b = beams_hit.pop()
+        n_nodes = beam_of_node[in_beam[0]][2]
+        local = sorted(beam_of_node[n][1] for n in in_beam)
+        if len(local) == n_nodes:
+            return f"beam:{b}", "beam"
+        if local == [0]:
+            return f"beam:{b}:start", "beam"
+        if local == [n_nodes - 1]:
+            return f"beam:{b}:end", "beam"
+        _fail(key, f"design {kind.lower()} {eid} selects part of beam {b}; only whole beams or their ends are "
+                   "supported")
+
+    for key, value in data.items():
+        m = re.fullmatch(r"DESIGN (POINT|LINE|SURF|VOL) (DIRICH|NEUMANN) CONDITIONS", key)
+        if not m:
+            if key.startswith("DESIGN ") and key.endswith(" CONDITIONS"):
+                _fail(key, "condition not supported")
+            continue
+        kind, what = m.groups()
+        for i, cond in enumerate(value or ()):
+            ckey = f"{key}[{i}]"
+            extra = set(cond) - {"E", "NUMDOF", "ONOFF", "VAL", "FUNCT", "TAG", "TYPE"}
+            if extra:
+                _fail(f"{ckey}.{sorted(extra)[0]}", "is not supported")
+            on, body = target(kind, int(cond["E"]), f"{ckey}.E")
+            framed = body == "beam" and int(on.split(":")[1]) in rotation_beams
+            # a Hermite BEAM3R node's DOFs: position (3), rotation (3), tangent (3)
+            comps, values = _condition_components(cond, ckey, functions, final, 6 if framed else 3)
+            rot = [(c - 3, v) for c, v in zip(comps, values) if c >= 3]
+            comps, values = [c for c in comps if c < 3], [v for c, v in zip(comps, values) if c < 3]
+            if rot and what == "NEUMANN":
+                if kind != "POINT":
+                    _fail(f"{ckey}.ONOFF", f"moments distributed over a {kind.lower()} are not supported (point "
+                                           "moments only)")
+                if comps:
+                    _fail(ckey, "forces and moments in one condition are not supported")
+                vec = [0.0, 0.0, 0.0]
+                for c, v in rot:
+                    vec[c] = v
+                loads.append({"type": "moment", "on": on, "value": vec})
+                continue
+            if rot:
+                if [c for c, _ in rot] != [0, 1, 2] or any(v != 0.0 for _, v in rot):
+                    _fail(f"{ckey}.ONOFF", f"rotation components {[c + 3 for c, _ in rot]} with values "
+                                           f"{[v for _, v in rot]}: only all three rotations held at zero are "
+                                           "supported (scenes prescribe a node's whole rotation vector)")
+                entry = {"on": on, "rotation": [0.0, 0.0, 0.0]}
+                if comps:
+                    vec = [0.0, 0.0, 0.0]
+                    for c, v in zip(comps, values):
+                        vec[c] = v
+                    entry.update(components=["xyz"[c] for c in comps], value=vec)
+                dirichlet.append(entry)
+                continue
+            if not comps:
+                continue
+            if what == "DIRICH":
+                vec = [0.0, 0.0, 0.0]
+                for c, v in zip(comps, values):
+                    vec[c] = v
+                dirichlet.append({"on": on, "components": ["xyz"[c] for c in comps], "value": vec})
+                continue
+            vec = [0.0, 0.0, 0.0]
+            for c, v in zip(comps, values):
+                vec[c] = v
+            if kind == "SURF" and body == "solid":
+                loads.append({"type": "traction", "on": on, "value": vec})
+            elif kind == "LINE" and body == "beam":
+                loads.append({"type": "line", "on": on, "value": vec})
+            elif kind == "POINT":
+                loads.append({"type": "point", "on": on, "value": vec})
+            else:
+                _fail(ckey, f"a {kind.lower()} Neumann condition on {body} nodes is not supported")
+
+    coupling = _coupling(data.get(_COUPLING), bool(beams)) if beams else None
+    if beams:
+        for key in ("BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING LINE",
+                    "BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING VOLUME"):
+            if not data.get(key):
+                _fail(key, "missing: the beams are not tied to the solid")
+    analysis = {"kinematics": "nonlinear", "steps": steps, "solver": "direct"}
+    scene = Scene(solid={"mesh": solid_mesh, "material": material}, beams=beams, coupling=coupling,
+                  dirichlet=dirichlet, load=loads, analysis=analysis, base_dir=fc.path.parent,
+                  name=fc.path.name.removesuffix(".yaml").removesuffix(".4C"))
+    nodes = {nid: ("solid", r) for nid, r in solid_row.items()}
+    nodes.update({nid: ("beam", r) for nid, r in beam_rows.items()})
+    return scene, nodes
+
+
+def _coupling(block, has_beams):
+    key = _COUPLING
+    if block is None:
+        _fail(key, "missing: the beams are not tied to the solid")
+    block = dict(block)
+    allowed = {"CONTACT_DISCRETIZATION", "CONSTRAINT_STRATEGY", "MORTAR_SHAPE_FUNCTION", "PENALTY_PARAMETER",
+               "GEOMETRY_PAIR_STRATEGY", "GEOMETRY_PAIR_SEGMENTATION_SEARCH_POINTS", "GAUSS_POINTS",
+               "LAGRANGE_FORMULATION", "ROTATION_COUPLING", "COUPLE_RESTART_STATE", "ROTATION_COUPLING_PENALTY_PARAMETER",
+               "ROTATION_COUPLING_MORTAR_SHAPE_FUNCTION", "INTEGRATION_POINTS_CIRCUMFERENCE"}
+    for k in block:
+        if k not in allowed:
+            _fail(f"{key}.{k}", f"{block[k]!r} is not supported")
+    out = {}
+    disc = str(block.get("CONTACT_DISCRETIZATION", "none"))
+    if disc == "mortar":
+        out["constraint"] = "mortar"
+        shape = str(block.get("MORTAR_SHAPE_FUNCTION", "none"))
+        if shape not in ("line2", "line3", "line4"):
+            _fail(f"{key}.MORTAR_SHAPE_FUNCTION", f"{shape!r} is not supported (line2, line3, line4)")
+        out["lm"] = shape
+    elif disc == "gauss_point_to_segment":
+        out["constraint"] = "gauss_point"
+    else:
+        _fail(f"{key}.CONTACT_DISCRETIZATION", f"{disc!r} is not supported (mortar, gauss_point_to_segment)")
+    strategy = str(block.get("GEOMETRY_PAIR_STRATEGY", "segmentation"))
+    if strategy == "segmentation":
+        out["integration"] = "segment"
+    elif strategy in ("gauss_point_projection_without_boundary_segmentation",
+                      "gauss_point_projection_boundary_segmentation"):
+        # the two differ only where a beam element leaves the solid: run() checks that none does
+        out["integration"] = "element"
+    else:
+        _fail(f"{key}.GEOMETRY_PAIR_STRATEGY", f"{strategy!r} is not supported (segmentation, "
+                                               "gauss_point_projection_without_boundary_segmentation)")
+    out["search_points"] = int(block.get("GEOMETRY_PAIR_SEGMENTATION_SEARCH_POINTS", 6))
+    out["n_gauss"] = int(block.get("GAUSS_POINTS", 6))
+    constraint = str(block.get("CONSTRAINT_STRATEGY", "none"))
+    if constraint == "penalty":
+        out["enforcement"] = "penalty"
+        out["penalty"] = _num(block.get("PENALTY_PARAMETER"), f"{key}.PENALTY_PARAMETER")
+    elif constraint == "lagrange":
+        form = str(block.get("LAGRANGE_FORMULATION", "saddlepoint"))
+        if form in ("saddlepoint", "augmented"):
+            # augmented: the added penalty term vanishes where the constraint holds, so the solution
+            # is the saddle point's (it changes only 4C's linear systems)
+            out["enforcement"] = "lagrange"
+        elif form == "regularized":
+            # the regularised constraint g − κ λ / ε = 0 gives λ = ε κ⁻¹ g: exactly the penalty method
+            out["enforcement"] = "penalty"
+            out["penalty"] = _num(block.get("PENALTY_PARAMETER"), f"{key}.PENALTY_PARAMETER")
+        else:
+            _fail(f"{key}.LAGRANGE_FORMULATION", f"{form!r} is not supported (saddlepoint, augmented, regularized)")
+    else:
+        _fail(f"{key}.CONSTRAINT_STRATEGY", f"{constraint!r} is not supported (penalty, lagrange)")
+    rotation = str(block.get("ROTATION_COUPLING", "none"))
+    if rotation == "deformation_gradient_3d_general":
+        rot = {"triad": "deformation_gradient", "enforcement": "penalty",
+               "penalty": _num(block.get("ROTATION_COUPLING_PENALTY_PARAMETER"),
+                               f"{key}.ROTATION_COUPLING_PENALTY_PARAMETER")}
+        shape = str(block.get("ROTATION_COUPLING_MORTAR_SHAPE_FUNCTION", "none"))
+        if out["constraint"] == "mortar":
+            if shape not in ("line2", "line3"):
+                _fail(f"{key}.ROTATION_COUPLING_MORTAR_SHAPE_FUNCTION", f"{shape!r} is not supported (line2, line3)")
+            rot["lm"] = shape
+        else:
+            _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} with {disc!r} is not supported (mortar only)")
+        out["rotational"] = rot
+    elif rotation != "none":
+        _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} is not supported (deformation_gradient_3d_general)")
+    if str(block.get("COUPLE_RESTART_STATE", "false")).lower() not in ("false", "no", "0"):
+        _fail(f"{key}.COUPLE_RESTART_STATE", f"{block['COUPLE_RESTART_STATE']!r} is not supported")
+    return out
+
+
+# ----------------------------------------------------------------------------------------------
+# run and check
+# ----------------------------------------------------------------------------------------------
+@dataclass
+class CheckRow:
+    """One compared ``RESULT DESCRIPTION`` entry."""
+
+    entry: ResultEntry
+    computed: float = float("nan")
+    status: str = ""            # "pass", "FAIL" or "not comparable"
+
+    @property
+    def deviation(self):
+        return abs(self.computed - self.entry.value) if self.status in ("pass", "FAIL") else float("nan")
+
+
+@dataclass
+class CheckReport:
+    """What :func:`check` found: the rows, the result and the run time (s)."""
+
+    path: Path
+    rows: list
+    result: object
+    seconds: float
+
+    @property
+    def passed(self):
+        return all(r.status != "FAIL" for r in self.rows)
+
+    @property
+    def max_deviation(self):
+        values = [r.deviation for r in self.rows if r.status in ("pass", "FAIL")]
+        return max(values) if values else float("nan")
+
+    def table(self):
+        lines = [f"{'node':>6}  {'quantity':<16} {'4C value':>24} {'computed':>24} {'deviation':>10} "
+                 f"{'tolerance':>9}  status"]
+        for r in self.rows:
+            e = r.entry
+            node = "-" if e.node is None else str(e.node)
+            comp = "-" if r.status == "not comparable" else f"{r.computed:24.16e}"
+            dev = "-" if r.status == "not comparable" else f"{r.deviation:10.2e}"
+            lines.append(f"{node:>6}  {e.quantity:<16} {e.value:24.16e} {comp:>24} {dev:>10} {e.tolerance:9.1e}  "
+                         f"{r.status}")
+        return "\n".join(lines)
+
+
+def run(path, progress=False):
+    """Solve a 4C input file; returns ``(result, nodes, fourc_input)`` (see :func:`scene_from_4c`)."""
+    from ..model import solve
+    fc = read_4c(path)
+    scene, nodes = scene_from_4c(fc)
+    result = solve(scene, progress=progress)
+    strategy = (fc.data.get(_COUPLING) or {}).get("GEOMETRY_PAIR_STRATEGY")
+    outside = np.flatnonzero(result.coupled_length < result.beam_length * (1.0 - 1e-12))
+    if strategy == "gauss_point_projection_boundary_segmentation" and outside.size:
+        _fail(f"{_COUPLING}.GEOMETRY_PAIR_STRATEGY", f"{strategy!r} segments the beam elements that leave the solid "
+                                                    f"(beams {outside.tolist()} do), which is not supported; the "
+                                                    "library's element-based integration leaves them unsegmented")
+    return result, nodes, fc
+
+
+def check(path, progress=False):
+    """Solve a 4C input file and compare every ``RESULT DESCRIPTION`` entry with its tolerance.
+
+    Entries of type SPECIAL (4C's own Newton and linear-solver iteration counts) are reported as
+    "not comparable" and never fail.
+
+    Returns
+    -------
+    CheckReport
+    """
+    start = time.perf_counter()
+    result, nodes, fc = run(path, progress=progress)
+    seconds = time.perf_counter() - start
+    rows = []
+    for e in fc.results:
+        if e.special:
+            rows.append(CheckRow(e, status="not comparable"))
+            continue
+        if e.quantity not in ("dispx", "dispy", "dispz"):
+            rows.append(CheckRow(e, status="not comparable"))
+            continue
+        if e.node not in nodes:
+            _fail(f"RESULT DESCRIPTION[{e.index}].NODE", f"node {e.node} is not a node of the model")
+        body, row = nodes[e.node]
+        field_ = result.solid_displacement if body == "solid" else result.beam_displacement
+        value = float(field_[row, "xyz".index(e.quantity[-1])])
+        rows.append(CheckRow(e, value, "pass" if abs(value - e.value) <= e.tolerance else "FAIL"))
+    return CheckReport(Path(path), rows, result, seconds)

@@ -1,0 +1,331 @@
+"""4C input files: the reader (node orders, conditions, errors), the beam3eb beam, line loads, and
+4C's own regression files where the folder of them exists (``MORTAR1D3D_4C_INPUTS`` or
+``shared/4c-inputs`` beside the repository's folder; skipped with the reason otherwise)."""
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import mortar1d3d as m13
+from mortar1d3d.io import fourc
+from mortar1d3d.io.fourc import FourCError, read_4c, scene_from_4c
+from mortar1d3d.mesh import BeamMesh
+from mortar1d3d.physics.beam import BeamModel, line_force
+from mortar1d3d.physics.beam3eb import Beam3ebModel
+from mortar1d3d.scene import Scene, SceneError
+
+FOLDER = fourc.input_folder()
+needs_inputs = pytest.mark.skipif(FOLDER is None, reason=f"no 4C input files: set {fourc.ENV_VAR} or provide "
+                                                         "shared/4c-inputs beside the repository's folder")
+EB = "beam3eb_static_beam_to_solid_volume_meshtying_"
+
+
+# -- a small 4C file written here: a 2 × 1 × 1 hex8 block with a BEAM3EB fibre along x ------------
+def tiny_file(tmp_path, coupling=None, extra="", funct="t", elements=None):
+    """A self-made 4C input file (not one of 4C's): block [0, 2] × [0, 1] × [0, 1], clamped at
+    x = 0, pulled at x = 2, a beam of two elements at y = z = 0.5 with a line load."""
+    X = [(x, y, z) for x in (0.0, 1.0, 2.0) for y in (0.0, 1.0) for z in (0.0, 1.0)]
+    node = {p: i + 1 for i, p in enumerate(X)}
+
+    def hexa(x0):
+        c = [(x0, 0, 0), (x0 + 1, 0, 0), (x0 + 1, 1, 0), (x0, 1, 0), (x0, 0, 1), (x0 + 1, 0, 1), (x0 + 1, 1, 1),
+             (x0, 1, 1)]
+        return " ".join(str(node[tuple(float(v) for v in p)]) for p in c)
+    beam = [(0.2, 0.5, 0.5), (1.0, 0.5, 0.5), (1.8, 0.5, 0.5)]
+    lines = [f'  - "NODE {i + 1} COORD {p[0]} {p[1]} {p[2]}"' for i, p in enumerate(X + beam)]
+    elements = elements or [f'  - "1 SOLID HEX8 {hexa(0)} MAT 1 KINEM nonlinear"',
+                            f'  - "2 SOLID HEX8 {hexa(1)} MAT 1 KINEM nonlinear"',
+                            '  - "3 BEAM3EB LINE2 13 14 MAT 2"', '  - "4 BEAM3EB LINE2 14 15 MAT 2"']
+    x0 = [f'  - "NODE {node[p]} DSURFACE 1"' for p in X if p[0] == 0.0]
+    x2 = [f'  - "NODE {node[p]} DSURFACE 2"' for p in X if p[0] == 2.0]
+    coupling = coupling or ("  CONTACT_DISCRETIZATION: mortar\n  CONSTRAINT_STRATEGY: penalty\n"
+                            "  MORTAR_SHAPE_FUNCTION: line2\n  PENALTY_PARAMETER: 100\n")
+    text = f"""\
+PROBLEM TYPE:
+  PROBLEMTYPE: "Structure"
+STRUCTURAL DYNAMIC:
+  DYNAMICTYPE: "Statics"
+  TIMESTEP: 0.5
+  NUMSTEP: 2
+  MAXTIME: 1
+BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING:
+{coupling}MATERIALS:
+  - MAT: 1
+    MAT_Struct_StVenantKirchhoff:
+      YOUNG: 100
+      NUE: 0.3
+      DENS: 0
+  - MAT: 2
+    MAT_BeamKirchhoffTorsionFreeElastHyper:
+      YOUNG: 1000
+      DENS: 0
+      CROSSAREA: 0.01
+      MOMIN: 1.0e-05
+FUNCT1:
+  - SYMBOLIC_FUNCTION_OF_SPACE_TIME: "{funct}"
+DESIGN SURF DIRICH CONDITIONS:
+  - E: 1
+    NUMDOF: 3
+    ONOFF: [1, 1, 1]
+    VAL: [0, 0, 0]
+    FUNCT: [0, 0, 0]
+DESIGN SURF NEUMANN CONDITIONS:
+  - E: 2
+    NUMDOF: 3
+    ONOFF: [1, 0, 1]
+    VAL: [2, 0, -1]
+    FUNCT: [1, 0, 1]
+DESIGN LINE NEUMANN CONDITIONS:
+  - E: 1
+    NUMDOF: 6
+    ONOFF: [0, 1, 0, 0, 0, 0]
+    VAL: [0, 0.5, 0, 0, 0, 0]
+    FUNCT: [0, 1, 0, 0, 0, 0]
+BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING LINE:
+  - E: 1
+    COUPLING_ID: 1
+BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING VOLUME:
+  - E: 1
+    COUPLING_ID: 1
+{extra}RESULT DESCRIPTION:
+  - STRUCTURE:
+      DIS: "structure"
+      NODE: 15
+      QUANTITY: "dispx"
+      VALUE: 0.0
+      TOLERANCE: 1e-10
+  - STRUCTURE:
+      SPECIAL: true
+      QUANTITY: "num_iter_step_1"
+      VALUE: 3
+      TOLERANCE: 1e-08
+DSURF-NODE TOPOLOGY:
+{chr(10).join(x0 + x2)}
+DLINE-NODE TOPOLOGY:
+  - "NODE 13 DLINE 1"
+  - "NODE 14 DLINE 1"
+  - "NODE 15 DLINE 1"
+DVOL-NODE TOPOLOGY:
+  - "NODE 1 DVOL 1"
+NODE COORDS:
+{chr(10).join(lines)}
+STRUCTURE ELEMENTS:
+{chr(10).join(elements)}
+"""
+    path = tmp_path / "tiny.4C.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_tiny_file_becomes_the_scene_written_by_hand(tmp_path):
+    scene, nodes = scene_from_4c(tiny_file(tmp_path))
+    assert scene.analysis["steps"] == 2 and scene.solid["material"] == {"model": "saint_venant_kirchhoff",
+                                                                         "E": 100.0, "nu": 0.3}
+    assert [b["model"] for b in scene.beams] == ["beam3eb"]
+    assert scene.beams[0]["section"]["EA"] == pytest.approx(10.0) and scene.beams[0]["section"]["EI"] == 1e-2
+    assert scene.coupling["penalty"] == 100.0 and scene.coupling["lm"] == "line2"
+    assert scene.coupling["search_points"] == 6 and scene.coupling["n_gauss"] == 6
+    assert [d["on"] for d in scene.dirichlet] == ["solid:dsurf1"]
+    loads = {item["type"]: item for item in scene.loads}
+    np.testing.assert_array_equal(loads["traction"]["value"], [2.0, 0.0, -1.0])
+    np.testing.assert_array_equal(loads["line"]["value"], [0.0, 0.5, 0.0])
+    assert loads["line"]["on"] == "beam:0"
+    assert nodes[15] == ("beam", 2) and nodes[12][0] == "solid"
+    assert "load.line" in str(m13.plan(scene))
+    # the same model written as a scene by hand gives the same bits
+    solid = scene.solid["mesh"]
+    hand = Scene(solid={"mesh": solid, "material": {"model": "saint_venant_kirchhoff", "E": 100, "nu": 0.3}},
+                 beams=[{"curve": {"line": [[0.2, 0.5, 0.5], [1.8, 0.5, 0.5]]}, "elements": 2, "model": "beam3eb",
+                         "section": {"EA": 1000 * 0.01, "EI": 1000 * 1e-5}}],
+                 coupling={"penalty": 100},
+                 dirichlet=[{"on": "solid:x_min"}],
+                 load=[{"type": "traction", "on": "solid:x_max", "value": [2, 0, -1]},
+                       {"type": "line", "on": "beam:0", "value": [0, 0.5, 0]}],
+                 analysis={"steps": 2, "solver": "direct"})
+    a, b = m13.solve(scene), m13.solve(hand)
+    np.testing.assert_array_equal(a.z, b.z)
+    assert np.abs(a.beam_displacement).max() > 1e-3
+
+
+def test_check_reports_special_entries_as_not_comparable(tmp_path):
+    report = fourc.check(tiny_file(tmp_path))
+    statuses = [r.status for r in report.rows]
+    assert statuses[1] == "not comparable"
+    # the file's made-up value 0 for dispx of node 15 is wrong: the check must say so
+    assert statuses[0] == "FAIL" and report.rows[0].deviation > 1e-4 and not report.passed
+    assert "not comparable" in report.table()
+
+
+def test_cli_check_exit_codes(tmp_path):
+    path = tiny_file(tmp_path)
+    out = subprocess.run([sys.executable, "-m", "mortar1d3d.cli", "check", str(path), "--quiet"],
+                         capture_output=True, text=True)
+    assert out.returncode == 1 and "FAIL" in out.stdout and "not comparable" in out.stdout
+    bad = tiny_file(tmp_path, funct="t*t")
+    out = subprocess.run([sys.executable, "-m", "mortar1d3d.cli", "check", str(bad), "--quiet"],
+                         capture_output=True, text=True)
+    assert out.returncode == 2 and "FUNCT1.SYMBOLIC_FUNCTION_OF_SPACE_TIME" in out.stderr
+
+
+@pytest.mark.parametrize("coupling, extra, key", [
+    ("  CONTACT_DISCRETIZATION: mortar\n  CONSTRAINT_STRATEGY: lagrange\n  LAGRANGE_FORMULATION: mixed\n"
+     "  MORTAR_SHAPE_FUNCTION: line2\n", "", "LAGRANGE_FORMULATION: 'mixed' is not supported"),
+    ("  CONTACT_DISCRETIZATION: mortar\n  CONSTRAINT_STRATEGY: penalty\n  MORTAR_SHAPE_FUNCTION: line2\n"
+     "  PENALTY_PARAMETER: 1\n  ROTATION_COUPLING: polar_decomposition_2d\n", "",
+     "ROTATION_COUPLING: 'polar_decomposition_2d' is not supported"),
+    ("  CONTACT_DISCRETIZATION: mortar\n  CONSTRAINT_STRATEGY: penalty\n  MORTAR_SHAPE_FUNCTION: line2\n"
+     "  PENALTY_PARAMETER: 1\n  GEOMETRY_PAIR_STRATEGY: gauss_point_projection_cross_section\n", "",
+     "GEOMETRY_PAIR_STRATEGY: 'gauss_point_projection_cross_section'"),
+    (None, "BEAM CONTACT/BEAM TO BEAM CONTACT:\n  STRATEGY: penalty\n", "BEAM CONTACT/BEAM TO BEAM CONTACT: section"),
+    (None, "DESIGN SURF NEUMANN CONDITIONS:\n  - E: 2\n    NUMDOF: 3\n    ONOFF: [1, 0, 0]\n    VAL: [1, 0, 0]\n"
+           "    FUNCT: [1, 0, 0]\n    TYPE: pseudo_orthopressure\n", "TYPE: 'pseudo_orthopressure'"),
+])
+def test_unsupported_keys_are_errors_naming_key_and_value(tmp_path, coupling, extra, key):
+    with pytest.raises(FourCError) as info:
+        scene_from_4c(tiny_file(tmp_path, coupling=coupling, extra=extra))
+    assert key in str(info.value)
+    assert isinstance(info.value, SceneError)
+
+
+def test_nurbs27_and_constant_load_are_errors(tmp_path):
+    nurbs = ['  - "1 SOLID NURBS27 ' + " ".join(str(i) for i in range(1, 13)) + ' MAT 1 KINEM nonlinear"']
+    with pytest.raises(FourCError, match="NURBS27"):
+        read_4c(tiny_file(tmp_path, elements=nurbs))
+    with pytest.raises(FourCError, match=r"FUNCT1.*'2\*t\*t'"):
+        scene_from_4c(tiny_file(tmp_path, funct="2*t*t"))
+
+
+def test_node_permutations_match_the_library_reference_nodes():
+    from mortar1d3d.elements.solid.dispatch import solid_element
+    for name, (lib, ref4c) in fourc.FOURC_SOLID_NODES.items():
+        perm = fourc._permutation(name)
+        np.testing.assert_array_equal(ref4c[perm], solid_element(lib).reference_nodes)
+    # 4C's TET10: node 5 halves edge 1-2, 6 edge 2-3, 7 edge 3-1, 8 edge 1-4, 9 edge 2-4, 10 edge 3-4
+    tet = fourc.FOURC_SOLID_NODES["TET10"][1]
+    for k, (i, j) in enumerate([(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)]):
+        np.testing.assert_array_equal(tet[4 + k], 0.5 * (tet[i] + tet[j]))
+
+
+@needs_inputs
+def test_hex27_node_order_of_4c_files_is_the_geometry():
+    """Every node of the bar's HEX27 elements sits where its 4C reference coordinate maps to under
+    the trilinear map of the element's corners (the bricks are straight-sided): the table of 4C's
+    node order is right."""
+    fc = read_4c(FOLDER / f"{EB}mortar_penalty_line3.4C.yaml")
+    ref = fourc.FOURC_SOLID_NODES["HEX27"][1]
+    corners = ref[:8]
+    # trilinear functions at the 27 reference points
+    N = np.prod(1.0 + ref[:, None, :] * corners[None, :, :], axis=2) / 8.0
+    for _, kind, ids, _ in fc.solids:
+        X = np.array([fc.nodes[n] for n in ids])
+        np.testing.assert_allclose(N @ X[:8], X, atol=1e-12)
+
+
+# -- beam3eb ----------------------------------------------------------------------------------------
+def _bent_beam(n=3):
+    beams = BeamMesh.hermite(np.column_stack([np.linspace(0, 1.2, n + 1), np.zeros(n + 1), np.zeros(n + 1)]),
+                             np.tile([1.0, 0, 0], (n + 1, 1)), np.column_stack([np.arange(n), np.arange(1, n + 1)]))
+    rng = np.random.default_rng(3)
+    d = 0.05 * rng.standard_normal(6 * (n + 1))
+    return beams, d
+
+
+def test_beam3eb_tangent_is_the_derivative_of_its_force():
+    beams, d = _bent_beam()
+    model = Beam3ebModel(beams, EA=50.0, EI=0.3)
+    f, K = model.evaluate(d)
+    K = K.toarray()
+    h = 1e-6
+    fd = np.column_stack([(model.evaluate(d + h * e, tangent=False)[0] - model.evaluate(d - h * e, tangent=False)[0])
+                          / (2 * h) for e in np.eye(len(d))])
+    assert np.abs(fd - K).max() < 1e-6 * np.abs(K).max()
+    # the ANS axial term is not variational: the tangent is not symmetric
+    assert np.abs(K - K.T).max() > 1e-4 * np.abs(K).max()
+
+
+def test_beam3eb_bending_force_is_the_gradient_of_4c_bending_energy():
+    beams, d = _bent_beam()
+    model = Beam3ebModel(beams, EA=1e-30, EI=0.3)
+    f, _ = model.evaluate(d, tangent=False)
+    h = 1e-6
+    grad = np.array([(model.energy(d + h * e) - model.energy(d - h * e)) / (2 * h) for e in np.eye(len(d))])
+    np.testing.assert_allclose(f, grad, atol=1e-7 * np.abs(f).max())
+
+
+def test_beam3eb_differs_from_torsion_free_at_second_order_only():
+    beams, d = _bent_beam()
+    eb, tf = Beam3ebModel(beams, EA=50.0, EI=0.3), BeamModel(beams, EA=50.0, EI=0.3)
+    # the same stiffness at the reference state: 3 sampled strains interpolate the quadratic linear
+    # strain exactly, as the 3-point axial rule of torsion_free integrates it exactly
+    Ka, Kb = eb.evaluate(np.zeros_like(d))[1].toarray(), tf.evaluate(np.zeros_like(d))[1].toarray()
+    assert np.abs(Ka - Kb).max() < 1e-12 * np.abs(Kb).max()
+    # the forces then differ at second order in the displacement
+    diff = [np.abs(eb.evaluate(s * d, tangent=False)[0] - tf.evaluate(s * d, tangent=False)[0]).max()
+            for s in (1e-3, 1e-4)]
+    assert diff[1] > 0.0 and diff[0] / diff[1] == pytest.approx(100.0, rel=0.02)
+
+
+def test_line_force_sums_to_load_times_length():
+    beams, _ = _bent_beam(4)
+    dofs, f = line_force(beams, np.arange(4), [0.0, 2.0, -1.0])
+    total = np.zeros(beams.n_centreline_dofs)
+    np.add.at(total, dofs, f)
+    per_node = total.reshape(-1, 6)
+    np.testing.assert_allclose(per_node[:, :3].sum(axis=0), [0.0, 2.4, -1.2], rtol=1e-14)
+    # the tangent shares cancel between neighbouring elements except at the ends: ±q L²/12 there
+    np.testing.assert_allclose(per_node[0, 3:], [0.0, 2.0 * 0.3 ** 2 / 12, -0.3 ** 2 / 12], rtol=1e-12)
+    np.testing.assert_allclose(per_node[1:-1, 3:], 0.0, atol=1e-15)
+
+
+def test_line_load_needs_a_whole_beam():
+    with pytest.raises(SceneError, match=r"load\[0\].on: a line load acts along a whole beam"):
+        Scene(beams=[{"curve": {"line": [[0, 0, 0], [1, 0, 0]]}, "elements": 2, "section": {"EA": 1, "EI": 1}}],
+              load=[{"type": "line", "on": "beam:0:end", "value": [0, 0, 1]}])
+
+
+# -- 4C's files -------------------------------------------------------------------------------------
+@needs_inputs
+@pytest.mark.parametrize("name", ["mortar_penalty_line3", "mortar_lagrange_saddlepoint_line3",
+                                  "mortar_lagrange_regularized_line3"])
+def test_4c_beam3eb_line3_bar_passes(name):
+    report = fourc.check(FOLDER / f"{EB}{name}.4C.yaml")
+    assert report.passed, report.table()
+    assert report.max_deviation < 1e-10
+
+
+@needs_inputs
+def test_4c_regularized_lagrange_is_the_penalty_method():
+    """4C's regularised Lagrange formulation is the penalty method: its reference values equal the
+    penalty file's, and the reader maps it to penalty coupling."""
+    scene = Scene.from_4c(FOLDER / f"{EB}mortar_lagrange_regularized_line3.4C.yaml")
+    assert scene.coupling["enforcement"] == "penalty" and scene.coupling["penalty"] == 10.0
+    a = read_4c(FOLDER / f"{EB}mortar_lagrange_regularized_line3.4C.yaml").results
+    b = read_4c(FOLDER / f"{EB}mortar_penalty_line3.4C.yaml").results
+    assert [r.value for r in a] == [r.value for r in b]
+
+
+@needs_inputs
+def test_4c_beam3r_files_become_simo_reissner_scenes():
+    name = ("beam3r_herm2line3_static_beam_to_solid_volume_meshtying_beam_in_solid_column_gauss_point_projection_"
+            "without_boundary_segmentation.4C.yaml")
+    with pytest.warns(m13.errors.AccuracyWarning, match="BEAM3R elements run as the library's simo_reissner"):
+        scene, nodes = scene_from_4c(FOLDER / name)
+    beam = scene.beams[0]
+    assert beam["model"] == "simo_reissner" and beam["mesh"].n_elements == 4
+    # the elements' TRIADS (all the same rotation vector) give the reference triads, g1 the tangents
+    triads = np.array(beam["triads"])
+    np.testing.assert_allclose(triads[:, :, 0], np.tile(beam["mesh"].tangents[0], (len(triads), 1)), atol=1e-12)
+    rotation = [d for d in scene.dirichlet if d["rotation"] is not None]
+    assert len(rotation) == 1 and rotation[0]["components"] == [0, 1, 2]
+    assert scene.coupling["constraint"] == "gauss_point" and scene.coupling["integration"] == "element"
+    with pytest.warns(m13.errors.AccuracyWarning), \
+            pytest.raises(FourCError, match=r"DESIGN POINT DIRICH CONDITIONS\[0\]\.ONOFF: rotation components \[5\]"):
+        Scene.from_4c(FOLDER / "beam3r_herm2line3_static_beam_to_solid_volume_meshtying_mortar_penalty_line2.4C.yaml")
+
+
+def test_input_folder_follows_the_environment_variable(tmp_path, monkeypatch):
+    monkeypatch.setenv(fourc.ENV_VAR, str(tmp_path))
+    assert fourc.input_folder() == tmp_path
+    monkeypatch.setenv(fourc.ENV_VAR, str(tmp_path / "absent"))
+    assert fourc.input_folder() is None
