@@ -9,6 +9,7 @@ __all__ = ["ReusedPreconditioner", "REBUILD_GROWTH", "REBUILD_SLACK"]
 #: ``REBUILD_SLACK``: a set-up costs about as much as 10-20 iterations (benchmarks/README.md,
 #: "Newton: reused preconditioner")
 REBUILD_GROWTH = 1.5
+#: iterations added to ``REBUILD_GROWTH`` times the first solve's before a set-up is rebuilt
 REBUILD_SLACK = 5
 
 
