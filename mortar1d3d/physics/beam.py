@@ -37,7 +37,7 @@ import numpy as np
 import scipy.sparse as sp
 from numba import prange
 
-from .._config import CHUNK, njit, njit_parallel
+from .._config import CHUNK, njit, njit_inline, njit_parallel
 from ..elements.beam import evaluate
 from ..quadrature import gauss_legendre
 from ..mesh import BeamMesh
@@ -115,6 +115,21 @@ def section(E=None, radius=None, EA=None, EI=None):
 
 
 # -- kernels ---------------------------------------------------------------------------------------
+
+@njit_inline
+def cross_square_gradient(a, b, u, ab, bb, i):
+    """(∂C/∂a_i, ∂C/∂b_i) of C = |a × b|² = u (b·b) − (a·b)² (Lagrange's identity), with
+    ``u`` = a·a, ``ab`` = a·b, ``bb`` = b·b: the bending measures of both torsion-free beams."""
+    return 2.0 * (bb * a[i] - ab * b[i]), 2.0 * (u * b[i] - ab * a[i])
+
+
+@njit_inline
+def cross_square_hessian(a, b, u, ab, bb, i, j):
+    """(∂²C/∂a_i∂a_j, ∂²C/∂b_i∂b_j, ∂²C/∂a_i∂b_j, δ_ij) of C as in :func:`cross_square_gradient`."""
+    delta = 1.0 if i == j else 0.0
+    return (2.0 * (bb * delta - b[i] * b[j]), 2.0 * (u * delta - a[i] * a[j]),
+            4.0 * a[i] * b[j] - 2.0 * b[i] * a[j] - 2.0 * ab * delta, delta)
+
 
 @njit
 def _gauss_point(a, b, a0, da, J, EA, EI, kappa0, want, grad, hess, work):
@@ -208,8 +223,7 @@ def _gauss_point(a, b, a0, da, J, EA, EI, kappa0, want, grad, hess, work):
     Cb = work[3:6]
     px = work[6:12]
     for i in range(3):
-        Ca[i] = 2.0 * (bb * a[i] - ab * b[i])
-        Cb[i] = 2.0 * (u * b[i] - ab * a[i])
+        Ca[i], Cb[i] = cross_square_gradient(a, b, u, ab, bb, i)
         px[i] = Ca[i] / u3 - 6.0 * C * a[i] / u4
         px[3 + i] = Cb[i] / u3
     for i in range(6):
@@ -220,10 +234,7 @@ def _gauss_point(a, b, a0, da, J, EA, EI, kappa0, want, grad, hess, work):
     u5 = u4 * u
     for i in range(3):
         for j in range(3):
-            delta = 1.0 if i == j else 0.0
-            Caa = 2.0 * (bb * delta - b[i] * b[j])
-            Cbb = 2.0 * (u * delta - a[i] * a[j])
-            Cab = 4.0 * a[i] * b[j] - 2.0 * b[i] * a[j] - 2.0 * ab * delta      # ∂²C/∂a_i∂b_j
+            Caa, Cbb, Cab, delta = cross_square_hessian(a, b, u, ab, bb, i, j)
             paa = (Caa / u3 - 6.0 * (Ca[i] * a[j] + a[i] * Ca[j]) / u4
                    + 48.0 * C * a[i] * a[j] / u5 - 6.0 * C * delta / u4)
             pab = Cab / u3 - 6.0 * a[i] * Cb[j] / u4

@@ -26,7 +26,7 @@ import numpy as np
 
 from .._config import njit
 from ..quadrature import gauss_legendre
-from .beam import BeamModel, _tables, _current_derivatives
+from .beam import BeamModel, _tables, _current_derivatives, cross_square_gradient, cross_square_hessian
 
 __all__ = ["Beam3ebModel", "GAUSS_POINTS", "COLLOCATION"]
 
@@ -61,18 +61,14 @@ def _bending(a, b, c, want, grad, hess):
     Ca = np.empty(3)
     Cb = np.empty(3)
     for i in range(3):
-        Ca[i] = 2.0 * (bb * a[i] - ab * b[i])
-        Cb[i] = 2.0 * (u * b[i] - ab * a[i])
+        Ca[i], Cb[i] = cross_square_gradient(a, b, u, ab, bb, i)
         grad[i] = c * (Ca[i] / u2 - 4.0 * C * a[i] / u3)
         grad[3 + i] = c * Cb[i] / u2
     if want < 2:
         return W
     for i in range(3):
         for j in range(3):
-            delta = 1.0 if i == j else 0.0
-            Caa = 2.0 * (bb * delta - b[i] * b[j])
-            Cbb = 2.0 * (u * delta - a[i] * a[j])
-            Cab = 4.0 * a[i] * b[j] - 2.0 * b[i] * a[j] - 2.0 * ab * delta      # ∂²C/∂a_i∂b_j
+            Caa, Cbb, Cab, delta = cross_square_hessian(a, b, u, ab, bb, i, j)
             hess[i, j] = c * (Caa / u2 - 4.0 * (Ca[i] * a[j] + a[i] * Ca[j]) / u3 - 4.0 * C * delta / u3
                               + 24.0 * C * a[i] * a[j] / u4)
             hess[i, 3 + j] = c * (Cab / u2 - 4.0 * a[i] * Cb[j] / u3)
