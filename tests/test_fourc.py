@@ -324,6 +324,34 @@ def test_4c_beam3r_files_become_simo_reissner_scenes():
         Scene.from_4c(FOLDER / "beam3r_herm2line3_static_beam_to_solid_volume_meshtying_mortar_penalty_line2.4C.yaml")
 
 
+def test_missing_material_parameter_is_an_error_naming_it(tmp_path):
+    path = tiny_file(tmp_path)
+    path.write_text(path.read_text().replace("      MOMIN: 1.0e-05\n", ""))
+    with pytest.raises(FourCError, match=r"MATERIALS\[1\].*MOMIN: missing"):
+        scene_from_4c(path)
+
+
+@needs_inputs
+def test_beam3r_shear_modulus_may_be_given_instead_of_poisson_ratio(tmp_path):
+    """4C's beam materials take exactly one of SHEARMOD and POISSONRATIO."""
+    name = ("beam3r_herm2line3_static_beam_to_solid_volume_meshtying_beam_in_solid_column_gauss_point_projection_"
+            "without_boundary_segmentation.4C.yaml")
+    text = (FOLDER / name).read_text()
+    assert text.count("POISSONRATIO: 0.3") == 1
+    path = tmp_path / "shear.4C.yaml"
+    path.write_text(text.replace("POISSONRATIO: 0.3", "SHEARMOD: 384615384.6153846"))     # E / (2 (1 + ν))
+    with pytest.warns(m13.errors.AccuracyWarning):
+        by_G = scene_from_4c(path)[0].beams[0]["section"]
+        by_nu = scene_from_4c(FOLDER / name)[0].beams[0]["section"]
+    assert by_G.keys() == by_nu.keys()
+    for key in by_nu:
+        assert by_G[key] == pytest.approx(by_nu[key], rel=1e-14), key
+    assert by_nu["GA2"] == pytest.approx(384615384.6153846 * 7.853981634e-05, rel=1e-14)
+    path.write_text(text.replace("POISSONRATIO: 0.3", "POISSONRATIO: 0.3\n      SHEARMOD: 1.0"))
+    with pytest.raises(FourCError, match="exactly one of SHEARMOD and POISSONRATIO"):
+        scene_from_4c(path)
+
+
 def test_input_folder_follows_the_environment_variable(tmp_path, monkeypatch):
     monkeypatch.setenv(fourc.ENV_VAR, str(tmp_path))
     assert fourc.input_folder() == tmp_path

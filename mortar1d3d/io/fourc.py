@@ -105,6 +105,22 @@ def _num(value, key):
         _fail(key, f"expected a number, got {value!r}")
 
 
+def _param(params, name, mkey):
+    """The number ``params[name]`` of material ``mkey``; a FourCError naming the key if it is missing."""
+    if name not in params:
+        _fail(f"{mkey}.{name}", "missing")
+    return _num(params[name], f"{mkey}.{name}")
+
+
+def _shear_modulus(params, mkey):
+    """``{"G": SHEARMOD}`` or ``{"nu": POISSONRATIO}`` of a beam material: 4C takes exactly one of them."""
+    given = [name for name in ("SHEARMOD", "POISSONRATIO") if name in params]
+    if len(given) != 1:
+        _fail(mkey, f"expected exactly one of SHEARMOD and POISSONRATIO, got {given or 'neither'}")
+    return {"G": _param(params, "SHEARMOD", mkey)} if given[0] == "SHEARMOD" else \
+        {"nu": _param(params, "POISSONRATIO", mkey)}
+
+
 @dataclass
 class ResultEntry:
     """One ``RESULT DESCRIPTION`` entry: 4C's value for a node's displacement component.
@@ -407,9 +423,9 @@ def _beam3eb(info, X, connectivity, params, law, mkey):
         _fail("STRUCTURE ELEMENTS", f"BEAM3EB elements {eids[k]} and {eids[k + 1]} meet at an angle: the "
                                     "torsion-free beam needs a straight reference centreline")
     mesh = BeamMesh.hermite(X, np.vstack([chords, chords[-1:]]), connectivity)
-    E = _num(params["YOUNG"], f"{mkey}.YOUNG")
-    return {"mesh": mesh, "model": "beam3eb", "section": {"EA": E * _num(params["CROSSAREA"], f"{mkey}.CROSSAREA"),
-                                                          "EI": E * _num(params["MOMIN"], f"{mkey}.MOMIN")}}
+    E = _param(params, "YOUNG", mkey)
+    return {"mesh": mesh, "model": "beam3eb", "section": {"EA": E * _param(params, "CROSSAREA", mkey),
+                                                          "EI": E * _param(params, "MOMIN", mkey)}}
 
 
 def _beam3r(info, nodes, X, connectivity, params, law, mkey):
@@ -448,9 +464,9 @@ def _beam3r(info, nodes, X, connectivity, params, law, mkey):
                                             "element's")
             triads[slot] = triad
     mesh = BeamMesh.hermite(X, triads[:n_nodes, :, 0], connectivity)
-    section = {"E": _num(params["YOUNG"], f"{mkey}.YOUNG"), "nu": _num(params["POISSONRATIO"], f"{mkey}.POISSONRATIO"),
-               "A": _num(params["CROSSAREA"], f"{mkey}.CROSSAREA"), "I2": _num(params["MOMIN2"], f"{mkey}.MOMIN2"),
-               "I3": _num(params["MOMIN3"], f"{mkey}.MOMIN3"), "I_T": _num(params["MOMINPOL"], f"{mkey}.MOMINPOL"),
+    section = {"E": _param(params, "YOUNG", mkey), **_shear_modulus(params, mkey),
+               "A": _param(params, "CROSSAREA", mkey), "I2": _param(params, "MOMIN2", mkey),
+               "I3": _param(params, "MOMIN3", mkey), "I_T": _param(params, "MOMINPOL", mkey),
                "shear_correction": _num(params.get("SHEARCORR", 1.0), f"{mkey}.SHEARCORR")}
     return {"mesh": mesh, "model": "simo_reissner", "section": section, "triads": triads.tolist()}
 
@@ -500,8 +516,8 @@ def scene_from_4c(source):
     law, params, mkey = _material(materials, {m for *_, m in fc.solids}, "solid elements")
     if law != "MAT_Struct_StVenantKirchhoff":
         _fail(mkey, "solid material law not supported (only MAT_Struct_StVenantKirchhoff)")
-    material = {"model": "saint_venant_kirchhoff", "E": _num(params["YOUNG"], f"{mkey}.YOUNG"),
-                "nu": _num(params["NUE"], f"{mkey}.NUE")}
+    material = {"model": "saint_venant_kirchhoff", "E": _param(params, "YOUNG", mkey),
+                "nu": _param(params, "NUE", mkey)}
     blocks = {}
     for eid, kind, ids, _ in fc.solids:
         if len(ids) != len(FOURC_SOLID_NODES[kind][1]):
