@@ -13,6 +13,7 @@ times the global control weights. Kept for the measurement that chose the Bézie
 import numpy as np
 
 from .._config import njit
+from ..elements.solid.dispatch import _quotient_rule
 
 
 @njit
@@ -43,8 +44,8 @@ def bernstein(p, x, v, dv):
 @njit
 def _rational_tensor(p0, p1, p2, v, dv, weights, R, dR):
     """R_a = w_a B_a / W and its derivatives from the 1D values ``v`` and derivatives ``dv`` (3, 8) of
-    any tensor-product basis; returns W."""
-    W = W0 = W1 = W2 = 0.0
+    any tensor-product basis; returns W (the quotient rule is the solid elements' own,
+    :func:`mortar1d3d.elements.solid.dispatch._quotient_rule`)."""
     a = 0
     for i in range(p0 + 1):
         for j in range(p1 + 1):
@@ -54,19 +55,8 @@ def _rational_tensor(p0, p1, p2, v, dv, weights, R, dR):
                 dR[a, 0] = w * dv[0, i] * v[1, j] * v[2, k]
                 dR[a, 1] = w * v[0, i] * dv[1, j] * v[2, k]
                 dR[a, 2] = w * v[0, i] * v[1, j] * dv[2, k]
-                W += R[a]
-                W0 += dR[a, 0]
-                W1 += dR[a, 1]
-                W2 += dR[a, 2]
                 a += 1
-    inv = 1.0 / W
-    for a in range((p0 + 1) * (p1 + 1) * (p2 + 1)):
-        r = R[a] * inv
-        dR[a, 0] = (dR[a, 0] - r * W0) * inv
-        dR[a, 1] = (dR[a, 1] - r * W1) * inv
-        dR[a, 2] = (dR[a, 2] - r * W2) * inv
-        R[a] = r
-    return W
+    return _quotient_rule(a, R, dR)
 
 
 @njit

@@ -1,0 +1,68 @@
+"""The parts of the search stage (the kernel input of ``assemble_mortar``) timed one by one.
+
+    .venv/bin/python benchmarks/search_parts.py [--package CHECKOUT] [--repeats 40] [--n 20] [--fibres 1000]
+
+Scene ``fibre_cube(n, fibres, 20)`` (the benchmark cube by default), 1 thread. Prints the best of
+``--repeats`` calls of each part in ms: the solid frames (boxes, sizes, origins), the linearised
+maps, the beam frames (coefficients and boxes) and the candidate pairs. The ``search`` stage of
+``throughput.py`` is their sum; this says which part moved. To compare two versions run it
+alternately with ``--package`` naming each checkout (as ``throughput.py``); the best of many calls
+moves little with the machine's load, but alternate the runs anyway.
+"""
+import argparse
+import sys
+import time
+
+import numpy as np
+
+from throughput import _package_root
+
+# the package must be imported from the chosen checkout before anything imports it
+sys.path.insert(0, str(_package_root(None)))
+
+import numba  # noqa: E402
+
+import mortar1d3d as m13  # noqa: E402
+from mortar1d3d._schedule import workers  # noqa: E402
+from mortar1d3d.geometry import projection, search  # noqa: E402
+
+
+def best_ms(call, repeats):
+    """Best wall time of ``repeats`` calls of ``call`` after one warm-up call, in ms."""
+    call()
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - t)
+    return 1e3 * min(times)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--package", help="checkout whose package is measured (default: this one)")
+    parser.add_argument("--repeats", type=int, default=40)
+    parser.add_argument("--n", type=int, default=20)
+    parser.add_argument("--fibres", type=int, default=1000)
+    args = parser.parse_args(argv)
+    numba.set_num_threads(1)
+    beams, solid = m13.generate.fibre_cube(args.n, args.fibres, 20)
+    points = getattr(solid, "kernel_points", solid.points)      # older checkouts: no weights column
+    boxes, size, origin = search.solid_frames(solid)
+    table = np.empty((solid.n_elements, 5, 3))
+    beam_boxes = search.beam_frames(beams)[2]
+    parts = {
+        "solid_frames": lambda: search.solid_frames(solid),
+        "linear_maps": lambda: projection.linear_maps(points, solid.connectivity, solid.element_codes, origin,
+                                                      size, table, workers()),
+        "beam_frames": lambda: search.beam_frames(beams),
+        "candidate_pairs": lambda: search.find_candidate_pairs(beam_boxes, boxes),
+    }
+    print(f"package {m13.__file__.rsplit('/', 2)[0]}: fibre_cube({args.n}, {args.fibres}, 20), 1 thread, "
+          f"best of {args.repeats} calls [ms]")
+    for name, call in parts.items():
+        print(f"  {name:16s} {best_ms(call, args.repeats):8.3f}")
+
+
+if __name__ == "__main__":
+    main()
