@@ -8,6 +8,7 @@ import numpy as np
 
 from .._config import njit, njit_inline
 from ..elements import beam as beam_functions
+from ..elements.beam import select as beam_kernel
 
 #: a map counts as affine when its nonlinear part is below AFFINE_TOL times the element size
 AFFINE_TOL = 1e-12
@@ -18,9 +19,25 @@ def beam_point(code, Q, length, s0, s1, s2, eta, H, dH):
     """(r0, r1, r2, dr0, dr1, dr2): r(η) + shift and dr/dη for coefficients ``Q`` (4, 3)."""
     beam_functions.shape(code, eta, length, H)
     beam_functions.deriv(code, eta, length, dH)
+    return _combine(beam_functions.n_functions(code), Q, s0, s1, s2, H, dH)
+
+
+@njit_inline
+def beam_point_of(k, Q, length, s0, s1, s2, eta, H, dH):
+    """:func:`beam_point` of the centreline type ``k`` given as a literal (inside a
+    ``literal_unroll`` loop over ``beam_functions.CODES``): its kernels are called directly,
+    without the registry's dispatch per point."""
+    beam_kernel(k, "shape")(eta, length, H)
+    beam_kernel(k, "deriv")(eta, length, dH)
+    return _combine(beam_functions.N_FUNCTIONS[k], Q, s0, s1, s2, H, dH)
+
+
+@njit_inline
+def _combine(n, Q, s0, s1, s2, H, dH):
+    # r = shift + Σ H_k q_k and dr/dη = Σ dH_k q_k over the first n functions
     r0, r1, r2 = s0, s1, s2
     d0 = d1 = d2 = 0.0
-    for k in range(beam_functions.n_functions(code)):
+    for k in range(n):
         r0 += H[k] * Q[k, 0]
         r1 += H[k] * Q[k, 1]
         r2 += H[k] * Q[k, 2]

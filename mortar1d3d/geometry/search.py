@@ -7,12 +7,13 @@ a uniform grid; each beam box visits only the grid cells it covers, so the cost 
 O(n_beam + n_solid) for meshes of comparable element sizes, not O(n_beam · n_solid).
 """
 import numpy as np
-from numba import prange
+from numba import literal_unroll, prange
 
 from .._config import PARAMETER_TOL, njit, njit_parallel, njit_inline
 from .._memory import carve
 from .._schedule import claim, new_claims, workers
 from ..elements import beam as beam_functions
+from ..elements.beam import CODES as _BEAM_CODES, select as _beam_kernel
 from ..elements.solid.dispatch import CONTROL_MATRIX, MAX_NODES, N_NODES, control_points
 
 MAX_CONTROL = CONTROL_MATRIX.shape[1]
@@ -116,15 +117,27 @@ def _beam_frames(positions, tangents, elements, lengths, code, padding, Q, origi
         global_q = np.empty((beam_functions.MAX_FUNCTIONS, 3))
         begin, stop = claim(claims, n_el, worker)
         while begin < stop:
+            _beam_frames_chunk(code, begin, stop, positions, tangents, elements, lengths, padding, Q, origin,
+                               boxes, size, zero, ctrl, global_q)
+            begin, stop = claim(claims, n_el, worker)
+
+
+@njit
+def _beam_frames_chunk(code, begin, stop, positions, tangents, elements, lengths, padding, Q, origin, boxes, size,
+                       zero, ctrl, global_q):
+    # the beam type chosen once per claimed chunk, not per element: the loop below then calls its
+    # kernels directly (inlined). The choice stays out of the prange body, where a literal_unroll loop
+    # would make Numba compile the parallel loop serially.
+    for k in literal_unroll(_BEAM_CODES):
+        if k == code:
             for e in range(begin, stop):
                 nodes = elements[e]
                 for i in range(3):
                     origin[e, i] = positions[nodes[0], i]
-                beam_functions.coefficients(code, positions, tangents, nodes, origin[e], Q[e])
-                beam_functions.coefficients(code, positions, tangents, nodes, zero, global_q)
-                _hull_box(ctrl, beam_functions.control_points(code, global_q, lengths[e], ctrl), boxes[e])
+                _beam_kernel(k, "coefficients")(positions, tangents, nodes, origin[e], Q[e])
+                _beam_kernel(k, "coefficients")(positions, tangents, nodes, zero, global_q)
+                _hull_box(ctrl, _beam_kernel(k, "control_points")(global_q, lengths[e], ctrl), boxes[e])
                 size[e] = _finish_box(boxes[e], padding)
-            begin, stop = claim(claims, n_el, worker)
 
 
 @njit

@@ -14,7 +14,7 @@ the projection. Only the set of points differs (docs/conventions.md §1):
   the integrand is a polynomial (:func:`exact_rule_counts`).
 """
 import numpy as np
-from numba import prange
+from numba import literal_unroll, prange
 
 from .._config import PARAMETER_TOL, njit, njit_parallel
 from .._memory import carve
@@ -22,7 +22,8 @@ from .._schedule import claim, new_claims, workers
 from ..elements import beam as beam_elements
 from ..elements.solid import dispatch as solid
 from ..geometry.beam import AFFINE_TOL
-from ..geometry.beam import beam_point
+from ..elements.beam import CODES as BEAM_CODES
+from ..geometry.beam import beam_point, beam_point_of
 from ..geometry.linalg import norm3
 from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse, first_containing,
                                    is_affine, linear_parameters, load_element, locate_point, point_buffers, polish,
@@ -40,13 +41,26 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
                     eta, xi, weight, position, status, workers):
     # segment g gets the n-point rule (n = seg_points[g+1] - seg_points[g]) stored in row n of gx, gw
     n_seg = seg_beam.shape[0]
-    loose = 1e3 * PARAMETER_TOL
     claims = new_claims(n_seg, workers)
     for worker in prange(workers):
         X, N, dN, H, dH, x, trial = point_buffers()
         a, stack = search_buffers()
         begin, stop = claim(claims, n_seg, worker)
         while begin < stop:
+            _segment_points_chunk(beam_code, begin, stop, seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
+                                  codes, conn, points, solid_origin, solid_h, linear, Q, lengths, beam_origin, eta,
+                                  xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack)
+            begin, stop = claim(claims, n_seg, worker)
+
+
+@njit
+def _segment_points_chunk(beam_code, begin, stop, seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
+                          codes, conn, points, solid_origin, solid_h, linear, Q, lengths, beam_origin, eta,
+                          xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack):
+    # segments begin..stop; the beam type is chosen once here (see search._beam_frames_chunk)
+    loose = 1e3 * PARAMETER_TOL
+    for kb in literal_unroll(BEAM_CODES):
+        if kb == beam_code:
             for g in range(begin, stop):
                 e = seg_beam[g]
                 s = seg_solid[g]
@@ -64,7 +78,7 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
                 for q in range(n_gauss):
                     k = seg_points[g] + q
                     eta[k] = mid + half * gx[n_gauss, q]
-                    r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q[e], lengths[e], s0, s1, s2, eta[k], H, dH)
+                    r0, r1, r2, d0, d1, d2 = beam_point_of(kb, Q[e], lengths[e], s0, s1, s2, eta[k], H, dH)
                     weight[k] = gw[n_gauss, q] * half * norm3(d0, d1, d2)
                     position[k, 0] = r0 + solid_origin[s, 0]
                     position[k, 1] = r1 + solid_origin[s, 1]
@@ -92,28 +106,40 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
                     # a segment lies in its element: a point clearly outside means a missed
                     # crossing; it is reported, not hidden
                     status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
-            begin, stop = claim(claims, n_seg, worker)
 
 
 @njit_parallel
 def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid_origin, solid_h,
                     solid_boxes, linear, beam_code, Q, lengths, beam_origin,
                     beam, owner, eta, xi, weight, position, status, workers):
-    n_gauss = gx.shape[0]
     n_beam = pair_offsets.shape[0] - 1
-    tol = PARAMETER_TOL
     claims = new_claims(n_beam, workers)
     for worker in prange(workers):
         X, N, dN, H, dH, x, trial = point_buffers()
         a, stack = search_buffers()
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
+            _element_points_chunk(beam_code, begin, stop, pair_offsets, pair_solid, gx, gw, codes, conn, points,
+                                  solid_origin, solid_h, solid_boxes, linear, Q, lengths, beam_origin, beam, owner,
+                                  eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack)
+            begin, stop = claim(claims, n_beam, worker)
+
+
+@njit
+def _element_points_chunk(beam_code, begin, stop, pair_offsets, pair_solid, gx, gw, codes, conn, points,
+                          solid_origin, solid_h, solid_boxes, linear, Q, lengths, beam_origin, beam, owner,
+                          eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack):
+    # beam elements begin..stop; the beam type is chosen once here (see search._beam_frames_chunk)
+    n_gauss = gx.shape[0]
+    tol = PARAMETER_TOL
+    for kb in literal_unroll(BEAM_CODES):
+        if kb == beam_code:
             for e in range(begin, stop):
                 for q in range(n_gauss):
                     k = e * n_gauss + q
                     beam[k] = e
                     eta[k] = gx[q]
-                    r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, gx[q], H, dH)
+                    r0, r1, r2, d0, d1, d2 = beam_point_of(kb, Q[e], lengths[e], 0.0, 0.0, 0.0, gx[q], H, dH)
                     weight[k] = gw[q] * norm3(d0, d1, d2)
                     position[k, 0] = r0 + beam_origin[e, 0]
                     position[k, 1] = r1 + beam_origin[e, 1]
@@ -133,7 +159,6 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
                         owner[k] = s
                         status[k] = POINT_INSIDE
                         xi[k] = x
-            begin, stop = claim(claims, n_beam, worker)
 
 
 def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):

@@ -37,8 +37,13 @@ MAX_FUNCTIONS = max(d.n_functions for d in BEAM_ELEMENTS.values())
 N_FUNCTIONS = np.array([BY_CODE[c].n_functions for c in range(len(BY_CODE))], dtype=np.int64)
 DEGREE = np.array([BY_CODE[c].degree for c in range(len(BY_CODE))], dtype=np.int64)
 
-_CODES = tuple(range(len(BEAM_TYPES)))
-_kernel = kernel_selector(BEAM_TYPES)
+#: the registry's codes, for ``literal_unroll`` over the types in njit code
+CODES = tuple(range(len(BEAM_TYPES)))
+_CODES = CODES
+#: ``select(k, name)``: kernel ``name`` of type ``k`` (a literal) in njit code (see :mod:`..selector`);
+#: lets a loop choose the type once and call its kernels directly inside
+select = kernel_selector(BEAM_TYPES)
+_kernel = select
 
 
 def beam_element(name):
