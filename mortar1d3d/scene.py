@@ -434,9 +434,10 @@ def _set_spec(value, path):
 
 def _dirichlet(value, i):
     path = f"dirichlet[{i}]"
-    _table(value, path, ("on", "value", "components", "clamp", "rotation"), required=("on",))
-    # an entry that prescribes a rotation fixes positions only when it says so (value or components)
-    rotation_only = "rotation" in value and "value" not in value and "components" not in value
+    _table(value, path, ("on", "value", "components", "clamp", "rotation", "twist"), required=("on",))
+    # an entry that prescribes a rotation (or holds the twist) fixes positions only when it says so
+    # (value or components)
+    rotation_only = ("rotation" in value or "twist" in value) and "value" not in value and "components" not in value
     comps = value.get("components", [] if rotation_only else ["x", "y", "z"])
     comps = _list(comps, f"{path}.components")
     if not comps and not rotation_only:
@@ -456,6 +457,13 @@ def _dirichlet(value, i):
                                       f"rotation is one object, its components are not independent), got "
                                       f"{len(rotation)} entries")
         out["rotation"] = _vector(rotation, f"{path}.rotation")
+    out["twist"] = _boolean(value.get("twist", False), f"{path}.twist")
+    if out["twist"]:
+        if not (isinstance(out["on"], str) and out["on"].startswith("beam:")):
+            _fail(f"{path}.twist", "the twist is held on beam sets only (beam:<i>, beam:<i>:start|end)")
+        if "rotation" in value or out["clamp"]:
+            _fail(f"{path}.twist", "give twist or a whole rotation (rotation, clamp), not both: those fix the twist "
+                                   "already")
     return out
 
 
@@ -571,6 +579,11 @@ class Scene:
                                                  "rotations to couple; use model = \"simo_reissner\" or leave out "
                                                  "coupling.rotational")
         for i, d in enumerate(self.dirichlet):
+            if d["twist"]:
+                beam = int(d["on"].split(":")[1])
+                if beam < len(self.beams) and BEAM_TYPES[self.beams[beam]["model"]].triads is None:
+                    _fail(f"dirichlet[{i}].twist", f"beam {beam} is a {self.beams[beam]['model']} beam, which has no "
+                                                   "cross-section rotations to hold; twist is for simo_reissner beams")
             if d["rotation"] is not None:
                 beam = int(d["on"].split(":")[1])
                 if beam < len(self.beams) and BEAM_TYPES[self.beams[beam]["model"]].triads is None:
