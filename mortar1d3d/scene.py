@@ -400,7 +400,8 @@ def _rotational(value):
     """``coupling.rotational``: cross-sections of beams with rotations tied to a solid triad."""
     path = "coupling.rotational"
     _table(value, path, ("triad", "enforcement", "penalty", "lm"))
-    out = {"triad": _choice(value.get("triad", "polar"), f"{path}.triad", ("polar", "deformation_gradient")),
+    out = {"triad": _choice(value.get("triad", "polar"), f"{path}.triad",
+                            ("polar", "deformation_gradient", "deformation_gradient_symmetric")),
            "enforcement": _choice(value.get("enforcement", "penalty"), f"{path}.enforcement", ("penalty", "lagrange")),
            "lm": _choice(value.get("lm", "line3"), f"{path}.lm", ("line2", "line3")),
            "penalty": None}

@@ -352,6 +352,20 @@ def test_4c_single_rotation_components_that_are_not_a_gauge_are_errors(tmp_path,
 
 
 @needs_inputs
+def test_4c_rotation_coupling_triads(tmp_path):
+    """4C's deformation_gradient_3d_general is the symmetric triad, its 3d_base_1 the library's
+    deformation_gradient triad (built from the first base vector)."""
+    name = f"{R}rotational_coupling_mortar_line4_line3_deformation_gradient_3d_general.4C.yaml"
+    assert Scene.from_4c(FOLDER / name).coupling["rotational"]["triad"] == "deformation_gradient_symmetric"
+    text = (FOLDER / name).read_text()
+    assert text.count("ROTATION_COUPLING: deformation_gradient_3d_general") == 1
+    path = tmp_path / "base_1.4C.yaml"
+    path.write_text(text.replace("ROTATION_COUPLING: deformation_gradient_3d_general",
+                                 "ROTATION_COUPLING: deformation_gradient_3d_base_1"))
+    assert Scene.from_4c(path).coupling["rotational"]["triad"] == "deformation_gradient"
+
+
+@needs_inputs
 def test_4c_regularized_lagrange_is_the_penalty_method():
     """4C's regularised Lagrange formulation is the penalty method: its reference values equal the
     penalty file's, and the reader maps it to penalty coupling."""

@@ -797,8 +797,11 @@ def _coupling(block, has_beams):
     else:
         _fail(f"{key}.CONSTRAINT_STRATEGY", f"{constraint!r} is not supported (penalty, lagrange)")
     rotation = str(block.get("ROTATION_COUPLING", "none"))
-    if rotation == "deformation_gradient_3d_general":
-        rot = {"triad": "deformation_gradient", "enforcement": "penalty",
+    # 4C's 3d_general treats the three deformed base vectors alike; its 3d_base_1 starts from the first
+    triads = {"deformation_gradient_3d_general": "deformation_gradient_symmetric",
+              "deformation_gradient_3d_base_1": "deformation_gradient"}
+    if rotation in triads:
+        rot = {"triad": triads[rotation], "enforcement": "penalty",
                "penalty": _num(block.get("ROTATION_COUPLING_PENALTY_PARAMETER"),
                                f"{key}.ROTATION_COUPLING_PENALTY_PARAMETER")}
         shape = str(block.get("ROTATION_COUPLING_MORTAR_SHAPE_FUNCTION", "none"))
@@ -810,7 +813,8 @@ def _coupling(block, has_beams):
             _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} with {disc!r} is not supported (mortar only)")
         out["rotational"] = rot
     elif rotation != "none":
-        _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} is not supported (deformation_gradient_3d_general)")
+        _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} is not supported (deformation_gradient_3d_general, "
+                                          "deformation_gradient_3d_base_1)")
     if str(block.get("COUPLE_RESTART_STATE", "false")).lower() not in ("false", "no", "0"):
         _fail(f"{key}.COUPLE_RESTART_STATE", f"{block['COUPLE_RESTART_STATE']!r} is not supported")
     return out
