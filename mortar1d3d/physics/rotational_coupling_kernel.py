@@ -262,7 +262,7 @@ def point_psi(kind, F, L0, triads, lag, psi, work):
     Parameters
     ----------
     kind : int
-        POLAR or DEFORMATION_GRADIENT.
+        POLAR, DEFORMATION_GRADIENT or SYMMETRIC.
     F : (3, 3)
         Deformation gradient of the solid at the point.
     L0 : (3, 3) float64
