@@ -51,9 +51,12 @@ def run_one(path):
                deviation=f"{report.max_deviation:.1e}",
                tolerance=f"{min(r.entry.tolerance for r in compared):.0e}" if compared else "-",
                note=f"{len(compared)} values" + (f", {special} SPECIAL not comparable" if special else ""))
-    if not report.passed and any(b["model"] == "simo_reissner" for b in report.result.scene.beams):
-        row["note"] += ("; BEAM3R runs as the library's simo_reissner beam, not 4C's element formulation (the "
-                        "gap's cause is not isolated further)")
+    coupling = report.result.scene.coupling if report.result.scene.coupled else {}
+    if not report.passed and coupling.get("rotational") is not None:
+        row["note"] += ("; 4C's rotational coupling forces are not the derivative of its constraint, the "
+                        "library's are (see fourc.md, Rotational coupling)")
+    if report.notes:
+        row["note"] += "; " + "; ".join(report.notes).replace("|", "\\|")
     return row
 
 

@@ -234,7 +234,8 @@ def _curve(value, path):
 
 def _beam(value, i, base_dir):
     path = f"beams[{i}]"
-    _table(value, path, ("curve", "mesh", "elements", "model", "section", "normal", "triads"), required=("section",))
+    _table(value, path, ("curve", "mesh", "elements", "model", "section", "normal", "triads", "force_rule"),
+           required=("section",))
     model = _choice(value.get("model", DEFAULT_BEAM_TYPE), f"{path}.model", BEAM_MODELS)
     if model not in IMPLEMENTED_BEAM_MODELS:
         _fail(f"{path}.model", f"{model!r} beams are not implemented yet; use one of "
@@ -251,6 +252,12 @@ def _beam(value, i, base_dir):
         if np.linalg.norm(normal) == 0.0:
             _fail(f"{path}.normal", "must not be zero")
         out["normal"] = normal / np.linalg.norm(normal)
+    out["force_rule"] = None
+    if "force_rule" in value:
+        if kind.triads is None:
+            _fail(f"{path}.force_rule", f"a {model} beam has no force (shear) term of its own rule; force_rule is for "
+                                        "model = \"simo_reissner\"")
+        out["force_rule"] = _choice(value["force_rule"], f"{path}.force_rule", ("gauss", "lobatto3"))
     out["triads"] = None
     if "triads" in value:
         if kind.triads is None or "normal" in value:
@@ -393,7 +400,8 @@ def _rotational(value):
     """``coupling.rotational``: cross-sections of beams with rotations tied to a solid triad."""
     path = "coupling.rotational"
     _table(value, path, ("triad", "enforcement", "penalty", "lm"))
-    out = {"triad": _choice(value.get("triad", "polar"), f"{path}.triad", ("polar", "deformation_gradient")),
+    out = {"triad": _choice(value.get("triad", "polar"), f"{path}.triad",
+                            ("polar", "deformation_gradient", "deformation_gradient_symmetric")),
            "enforcement": _choice(value.get("enforcement", "penalty"), f"{path}.enforcement", ("penalty", "lagrange")),
            "lm": _choice(value.get("lm", "line3"), f"{path}.lm", ("line2", "line3")),
            "penalty": None}
@@ -427,9 +435,10 @@ def _set_spec(value, path):
 
 def _dirichlet(value, i):
     path = f"dirichlet[{i}]"
-    _table(value, path, ("on", "value", "components", "clamp", "rotation"), required=("on",))
-    # an entry that prescribes a rotation fixes positions only when it says so (value or components)
-    rotation_only = "rotation" in value and "value" not in value and "components" not in value
+    _table(value, path, ("on", "value", "components", "clamp", "rotation", "twist"), required=("on",))
+    # an entry that prescribes a rotation (or holds the twist) fixes positions only when it says so
+    # (value or components)
+    rotation_only = ("rotation" in value or "twist" in value) and "value" not in value and "components" not in value
     comps = value.get("components", [] if rotation_only else ["x", "y", "z"])
     comps = _list(comps, f"{path}.components")
     if not comps and not rotation_only:
@@ -449,6 +458,13 @@ def _dirichlet(value, i):
                                       f"rotation is one object, its components are not independent), got "
                                       f"{len(rotation)} entries")
         out["rotation"] = _vector(rotation, f"{path}.rotation")
+    out["twist"] = _boolean(value.get("twist", False), f"{path}.twist")
+    if out["twist"]:
+        if not (isinstance(out["on"], str) and out["on"].startswith("beam:")):
+            _fail(f"{path}.twist", "the twist is held on beam sets only (beam:<i>, beam:<i>:start|end)")
+        if "rotation" in value or out["clamp"]:
+            _fail(f"{path}.twist", "give twist or a whole rotation (rotation, clamp), not both: those fix the twist "
+                                   "already")
     return out
 
 
@@ -564,6 +580,11 @@ class Scene:
                                                  "rotations to couple; use model = \"simo_reissner\" or leave out "
                                                  "coupling.rotational")
         for i, d in enumerate(self.dirichlet):
+            if d["twist"]:
+                beam = int(d["on"].split(":")[1])
+                if beam < len(self.beams) and BEAM_TYPES[self.beams[beam]["model"]].triads is None:
+                    _fail(f"dirichlet[{i}].twist", f"beam {beam} is a {self.beams[beam]['model']} beam, which has no "
+                                                   "cross-section rotations to hold; twist is for simo_reissner beams")
             if d["rotation"] is not None:
                 beam = int(d["on"].split(":")[1])
                 if beam < len(self.beams) and BEAM_TYPES[self.beams[beam]["model"]].triads is None:

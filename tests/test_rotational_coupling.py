@@ -142,13 +142,16 @@ def test_comparison_of_the_solid_triads_on_coarse_and_fine_solid_meshes():
 
 # -- triads, constraint, tangent ------------------------------------------------------------------
 
+SYMMETRIC_SHEAR_ANGLE = 0.2380675563      # measured; polar 0.245, deformation_gradient 0.232
+
+
 def _triad(kind, F, L0):
     L = np.empty((3, 3))
     assert kernel.solid_triad(kernel.TRIADS[kind], np.ascontiguousarray(F), L0, L, np.empty((4, 3, 3))) == kernel.OK
     return L
 
 
-@pytest.mark.parametrize("kind", ["polar", "deformation_gradient"])
+@pytest.mark.parametrize("kind", ["polar", "deformation_gradient", "deformation_gradient_symmetric"])
 def test_solid_triads_are_objective_rotations_and_exact_for_rigid_rotations(kind):
     rng = np.random.default_rng(3)
     L0 = Rotation.from_rotvec([0.4, -0.2, 1.1]).as_matrix()
@@ -158,13 +161,37 @@ def test_solid_triads_are_objective_rotations_and_exact_for_rigid_rotations(kind
         L = _triad(kind, F, L0)
         assert np.abs(L.T @ L - np.eye(3)).max() < 1e-14 and np.linalg.det(L) > 0
         assert np.abs(_triad(kind, Q @ F, L0) - Q @ L).max() < 1e-14             # objective
-        # a stretch along the reference base vectors does not turn the triad
-        S = L0 @ np.diag(rng.uniform(0.5, 2.0, 3)) @ L0.T
+        # a stretch along the reference base vectors does not turn the triad (the symmetric triad:
+        # only an equal one, since it is built about the mean direction of the stretched vectors)
+        S = L0 @ np.diag(rng.uniform(0.5, 2.0, 3) if kind != "deformation_gradient_symmetric"
+                         else np.full(3, rng.uniform(0.5, 2.0))) @ L0.T
         assert np.abs(_triad(kind, Q @ S, L0) - Q @ L0).max() < 1e-14
     # the triads differ under shear in the section plane (polar turns, the bisector stays)
     shear = L0 @ np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.5], [0.0, 0.0, 1.0]]) @ L0.T
     angle = np.linalg.norm(Rotation.from_matrix(_triad(kind, shear, L0) @ L0.T).as_rotvec())
-    assert angle == pytest.approx({"polar": 0.2449786631, "deformation_gradient": 0.2318238045}[kind], rel=1e-8)
+    assert angle == pytest.approx({"polar": 0.2449786631, "deformation_gradient": 0.2318238045,
+                                   "deformation_gradient_symmetric": SYMMETRIC_SHEAR_ANGLE}[kind], rel=1e-8)
+
+
+def test_symmetric_triad_is_the_even_tripod_about_the_mean_direction():
+    """4C's deformation_gradient_3d_general: unit vectors at acos(1/√3) from d = Σ a_i / |Σ a_i|,
+    spread by 2π/3 about d, turned so that their mean angular offset from the a_i's projections
+    vanishes; the identity on the reference; unlike the others it turns under an unequal stretch."""
+    L0 = Rotation.from_rotvec([0.4, -0.2, 1.1]).as_matrix()
+    np.testing.assert_allclose(_triad("deformation_gradient_symmetric", np.eye(3), L0), L0, atol=1e-15)
+    F = np.eye(3) + 0.3 * np.random.default_rng(7).standard_normal((3, 3))
+    L = _triad("deformation_gradient_symmetric", F, L0)
+    a = F @ L0
+    d = a.sum(axis=1) / np.linalg.norm(a.sum(axis=1))
+    np.testing.assert_allclose(L.T @ d, np.full(3, 1 / np.sqrt(3)), atol=1e-14)
+    p = a - np.outer(d, d @ a)
+    p /= np.linalg.norm(p, axis=0)
+    q = L - np.outer(d, d @ L)
+    q /= np.linalg.norm(q, axis=0)
+    offsets = [np.arctan2(d @ np.cross(q[:, k], p[:, k]), q[:, k] @ p[:, k]) for k in range(3)]
+    assert abs(sum(offsets)) < 1e-13 and max(map(abs, offsets)) > 1e-3
+    stretch = L0 @ np.diag([2.0, 1.0, 1.0]) @ L0.T
+    assert np.abs(_triad("deformation_gradient_symmetric", stretch, L0) - L0).max() > 0.1
 
 
 def coupled_rod(element="hexahedron"):
@@ -191,7 +218,8 @@ def _spin(psi, theta):
 
 
 @pytest.mark.parametrize("kind, element", [("polar", "hexahedron"), ("deformation_gradient", "hexahedron"),
-                                           ("polar", "tetra"), ("deformation_gradient", "hexahedron27")])
+                                           ("polar", "tetra"), ("deformation_gradient", "hexahedron27"),
+                                           ("deformation_gradient_symmetric", "hexahedron")])
 def test_constraint_vanishes_in_the_reference_and_under_rigid_motions(kind, element):
     model, g, rc = rod_coupling(kind, element, penalty=1e4)
     X = model.solid_mesh.points
@@ -213,7 +241,8 @@ def test_constraint_vanishes_in_the_reference_and_under_rigid_motions(kind, elem
 
 
 @pytest.mark.parametrize("kind, element", [("polar", "hexahedron"), ("deformation_gradient", "hexahedron"),
-                                           ("polar", "tetra"), ("deformation_gradient", "hexahedron27")])
+                                           ("polar", "tetra"), ("deformation_gradient", "hexahedron27"),
+                                           ("deformation_gradient_symmetric", "hexahedron")])
 def test_tangent_matches_central_differences(kind, element):
     model, g, rc = rod_coupling(kind, element, penalty=1e3, lm="line2")
     nS, n_rot = 3 * model.n_solid_nodes, g.physics.n_rotation_nodes
@@ -242,7 +271,7 @@ def test_tangent_matches_central_differences(kind, element):
     assert worst_r < 1e-8 and worst_K < 1e-8          # measured 7e-11, 6e-11 (polar, hexahedron)
 
 
-@pytest.mark.parametrize("kind", ["polar", "deformation_gradient"])
+@pytest.mark.parametrize("kind", ["polar", "deformation_gradient", "deformation_gradient_symmetric"])
 def test_a_constant_rotation_of_the_solid_is_reproduced_exactly(kind):
     """The solid rigidly turned by 0.8 rad: the free fibre's triads all become Q Λ0 (consistency)."""
     Q = Rotation.from_rotvec([0.2, 0.5, -0.6])

@@ -162,8 +162,12 @@ def test_reference_configuration_is_stress_free(beams):
     assert np.abs(s["F"]).max() < 1e-13 and np.abs(s["M"]).max() < 1e-13
 
 
-def test_tangent_against_central_differences():
-    model = SimoReissnerBeam(helix_beam(3), SECTION)
+RULES = {"gauss": "gauss", "lobatto": "lobatto3", "mixed": ["lobatto3", "gauss", "lobatto3"]}
+
+
+@pytest.mark.parametrize("rule", RULES.values(), ids=RULES.keys())
+def test_tangent_against_central_differences(rule):
+    model = SimoReissnerBeam(helix_beam(3), SECTION, force_rule=rule)
     d, psi = deformed_state(model)
     f, K = model.evaluate(d, psi)
     K = K.toarray()
@@ -173,12 +177,49 @@ def test_tangent_against_central_differences():
     assert np.abs(K - K.T).max() > 1e-2 * np.abs(K).max()      # away from equilibrium: not symmetric
 
 
-def test_residual_is_the_energy_derivative():
-    model = SimoReissnerBeam(helix_beam(3), SECTION, n_gauss=3, force_gauss=2)
+@pytest.mark.parametrize("rules", [dict(force_gauss=2), dict(force_rule="lobatto3"),
+                                   dict(force_rule=RULES["mixed"])], ids=["gauss2", "lobatto", "mixed"])
+def test_residual_is_the_energy_derivative(rules):
+    model = SimoReissnerBeam(helix_beam(3), SECTION, n_gauss=3, **rules)
     d, psi = deformed_state(model, seed=2)
     f, _ = model.evaluate(d, psi, tangent=False)
     fd = central_differences(lambda x: model.energy(*perturbed(model, d, psi, x)), np.zeros(model.n_dofs), 1e-6)
     assert np.abs(f - fd).max() < 1e-8 * np.abs(f).max()
+
+
+# -- the 3-point Gauss–Lobatto force rule (4C's BEAM3R) -----------------------------------------------
+
+@pytest.mark.parametrize("beams", [straight_beam(3), arc_beam(3), helix_beam(3)], ids=["straight", "arc", "helix"])
+def test_lobatto_force_rule_keeps_the_reference_stress_free(beams):
+    """Γ0 and K0 are taken at the points of the terms that use them: no force in the reference."""
+    model = SimoReissnerBeam(beams, SECTION, force_rule="lobatto3")
+    d, psi = np.zeros(model.n_centreline_dofs), np.zeros((model.n_rotation_nodes, 3))
+    f, _ = model.evaluate(d, psi)
+    assert np.abs(f).max() == 0.0 and model.energy(d, psi) == 0.0
+
+
+def test_lobatto_force_rule_samples_the_force_term_at_ends_and_middle():
+    """The energy is the force term at η = -1, 0, 1 (weights 1/3, 4/3, 1/3) plus the moment term at
+    the 3 Gauss points, both from the strains of ``sample`` (a straight beam: ds = L/2 dη)."""
+    beams = straight_beam(2, length=2.0)
+    model = SimoReissnerBeam(beams, SECTION, force_rule="lobatto3")
+    d, psi = deformed_state(model, seed=3)
+    x, w = np.array([-1.0, 0.0, 1.0]), np.array([1.0, 4.0, 1.0]) / 3.0
+    g, wg = np.polynomial.legendre.leggauss(3)
+    F, M = model.sample(d, psi, x), model.sample(d, psi, g)
+    J = 0.5                                               # elements of length 1
+    expected = 0.5 * J * (np.einsum("p,epi,i->", w, F["Gamma"] ** 2, SECTION.force_stiffness)
+                          + np.einsum("p,epi,i->", wg, M["K"] ** 2, SECTION.moment_stiffness))
+    assert model.energy(d, psi) == pytest.approx(expected, rel=1e-12)
+    gauss = SimoReissnerBeam(beams, SECTION)
+    assert abs(gauss.energy(d, psi) - model.energy(d, psi)) > 1e-3 * model.energy(d, psi)
+
+
+def test_force_rule_is_checked():
+    with pytest.raises(ValueError, match="force_rule of elements 1: 'lobatto' is not one of"):
+        SimoReissnerBeam(straight_beam(2), SECTION, force_rule=["gauss", "lobatto"])
+    with pytest.raises(ValueError, match=r"one per element \(2\), got 3"):
+        SimoReissnerBeam(straight_beam(2), SECTION, force_rule=["gauss"] * 3)
 
 
 # -- invariance -----------------------------------------------------------------------------------------

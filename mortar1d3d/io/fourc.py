@@ -16,7 +16,8 @@ What maps to what:
 ``SOLID HEX8/HEX20/HEX27/TET4/TET10``           solid mesh (node orders permuted, det J checked)
 ``MAT_Struct_StVenantKirchhoff``                ``saint_venant_kirchhoff``
 ``BEAM3EB LINE2``                               ``model = "beam3eb"``, one beam per chain of elements
-``BEAM3R LINE3``, Hermite centreline            ``model = "simo_reissner"``, ``TRIADS`` as reference triads
+``BEAM3R LINE3``, Hermite centreline            ``model = "simo_reissner"``, ``force_rule = "lobatto3"``,
+                                                ``TRIADS`` as reference triads
 ``DESIGN SURF/VOL/POINT DIRICH CONDITIONS``     ``dirichlet`` on the condition's node set
 ``DESIGN SURF NEUMANN CONDITIONS``              ``traction`` (force per reference area)
 ``DESIGN LINE NEUMANN CONDITIONS`` (beams)      ``line`` load (force per reference length)
@@ -150,6 +151,9 @@ class FourCInput:
     beams : list of (element id, 4C type, node ids, material id, rest of the line)
     sets : dict (kind, id) -> sorted node ids, kind in ``DNODE, DLINE, DSURF, DVOL``
     results : list of ResultEntry
+    notes : list of str
+        What the reader mapped to something other than the file's literal meaning (each one says
+        what and why; :func:`check` prints them).
     """
 
     path: Path
@@ -159,6 +163,7 @@ class FourCInput:
     beams: list = field(default_factory=list)
     sets: dict = field(default_factory=dict)
     results: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
 
 
 _SET_KIND = {"DNODE": "DNODE", "DPOINT": "DNODE", "DLINE": "DLINE", "DSURFACE": "DSURF", "DSURF": "DSURF",
@@ -468,7 +473,53 @@ def _beam3r(info, nodes, X, connectivity, params, law, mkey):
                "A": _param(params, "CROSSAREA", mkey), "I2": _param(params, "MOMIN2", mkey),
                "I3": _param(params, "MOMIN3", mkey), "I_T": _param(params, "MOMINPOL", mkey),
                "shear_correction": _num(params.get("SHEARCORR", 1.0), f"{mkey}.SHEARCORR")}
-    return {"mesh": mesh, "model": "simo_reissner", "section": section, "triads": triads.tolist()}
+    # 4C integrates the force (Γ) term of a Hermite-centreline BEAM3R with 3-point Gauss–Lobatto and
+    # the moment term with 3-point Gauss (Beam3r::my_gauss_rule): the library's rule "lobatto3"
+    return {"mesh": mesh, "model": "simo_reissner", "section": section, "triads": triads.tolist(),
+            "force_rule": "lobatto3"}
+
+
+def _twist_gauge(rot, key, on, beams, coupling, notes):
+    """The scene's ``twist = true`` support for a Dirichlet condition on some rotation components of
+    a BEAM3R node (``rot``: (component 0-2, value) pairs), where that condition only gauges the twist.
+
+    A straight beam with g1 along its tangent and equal bending and shear stiffnesses about g2 and
+    g3, tied to the solid by its centreline only, can turn all its cross-sections about their own
+    axes at no energy cost, in any configuration. Fixing one spin component at a node removes that
+    mode (4C's direct solver gets through the first iteration because the mode's right-hand side is
+    zero); the centreline does not depend on how the mode is removed. Holding the twist about the
+    node's reference tangent removes it for every configuration; the note in ``notes`` says so.
+    Anything else (nonzero values, rotational coupling, a curved or anisotropic beam) is a
+    FourCError naming the condition and the reason.
+    """
+    comps = [c + 3 for c, _ in rot]
+    what = f"rotation components {comps} with values {[v for _, v in rot]}"
+    if any(v != 0.0 for _, v in rot):
+        _fail(f"{key}.VAL", f"{what}: a nonzero rotation is supported only for all three components together "
+                            "(scenes prescribe a node's whole rotation vector)")
+    if len(rot) != 1:
+        _fail(f"{key}.ONOFF", f"{what}: beyond removing the free twist, two spin components hold the bending rotation "
+                              "about a fixed axis (a constraint scenes cannot express); supported: one component "
+                              "(a gauge of the twist) or all three")
+    if str(coupling.get("ROTATION_COUPLING", "none")) != "none":
+        _fail(f"{key}.ONOFF", f"{what}: with ROTATION_COUPLING the cross-sections are tied to the solid, so a single "
+                              "rotation component is a real constraint, not a gauge of the twist; only all three "
+                              "rotations held at zero are supported")
+    beam = beams[int(on.split(":")[1])]
+    section, mesh = beam["section"], beam["mesh"]
+    if section["I2"] != section["I3"] or np.ndim(section["shear_correction"]) != 0:
+        _fail(f"{key}.ONOFF", f"{what}: the beam's section is not the same about g2 and g3, so its twist is not free "
+                              "and the condition is a real constraint; only all three rotations held at zero are "
+                              "supported")
+    t = mesh.tangents
+    if np.abs(t - t[0]).max() > 1e-12 or np.abs(np.array(beam["triads"])[:, :, 0] - t[0]).max() > 1e-12:
+        _fail(f"{key}.ONOFF", f"{what}: the beam is not straight along its triads' g1, so its twist is not free and "
+                              "the condition is a real constraint; only all three rotations held at zero are "
+                              "supported")
+    notes.append(f"{key}: {what} (spins about global axes) at {on!r} only remove the beam's free twist (a straight "
+                 "beam with an isotropic section, tied by its centreline only); read as twist = true there (the "
+                 "triad does not turn about the node's reference tangent), which gives the same centreline")
+    return {"on": on, "twist": True, "twist_key": f"{key}.ONOFF"}
 
 
 def scene_from_4c(source):
@@ -565,12 +616,6 @@ def scene_from_4c(source):
             else:
                 beams.append(_beam3r(info, nodes, X, connectivity, params, law, mkey))
                 rotation_beams.add(index)
-                if index == 0:
-                    import warnings
-                    from ..errors import AccuracyWarning
-                    warnings.warn("BEAM3R elements run as the library's simo_reissner beam, whose element formulation "
-                                  "is not 4C's: results differ from 4C's by the discretisation error (see "
-                                  "docs/conformance.md)", AccuracyWarning, stacklevel=2)
             for k, n in enumerate(nodes):
                 beam_rows[n] = row + k
                 beam_of_node[n] = (index, k, len(nodes))
@@ -637,9 +682,12 @@ def scene_from_4c(source):
                 continue
             if rot:
                 if [c for c, _ in rot] != [0, 1, 2] or any(v != 0.0 for _, v in rot):
-                    _fail(f"{ckey}.ONOFF", f"rotation components {[c + 3 for c, _ in rot]} with values "
-                                           f"{[v for _, v in rot]}: only all three rotations held at zero are "
-                                           "supported (scenes prescribe a node's whole rotation vector)")
+                    entry = _twist_gauge(rot, ckey, on, beams, data.get(_COUPLING) or {}, fc.notes)
+                    if comps:
+                        entry.update(components=["xyz"[c] for c in comps],
+                                     value=[dict(zip(comps, values)).get(c, 0.0) for c in range(3)])
+                    dirichlet.append(entry)
+                    continue
                 entry = {"on": on, "rotation": [0.0, 0.0, 0.0]}
                 if comps:
                     vec = [0.0, 0.0, 0.0]
@@ -668,6 +716,17 @@ def scene_from_4c(source):
             else:
                 _fail(ckey, f"a {kind.lower()} Neumann condition on {body} nodes is not supported")
 
+    held = {d["on"] for d in dirichlet if d.get("rotation") is not None}
+    for d in dirichlet:
+        if d.get("twist") and (d["on"] in held or d["on"].rsplit(":", 1)[0] in held):
+            _fail(d["twist_key"], "a single rotation component at a node whose rotation another condition also "
+                                  "holds is not a pure twist gauge; not supported")
+    for d in dirichlet:
+        d.pop("twist_key", None)
+    if fc.notes:
+        import warnings
+        for note in fc.notes:
+            warnings.warn(f"{fc.path.name}: {note}", UserWarning, stacklevel=2)
     coupling = _coupling(data.get(_COUPLING), bool(beams)) if beams else None
     if beams:
         for key in ("BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING LINE",
@@ -738,8 +797,11 @@ def _coupling(block, has_beams):
     else:
         _fail(f"{key}.CONSTRAINT_STRATEGY", f"{constraint!r} is not supported (penalty, lagrange)")
     rotation = str(block.get("ROTATION_COUPLING", "none"))
-    if rotation == "deformation_gradient_3d_general":
-        rot = {"triad": "deformation_gradient", "enforcement": "penalty",
+    # 4C's 3d_general treats the three deformed base vectors alike; its 3d_base_1 starts from the first
+    triads = {"deformation_gradient_3d_general": "deformation_gradient_symmetric",
+              "deformation_gradient_3d_base_1": "deformation_gradient"}
+    if rotation in triads:
+        rot = {"triad": triads[rotation], "enforcement": "penalty",
                "penalty": _num(block.get("ROTATION_COUPLING_PENALTY_PARAMETER"),
                                f"{key}.ROTATION_COUPLING_PENALTY_PARAMETER")}
         shape = str(block.get("ROTATION_COUPLING_MORTAR_SHAPE_FUNCTION", "none"))
@@ -751,7 +813,8 @@ def _coupling(block, has_beams):
             _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} with {disc!r} is not supported (mortar only)")
         out["rotational"] = rot
     elif rotation != "none":
-        _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} is not supported (deformation_gradient_3d_general)")
+        _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} is not supported (deformation_gradient_3d_general, "
+                                          "deformation_gradient_3d_base_1)")
     if str(block.get("COUPLE_RESTART_STATE", "false")).lower() not in ("false", "no", "0"):
         _fail(f"{key}.COUPLE_RESTART_STATE", f"{block['COUPLE_RESTART_STATE']!r} is not supported")
     return out
@@ -781,6 +844,7 @@ class CheckReport:
     rows: list
     result: object
     seconds: float
+    notes: list = field(default_factory=list)
 
     @property
     def passed(self):
@@ -801,6 +865,7 @@ class CheckReport:
             dev = "-" if r.status == "not comparable" else f"{r.deviation:10.2e}"
             lines.append(f"{node:>6}  {e.quantity:<16} {e.value:24.16e} {comp:>24} {dev:>10} {e.tolerance:9.1e}  "
                          f"{r.status}")
+        lines += [f"note: {n}" for n in self.notes]
         return "\n".join(lines)
 
 
@@ -846,4 +911,4 @@ def check(path, progress=False):
         field_ = result.solid_displacement if body == "solid" else result.beam_displacement
         value = float(field_[row, "xyz".index(e.quantity[-1])])
         rows.append(CheckRow(e, value, "pass" if abs(value - e.value) <= e.tolerance else "FAIL"))
-    return CheckReport(Path(path), rows, result, seconds)
+    return CheckReport(Path(path), rows, result, seconds, list(fc.notes))

@@ -111,8 +111,15 @@ class Model:
         (for its reaction), and that basis (:class:`~mortar1d3d.supports.RotatedBasis` of the clamps)."""
         dofs, values, per_entry = [], [], []
         clamps = {}
+        whole, self.twist_starts = {}, np.zeros(0, np.int64)    # rotation triplets: fixed whole / their twist held
         for i, d in enumerate(self.scene.dirichlet):
             sel = self.select(d["on"], f"dirichlet[{i}].on")
+            if d.get("twist"):
+                starts, frames = self._twist_frames(sel, f"dirichlet[{i}].twist")
+                clamps.update(zip(starts.tolist(), frames))
+                self.twist_starts = np.union1d(self.twist_starts, starts)
+                dofs.append(starts + 2)                 # the component along the reference tangent
+                values.append(np.zeros(len(starts)))
             idx = self._set_dofs(sel, d["components"])
             val = np.tile(d["value"][d["components"]], len(idx) // max(len(d["components"]), 1))
             dofs.append(idx)
@@ -129,10 +136,15 @@ class Model:
             if d["rotation"] is not None or (d["clamp"] and sel[1].rotations.size):
                 # the total rotation vector of every node of the set (a clamp: the reference triad)
                 r_idx = self._rotation_dofs(sel)
+                whole.update((int(x), i) for x in r_idx[::3])
                 rotation = d["rotation"] if d["rotation"] is not None else np.zeros(3)
                 dofs.append(r_idx)
                 values.append(np.tile(rotation, len(r_idx) // 3))
             per_entry.append(idx)     # position DOFs only: their reactions are forces
+        both = [x for x in self.twist_starts.tolist() if x in whole]
+        if both:
+            raise SceneError(f"dirichlet[{whole[both[0]]}]: prescribes the whole rotation of a node whose twist another "
+                             "entry holds (twist = true); give one of them per node")
         starts = sorted(clamps)
         basis = RotatedBasis(starts, [clamps[s] for s in starts])
         if not dofs:
@@ -149,6 +161,54 @@ class Model:
             keep = np.concatenate([[True], ~same])
             dofs, values = dofs[keep], values[keep]
         return dofs, values, per_entry, basis
+
+    def _twist_frames(self, sel, path):
+        """First rotation unknown of each node of a beam set and its frame ``(e1, e2, t0)`` (rows;
+        ``t0`` the node's unit reference tangent): the twist support holds the third component.
+
+        The rotation unknowns of these nodes are the total rotation vectors in that frame, updated
+        additively (see :meth:`update` and :meth:`_twist_jacobian`), so that ``t0·ψ = 0`` holds
+        exactly in every iteration.
+        """
+        g = sel[1]
+        if not g.rotations.size:
+            raise SceneError(f"{path}: beam set has no rotation DOFs ({g.model})")
+        nodes = np.asarray(sel[2], dtype=np.int64)
+        return g.rotations.dofs(nodes, [0]), [clamp_frame(g.mesh.tangents[node]) for node in nodes]
+
+    def _twist_jacobian(self, d, r, K):
+        """Residual and Jacobian with the rotation unknowns of twist-held nodes as total rotation
+        vectors ψ (additive) instead of spins: ``δθ = T(ψ) δψ`` (left Jacobian), so ``r ← Dᵀ r`` and
+        ``K ← Dᵀ K D + E`` with ``D`` the identity but for ``T(ψ)`` on those triplets and
+        ``E[:, j] = (∂T/∂ψ_j)ᵀ r`` on their diagonal blocks (the rows' own dependence on ψ)."""
+        from ..physics.rotations import jacobian, jacobian_derivative_transpose
+        n_all = len(r)
+        rows, cols, vals = [np.arange(n_all)], [np.arange(n_all)], [np.ones(n_all)]
+        keep = np.ones(n_all, dtype=bool)
+        T, E, work = np.empty((3, 3)), np.empty((3, 3)), np.empty(9)
+        extra = []
+        for s in self.twist_starts:
+            psi = np.ascontiguousarray(d[s:s + 3])
+            jacobian(psi, T)
+            keep[s:s + 3] = False
+            block = (np.repeat(np.arange(s, s + 3), 3), np.tile(np.arange(s, s + 3), 3))
+            rows.append(block[0])
+            cols.append(block[1])
+            vals.append(T.ravel().copy())
+            if K is not None:
+                u, col = np.ascontiguousarray(r[s:s + 3]), np.empty(3)
+                for j in range(3):
+                    jacobian_derivative_transpose(psi, np.eye(3)[j], u, col, work)
+                    E[:, j] = col
+                extra.append((block, E.ravel().copy()))
+        rows[0], cols[0], vals[0] = rows[0][keep], cols[0][keep], vals[0][keep]
+        D = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n_all, n_all))
+        if K is not None:
+            K = D.T @ K @ D
+            for (i, j), v in extra:
+                K = K + sp.csr_matrix((v, (i, j)), shape=K.shape)
+            K = K.tocsr()
+        return D.T @ r, K
 
     @staticmethod
     def _clamp_frames(g, nodes):
@@ -238,7 +298,8 @@ class Model:
                 raise SceneError(f"solid.material: {exc}") from None
         for g in self.groups:
             sections = [(b - a, sc.beams[i]["section"]) for i, (a, b) in zip(g.entries, g.entry_elements)]
-            g.physics = g.type.make_physics(g.mesh, sections, g.triads)
+            g.physics = g.type.make_physics(g.mesh, sections, g.triads,
+                                            [sc.beams[i].get("force_rule") for i in g.entries])
             if g.rotations.size:
                 self.counts["beam.rotations"] += 1
         if sc.coupled:
@@ -582,6 +643,11 @@ class Model:
             b = g.rotations
             spin = step[b.slice].reshape(-1, 3).copy()
             step[b.slice] = 0.0
+            if self.twist_starts.size:
+                # twist-held nodes: total rotation vectors in their frames, updated additively
+                held = (self.twist_starts[(self.twist_starts >= b.start) & (self.twist_starts < b.stop)] - b.start) // 3
+                step[b.start + 3 * held[:, None] + np.arange(3)] = spin[held]
+                spin[held] = 0.0
             psi = z[b.slice].reshape(-1, 3)
             moved = np.any(spin != 0.0, axis=1)          # the others keep their bits
             psi[moved] = g.physics.update(psi, spin)[moved]
@@ -622,6 +688,8 @@ class Model:
                 K = sp.bmat([[K, B.T], [B, None]], format="csr")
         elif self.n_multipliers:
             r, K = self._saddle_residual(z, d, r, K, tangent)
+        if self.twist_starts.size:
+            r, K = self._twist_jacobian(d, r, K)
         r, K = self.basis.to_unknowns(r), self.basis.matrix(K)
         self.last_residual = r
         return r, (K.tocsr() if tangent else None)

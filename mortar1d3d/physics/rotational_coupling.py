@@ -66,7 +66,8 @@ class RotationalCoupling:
         global unknowns ``0 .. 3 n_solid_nodes - 1``).
     n_dofs : int
         Size of the global displacement vector.
-    triad : {"polar", "deformation_gradient"}
+    triad : {"polar", "deformation_gradient", "deformation_gradient_symmetric"}
+        Solid triad (:mod:`.rotational_coupling_kernel`).
     penalty : float, optional
         ε (force: moment per length per radian); default :data:`DEFAULT_PENALTY_FACTOR` × the
         largest ``GI_T`` over the squared mean element length.

@@ -22,6 +22,14 @@ parameter ξ) the coupling compares two triads (Steinbrecher, Popp & Meier, Comp
       normalised mean (the mean of the two triads, which share e1), ``e3 = e1 × e2``. No base
       vector of the section is preferred, and a rigid rotation Q of the solid (``F → Q F``)
       turns every a_i and so the triad.
+  ``SYMMETRIC``
+      All three ``a_i = F g_i0`` alike (4C's ``deformation_gradient_3d_general``): the axis
+      ``d = (a1 + a2 + a3)/|…|``; the unit parts ``p_i`` of the a_i normal to d; their angles from
+      p1 about d, ``θ2 = acos(p1·p2)`` and ``θ3 = 2π - acos(p1·p3)``, whose mean offset from an
+      even spread is ``α = (θ2 + θ3 - 2π)/3``; the triad is the orthonormal "tripod" about d (each
+      base vector at acos(1/√3) from d, as a cube's edges from its diagonal): its first vector is
+      p1 tilted towards d to that angle, then turned by α about d, the others by α + 2π/3 and
+      α + 4π/3. In the reference ``Λ_S = Λ_S0``; a rigid rotation turns it along.
 
 The constraint measure is the spatial relative rotation vector ``ψ = log(Λ_B Λ_Sᵀ)``: zero in the
 reference configuration (``Λ_S0 = Λ_B0``), turned with any rigid rotation of the whole scene (its
@@ -45,12 +53,14 @@ from ..elements.solid import dispatch as solid_types
 from .rotations import exp, log
 from .simo_reissner_kernel import _matmul, element_setup
 
-__all__ = ["POLAR", "DEFORMATION_GRADIENT", "TRIADS", "point_psi", "point_jacobian", "point_hessian",
+__all__ = ["POLAR", "DEFORMATION_GRADIENT", "SYMMETRIC", "TRIADS", "point_psi", "point_jacobian", "point_hessian",
            "reference_gradients", "OK", "NOT_CONVERGED", "STEP", "FD_STEP", "POINT_CHUNK"]
 
-POLAR, DEFORMATION_GRADIENT = 0, 1
+POLAR, DEFORMATION_GRADIENT, SYMMETRIC = 0, 1, 2
 #: triad names of the scene (``coupling.rotational.triad``) → kernel codes
-TRIADS = {"polar": POLAR, "deformation_gradient": DEFORMATION_GRADIENT}
+TRIADS = {"polar": POLAR, "deformation_gradient": DEFORMATION_GRADIENT, "deformation_gradient_symmetric": SYMMETRIC}
+#: ``SYMMETRIC``: angle between the mean direction of a unit cube's edges and each edge, acos(1/√3)
+_TRIPOD_ANGLE = float(np.arccos(1.0 / np.sqrt(3.0)))
 OK, NOT_CONVERGED = 0, 1
 #: complex step of the Jacobian
 STEP = 1e-30
@@ -150,6 +160,9 @@ def solid_triad(kind, F, L0, L, work):
         status = polar_rotation(F, work[2], work[:2])
         _matmul(work[2], L0.astype(F.dtype), L)
         return status
+    if kind == SYMMETRIC:
+        _symmetric_triad(F, L0, L, work)
+        return status
     a = work[0]
     for i in range(3):
         for k in range(3):
@@ -185,6 +198,50 @@ def solid_triad(kind, F, L0, L, work):
 
 
 @njit
+def _symmetric_triad(F, L0, L, work):
+    """:data:`SYMMETRIC` triad ``L`` (3, 3) from F and L0; ``work``: (4, 3, 3) scratch (every step
+    complex-analytic: no conjugates, ``arccos`` of the complex argument)."""
+    a = work[0]
+    for i in range(3):
+        for k in range(3):
+            a[i, k] = F[i, 0] * L0[0, k] + F[i, 1] * L0[1, k] + F[i, 2] * L0[2, k]
+    d = work[1, 0]
+    for i in range(3):
+        d[i] = a[i, 0] + a[i, 1] + a[i, 2]
+    _unit(d)
+    p = work[2]                                 # rows: the unit normal parts p_i
+    for k in range(3):
+        c = a[0, k] * d[0] + a[1, k] * d[1] + a[2, k] * d[2]
+        for i in range(3):
+            p[k, i] = a[i, k] - c * d[i]
+        _unit(p[k])
+    c12 = p[0, 0] * p[1, 0] + p[0, 1] * p[1, 1] + p[0, 2] * p[1, 2]
+    c13 = p[0, 0] * p[2, 0] + p[0, 1] * p[2, 1] + p[0, 2] * p[2, 2]
+    # θ2 = acos(c12), θ3 = 2π - acos(c13): α = (θ2 + θ3 - 2π)/3
+    alpha = (np.arccos(c12) - np.arccos(c13)) / 3.0
+    # p1 tilted towards d about the unit axis p1 × d, to the angle acos(1/√3) from d
+    v = work[1, 1]
+    v[0] = p[0, 1] * d[2] - p[0, 2] * d[1]
+    v[1] = p[0, 2] * d[0] - p[0, 0] * d[2]
+    v[2] = p[0, 0] * d[1] - p[0, 1] * d[0]
+    tilt = 0.5 * np.pi - _TRIPOD_ANGLE
+    for i in range(3):
+        v[i] *= tilt
+    R = work[3]
+    exp(v, R)
+    start = work[1, 2]
+    for i in range(3):
+        start[i] = R[i, 0] * p[0, 0] + R[i, 1] * p[0, 1] + R[i, 2] * p[0, 2]
+    for k in range(3):
+        angle = alpha + k * (2.0 * np.pi / 3.0)
+        for i in range(3):
+            v[i] = angle * d[i]
+        exp(v, R)
+        for i in range(3):
+            L[i, k] = R[i, 0] * start[0] + R[i, 1] * start[1] + R[i, 2] * start[2]
+
+
+@njit
 def beam_triad(triads, lag, L, work):
     """Interpolated beam triad ``L`` (3, 3) at a point with Lagrange values ``lag`` (3,) from the
     element's nodal triads (3, 3, 3) in line3 order. ``work``: (4, 3, 3) scratch."""
@@ -205,7 +262,7 @@ def point_psi(kind, F, L0, triads, lag, psi, work):
     Parameters
     ----------
     kind : int
-        POLAR or DEFORMATION_GRADIENT.
+        POLAR, DEFORMATION_GRADIENT or SYMMETRIC.
     F : (3, 3)
         Deformation gradient of the solid at the point.
     L0 : (3, 3) float64

@@ -33,13 +33,18 @@ from .beam import BeamModel, _positive
 from .rotations import compose_rows, exp_rows
 
 __all__ = ["Section", "SimoReissnerBeam", "reference_triads", "check_triads", "RotationRangeError",
-           "N_GAUSS", "FORCE_GAUSS"]
+           "N_GAUSS", "FORCE_GAUSS", "FORCE_RULES", "LOBATTO3"]
 
 #: Gauss points of the moment (curvature) term per element (see :class:`SimoReissnerBeam` Notes)
 N_GAUSS = 3
 #: Gauss points of the force (Γ) term per element (None: the same rule as the moment term, so that
 #: both share their points); an int or one per component Γ1, Γ2, Γ3
 FORCE_GAUSS = None
+#: rules of the force term a beam may choose (``force_rule``): ``"gauss"`` (Gauss–Legendre with
+#: ``force_gauss`` points) or ``"lobatto3"`` (3-point Gauss–Lobatto, :data:`LOBATTO3`)
+FORCE_RULES = ("gauss", "lobatto3")
+#: the 3-point Gauss–Lobatto rule on [-1, 1]: points (-1, 0, 1), weights (1/3, 4/3, 1/3)
+LOBATTO3 = (np.array([-1.0, 0.0, 1.0]), np.array([1.0, 4.0, 1.0]) / 3.0)
 #: given reference triads: largest |ΛᵀΛ - I| accepted (then projected to the nearest rotation)
 ORTHONORMAL_TOL = 1e-8
 #: given reference triads: largest |g1 - t| against the unit reference tangent t
@@ -289,6 +294,11 @@ class SimoReissnerBeam:
     force_gauss : int or 3 ints, optional
         Gauss points of the force term per element, or per component (Γ1, Γ2, Γ3); default
         ``n_gauss`` (see Notes before reducing it).
+    force_rule : str or sequence of str, optional
+        Rule of the force term, one for all elements or one per element (:data:`FORCE_RULES`):
+        ``"gauss"`` (default: Gauss–Legendre with ``force_gauss`` points) or ``"lobatto3"`` (3-point
+        Gauss–Lobatto, η = -1, 0, 1 with weights 1/3, 4/3, 1/3, for all three components; the
+        moment term keeps its ``n_gauss`` Gauss points). See Notes.
 
     Attributes
     ----------
@@ -327,9 +337,18 @@ class SimoReissnerBeam:
     also fixes the shear at that node, an O(h) error of the deflection inside the elements when
     the root carries a shear force). Moment rules of 2 to 5 points give the same results to the
     discretisation error (``benchmarks/simo_reissner.py`` measures all of these).
+
+    ``force_rule="lobatto3"`` is the rule of 4C's ``BEAM3R`` element with a Hermite centreline
+    (its "reduced integration of elastic residual contributions from forces"; the moment term
+    there is the 3-point Gauss rule too): the force term is sampled at the element's ends and
+    middle. It samples the quadratic part ``η² - 1/3`` of Γ at nonzero values, so it has none of
+    the 2-point rule's spurious modes. The 4C reader chooses it for every ``BEAM3R`` element. The
+    reference strains Γ0, K0 are always taken at the same points as the terms that use them, so
+    that a curved reference stays stress-free with either rule.
     """
 
-    def __init__(self, beams, section, reference_triads=None, *, n_gauss=N_GAUSS, force_gauss=FORCE_GAUSS):
+    def __init__(self, beams, section, reference_triads=None, *, n_gauss=N_GAUSS, force_gauss=FORCE_GAUSS,
+                 force_rule="gauss"):
         if not isinstance(beams, BeamMesh):
             raise TypeError(f"SimoReissnerBeam: expected a BeamMesh, got {type(beams).__name__}")
         if beams.element_type.name != "hermite":
@@ -356,7 +375,9 @@ class SimoReissnerBeam:
         if n_gauss < 1 or min(force_gauss) < 1:
             raise ValueError(f"need n_gauss >= 1 and force_gauss >= 1, got {n_gauss}, {force_gauss}")
         self.n_gauss, self.force_gauss = n_gauss, force_gauss
-        eta, wF, wM = _rules(n_gauss, force_gauss)
+        self.force_rule = _force_rules(force_rule, n_el)
+        lobatto = self.force_rule == "lobatto3"
+        eta, wF, wM, wL = _rules(n_gauss, force_gauss, lobatto.any())
         self._q0 = beams.centreline_dofs()
         cols = beams.function_columns()[:, :4]
         cl = (3 * cols[:, :, None] + np.arange(3)).reshape(n_el, 12)
@@ -364,7 +385,10 @@ class SimoReissnerBeam:
         self._dofs = np.ascontiguousarray(np.hstack([cl, rot]))
         self._points = self._tables(eta)
         dH, lag, dlag, A0, J = self._points
-        self._wF = np.ascontiguousarray(wF[None, :, :] * J[:, :, None])
+        if wL is None:
+            self._wF = np.ascontiguousarray(wF[None, :, :] * J[:, :, None])
+        else:
+            self._wF = np.ascontiguousarray(np.where(lobatto[:, None, None], wL[None], wF[None]) * J[:, :, None])
         self._wM = np.ascontiguousarray(wM[None, :] * J)
         reference = self._element_triads(self.triads0)
         self._Gamma0, self._K0, _ = self._strains(self._points, np.zeros((n_el, 4, 3)), reference)
@@ -534,9 +558,23 @@ class SimoReissnerBeam:
                 f"{self.n_dofs} DOFs)")
 
 
-def _rules(n_gauss, force_gauss):
+def _force_rules(force_rule, n_el):
+    """``force_rule`` (one name or one per element) as an (n_el,) array of names of :data:`FORCE_RULES`."""
+    rules = np.array([force_rule] * n_el if isinstance(force_rule, str) else list(force_rule), dtype=object)
+    if rules.shape != (n_el,):
+        raise ValueError(f"force_rule: expected one of {FORCE_RULES} or one per element ({n_el}), got {len(rules)}")
+    bad = [k for k, r in enumerate(rules) if r not in FORCE_RULES]
+    if bad:
+        raise ValueError(f"force_rule of elements {format_ids(bad)}: {rules[bad[0]]!r} is not one of {FORCE_RULES}")
+    return rules.astype(str)
+
+
+def _rules(n_gauss, force_gauss, lobatto=False):
     """Union of the Gauss rules of the moment term (``n_gauss`` points) and of each force component
-    (``force_gauss``: 3 point counts): points (n_p,), force weights (n_p, 3), moment weights (n_p,)."""
+    (``force_gauss``: 3 point counts), then (``lobatto``) the points of :data:`LOBATTO3`: points
+    (n_p,), Gauss force weights (n_p, 3), moment weights (n_p,), and Lobatto force weights (n_p, 3)
+    (None without ``lobatto``; zero at the Gauss points, as the Gauss weights are at the Lobatto
+    points)."""
     counts = sorted({n_gauss, *force_gauss})
     eta = np.concatenate([gauss_legendre(n)[0] for n in counts])
     offsets = np.cumsum([0] + [n for n in counts])
@@ -549,7 +587,11 @@ def _rules(n_gauss, force_gauss):
         for i in range(3):
             if force_gauss[i] == n:
                 wF[o:o + n, i] = w
-    return eta, wF, wM
+    if not lobatto:
+        return eta, wF, wM, None
+    x, w = LOBATTO3
+    wL = np.vstack([np.zeros_like(wF), np.repeat(w[:, None], 3, axis=1)])
+    return (np.concatenate([eta, x]), np.vstack([wF, np.zeros((3, 3))]), np.concatenate([wM, np.zeros(3)]), wL)
 
 
 def _default_triads(beams):
