@@ -119,3 +119,82 @@ def test_partition_rejects_bad_ranks():
                   beam_part=[np.zeros(beams.n_elements, np.int64)])
     with pytest.raises(ValueError, match="method must be one of"):
         partition(solid, [beams], 2, "spectral")
+
+
+# --------------------------------------------------------------------------------------------
+# the distributed solve: CG + GAMG on the linear penalty model, gathered on rank 0
+# --------------------------------------------------------------------------------------------
+def _rebar_data():
+    import tomllib
+    data = tomllib.loads((ROOT / "examples" / "scenes" / "rebar_cantilever.toml").read_text())
+    data["analysis"] = {"kinematics": "linear"}
+    return lambda: m13.Scene.from_dict(data)
+
+
+def _cube_scene():
+    beams, solid = m13.generate.fibre_cube(3, 6, 3)
+    parts = []
+    for f in range(6):
+        nodes = np.arange(4 * f, 4 * f + 4)
+        parts.append(m13.BeamMesh.hermite(beams.positions[nodes], beams.tangents[nodes], [[0, 1], [1, 2], [2, 3]]))
+    return lambda: m13.Scene(solid={"mesh": solid, "material": {"model": "linear_elastic", "E": 1.0, "nu": 0.3}},
+                             beams=[{"mesh": p, "model": "torsion_free", "section": {"E": 50.0, "radius": 0.01}}
+                                    for p in parts],
+                             dirichlet=[{"on": "solid:z_min", "value": [0, 0, 0]}],
+                             load=[{"type": "traction", "on": "solid:z_max", "value": [0.01, 0, -0.02]},
+                                   {"type": "body", "value": [0, 0.003, 0]}],
+                             analysis={"kinematics": "linear"})
+
+
+SOLVE_SCENES = {"rebar": _rebar_data(), "cube": _cube_scene()}
+
+
+def _with(scene, **analysis):
+    scene.analysis = {**scene.analysis, **analysis}
+    return scene
+
+
+@pytest.mark.parametrize("name", list(SOLVE_SCENES))
+def test_distributed_solution_equals_the_serial_one(name):
+    from mortar1d3d.distributed.solve import solve_distributed
+    serial = m13.solve(_with(SOLVE_SCENES[name](), solver="direct"))
+    for parts in (None, lambda solid, beams, n: (np.zeros(solid.n_elements, np.int64),
+                                                 [np.full(b.n_elements, n - 1) for b in beams])):
+        result = solve_distributed(_with(SOLVE_SCENES[name](), solver="amg", backend="petsc", rtol=1e-12), comm=COMM,
+                                   parts=parts)
+        errors = (None, None)
+        if RANK == 0:
+            assert result.distributed["ranks"] == SIZE
+            errors = (np.linalg.norm(result.z - serial.z) / np.linalg.norm(serial.z),
+                      np.abs(result.line_load - serial.line_load).max() / np.abs(serial.line_load).max())
+        else:
+            assert result is None
+        # decided together: a rank that failed alone would leave the others waiting in the next test
+        error, line_error = COMM.tompi4py().bcast(errors, root=0)
+        assert error <= 1e-10, (name, error)
+        # the line load of the output, from the gathered operators: λ = ε κ⁻¹ (D d_B − M d_S) takes
+        # the difference of nearly equal displacements times the penalty, so it is only as accurate
+        # as the solution times ε / E (1e3 here)
+        assert line_error <= 1e-6, (name, line_error)
+
+
+def test_solve_and_command_line_with_the_petsc_backend(tmp_path_factory):
+    import tempfile
+    from mortar1d3d.cli import main
+    scene = _with(SOLVE_SCENES["rebar"](), backend="petsc", rtol=1e-10)
+    result = m13.solve(scene)
+    assert COMM.tompi4py().allgather(result is None) == [r != 0 for r in range(SIZE)]
+    path = Path(tempfile.mkdtemp(prefix=f"mpi-rank{RANK}-"))
+    (path / "scene.toml").write_text((ROOT / "examples" / "scenes" / "rebar_cantilever.toml").read_text()
+                                     .replace('kinematics = "nonlinear"', 'kinematics = "linear"\nbackend = "petsc"'))
+    code = main(["run", str(path / "scene.toml"), "--out", str(path / "out"), "--quiet"])
+    written = (path / "out" / "result.pvd").exists()
+    # decided together (see above): every rank exits 0, only rank 0 writes
+    assert COMM.tompi4py().allgather((code, written)) == [(0, r == 0) for r in range(SIZE)]
+
+
+def test_unsupported_features_name_their_key():
+    from mortar1d3d.scene import SceneError
+    scene = _with(SOLVE_SCENES["rebar"](), backend="petsc", kinematics="nonlinear")
+    with pytest.raises(SceneError, match="analysis.kinematics: the PETSc backend solves linear analyses"):
+        m13.solve(scene)

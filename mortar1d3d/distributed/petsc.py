@@ -24,7 +24,7 @@ def petsc():
     return _PETSC
 
 
-def coo_matrix(comm, rows, cols, values, row_sizes, col_sizes):
+def coo_matrix(comm, rows, cols, values, row_sizes, col_sizes, block_size=None):
     """An assembled ``MPIAIJ`` matrix of the sum of the entries given on all ranks.
 
     Parameters
@@ -35,6 +35,8 @@ def coo_matrix(comm, rows, cols, values, row_sizes, col_sizes):
     values : (k,) float64
     row_sizes, col_sizes : (local, global)
         This rank's owned rows (columns: its part of the input vector) and the totals.
+    block_size : int, optional
+        Rows per node (3 for displacements: GAMG aggregates nodes and reads the block size).
 
     Notes
     -----
@@ -46,7 +48,7 @@ def coo_matrix(comm, rows, cols, values, row_sizes, col_sizes):
     rows, cols = np.asarray(rows, dtype=np.int64), np.asarray(cols, dtype=np.int64)
     (n_local, n), (m_local, m) = (tuple(int(s) for s in row_sizes), tuple(int(s) for s in col_sizes))
     A = PETSc.Mat().create(comm=comm)
-    A.setSizes(((n_local, n), (m_local, m)))
+    A.setSizes(((n_local, n), (m_local, m)), bsize=block_size)
     A.setType(PETSc.Mat.Type.MPIAIJ)
     first_row = _exclusive_sum(comm, n_local)
     first_col = _exclusive_sum(comm, m_local)
