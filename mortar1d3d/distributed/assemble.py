@@ -21,16 +21,24 @@ from ..mortar.assemble import assemble_mortar, lm_numbering
 from .petsc import coo_matrix, gather_matrix, gather_vector, petsc, summed_vector
 
 
+def _used_nodes(element_ids, connectivity):
+    """``element_ids`` as int64 and the ascending serial nodes their rows of ``connectivity`` use
+    (padding -1 left out); None for the nodes when there are no elements."""
+    element_ids = np.asarray(element_ids, dtype=np.int64)
+    if not len(element_ids):
+        return element_ids, None
+    conn = connectivity[element_ids]
+    return element_ids, np.unique(conn[conn >= 0])
+
+
 def solid_submesh(solid, element_ids):
     """The solid elements ``element_ids`` (ascending) as a mesh of their own nodes, in the same order.
 
     Returns the mesh (None for no elements) and the serial ids of its nodes (ascending).
     """
-    element_ids = np.asarray(element_ids, dtype=np.int64)
-    if not len(element_ids):
+    element_ids, nodes = _used_nodes(element_ids, solid.connectivity)
+    if nodes is None:
         return None, np.zeros(0, np.int64)
-    conn = solid.connectivity[element_ids]
-    nodes = np.unique(conn[conn >= 0])
     cells, start = {}, 0
     for descriptor, block in solid.blocks:
         pick = element_ids[(element_ids >= start) & (element_ids < start + len(block))] - start
@@ -47,13 +55,11 @@ def beam_submesh(beams, element_ids):
 
     Returns the mesh (None for no elements) and the serial ids of its nodes (ascending).
     """
-    element_ids = np.asarray(element_ids, dtype=np.int64)
-    if not len(element_ids):
+    element_ids, nodes = _used_nodes(element_ids, beams.elements)
+    if nodes is None:
         return None, np.zeros(0, np.int64)
-    elements = beams.elements[element_ids]
-    nodes = np.unique(elements)
     tangents = beams.tangents[nodes] if beams.tangents is not None else None
-    return BeamMesh(beams.element_type.name, beams.positions[nodes], np.searchsorted(nodes, elements),
+    return BeamMesh(beams.element_type.name, beams.positions[nodes], np.searchsorted(nodes, beams.elements[element_ids]),
                     tangents=tangents), nodes
 
 

@@ -183,6 +183,29 @@ def _coupling_matrix(model, part, numbering, layout, comm):
     return B, kappa, ops
 
 
+class _Clock:
+    """Wall time per stage, the slowest rank's (a barrier before each reading)."""
+
+    def __init__(self, comm):
+        self.comm, self.times, self.last = comm, {}, time.perf_counter()
+
+    def __call__(self, stage):
+        self.comm.barrier()
+        now = time.perf_counter()
+        self.times[stage] = now - self.last
+        self.last = now
+
+
+def _traffic(A, comm):
+    """What one product with the assembled system moves between ranks, and what each rank stores:
+    ``ghosts`` (vector entries each rank receives: the distinct off-rank columns of its rows),
+    ``nnz`` (stored entries per rank)."""
+    indptr, indices, _ = A.getValuesCSR()
+    first, last = A.getOwnershipRange()
+    off = np.unique(indices[(indices < first) | (indices >= last)])
+    return {"ghosts": comm.tompi4py().allgather(int(len(off))), "nnz": comm.tompi4py().allgather(int(len(indices)))}
+
+
 def _near_null_space(model, layout, rank, A):
     """The model's rigid-body modes (translations, rotations; tangent DOFs rotate) as a PETSc null space."""
     PETSc = petsc()
@@ -232,6 +255,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     comm = PETSc.COMM_WORLD if comm is None else comm
     rank, size = comm.getRank(), comm.getSize()
     start = time.perf_counter()
+    clock = _Clock(comm)
     model = Model(build(scene))
     reason = _unsupported(model)
     if reason:
@@ -240,6 +264,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     model._body_loads = _BodyLoads()
     model.solid_physics = model._body_loads
     model._prepare_loads()
+    clock("setup")
     beam_meshes = [g.mesh for g in model.groups]
     if parts is None:
         part = partition(model.solid_mesh, beam_meshes, size, method)
@@ -250,8 +275,10 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     layout = SystemLayout.of(numbering, model.dofmap, [g.type.dofs_per_node for g in model.groups])
     n_sys = int(layout.ranges[-1])
     local = int(layout.ranges[rank + 1] - layout.ranges[rank])
+    clock("partition")
     (r, c, v), (f_idx, f_val) = _stiffness_triplets(model, part, layout, rank)
     A = coo_matrix(comm, r, c, v, (local, n_sys), (local, n_sys), block_size=3)
+    clock("stiffness")
     ops = []
     if scene.coupled:
         B, kappa, ops = _coupling_matrix(model, part, numbering, layout, comm)
@@ -263,6 +290,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
         WB.diagonalScale(L=w)
         Kc = B.transposeMatMult(WB)
         A.axpy(1.0, Kc, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    clock("coupling")
     # loads: the replicated dead loads on their owners, the body forces added by PETSc
     b = A.createVecLeft()
     first = int(layout.ranges[rank])
@@ -299,7 +327,9 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
         ksp.getPC().setType(PETSc.PC.Type.GAMG)
         ksp.setTolerances(rtol=scene.analysis["rtol"], atol=0.0, max_it=10000)
     ksp.setFromOptions()
+    clock("loads_supports")
     ksp.solve(b, x)
+    clock("solve")
     reason = ksp.getConvergedReason()
     if reason < 0:
         from ..solvers.newton import ConvergenceError
@@ -310,7 +340,8 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     # collective: every rank sends its part of the operators and points, rank 0 keeps them
     outputs = [(d.gathered(), _gathered_points(comm, d.local)) for d in ops]
     info = {"ranks": size, "unknowns": n_sys, "iterations": iterations, "ksp": ksp.getType(),
-            "pc": ksp.getPC().getType(), "partition": part.stats}
+            "pc": ksp.getPC().getType(), "partition": part.stats, "timings": clock.times,
+            "traffic": _traffic(A, comm)}
     if rank != 0:
         return None
     z = np.zeros(model.n_displacement_dofs)
