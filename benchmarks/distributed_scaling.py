@@ -8,7 +8,8 @@
 The scene is the benchmark cube (docs/conventions.md §5) with hexahedra, ``--fibres`` straight fibres
 of 10 Hermite elements as one beam entry, clamped at z = 0 and pulled at z = 1, linear, mortar
 penalty, CG + GAMG to rtol 1e-8. Rank 0 prints the stage times (slowest rank, after a barrier),
-the CG iterations, the vector entries each rank receives per matrix product (ghosts), the stored
+each rank's CPU time per stage up to the barrier (its own work: on a loaded machine the fairer
+measure of balance), the CG iterations, the vector entries each rank receives per matrix product (ghosts), the stored
 entries per rank and the peak resident memory per rank. Run it twice and take the second run
 (the first compiles the kernels into the cache).
 """
@@ -67,6 +68,7 @@ def main():
         print(json.dumps({"ranks": info["ranks"], "cells": args.cells, "fibres": args.fibres,
                           "unknowns": info["unknowns"], "iterations": info["iterations"], "wall": round(wall, 3),
                           "timings": {k: round(v, 3) for k, v in info["timings"].items()},
+                          "cpu_per_rank": {k: [round(c[k], 3) for c in info["cpu"]] for k in info["cpu"][0]},
                           "ghosts": info["traffic"]["ghosts"], "nnz": info["traffic"]["nnz"],
                           "peak_MiB": [round(m, 1) for m in memory]}))
 

@@ -152,7 +152,8 @@ def _coupling_matrix(model, part, numbering, layout, comm):
         per_node = g.type.dofs_per_node
 
         def row_of(new_rows, num=num, k=k):
-            lm_rank = num.owner[np.argsort(num.new_of_old)][new_rows // 3] if len(new_rows) else new_rows
+            # the rank that owns a rank-major LM node: the range it falls in
+            lm_rank = np.searchsorted(num.ranges, new_rows // 3, side="right") - 1
             return row_ranges[lm_rank] + counts[lm_rank, :k].sum(axis=1) + new_rows - 3 * num.ranges[lm_rank]
 
         # operator columns (rank-major per kind) back to serial, then to the system
@@ -184,16 +185,20 @@ def _coupling_matrix(model, part, numbering, layout, comm):
 
 
 class _Clock:
-    """Wall time per stage, the slowest rank's (a barrier before each reading)."""
+    """Per stage: the wall time of the slowest rank (a barrier before each reading), and this rank's
+    CPU time up to the barrier (its own work; on a loaded machine the fairer measure of balance)."""
 
     def __init__(self, comm):
-        self.comm, self.times, self.last = comm, {}, time.perf_counter()
+        self.comm, self.times, self.cpu = comm, {}, {}
+        self.last, self.last_cpu = time.perf_counter(), time.process_time()
 
     def __call__(self, stage):
+        now_cpu = time.process_time()
+        self.cpu[stage] = now_cpu - self.last_cpu
         self.comm.barrier()
         now = time.perf_counter()
         self.times[stage] = now - self.last
-        self.last = now
+        self.last, self.last_cpu = now, time.process_time()
 
 
 def _traffic(A, comm):
@@ -341,6 +346,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     outputs = [(d.gathered(), _gathered_points(comm, d.local)) for d in ops]
     info = {"ranks": size, "unknowns": n_sys, "iterations": iterations, "ksp": ksp.getType(),
             "pc": ksp.getPC().getType(), "partition": part.stats, "timings": clock.times,
+            "cpu": comm.tompi4py().allgather(clock.cpu),
             "traffic": _traffic(A, comm)}
     if rank != 0:
         return None
