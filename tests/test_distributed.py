@@ -178,7 +178,7 @@ def test_distributed_solution_equals_the_serial_one(name):
         assert line_error <= 1e-6, (name, line_error)
 
 
-def test_solve_and_command_line_with_the_petsc_backend(tmp_path_factory):
+def test_solve_and_command_line_with_the_petsc_backend():
     import tempfile
     from mortar1d3d.cli import main
     scene = _with(SOLVE_SCENES["rebar"](), backend="petsc", rtol=1e-10)

@@ -2,7 +2,7 @@
 
 The optional extra ``mpi`` (mpi4py, petsc4py, pymetis) is imported only when a function here
 needs it; without it, asking for the PETSc backend raises
-:class:`~mortar1d3d.distributed._require.MissingPackageError` naming the missing package.
+:class:`~mortar1d3d.errors.MissingPackageError` naming the missing package.
 
 * :mod:`.partition`: solid and beam elements to ranks (one graph; METIS or geometric slabs).
 * :mod:`.numbering`: the rank-major numbering of nodes and multiplier nodes.

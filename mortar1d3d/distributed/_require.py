@@ -1,6 +1,8 @@
 """The optional packages of the distributed path, imported on demand with an error that names them."""
 import importlib
 
+from ..errors import MissingPackageError
+
 #: what each optional package is for, and how it is installed (docs/distributed.md)
 PACKAGES = {
     "mpi4py": "MPI from Python (pip install mpi4py, built against the MPI that PETSc uses)",
@@ -8,10 +10,6 @@ PACKAGES = {
                 "matching the PETSc version)",
     "pymetis": "the METIS graph partition (pip install pymetis)",
 }
-
-
-class MissingPackageError(ImportError):
-    """An optional package of the distributed path (``pip install "mortar1d3d[mpi]"``) is not installed."""
 
 
 def require(name, what='analysis.backend = "petsc"'):

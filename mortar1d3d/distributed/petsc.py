@@ -110,11 +110,3 @@ def gather_matrix(A):
 def gather_vector(v):
     """The distributed vector ``v`` as an array on every rank."""
     return np.concatenate(_allgather(v.getComm(), np.asarray(v.getArray()).copy()))
-
-
-def vector_from(comm, array, first):
-    """An ``MPI`` vector whose owned entries are ``array`` (this rank's, from global index ``first``)."""
-    PETSc = petsc()
-    v = PETSc.Vec().createMPI((len(array), PETSc.DECIDE), comm=comm)
-    v.setArray(np.asarray(array, dtype=PETSc.ScalarType))
-    return v
