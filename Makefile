@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test fuzz bench report docs venv clean conformance
+.PHONY: demo test test-mpi fuzz bench report docs venv clean conformance
 
 $(STAMP): pyproject.toml
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "$(PYTHON) not found; run 'make PYTHON=python3 ...'"; exit 1; }
@@ -20,6 +20,22 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest -q
+
+# the distributed tests (tests/test_distributed.py) under mpiexec with 1, 2 and 3 ranks; needs the mpi
+# extra built against the machine's PETSc and MPI (docs/distributed.md). Open MPI refuses to start as
+# root unless both variables are set (containers and CI run as root); --oversubscribe lets 3 ranks
+# share 2 cores (MPICH: make test-mpi MPIEXEC_FLAGS=). One Numba thread per rank.
+MPIEXEC       ?= mpiexec
+MPIEXEC_FLAGS ?= --oversubscribe
+MPI_RANKS     ?= 1 2 3
+test-mpi: $(STAMP)
+	@$(PY) -c "import mpi4py, petsc4py, pymetis" || { echo "make test-mpi: the mpi extra is not installed (docs/distributed.md)"; exit 1; }
+	@for n in $(MPI_RANKS); do \
+	  echo "== mpiexec -n $$n"; \
+	  OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 NUMBA_NUM_THREADS=1 \
+	    $(MPIEXEC) $(MPIEXEC_FLAGS) -n $$n $(PY) -m pytest -q -p no:randomly -p no:cacheprovider tests/test_distributed.py \
+	    || exit 1; \
+	done
 
 # long property-based run of tests/test_fuzz.py and the fuzzed scene files of tests/test_bad_input.py
 # (make test runs their bounded, derandomized profile)

@@ -14,7 +14,7 @@ import numba
 
 #: subpackages without kernels, whose edits cannot change a compiled kernel (the study only calls
 #: the library): left out of the cache key, so editing them keeps the compiled kernels
-KERNEL_FREE = ("study",)
+KERNEL_FREE = ("study", "distributed")
 
 
 def _source_fingerprint(root=None, skip=KERNEL_FREE):

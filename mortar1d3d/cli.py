@@ -11,6 +11,7 @@ from pathlib import Path
 
 
 def _run(args):
+    from .distributed import MissingPackageError
     from .errors import MeshError
     from .model import solve
     from .scene import SceneError
@@ -21,11 +22,13 @@ def _run(args):
             print(f"mortar1d3d run {args.scene}: {scene!r}", flush=True)
         start = time.perf_counter()
         result = solve(scene, progress=not args.quiet)
+        if result is None:          # a rank other than 0 of a distributed run: rank 0 writes
+            return 0
         out = Path(args.out) if args.out else Path("results") / scene.name
         paths = result.write(out, samples_per_element=args.samples)
-    except (SceneError, MeshError, ConvergenceError) as exc:
+    except (SceneError, MeshError, ConvergenceError, MissingPackageError) as exc:
         print(f"error: {exc}", file=sys.stderr)
-        return 2 if isinstance(exc, (SceneError, MeshError)) else 3
+        return 2 if isinstance(exc, (SceneError, MeshError, MissingPackageError)) else 3
     if not args.quiet:
         print(f"{result!r}")
         for line in result.coupling_summary():

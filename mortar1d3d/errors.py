@@ -10,7 +10,9 @@ ids or values at fault and what to try):
 - :class:`InvertedElementsError` (``FloatingPointError``): det F <= 0 in solid elements (a Newton
   solver catches it to cut its step);
 - :class:`RotationRangeError` (``FloatingPointError``): Simo–Reissner beam elements whose triads are
-  too far apart for the interpolation, or non-finite (likewise a reason to cut the step).
+  too far apart for the interpolation, or non-finite (likewise a reason to cut the step);
+- :class:`MissingPackageError` (``ImportError``): an optional package of the distributed path
+  (the ``mpi`` extra) is not installed.
 
 Warnings (``UserWarning`` subclasses): :class:`AccuracyWarning`, :class:`CouplingWarning`,
 :class:`LargeDeformationWarning`.
@@ -21,7 +23,7 @@ The modules that raise them re-export them under their old names (``mortar1d3d.s
 import numpy as np
 
 __all__ = ["MeshError", "SceneError", "FourCError", "LinearSolverError", "ConvergenceError", "InvertedElementsError",
-           "RotationRangeError", "AccuracyWarning", "CouplingWarning", "LargeDeformationWarning", "format_ids"]
+           "RotationRangeError", "MissingPackageError", "AccuracyWarning", "CouplingWarning", "LargeDeformationWarning", "format_ids"]
 
 
 def format_ids(ids, limit=10):
@@ -75,6 +77,11 @@ class RotationRangeError(FloatingPointError):
 class FourCError(SceneError):
     """A 4C input file the library cannot run as it is (:mod:`mortar1d3d.io.fourc`): the message
     names the section, key and value."""
+
+
+class MissingPackageError(ImportError):
+    """An optional package of the distributed path (``pip install "mortar1d3d[mpi]"``) is not
+    installed (:mod:`mortar1d3d.distributed`): the message names it and how to install it."""
 
 
 # ----------------------------------------------------------------------------------- warnings

@@ -24,6 +24,8 @@ IMPLEMENTED_BEAM_MODELS = tuple(BEAM_TYPES)
 BEAM_MODELS = IMPLEMENTED_BEAM_MODELS + PLANNED_BEAM_TYPES
 LOAD_TYPES = ("point", "traction", "pressure", "body", "moment", "line")
 SOLVERS = ("auto", "direct", "amg", "block")
+# "petsc": distributed assembly and solve under MPI (mortar1d3d.distributed, the optional extra "mpi")
+BACKENDS = ("serial", "petsc")
 
 
 #: every number of a scene is 0 or has a magnitude in [MIN_MAGNITUDE, MAX_MAGNITUDE]: physical data in
@@ -498,13 +500,14 @@ def _load(value, i):
 
 def _analysis(value):
     path = "analysis"
-    _table(value, path, ("kinematics", "steps", "solver", "max_iterations", "rtol", "max_cuts"))
+    _table(value, path, ("kinematics", "steps", "solver", "max_iterations", "rtol", "max_cuts", "backend"))
     return {"kinematics": _choice(value.get("kinematics", "nonlinear"), "analysis.kinematics", ("nonlinear", "linear")),
             "steps": _integer(value.get("steps", 1), "analysis.steps", 1, 100000),
             "solver": _choice(value.get("solver", "auto"), "analysis.solver", SOLVERS),
             "max_iterations": _integer(value.get("max_iterations", 25), "analysis.max_iterations", 1, 1000),
             "rtol": _number(value.get("rtol", 1e-8), "analysis.rtol", low=0.0, high=1.0, low_open=True, high_open=True),
-            "max_cuts": _integer(value.get("max_cuts", 6), "analysis.max_cuts", 0, 50)}
+            "max_cuts": _integer(value.get("max_cuts", 6), "analysis.max_cuts", 0, 50),
+            "backend": _choice(value.get("backend", "serial"), "analysis.backend", BACKENDS)}
 
 
 def _fibre_arrays(value, beams, base_dir):

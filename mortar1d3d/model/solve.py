@@ -14,7 +14,7 @@ import numpy as np
 from .._config import announce_compilation
 from ..result import Result
 from ..solvers.newton import solve_linear_step, solve_load_steps
-from .build import build
+from .build import as_scene, build
 from .checks import check_linear_displacements
 from .model import Model
 
@@ -35,8 +35,14 @@ def solve(scene, *, progress=False):
     progress : bool or callable
         True prints one line per load step; a callable gets ``(StepRecord, step_index, None)``.
 
+    With ``analysis.backend = "petsc"`` the scene is assembled and solved on PETSc over the MPI
+    ranks (:func:`mortar1d3d.distributed.solve.solve_distributed`): rank 0 gets the Result, the
+    other ranks None.
+
     Raises
     ------
+    MissingPackageError
+        ``analysis.backend = "petsc"`` without the ``mpi`` extra (names the missing package).
     SceneError
         Invalid scene, empty sets, or rigid-body motions not fixed (before any solve).
     ConvergenceError
@@ -48,6 +54,14 @@ def solve(scene, *, progress=False):
         Linear kinematics, and a body moved by more than LINEAR_DISPLACEMENT_LIMIT of its size.
     """
     start = time.perf_counter()
+    scene = as_scene(scene)
+    if getattr(scene, "analysis", {}).get("backend") == "petsc":
+        # distributed (docs/distributed.md): needs the mpi extra, names the missing package otherwise
+        from ..distributed import require
+        for name in ("mpi4py", "petsc4py", "pymetis"):
+            require(name)
+        from ..distributed.solve import solve_distributed
+        return solve_distributed(scene, progress=progress)
     model = Model(build(scene))
     announce_compilation()      # after the scene's checks: an invalid scene fails without it
     model.prepare()

@@ -1,0 +1,200 @@
+"""The distributed path on PETSc (issue 23): partition, rank-major numbering, D, M, κ, the penalty solve.
+
+Every test here is collective: ``make test-mpi`` runs this file under ``mpiexec -n 1, 2, 3``
+(each rank runs pytest on the same tests in the same order), ``make test`` runs it in one process
+(one rank) when the ``mpi`` extra is installed and skips it with the reason otherwise. The
+serial results are computed on every rank and compared after the renumbering.
+"""
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import mortar1d3d as m13
+from mortar1d3d.distributed import available
+
+if not available():
+    pytest.skip("the mpi extra (mpi4py, petsc4py, pymetis) is not installed: pip install -e \".[mpi]\" with "
+                "PETSC_DIR set (docs/distributed.md); make test-mpi runs these tests under mpiexec",
+                allow_module_level=True)
+
+from mortar1d3d.distributed import partition                                    # noqa: E402
+from mortar1d3d.distributed.assemble import assemble_distributed, renumbered   # noqa: E402
+from mortar1d3d.distributed.numbering import Numbering                         # noqa: E402
+from mortar1d3d.distributed.petsc import petsc                                 # noqa: E402
+from mortar1d3d.model.build import build                                        # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+PETSc = petsc()
+COMM = PETSc.COMM_WORLD
+SIZE, RANK = COMM.getSize(), COMM.getRank()
+
+
+def _plate_scene():
+    spec = importlib.util.spec_from_file_location("composite_plate_example", ROOT / "examples" / "composite_plate.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.plate_scenes(1, "tension", cells=(8, 2))[0]
+
+
+def _scene_meshes(scene):
+    built = build(scene)
+    c = scene.coupling
+    options = {k: c[k] for k in ("integration", "n_gauss", "lm", "search_points")}
+    return built.solid_mesh, built.groups[0].mesh, options
+
+
+def _cube(lm="line2", integration="segment"):
+    beams, solid = m13.generate.fibre_cube(3, 12, 4)
+    return solid, beams, {"integration": integration, "n_gauss": 6, "lm": lm, "search_points": 6}
+
+
+SCENES = {
+    "cube": _cube,
+    "cube-line3-auto": lambda: _cube("line3", "auto"),
+    "rebar": lambda: _scene_meshes(m13.Scene.from_toml(ROOT / "examples" / "scenes" / "rebar_cantilever.toml")),
+    "plate": lambda: _scene_meshes(_plate_scene()),
+}
+
+
+def _partitions(solid, beams):
+    """The METIS partition, one whose rank 0 owns no beam element, and one whose last ranks own nothing."""
+    metis = partition(solid, [beams], SIZE, "metis")
+    no_beam = partition(solid, [beams], SIZE, solid_part=metis.solid_part,
+                        beam_part=[np.full(beams.n_elements, SIZE - 1)])
+    empty = partition(solid, [beams], SIZE, solid_part=np.zeros(solid.n_elements, np.int64),
+                      beam_part=[np.zeros(beams.n_elements, np.int64)])
+    return {"metis": metis, "rank 0 owns no beam": no_beam, "ranks 1.. own nothing": empty}
+
+
+def _serial_renumbered(solid, beams, numbering, options):
+    ser = m13.assemble_mortar(beams, solid, **options)
+    per_node = beams.n_centreline_dofs // beams.n_nodes
+    rows = numbering.lm[0].dofs(np.arange(3 * ser.n_lm), 3)
+    D = renumbered(ser.D, rows, numbering.beams[0].dofs(np.arange(beams.n_centreline_dofs), per_node), ser.D.shape)
+    M = renumbered(ser.M, rows, numbering.solid.dofs(np.arange(3 * solid.n_nodes), 3), ser.M.shape)
+    kappa = np.empty_like(ser.kappa)
+    kappa[numbering.lm[0].new_of_old] = ser.kappa
+    return D, M, kappa
+
+
+@pytest.mark.parametrize("name", list(SCENES))
+def test_gathered_operators_equal_the_serial_ones(name):
+    solid, beams, options = SCENES[name]()
+    for label, part in _partitions(solid, beams).items():
+        numbering = Numbering.of(part, solid, [beams], options["lm"])
+        dist = assemble_distributed(solid, beams, part, numbering, comm=COMM, **options)
+        D, M, kappa = dist.gathered()
+        D0, M0, kappa0 = _serial_renumbered(solid, beams, numbering, options)
+        scale = max(abs(D0).max(), abs(M0).max())
+        assert D.shape == D0.shape and M.shape == M0.shape, (name, label)
+        assert abs(D - D0).max() <= 1e-10 * scale, (name, label)
+        assert abs(M - M0).max() <= 1e-10 * scale, (name, label)
+        assert np.abs(kappa - kappa0).max() <= 1e-10 * kappa0.max(), (name, label)
+        assert kappa.sum() == pytest.approx(beams.length if name != "rebar" else kappa0.sum(), rel=1e-12)
+        # each rank owned its range: what PETSc holds locally is what the numbering gives the rank
+        first, last = dist.kappa.getOwnershipRange()
+        assert (first, last) == tuple(numbering.lm[0].ranges[RANK:RANK + 2]), (name, label)
+
+
+def test_partition_keeps_beams_with_the_solid_they_reach():
+    solid, beams, _ = _cube()
+    for method in ("metis", "geometric"):
+        part = partition(solid, [beams], SIZE, method)
+        assert sum(part.stats["solid_per_part"]) == solid.n_elements
+        assert sum(part.stats["beam_per_part"]) == beams.n_elements
+        # the ghost layer of every rank covers what its beams reach
+        for rank in range(SIZE):
+            owned = set(part.owned_solid(rank).tolist())
+            assert set(part.reach(rank).tolist()) <= owned | set(part.ghost_solid(rank).tolist())
+        if SIZE == 1:
+            assert part.stats["cut_pairs"] == 0 and part.stats["ghost_solid"] == 0
+
+
+def test_partition_rejects_bad_ranks():
+    solid, beams, _ = _cube()
+    with pytest.raises(ValueError, match=r"solid_part: ranks must be in \[0, 2\), not at elements \[0\]"):
+        partition(solid, [beams], 2, solid_part=np.r_[5, np.zeros(solid.n_elements - 1, np.int64)],
+                  beam_part=[np.zeros(beams.n_elements, np.int64)])
+    with pytest.raises(ValueError, match="method must be one of"):
+        partition(solid, [beams], 2, "spectral")
+
+
+# --------------------------------------------------------------------------------------------
+# the distributed solve: CG + GAMG on the linear penalty model, gathered on rank 0
+# --------------------------------------------------------------------------------------------
+def _rebar_data():
+    import tomllib
+    data = tomllib.loads((ROOT / "examples" / "scenes" / "rebar_cantilever.toml").read_text())
+    data["analysis"] = {"kinematics": "linear"}
+    return lambda: m13.Scene.from_dict(data)
+
+
+def _cube_scene():
+    beams, solid = m13.generate.fibre_cube(3, 6, 3)
+    parts = []
+    for f in range(6):
+        nodes = np.arange(4 * f, 4 * f + 4)
+        parts.append(m13.BeamMesh.hermite(beams.positions[nodes], beams.tangents[nodes], [[0, 1], [1, 2], [2, 3]]))
+    return lambda: m13.Scene(solid={"mesh": solid, "material": {"model": "linear_elastic", "E": 1.0, "nu": 0.3}},
+                             beams=[{"mesh": p, "model": "torsion_free", "section": {"E": 50.0, "radius": 0.01}}
+                                    for p in parts],
+                             dirichlet=[{"on": "solid:z_min", "value": [0, 0, 0]}],
+                             load=[{"type": "traction", "on": "solid:z_max", "value": [0.01, 0, -0.02]},
+                                   {"type": "body", "value": [0, 0.003, 0]}],
+                             analysis={"kinematics": "linear"})
+
+
+SOLVE_SCENES = {"rebar": _rebar_data(), "cube": _cube_scene()}
+
+
+def _with(scene, **analysis):
+    scene.analysis = {**scene.analysis, **analysis}
+    return scene
+
+
+@pytest.mark.parametrize("name", list(SOLVE_SCENES))
+def test_distributed_solution_equals_the_serial_one(name):
+    from mortar1d3d.distributed.solve import solve_distributed
+    serial = m13.solve(_with(SOLVE_SCENES[name](), solver="direct"))
+    for parts in (None, lambda solid, beams, n: (np.zeros(solid.n_elements, np.int64),
+                                                 [np.full(b.n_elements, n - 1) for b in beams])):
+        result = solve_distributed(_with(SOLVE_SCENES[name](), solver="amg", backend="petsc", rtol=1e-12), comm=COMM,
+                                   parts=parts)
+        errors = (None, None)
+        if RANK == 0:
+            assert result.distributed["ranks"] == SIZE
+            errors = (np.linalg.norm(result.z - serial.z) / np.linalg.norm(serial.z),
+                      np.abs(result.line_load - serial.line_load).max() / np.abs(serial.line_load).max())
+        else:
+            assert result is None
+        # decided together: a rank that failed alone would leave the others waiting in the next test
+        error, line_error = COMM.tompi4py().bcast(errors, root=0)
+        assert error <= 1e-10, (name, error)
+        # the line load of the output, from the gathered operators: λ = ε κ⁻¹ (D d_B − M d_S) takes
+        # the difference of nearly equal displacements times the penalty, so it is only as accurate
+        # as the solution times ε / E (1e3 here)
+        assert line_error <= 1e-6, (name, line_error)
+
+
+def test_solve_and_command_line_with_the_petsc_backend():
+    import tempfile
+    from mortar1d3d.cli import main
+    scene = _with(SOLVE_SCENES["rebar"](), backend="petsc", rtol=1e-10)
+    result = m13.solve(scene)
+    assert COMM.tompi4py().allgather(result is None) == [r != 0 for r in range(SIZE)]
+    path = Path(tempfile.mkdtemp(prefix=f"mpi-rank{RANK}-"))
+    (path / "scene.toml").write_text((ROOT / "examples" / "scenes" / "rebar_cantilever.toml").read_text()
+                                     .replace('kinematics = "nonlinear"', 'kinematics = "linear"\nbackend = "petsc"'))
+    code = main(["run", str(path / "scene.toml"), "--out", str(path / "out"), "--quiet"])
+    written = (path / "out" / "result.pvd").exists()
+    # decided together (see above): every rank exits 0, only rank 0 writes
+    assert COMM.tompi4py().allgather((code, written)) == [(0, r == 0) for r in range(SIZE)]
+
+
+def test_unsupported_features_name_their_key():
+    from mortar1d3d.scene import SceneError
+    scene = _with(SOLVE_SCENES["rebar"](), backend="petsc", kinematics="nonlinear")
+    with pytest.raises(SceneError, match="analysis.kinematics: the PETSc backend solves linear analyses"):
+        m13.solve(scene)

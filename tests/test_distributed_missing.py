@@ -1,0 +1,54 @@
+"""Asking for the PETSc backend without the mpi extra: an error that names the missing package
+(runs with and without the extra: the packages are hidden from the import system)."""
+import importlib
+import sys
+
+import pytest
+
+import mortar1d3d as m13
+from mortar1d3d.cli import main
+from mortar1d3d.distributed import MissingPackageError
+from mortar1d3d.scene import SceneError
+
+ORDER = ("mpi4py", "petsc4py", "pymetis")     # the order in which solve() asks for them
+
+
+def _importable(name):
+    try:
+        importlib.import_module(name)
+    except ImportError:
+        return False
+    return True
+
+
+def _scene(backend="petsc"):
+    return m13.Scene(solid={"mesh": {"box": [[0, 0, 0], [1, 1, 1]], "cells": [1, 1, 1]},
+                            "material": {"model": "linear_elastic", "E": 1.0, "nu": 0.3}},
+                     dirichlet=[{"on": "solid:x_min", "value": [0, 0, 0]}],
+                     analysis={"kinematics": "linear", "backend": backend})
+
+
+@pytest.mark.parametrize("missing", ["mpi4py", "petsc4py", "pymetis"])
+def test_petsc_backend_without_the_extra_names_the_package(monkeypatch, missing):
+    # the first package missing is named: this one, or one before it that is not installed here
+    named = next(n for n in ORDER if n == missing or not _importable(n))
+    monkeypatch.setitem(sys.modules, missing, None)       # import of it fails, as when not installed
+    with pytest.raises(MissingPackageError, match=rf"analysis.backend = \"petsc\" needs the package '{named}'.*"
+                                                  r"pip install \"mortar1d3d\[mpi\]\""):
+        m13.solve(_scene())
+
+
+def test_command_line_reports_the_missing_package(monkeypatch, tmp_path, capsys):
+    monkeypatch.setitem(sys.modules, "petsc4py", None)
+    path = tmp_path / "scene.toml"
+    path.write_text('[solid]\nmesh = { box = [[0, 0, 0], [1, 1, 1]], cells = [1, 1, 1] }\n'
+                    'material = { model = "linear_elastic", E = 1.0, nu = 0.3 }\n'
+                    '[[dirichlet]]\non = "solid:x_min"\nvalue = [0, 0, 0]\n'
+                    '[analysis]\nkinematics = "linear"\nbackend = "petsc"\n')
+    assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 2
+    assert "needs the package 'petsc4py'" in capsys.readouterr().err
+
+
+def test_unknown_backend_is_a_scene_error():
+    with pytest.raises(SceneError, match=r"analysis.backend"):
+        _scene("cuda")
