@@ -1,0 +1,164 @@
+"""How cost grows with problem size: assembly per integration point, Newton iteration per unknown.
+
+    .venv/bin/python benchmarks/scaling.py [--part assembly newton] [--rounds 3]
+                                           [--points 1e4 1e5 1e6 1e7] [--unknowns 1e4 1e5 1e6]
+
+Issue 22, item 4. One thread throughout; every timed call is paired with the control loop of
+``control.py`` (1 thread) in the same round, and the figure kept per size is the median over the
+rounds of ``time / control``, so that the machine's speed of the moment cancels. The slope of
+log(time) over log(size) is fitted by least squares; 1 means cost proportional to size.
+
+- ``assembly``: ``assemble_mortar`` (element- and segment-based, 4 Gauss points) on
+  ``fibre_cube(n, fibres, n)``, the whole scene grown together at the benchmark scene's density
+  (about ten element-based integration points per solid element, beam elements as long as the solid
+  elements): n = (points / 10)^(1/3), fibres = points / (4 n). Prints the time per call, per
+  integration point and per control, for each size, and the slope.
+- ``newton``: one Newton iteration's evaluation ``Model.residual(z, t, tangent=True)`` (residual
+  and tangent of the solid, the beams and the penalty coupling, in the basis of the unknowns) of a
+  Saint Venant–Kirchhoff cube ``fibre_cube(n, fibres, elements)`` with torsion-free fibres,
+  nonlinear kinematics, at a displacement state z of small random numbers (so nothing is
+  evaluated at the reference only). n is chosen so that the unknowns approach each requested
+  count; the fibres grow with n² and their elements with n (constant density per solid element).
+  Prints the time per iteration and per unknown, and the slope. The coupling operators (the
+  mortar assembly) are built once in ``Model.prepare`` and are not part of the iteration.
+
+Peak memory (``ru_maxrss`` of the process) is printed at the end. On this shared machine the
+largest sizes take minutes; choose the sizes with ``--points`` / ``--unknowns``.
+"""
+import argparse
+import os
+import resource
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numba
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # measure this checkout's package
+
+import mortar1d3d as m13  # noqa: E402
+from control import control_times  # noqa: E402
+from mortar1d3d.model import Model  # noqa: E402
+from mortar1d3d.model.build import build  # noqa: E402
+
+N_GAUSS = 4
+
+
+def slope(sizes, times):
+    """Least-squares slope of log(times) over log(sizes)."""
+    return float(np.polyfit(np.log(np.asarray(sizes, float)), np.log(np.asarray(times, float)), 1)[0])
+
+
+def _control():
+    return control_times((1,))[1]
+
+
+def _best(call):
+    t0 = time.perf_counter()
+    out = call()
+    return time.perf_counter() - t0, out
+
+
+def assembly(points, rounds):
+    print(f"assembly: assemble_mortar on fibre_cube(n, fibres, n), {N_GAUSS} Gauss points, 1 thread; "
+          f"median over {rounds} rounds")
+    print(f"{'integration':<12}{'n':>5}{'fibres':>8}{'points':>11}{'time s':>9}{'ns/point':>10}{'/control':>10}")
+    m13.assemble_mortar(*m13.generate.fibre_cube(2, 2, 2), integration="element")     # compile before timing
+    m13.assemble_mortar(*m13.generate.fibre_cube(2, 2, 2), integration="segment")
+    for integration in ("element", "segment"):
+        sizes, ratios = [], []
+        for target in points:
+            n = max(2, int(round((target / 10) ** (1 / 3))))
+            fibres = max(1, int(round(target / (N_GAUSS * n))))
+            beams, solid = m13.generate.fibre_cube(n, fibres, n)
+            m13.assemble_mortar(beams, solid, integration=integration, n_gauss=N_GAUSS)      # first touch
+            times, per_control = [], []
+            for _ in range(rounds):
+                c = _control()
+                t, ops = _best(lambda: m13.assemble_mortar(beams, solid, integration=integration, n_gauss=N_GAUSS))
+                times.append(t)
+                per_control.append(t / c)
+                count = ops.n_integration_points
+                del ops
+            t, r = float(np.median(times)), float(np.median(per_control))
+            sizes.append(count)
+            ratios.append(r)
+            print(f"{integration:<12}{n:>5}{fibres:>8}{count:>11.3g}{t:>9.3f}{1e9 * t / count:>10.1f}{r:>10.3g}",
+                  flush=True)
+            del beams, solid
+        print(f"{integration:<12}slope of log(time/control) over log(points): {slope(sizes, ratios):.3f}")
+
+
+def newton_scene(n):
+    fibres = max(4, n * n // 4)
+    beams, solid = m13.generate.fibre_cube(n, fibres, max(2, n // 2))
+    return m13.Scene(solid={"mesh": solid, "material": {"model": "saint_venant_kirchhoff", "E": 1e9, "nu": 0.3}},
+                     beams=[{"mesh": beams, "section": {"E": 2e11, "radius": 0.2 / n}}],
+                     coupling={"enforcement": "penalty", "lm": "line2"},
+                     dirichlet=[{"on": "solid:x_min"}],
+                     load=[{"type": "traction", "on": "solid:x_max", "value": [0, 0, -2e7]}],
+                     analysis={"kinematics": "nonlinear", "steps": 1})
+
+
+def _unknowns(n):
+    fibres, elements = max(4, n * n // 4), max(2, n // 2)
+    return 3 * (n + 1) ** 3 + 6 * fibres * (elements + 1)
+
+
+def newton(unknowns, rounds):
+    print(f"newton: Model.residual(z, t, tangent=True) of fibre_cube(n, n²/4, n/2), Saint Venant–Kirchhoff, "
+          f"torsion-free fibres, penalty; 1 thread; median over {rounds} rounds")
+    print(f"{'n':>4}{'unknowns':>11}{'time s':>9}{'us/unknown':>12}{'/control':>10}{'nnz(K)':>12}")
+    model = Model(build(newton_scene(2)))       # compile before timing
+    model.prepare()
+    model.residual(np.zeros(model.n_unknowns), 1.0)
+    sizes, ratios = [], []
+    rng = np.random.default_rng(1)
+    for target in unknowns:
+        n = 2
+        while _unknowns(n + 1) <= target:
+            n += 1
+        model = Model(build(newton_scene(n)))
+        model.prepare()
+        size = model.n_unknowns
+        z = 1e-6 * rng.standard_normal(size)
+        model.residual(z, 1.0)                   # first touch
+        times, per_control = [], []
+        nnz = 0
+        for _ in range(rounds):
+            c = _control()
+            t, (r, K) = _best(lambda: model.residual(z, 1.0, tangent=True))
+            nnz = K.nnz
+            del r, K
+            times.append(t)
+            per_control.append(t / c)
+        t, ratio = float(np.median(times)), float(np.median(per_control))
+        sizes.append(size)
+        ratios.append(ratio)
+        print(f"{n:>4}{size:>11}{t:>9.3f}{1e6 * t / size:>12.2f}{ratio:>10.3g}{nnz:>12}", flush=True)
+        del model
+    print(f"slope of log(time/control) over log(unknowns): {slope(sizes, ratios):.3f}")
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--part", nargs="+", default=["assembly", "newton"], choices=["assembly", "newton"])
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--points", nargs="+", type=float, default=[1e4, 1e5, 1e6, 1e7])
+    parser.add_argument("--unknowns", nargs="+", type=float, default=[1e4, 1e5, 1e6])
+    args = parser.parse_args(argv)
+    warnings.simplefilter("ignore")
+    numba.set_num_threads(1)
+    print(f"load average {os.getloadavg()[0]:.2f}")
+    if "assembly" in args.part:
+        assembly(args.points, args.rounds)
+    if "newton" in args.part:
+        newton(args.unknowns, args.rounds)
+    print(f"peak memory {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20:.2f} GB; "
+          f"load average {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
