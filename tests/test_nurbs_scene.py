@@ -82,7 +82,8 @@ def test_named_sets_of_a_pipe_section():
     ({"r_outer": 0.05}, r"solid\.mesh\.pipe\.r_outer: must be greater than r_inner"),
     ({"elements": [1, 2, 1]}, r"solid\.mesh\.pipe\.elements\[1\]: 2 element\(s\) cannot cover 360"),
     ({"angle": 400.0}, r"solid\.mesh\.pipe\.angle"),
-    ({"degree": 3}, r"solid\.mesh\.pipe\.degree: unknown key"),
+    ({"degree": 4}, r"solid\.mesh\.pipe\.degree: expected an integer in \[2, 3\]"),
+    ({"order": 3}, r"solid\.mesh\.pipe\.order: unknown key"),
 ])
 def test_pipe_key_errors(spec, match):
     base = {"r_inner": RI, "r_outer": RO, "length": L, "elements": [1, 4, 1]}

@@ -1,8 +1,9 @@
 """The scene key ``solid.mesh = { pipe = {...} }``: an exact NURBS pipe (section) as the scene's solid.
 
-The pipe is :func:`~mortar1d3d.nurbs.hollow_cylinder` (quadratic, about the z axis, from z = 0), and
-the scene runs on its Bézier mesh (:func:`~mortar1d3d.nurbs.bezier_mesh`): the solid's unknowns are
-the displacements of the ``nurbs27`` nodes (Bézier control points), i.e. the C⁰ space of the
+The pipe is :func:`~mortar1d3d.nurbs.hollow_cylinder` (about the z axis, from z = 0; quadratic, or
+``degree = 3``: the exact quadratic geometry degree-elevated to cubic, which leaves it unchanged),
+and the scene runs on its Bézier mesh (:func:`~mortar1d3d.nurbs.bezier_mesh`): the solid's unknowns
+are the displacements of the ``nurbs27`` (``nurbs64``) nodes (Bézier control points), i.e. the C⁰ space of the
 rational Bézier elements on the exact geometry. It contains the smoother NURBS space of the patch
 (``T`` maps one into the other) and is what every path of the model evaluates (the solid, the
 mortar coupling, surface loads and output take rational elements).
@@ -19,11 +20,11 @@ import numpy as np
 
 from ..physics.surface import face_nodes
 from .generate import MAX_SEGMENT_ANGLE, arc_segments, hollow_cylinder
-from .mesh import bezier_mesh
+from .mesh import BEZIER_TYPES, bezier_mesh
 from .solid import patch_face_set
 
 #: keys of ``solid.mesh.pipe``
-PIPE_KEYS = ("r_inner", "r_outer", "length", "angle", "start", "elements")
+PIPE_KEYS = ("r_inner", "r_outer", "length", "angle", "start", "elements", "degree")
 #: most elements a scene's pipe generates (the box key's limit)
 MAX_PIPE_ELEMENTS = 1_000_000
 #: set name -> patch face of :func:`hollow_cylinder` (directions: 0 radial, 1 circumferential, 2 axial)
@@ -32,8 +33,9 @@ PIPE_FACES = {"inner": "u0_min", "outer": "u0_max", "cut_start": "u1_min", "cut_
 
 
 def validate_pipe(value, path="solid.mesh.pipe"):
-    """The checked ``pipe`` table: radii, length, angle (degrees, default 360), start angle (default 0)
-    and ``elements = [radial, circumferential, axial]``. SceneError naming the key otherwise."""
+    """The checked ``pipe`` table: radii, length, angle (degrees, default 360), start angle (default 0),
+    ``elements = [radial, circumferential, axial]`` and ``degree`` (2 or 3, default 2). SceneError
+    naming the key otherwise."""
     from ..scene import _fail, _integer, _list, _number, _table
 
     _table(value, path, PIPE_KEYS, required=("r_inner", "r_outer", "length", "elements"))
@@ -53,15 +55,16 @@ def validate_pipe(value, path="solid.mesh.pipe"):
     except ValueError:
         _fail(f"{path}.elements[1]", f"{elements[1]} element(s) cannot cover {angle}° with arcs of at most "
                                      f"{MAX_SEGMENT_ANGLE}°; use at least {math.ceil(angle / MAX_SEGMENT_ANGLE)}")
+    degree = _integer(value.get("degree", 2), f"{path}.degree", 2, max(BEZIER_TYPES))
     return {"r_inner": r_inner, "r_outer": r_outer, "length": length, "angle": angle, "start": start,
-            "elements": elements}
+            "elements": elements, "degree": degree}
 
 
 def pipe_mesh(spec):
-    """The :class:`~mortar1d3d.SolidMesh` (``nurbs27``, with the named sets of the module docstring) of a
+    """The :class:`~mortar1d3d.SolidMesh` (``nurbs27`` or ``nurbs64``, with the named sets of the module docstring) of a
     validated ``pipe`` table, and its :class:`~mortar1d3d.nurbs.BezierMesh`."""
     solid = hollow_cylinder(spec["r_inner"], spec["r_outer"], spec["length"], angle=spec["angle"],
-                            elements=spec["elements"], start=spec["start"])
+                            elements=spec["elements"], start=spec["start"], degree=spec.get("degree", 2))
     mesh = bezier_mesh(solid)
     closed = abs(spec["angle"] - 360.0) < 1e-12
     sets = {}
