@@ -1,22 +1,16 @@
 """Cubic NURBS spans (issue 19, p-refinement): the ``nurbs64`` rational Bézier element in the engine and
 the model, as the quadratic ``nurbs27`` is tested in test_nurbs_engine.py.
 
-References: the exact hollow-cylinder sector (radius, angle, height) with crossings by bisection
-(tests/naive.py), the NURBS functions by Cox–de Boor over the knot vectors (the patch's own
-``evaluate``), central differences for derivatives.
+References: the patch's own NURBS evaluation by Cox–de Boor over the knot vectors, the exact radius,
+central differences for derivatives.
 """
 import numpy as np
 import pytest
 
-import mortar1d3d as m13
 from mortar1d3d import nurbs
 from mortar1d3d.elements.solid import dispatch
 from mortar1d3d.elements.solid.dispatch import SOLID_ELEMENTS
 from mortar1d3d.elements.validity import FOLDED, INVERTED, VALID, jacobian_validity
-from mortar1d3d.geometry.projection import INSIDE, OUTSIDE
-
-import naive
-from test_nurbs_engine import _crossing_beam
 
 NURBS64 = SOLID_ELEMENTS["nurbs64"]
 RNG = np.random.default_rng(64)
@@ -75,73 +69,9 @@ def test_cubic_cylinder_is_exact_and_elevation_keeps_the_geometry(angle, element
     assert np.abs(r[first == elements[0] - 1, 5:10] - 0.2).max() < 3e-16
 
 
-def test_points_are_found_where_they_are():
-    """The trust property on cubic curved spans: x(ξ) inside is INSIDE at ξ to 1e-10; x(ξ) just beyond a
-    face is never INSIDE."""
-    bm = sector(360.0, (1, 3, 1), r=(0.2, 0.3), height=1.0)
-    patch = bm.nurbs.patches[0]
-    xi = RNG.uniform(-1, 1, (40, 3))
-    x = patch.evaluate_elements(xi)
-    elements = np.repeat(np.arange(patch.n_elements), len(xi))
-    found, status = m13.project_points(bm.solid, x.reshape(-1, 3), elements)
-    assert (status == INSIDE).all()
-    assert np.abs(found - np.tile(xi, (patch.n_elements, 1))).max() < 1e-10
-    out = xi.copy()
-    axis = RNG.integers(0, 3, len(out))
-    out[np.arange(len(out)), axis] = np.where(RNG.uniform(size=len(out)) < 0.5, -1.0, 1.0) * (1 + 1e-6)
-    found, status = m13.project_points(bm.solid, patch.evaluate_elements(out).reshape(-1, 3), elements)
-    assert not (status == INSIDE).any()
-    hit = status == OUTSIDE
-    assert hit.mean() > 0.95 and (np.abs(found[hit]).max(axis=1) > 1 + 1e-7).all()
-
-
-def test_curved_beam_crossing_the_inner_face_twice_has_two_pieces():
-    """The 90° hollow-cylinder element, now one cubic span: the curved line dips into the hole (two
-    crossings of the inner face) and gives two pieces at the crossings found by bisection."""
-    bm = sector()
-    beams = _crossing_beam([[0.16, -0.02, 0.05], [0.06, 0.06, 0.2], [-0.02, 0.16, 0.1]])
-    reference = naive.indicator_crossings(lambda eta: beams.evaluate(0, eta),
-                                          lambda x: naive.in_sector(x, 0.1, 0.2, 90.0, 0.3))
-    assert len(reference) == 4
-    ops = m13.assemble_mortar(beams, bm.solid, integration="segment", n_gauss=6)
-    seg = np.sort(ops.segments, order="eta_start")
-    assert len(seg) == 2 and (seg["solid_element"] == 0).all()
-    found = np.column_stack([seg["eta_start"], seg["eta_end"]]).ravel()
-    assert np.abs(found - reference).max() < 1e-12
-    assert ops.constraint_residual < 1e-14
-
-
-@pytest.mark.parametrize("integration", ["segment", "element"])
-def test_operators_on_a_closed_cubic_pipe(integration):
-    """Curved beams through a closed cubic pipe of 2 × 4 × 2 elements: D q_B − M X_S = 0 on the mesh
-    and on the control points, M against Σ w Φ_j R_i with R_i by Cox–de Boor, and (segment-based)
-    the coupled length equals the length inside the pipe by bisection (tiling)."""
-    bm = nurbs.bezier_mesh(nurbs.hollow_cylinder(0.2, 0.3, 1.0, angle=360.0, elements=(2, 4, 2), degree=3))
-    beams = m13.BeamMesh.join([_crossing_beam([[0.35, -0.05, 0.1], [0.0, 0.45, 0.5], [-0.35, 0.05, 0.9]]),
-                               _crossing_beam([[0.28, -0.2, 0.3], [0.1, 0.1, 0.6], [-0.28, 0.2, 0.45]])])
-    ops = m13.assemble_mortar(beams, bm.solid, integration=integration, n_gauss=6)
-    assert ops.constraint_residual < 1e-13
-    M = bm.nodes_to_control(ops.M)
-    Dq = ops.D @ beams.centreline_dofs()
-    assert np.linalg.norm(Dq - M @ bm.nurbs.control.ravel()) < 1e-13 * np.linalg.norm(Dq)
-    patch, ids = bm.nurbs.patches[0], bm.nurbs.patch_ids[0]
-    lm_rows, _ = naive.lm_rows(beams, 2)
-    expected = np.zeros((ops.n_lm, bm.nurbs.n_control))
-    for p in ops.points:
-        R = naive.nurbs_functions(patch, int(p["solid_element"]), p["xi"])
-        rows = lm_rows[int(p["beam_element"])]
-        np.add.at(expected, (rows[:, None], ids[None, :]), p["weight"] * np.outer(naive.multiplier_values("line2", p["eta"]), R))
-    assert np.abs(M.toarray()[0::3, 0::3] - expected).max() < 1e-14
-    if integration == "segment":
-        inside = 0.0
-        for e in range(beams.n_elements):
-            eta = naive.indicator_crossings(lambda t: beams.evaluate(e, t),
-                                            lambda x: naive.in_sector(x, 0.2, 0.3, 360.0, 1.0))
-            start_inside = naive.in_sector(beams.evaluate(e, [-1.0]), 0.2, 0.3, 360.0, 1.0)[0]
-            bounds = np.concatenate([[-1.0] if start_inside else [], eta])
-            bounds = np.concatenate([bounds, [1.0]]) if len(bounds) % 2 else bounds
-            inside += sum(naive.arc_length(beams, e, a, b) for a, b in bounds.reshape(-1, 2))
-        assert abs(ops.embedded_length - inside) < 1e-8 * inside
+# point location on cubic spans (the trust property), the curved beam crossing one cubic span's inner face
+# twice, and the operators and certificates on a closed cubic pipe: test_nurbs_engine.py, with the cubic
+# cases in its parameters
 
 
 def test_validity_of_cubic_elements():

@@ -6,8 +6,8 @@ A degree-p element has (p+1)³ nodes, the Bézier control points of one span of 
 Bézier extraction, at the lattice positions ξ = -1 + 2 l / p (l = 0 … p per direction), each with a
 weight w_a > 0. Its functions are R_a = w_a B_a / W, W = Σ_b w_b B_b, with B_a the tensor products
 of the 1D Bernstein polynomials C(p, l) t^l (1 - t)^(p-l), t = (1 + ξ)/2. The element kernels give B_a
-(and ∂B_a/∂ξ) with :func:`bernstein` and the hexahedra's tensor products
-(:func:`.hex_family.lattice_values`); the rational quotient takes the node weights and is applied by
+(and ∂B_a/∂ξ) with :func:`tensor_bernstein` (the 1D :func:`bernstein` and the hexahedra's tensor
+products, :func:`.hex_family.lattice_values`); the rational quotient takes the node weights and is applied by
 :func:`mortar1d3d.elements.solid.dispatch.rational_shape`. Since the weights are positive, an element
 and each of its faces lie in the convex hull of their control points: the bounding matrix is the
 identity.
@@ -22,7 +22,7 @@ import numpy as np
 
 from ..._config import njit
 from ..descriptor import SolidElementType
-from .hex_family import CORNERS, HEXAHEDRON
+from .hex_family import CORNERS, HEXAHEDRON, lattice_gradients, lattice_values
 
 
 def bezier_nodes(p):
@@ -69,6 +69,28 @@ def bernstein(p, x, v, dv):
         v[0] = s * v[0]
     if p == 0:
         dv[0] = 0.0
+
+
+@njit
+def tensor_bernstein(p, lattice, xi, N):
+    """The tensor-product Bernstein polynomials B_a of degree ``p`` at ``xi`` (3,) into ``N``, node a at the
+    lattice index ``lattice[a]``: the ``shape`` of every rational Bézier hexahedron."""
+    v = np.empty((3, p + 1))
+    dv = np.empty((3, p + 1))
+    for i in range(3):
+        bernstein(p, xi[i], v[i], dv[i])
+    lattice_values(lattice, v, N)
+
+
+@njit
+def tensor_bernstein_gradients(p, lattice, xi, dN):
+    """∂B_a/∂ξ_i of :func:`tensor_bernstein` into ``dN`` (n, 3): the ``deriv`` of every rational Bézier
+    hexahedron."""
+    v = np.empty((3, p + 1))
+    dv = np.empty((3, p + 1))
+    for i in range(3):
+        bernstein(p, xi[i], v[i], dv[i])
+    lattice_gradients(lattice, v, dv, dN)
 
 
 def bernstein_values(p, lattice, xi):

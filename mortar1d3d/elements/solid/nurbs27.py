@@ -5,8 +5,8 @@ The 27 nodes are the span's Bézier control points, in the order and at the latt
 w_a > 0. The element's functions are R_a = w_a B_a / W, W = Σ_b w_b B_b, with B_a the triquadratic
 Bernstein polynomials on [-1, 1]³ (tensor products of ((1-ξ)/2)², (1-ξ²)/2, ((1+ξ)/2)²).
 
-What every rational Bézier hexahedron shares (the 1D Bernstein kernel, the tensor products, the
-validity check's determinants, the descriptor) is in :mod:`.bezier_hex`; ``shape`` and ``deriv``
+What every rational Bézier hexahedron shares (the Bernstein kernels, the validity check's
+determinants, the descriptor) is in :mod:`.bezier_hex`; ``shape`` and ``deriv``
 below give the polynomial part B_a, the rational quotient is applied by
 :func:`mortar1d3d.elements.solid.dispatch.rational_shape` (the descriptor says ``rational=True``).
 NURBS patches become meshes of these elements in :mod:`mortar1d3d.nurbs.mesh`.
@@ -16,8 +16,8 @@ import numpy as np
 from ..._config import njit
 from ...quadrature import hexahedron_rule
 from . import bezier_hex
-from .bezier_hex import bernstein, rational_descriptor
-from .hex_family import QUADRATIC_LATTICE, QUADRATIC_NODES, lattice_gradients, lattice_values, triquadratic_bernstein_matrix
+from .bezier_hex import rational_descriptor, tensor_bernstein, tensor_bernstein_gradients
+from .hex_family import QUADRATIC_LATTICE, QUADRATIC_NODES, triquadratic_bernstein_matrix
 
 DEGREE = 2
 #: lattice index (0, 1, 2) per direction of every node
@@ -29,32 +29,13 @@ NODE_VALUES = np.linalg.inv(triquadratic_bernstein_matrix())
 @njit
 def shape(xi, N):
     """The 27 triquadratic Bernstein polynomials B_a at ``xi`` (3,) into ``N`` (27,)."""
-    v = np.empty((3, 3))
-    dv = np.empty((3, 3))
-    for i in range(3):
-        bernstein(2, xi[i], v[i], dv[i])
-    lattice_values(LATTICE, v, N)
+    tensor_bernstein(DEGREE, LATTICE, xi, N)
 
 
 @njit
 def deriv(xi, dN):
     """∂B_a/∂ξ_i at ``xi`` into ``dN`` (27, 3)."""
-    v = np.empty((3, 3))
-    dv = np.empty((3, 3))
-    for i in range(3):
-        bernstein(2, xi[i], v[i], dv[i])
-    lattice_gradients(LATTICE, v, dv, dN)
-
-
-def bernstein_values(xi):
-    """B_a (k, 27) and ∂B_a/∂ξ (k, 27, 3) at the points ``xi`` (k, 3), numpy (validity check, tests)."""
-    return bezier_hex.bernstein_values(DEGREE, LATTICE, xi)
-
-
-def homogeneous_determinants(X, weights, xi):
-    """W⁴ det J (m, k) of m elements (control points X (m, 27, 3), weights (m, 27)) at ``xi`` (k, 3)
-    (:func:`.bezier_hex.homogeneous_determinants`)."""
-    return bezier_hex.homogeneous_determinants(DEGREE, LATTICE, X, weights, xi)
+    tensor_bernstein_gradients(DEGREE, LATTICE, xi, dN)
 
 
 DESCRIPTOR = rational_descriptor("nurbs27", 6, DEGREE, QUADRATIC_NODES, hexahedron_rule(3))

@@ -9,13 +9,10 @@ order and the two kernels below is shared with the other degrees in :mod:`.bezie
 Volume rule: 4 × 4 × 4 Gauss points (exact for the tricubic polynomial part of a stiffness
 integrand on an affine span; no rule is exact for rational functions).
 """
-import numpy as np
-
 from ..._config import njit
 from ...quadrature import hexahedron_rule
 from . import bezier_hex
-from .bezier_hex import bernstein, rational_descriptor
-from .hex_family import lattice_gradients, lattice_values
+from .bezier_hex import rational_descriptor, tensor_bernstein, tensor_bernstein_gradients
 
 DEGREE = 3
 REFERENCE_NODES = bezier_hex.bezier_nodes(DEGREE)
@@ -28,31 +25,13 @@ NODE_VALUES = bezier_hex.node_values(DEGREE, REFERENCE_NODES)
 @njit
 def shape(xi, N):
     """The 64 tricubic Bernstein polynomials B_a at ``xi`` (3,) into ``N`` (64,)."""
-    v = np.empty((3, 4))
-    dv = np.empty((3, 4))
-    for i in range(3):
-        bernstein(3, xi[i], v[i], dv[i])
-    lattice_values(LATTICE, v, N)
+    tensor_bernstein(DEGREE, LATTICE, xi, N)
 
 
 @njit
 def deriv(xi, dN):
     """∂B_a/∂ξ_i at ``xi`` into ``dN`` (64, 3)."""
-    v = np.empty((3, 4))
-    dv = np.empty((3, 4))
-    for i in range(3):
-        bernstein(3, xi[i], v[i], dv[i])
-    lattice_gradients(LATTICE, v, dv, dN)
-
-
-def bernstein_values(xi):
-    """B_a (k, 64) and ∂B_a/∂ξ (k, 64, 3) at the points ``xi`` (k, 3), numpy (validity check, tests)."""
-    return bezier_hex.bernstein_values(DEGREE, LATTICE, xi)
-
-
-def homogeneous_determinants(X, weights, xi):
-    """W⁴ det J (m, k) of m elements (control points X (m, 64, 3), weights (m, 64)) at ``xi`` (k, 3)."""
-    return bezier_hex.homogeneous_determinants(DEGREE, LATTICE, X, weights, xi)
+    tensor_bernstein_gradients(DEGREE, LATTICE, xi, dN)
 
 
 DESCRIPTOR = rational_descriptor("nurbs64", 7, DEGREE, REFERENCE_NODES, hexahedron_rule(4))
