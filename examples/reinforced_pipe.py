@@ -20,7 +20,9 @@ Three studies:
 (a) **Unreinforced pipe against Lamé** (closed ends, generalised plane strain: u_r = r/E (c (1 − 2ν)
     + (1 + ν) d / r²), c = σ_z, d = p r_i² r_o² / (r_o² − r_i²)): the error of u_r on the inner and
     outer surface per refinement level, for the scene's C⁰ space of the Bézier spans and for the
-    patch's own C¹ NURBS space (:class:`~mortar1d3d.nurbs.NurbsSolidModel`), and the rate.
+    patch's own C^(p-1) NURBS space (:class:`~mortar1d3d.nurbs.NurbsSolidModel`), and the rates: in h
+    (n × 4n × 1 spans, n = 1, 2, 4, 8) and in p (degree 2, the exact geometry, and 3, the same geometry
+    degree-elevated: ``pipe.degree = 3``, ``nurbs64`` spans).
 (b) **Winding sweep** α = 15° … 85° for several fibre/matrix stiffness ratios E_f / E_m: radial
     expansion, axial strain, twist and fibre force against α. Netting theory (fibres alone carry
     the load: hoop σ_θ = p r / t = N sin²α, axial σ_z = p r / (2t) = N cos²α) balances the two at
@@ -36,6 +38,7 @@ Three studies:
 
     python examples/reinforced_pipe.py --out results/reinforced_pipe
     python examples/reinforced_pipe.py --quick          # the reduced run of tests/test_reinforced_pipe.py
+    python examples/reinforced_pipe.py --lame           # study (a) only, levels 1, 2, 4, 8, degrees 2 and 3
 
 The scene file ``examples/scenes/reinforced_pipe.toml`` is the case α = 54.74°, E_f / E_m = 1000.
 Measured figures: see the module's section in docs/validation.md.
@@ -64,10 +67,10 @@ NETTING_ANGLE = math.degrees(math.atan(math.sqrt(2.0)))
 NETTING_ANGLE_WALL = math.degrees(math.atan(math.sqrt(2.0 * R_FIBRE / R_INNER)))
 
 FULL = {"elements": (1, 16, 8), "fibres": 8, "angles": (15, 25, 35, 45, 50, 52.5, 55, 57.5, 60, 65, 75, 85),
-        "ratios": (100, 1000, 10000), "lame_levels": (1, 2, 4, 8), "pressure_steps": 5,
+        "ratios": (100, 1000, 10000), "lame_levels": (1, 2, 4, 8), "lame_degrees": (2, 3), "pressure_steps": 5,
         "pressure_angles": (35, 55, 75)}
 QUICK = {"elements": (1, 8, 4), "fibres": 4, "angles": (35, 55, 75), "ratios": (1000,), "lame_levels": (1, 2),
-         "pressure_steps": 0, "pressure_angles": ()}
+         "lame_degrees": (2, 3), "pressure_steps": 0, "pressure_angles": ()}
 
 
 def fibre_elements(angle, elements):
@@ -77,8 +80,9 @@ def fibre_elements(angle, elements):
 
 
 def pipe_scene(angle=None, ratio=1000.0, fibres=8, elements=(1, 16, 8), kinematics="linear", pressure=PRESSURE,
-               steps=1):
-    """The reinforced pipe (module docstring) with fibres at ±``angle`` degrees, or without fibres."""
+               steps=1, degree=2):
+    """The reinforced pipe (module docstring) with fibres at ±``angle`` degrees, or without fibres; the wall
+    of NURBS ``degree`` 2 (the exact geometry) or 3 (degree-elevated)."""
     beams = []
     if angle is not None:
         section = {"E": ratio * E_MATRIX, "nu": 0.3, "radius": FIBRE_RADIUS}
@@ -88,7 +92,8 @@ def pipe_scene(angle=None, ratio=1000.0, fibres=8, elements=(1, 16, 8), kinemati
                           "model": "simo_reissner", "section": section})
     extra = {"coupling": {"penalty": 1e3 * E_MATRIX}} if beams else {}
     return m13.Scene(
-        solid={"mesh": {"pipe": {"r_inner": R_INNER, "r_outer": R_OUTER, "length": LENGTH, "elements": list(elements)}},
+        solid={"mesh": {"pipe": {"r_inner": R_INNER, "r_outer": R_OUTER, "length": LENGTH, "elements": list(elements),
+                                 "degree": degree}},
                "material": {"model": "linear_elastic" if kinematics == "linear" else "neo_hooke", "E": E_MATRIX,
                             "nu": NU_MATRIX}},
         beams=beams,
@@ -152,9 +157,10 @@ def zero_crossing(angles, strains):
     return found
 
 
-def lame_study(levels):
-    """u_r errors (inner, outer; relative to u_r(r_i)) per level n: the scene on n × 4n × 1 spans (C⁰
-    Bézier space) and NurbsSolidModel on the same patch (its C¹ NURBS space)."""
+def lame_study(levels, degree=2):
+    """u_r errors (inner, outer; relative to u_r(r_i)) per level n: the scene on n × 4n × 1 spans of NURBS
+    ``degree`` (C⁰ Bézier space) and NurbsSolidModel on the same patch (its C^(p-1) NURBS space). Rows
+    ``(n, mesh nodes, scene inner, scene outer, control points, patch inner, patch outer)``."""
     import scipy.sparse.linalg as spla
 
     from mortar1d3d import nurbs
@@ -163,10 +169,10 @@ def lame_study(levels):
     rows = []
     for n in levels:
         elements = (n, 4 * n, 1)
-        result = m13.solve(pipe_scene(None, elements=elements))
+        result = m13.solve(pipe_scene(None, elements=elements, degree=degree))
         X, U = sample(result.model.solid_mesh, result.solid_displacement)
         scene_err = _lame_errors(X, U)
-        model = nurbs.NurbsSolidModel(nurbs.hollow_cylinder(R_INNER, R_OUTER, LENGTH, elements=elements),
+        model = nurbs.NurbsSolidModel(nurbs.hollow_cylinder(R_INNER, R_OUTER, LENGTH, elements=elements, degree=degree),
                                       material("linear_elastic", E_MATRIX, NU_MATRIX), kinematics="linear")
         _, K = model.evaluate(np.zeros(model.n_dofs))
         f = model.pressure(0, "u0_min", PRESSURE) - model.pressure(0, "u2_max", SIGMA_Z)
@@ -231,17 +237,30 @@ def pressure_curves(config):
     return curves
 
 
+def lame_report(lame):
+    """Study (a) as text: per degree, the errors per level and the rates log2(e_n / e_2n) (h), then the
+    error ratio from degree 2 to 3 at equal n (p); ``lame`` maps degree -> rows of :func:`lame_study`."""
+    lines = ["(a) unreinforced closed pipe vs Lamé: max |u_r - Lamé| / u_r(r_i) on the inner | outer surface"]
+    for degree, rows in lame.items():
+        lines += [f"  degree {degree}:",
+                  "    n   spans      C0 Bézier (scene)          C^(p-1) NURBS (patch)"]
+        for i, (n, nodes, si, so, nc, ni, no) in enumerate(rows):
+            rate = ""
+            if i:
+                rate = "   h-rate " + " ".join(f"{math.log2(a / b):.2f}" for a, b in zip(rows[i - 1][2:4] + rows[i - 1][5:7],
+                                                                                       (si, so, ni, no)))
+            lines.append(f"  {n:3d} {n}x{4 * n}x1   {si:.2e} | {so:.2e} ({nodes} nodes)   {ni:.2e} | {no:.2e} "
+                         f"({nc} control points)" + rate)
+    if 2 in lame and 3 in lame:
+        lines.append("  p-refinement, degree 2 -> 3 at equal n: error ratio (scene inner | outer, patch inner | outer)")
+        for quadratic, cubic in zip(lame[2], lame[3]):
+            ratios = [a / b for a, b in zip(quadratic[2:4] + quadratic[5:7], cubic[2:4] + cubic[5:7])]
+            lines.append(f"  {quadratic[0]:3d}   " + " | ".join(f"{r:7.1f}" for r in ratios))
+    return lines
+
+
 def report(lame, rows, plain, config):
-    lines = ["(a) unreinforced closed pipe vs Lamé: max |u_r - Lamé| / u_r(r_i) on the inner | outer surface",
-             "    n   spans      C0 Bézier (scene)          C1 NURBS (patch)",
-             ]
-    for i, (n, nodes, si, so, nc, ni, no) in enumerate(lame):
-        rate = ""
-        if i:
-            rate = "   rate " + " ".join(f"{math.log2(a / b):.2f}" for a, b in
-                                       ((lame[i - 1][2], si), (lame[i - 1][3], so), (lame[i - 1][5], ni), (lame[i - 1][6], no)))
-        lines.append(f"  {n:3d} {n}x{4 * n}x1   {si:.2e} | {so:.2e} ({nodes} nodes)   {ni:.2e} | {no:.2e} ({nc} control points)"
-                     + rate)
+    lines = lame_report(lame)
     lines.append("")
     lines.append(f"(b) winding sweep, {config['fibres']} fibres per family, p = {PRESSURE:g} Pa, closed ends "
                  f"(unreinforced: u_r = {plain['radial']:.4e} m, eps_z = {plain['strain']:.4e})")
@@ -297,11 +316,16 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="the reduced run (coarse, three angles, one ratio)")
     parser.add_argument("--no-plot", action="store_true")
     parser.add_argument("--no-vtu", action="store_true")
+    parser.add_argument("--lame", action="store_true", help="study (a) only: the Lamé errors and rates, h and p")
     args = parser.parse_args(argv)
     config = QUICK if args.quick else FULL
     os.makedirs(args.out, exist_ok=True)
     t0 = time.perf_counter()
-    lame = lame_study(config["lame_levels"])
+    lame = {degree: lame_study(config["lame_levels"], degree) for degree in config["lame_degrees"]}
+    if args.lame:
+        print("\n".join(lame_report(lame)))
+        print(f"total {time.perf_counter() - t0:.1f} s")
+        return {"lame": lame[2], "lame_by_degree": lame}
     rows, plain = sweep(config, None if args.no_vtu else args.out)
     curves = pressure_curves(config) if config["pressure_angles"] else {}
     text, crossings = report(lame, rows, plain, config)
@@ -309,7 +333,8 @@ def main(argv=None):
     if not args.no_plot:
         print("wrote", plot(rows, curves, config, os.path.join(args.out, "reinforced_pipe.png")))
     print(f"total {time.perf_counter() - t0:.1f} s")
-    return {"lame": lame, "rows": rows, "plain": plain, "crossings": crossings, "curves": curves}
+    return {"lame": lame[2], "lame_by_degree": lame, "rows": rows, "plain": plain, "crossings": crossings,
+            "curves": curves}
 
 
 if __name__ == "__main__":

@@ -10,7 +10,7 @@ from numba import prange
 from ._config import njit, njit_parallel
 from .elements.beam import BEAM_ELEMENTS, MAX_FUNCTIONS, beam_element
 from .elements.beam import evaluate as _beam_functions
-from .elements.solid.dispatch import MAX_NODES, N_NODES, NODAL_ELEMENTS, solid_element
+from .elements.solid.dispatch import N_NODES, NODAL_ELEMENTS, solid_element
 from .elements.validity import DEGENERATE, FOLDED, INVERTED, jacobian_validity
 from .errors import MeshError, format_ids
 from .quadrature import gauss_legendre
@@ -90,7 +90,9 @@ class SolidMesh:
         if self.n_elements == 0:
             raise MeshError("solid mesh has no elements")
         self.element_codes = np.concatenate([np.full(len(c), d.code, np.int64) for d, c in self.blocks])
-        self.connectivity = np.full((self.n_elements, MAX_NODES), -1, dtype=np.int64)
+        # as wide as this mesh's largest element (not the registry's MAX_NODES): the kernels read
+        # connectivity[e, :n_nodes(code)] only, and a wide rational type must not widen every mesh
+        self.connectivity = np.full((self.n_elements, max(d.n_nodes for d, _ in self.blocks)), -1, dtype=np.int64)
         start = 0
         for d, c in self.blocks:
             self.connectivity[start:start + len(c), : d.n_nodes] = c

@@ -144,12 +144,13 @@ def _solid(value, base_dir):
         if not file.exists():
             _fail("solid.mesh", f"mesh file {str(file)!r} does not exist")
         mesh_spec = file
-    elif isinstance(mesh, dict) and "pipe" in mesh:
-        from .nurbs.scene import validate_pipe      # an exact NURBS pipe (section)
-        _table(mesh, "solid.mesh", ("pipe",))
-        mesh_spec = {"pipe": validate_pipe(mesh["pipe"])}
+    elif isinstance(mesh, dict) and ("pipe" in mesh or "brick" in mesh):
+        from .nurbs.scene import NURBS_MESHES       # an exact NURBS pipe (section) or a NURBS brick
+        _table(mesh, "solid.mesh", ("pipe",) if "pipe" in mesh else ("brick",))
+        (kind, table), = mesh.items()
+        mesh_spec = {kind: NURBS_MESHES[kind][0](table, f"solid.mesh.{kind}")}
     else:
-        _table(mesh, "solid.mesh", ("box", "cells", "element", "pipe"), required=("box", "cells"))
+        _table(mesh, "solid.mesh", ("box", "cells", "element", "pipe", "brick"), required=("box", "cells"))
         box = _points(mesh["box"], "solid.mesh.box")
         if len(box) != 2:
             _fail("solid.mesh.box", f"expected two corners [[x0, y0, z0], [x1, y1, z1]], got {len(box)} points")

@@ -18,8 +18,8 @@ import naive
 NURBS27 = SOLID_ELEMENTS["nurbs27"]
 
 
-def sector(angle=90.0, elements=(1, 1, 1), r=(0.1, 0.2), height=0.3):
-    return nurbs.bezier_mesh(nurbs.hollow_cylinder(r[0], r[1], height, angle=angle, elements=elements))
+def sector(angle=90.0, elements=(1, 1, 1), r=(0.1, 0.2), height=0.3, degree=2):
+    return nurbs.bezier_mesh(nurbs.hollow_cylinder(r[0], r[1], height, angle=angle, elements=elements, degree=degree))
 
 
 def jittered(seed):
@@ -34,13 +34,14 @@ def jittered(seed):
     return nurbs.bezier_mesh(nurbs.NurbsSolid([nurbs.NurbsPatch(control, weights, patch.knots, patch.degrees)]))
 
 
-@pytest.mark.parametrize("mesh", ["sector90", "pipe120", "jittered"])
+@pytest.mark.parametrize("mesh", ["sector90", "pipe120", "jittered", "pipe120_cubic"])
 def test_points_are_found_where_they_are(mesh):
     """The trust property on NURBS spans: x(ξ) for random ξ inside is INSIDE at ξ to 1e-10, and
     x(ξ) just beyond a face (1e-6 in ξ) is never INSIDE (OUTSIDE at that ξ, or no solution found:
     NOT_CONVERGED, after the search proved that none lies inside)."""
     bm = {"sector90": lambda: sector(), "pipe120": lambda: sector(360.0, (1, 3, 1), r=(0.2, 0.3), height=1.0),
-          "jittered": lambda: jittered(3)}[mesh]()
+          "jittered": lambda: jittered(3),
+          "pipe120_cubic": lambda: sector(360.0, (1, 3, 1), r=(0.2, 0.3), height=1.0, degree=3)}[mesh]()
     rng = np.random.default_rng(11)
     patch = bm.nurbs.patches[0]
     xi = rng.uniform(-1, 1, (60, 3))
@@ -71,11 +72,13 @@ def _crossing_beam(points):
     return m13.BeamMesh.from_curve(f, df, 0.0, 1.0, 1)
 
 
-def test_curved_beam_crossing_the_inner_face_twice_has_two_pieces():
-    """A curved Hermite line through the 90° hollow-cylinder element (radii 0.1 / 0.2, height 0.3):
-    it enters through θ = 0, dips into the hole (the curved inner face, twice) and leaves through
-    θ = 90°. Two pieces, at the crossings found by bisection of the exact sector."""
-    bm = sector()
+@pytest.mark.parametrize("degree", [2, 3])
+def test_curved_beam_crossing_the_inner_face_twice_has_two_pieces(degree):
+    """A curved Hermite line through the 90° hollow-cylinder element (radii 0.1 / 0.2, height 0.3; one
+    quadratic or, degree-elevated, cubic span): it enters through θ = 0, dips into the hole (the
+    curved inner face, twice) and leaves through θ = 90°. Two pieces, at the crossings found by
+    bisection of the exact sector."""
+    bm = sector(degree=degree)
     beams = _crossing_beam([[0.16, -0.02, 0.05], [0.06, 0.06, 0.2], [-0.02, 0.16, 0.1]])
     reference = naive.indicator_crossings(lambda eta: beams.evaluate(0, eta),
                                           lambda x: naive.in_sector(x, 0.1, 0.2, 90.0, 0.3))
@@ -91,12 +94,13 @@ def test_curved_beam_crossing_the_inner_face_twice_has_two_pieces():
     assert abs(ops.embedded_length - length) < 1e-9 * length     # 6 Gauss points on |r'| (not a polynomial)
 
 
+@pytest.mark.parametrize("degree", [2, 3])
 @pytest.mark.parametrize("integration", ["segment", "element", "auto"])
-def test_operators_on_a_closed_pipe(integration):
-    """Curved beams through a closed pipe of 2 × 6 × 2 elements: the certificates hold, the segments
-    tile the beam inside the pipe (coupled length = the length inside, by bisection), and M on the
-    control points equals Σ w Φ_j R_i with R_i by Cox–de Boor."""
-    bm = nurbs.bezier_mesh(nurbs.hollow_cylinder(0.2, 0.3, 1.0, angle=360.0, elements=(2, 6, 2)))
+def test_operators_on_a_closed_pipe(integration, degree):
+    """Curved beams through a closed pipe of 2 × 6 × 2 elements (quadratic, or cubic spans): the
+    certificates hold, the segments tile the beam inside the pipe (coupled length = the length
+    inside, by bisection), and M on the control points equals Σ w Φ_j R_i with R_i by Cox–de Boor."""
+    bm = nurbs.bezier_mesh(nurbs.hollow_cylinder(0.2, 0.3, 1.0, angle=360.0, elements=(2, 6, 2), degree=degree))
     beams = m13.BeamMesh.join([_crossing_beam([[0.35, -0.05, 0.1], [0.0, 0.45, 0.5], [-0.35, 0.05, 0.9]]),
                                _crossing_beam([[0.28, -0.2, 0.3], [0.1, 0.1, 0.6], [-0.28, 0.2, 0.45]])])
     ops = m13.assemble_mortar(beams, bm.solid, integration=integration, n_gauss=6)

@@ -82,7 +82,8 @@ def test_named_sets_of_a_pipe_section():
     ({"r_outer": 0.05}, r"solid\.mesh\.pipe\.r_outer: must be greater than r_inner"),
     ({"elements": [1, 2, 1]}, r"solid\.mesh\.pipe\.elements\[1\]: 2 element\(s\) cannot cover 360"),
     ({"angle": 400.0}, r"solid\.mesh\.pipe\.angle"),
-    ({"degree": 3}, r"solid\.mesh\.pipe\.degree: unknown key"),
+    ({"degree": 4}, r"solid\.mesh\.pipe\.degree: expected an integer in \[2, 3\]"),
+    ({"order": 3}, r"solid\.mesh\.pipe\.order: unknown key"),
 ])
 def test_pipe_key_errors(spec, match):
     base = {"r_inner": RI, "r_outer": RO, "length": L, "elements": [1, 4, 1]}
@@ -126,3 +127,40 @@ def test_helical_fibres_coupled_to_the_pipe_and_written(tmp_path):
     r = np.hypot(solid.points[:, 0], solid.points[:, 1])
     assert r.min() > RI - 1e-12 and r.max() < RO + 1e-12      # exact points, no control points
     assert any("beams" in str(f) for f in files)
+
+
+@pytest.mark.parametrize("degree", [2, 3])
+def test_brick_in_uniaxial_tension_is_exact(degree):
+    """``solid.mesh = { brick = ... }``: a NURBS block (weights 1) held on three faces by symmetry, a
+    traction on x_max. The linear field u = σ/E (x, -ν y, -ν z) lies in the space, so the node
+    displacements (Bézier control points of a linear field: the field at the nodes) are exact."""
+    sigma = 2.0
+    spec = {"lower": [0.0, 0.0, 0.0], "upper": [1.0, 0.5, 0.4], "elements": [2, 1, 2], "degree": degree}
+    scene = m13.Scene(
+        solid={"mesh": {"brick": spec}, "material": {"model": "linear_elastic", "E": E, "nu": NU}},
+        dirichlet=[{"on": f"solid:{axis}_min", "components": [axis]} for axis in "xyz"],
+        load=[{"type": "traction", "on": "solid:x_max", "value": [sigma, 0.0, 0.0]}],
+        analysis={"kinematics": "linear"})
+    result = m13.solve(scene)
+    mesh = result.model.solid_mesh
+    assert mesh.blocks[0][0].name == {2: "nurbs27", 3: "nurbs64"}[degree] and mesh.n_elements == 4
+    X = mesh.points
+    exact = sigma / E * X * [1.0, -NU, -NU]
+    assert np.abs(result.solid_displacement - exact).max() < 1e-12 * sigma / E
+    sets = mesh.point_sets
+    assert sorted(sets) == ["x_max", "x_min", "y_max", "y_min", "z_max", "z_min"]
+    assert len(sets["x_min"]) == (degree + 1) * (2 * degree + 1) and np.abs(X[sets["x_min"], 0]).max() == 0.0
+    assert np.abs(X[sets["z_max"], 2] - 0.4).max() < 1e-15
+
+
+@pytest.mark.parametrize("spec, match", [
+    ({"upper": [1.0, 0.0, 1.0]}, r"solid\.mesh\.brick\.upper: must be greater than lower"),
+    ({"degree": 1}, r"solid\.mesh\.brick\.degree: expected an integer in \[2, 3\]"),
+    ({"elements": [1, 0, 1]}, r"solid\.mesh\.brick\.elements\[1\]"),
+    ({"cells": [1, 1, 1]}, r"solid\.mesh\.brick\.cells: unknown key"),
+])
+def test_brick_key_errors(spec, match):
+    base = {"lower": [0.0, 0.0, 0.0], "upper": [1.0, 1.0, 1.0], "elements": [1, 1, 1]}
+    with pytest.raises(m13.SceneError, match=match):
+        m13.Scene(solid={"mesh": {"brick": dict(base, **spec)}, "material": {"model": "linear_elastic", "E": E,
+                                                                              "nu": NU}})

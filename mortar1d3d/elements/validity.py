@@ -163,9 +163,10 @@ def _bernstein(descriptor, X, zero, weights=None):
     lattice, to_bernstein = cells.lattice(p)
     corners = cells.corner_rows(p)
     if descriptor.rational:
-        from .solid.dispatch import SOLID_MODULES
-        det = SOLID_MODULES[descriptor.name].homogeneous_determinants(X, weights, cells.points(cells.whole(1),
-                                                                                               lattice)[0])
+        from .solid.bezier_hex import homogeneous_determinants, lattice_indices
+        q = descriptor.degree
+        det = homogeneous_determinants(q, lattice_indices(descriptor.reference_nodes, q), X, weights,
+                                       cells.points(cells.whole(1), lattice)[0])
     else:
         dN = shape_gradients(descriptor, cells.points(cells.whole(1), lattice)[0])
         det = _jacobian_determinant(X, dN)

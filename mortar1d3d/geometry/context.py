@@ -29,8 +29,8 @@ class KernelInput:
         Solid node coordinates (``solid.kernel_points``, global frame; column 3: weights of rational elements).
     codes : (n,) int64
         Element code of every solid element (``solid.element_codes``).
-    conn : (n, MAX_NODES) int64
-        Solid connectivity, padded with -1 (``solid.connectivity``).
+    conn : (n, m) int64
+        Solid connectivity, padded with -1 (``solid.connectivity``, as wide as its largest element).
     solid_boxes : (n, 2, 3) float64
         Padded bounding boxes [min, max] of the solid elements (Bernstein control points).
     solid_h : (n,) float64

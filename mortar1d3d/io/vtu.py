@@ -295,8 +295,9 @@ def write_solid(path, solid, point_data=None, cell_data=None, *, compression="zl
     pathlib.Path
         The file written. Cell data ``solid_element`` (int64, the global element number used by
         :attr:`MortarOperators.segments`) is always written, unless ``cell_data`` overrides it.
-        Rational elements (``nurbs27``) are written as ``hexahedron27`` cells through their exact
-        points at the lattice parameters, the point data interpolated there
+        Rational elements (``nurbs27``, ``nurbs64``) are written as ``hexahedron27`` cells through their
+        exact points at the lattice parameters (one cell per ``nurbs27`` span, 2 × 2 × 2 cells per
+        ``nurbs64`` span, each with its span's cell data), the point data interpolated there
         (:func:`mortar1d3d.nurbs.mesh.sampled_cells`).
     """
     import meshio
@@ -322,6 +323,9 @@ def write_solid(path, solid, point_data=None, cell_data=None, *, compression="zl
         # NURBS spans: their nodes are control points; write each span through its exact points
         from ..nurbs.mesh import sampled_cells
         points, cell_blocks, point_data = sampled_cells(solid, point_data)
+        # a span of degree p is (p-1)³ cells: each of them carries its element's cell data
+        blocks = {k: [np.repeat(part, len(c) // max(len(part), 1), axis=0) for part, (_, c) in zip(v, cell_blocks)]
+                  for k, v in blocks.items()}
     else:
         points, cell_blocks = solid.points, [(d.name, c) for d, c in solid.blocks]
     mesh = meshio.Mesh(points, cell_blocks, point_data=point_data, cell_data=blocks)

@@ -137,9 +137,10 @@ def build_solid_mesh(spec):
     """SolidMesh of a validated ``solid`` entry: generated box, mesh object or file."""
     mesh = spec["mesh"]
     try:
-        if isinstance(mesh, dict) and "pipe" in mesh:
-            from ..nurbs.scene import pipe_mesh
-            mesh = pipe_mesh(mesh["pipe"])[0]
+        if isinstance(mesh, dict) and ("pipe" in mesh or "brick" in mesh):
+            from ..nurbs.scene import NURBS_MESHES
+            (kind, table), = mesh.items()
+            mesh = NURBS_MESHES[kind][1](table)[0]
         elif isinstance(mesh, dict):
             return box_mesh(mesh["box"][0], mesh["box"][1], mesh["cells"], mesh["element"])
         if not isinstance(mesh, SolidMesh):

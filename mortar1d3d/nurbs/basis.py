@@ -13,32 +13,8 @@ times the global control weights. Kept for the measurement that chose the Bézie
 import numpy as np
 
 from .._config import njit
+from ..elements.solid.bezier_hex import bernstein
 from ..elements.solid.dispatch import _quotient_rule
-
-
-@njit
-def bernstein(p, x, v, dv):
-    """Bernstein polynomials of degree ``p`` on [-1, 1] at ``x`` into ``v[:p+1]``, d/dx into ``dv[:p+1]``.
-
-    The triangle B^q_a = (1 - t) B^{q-1}_a + t B^{q-1}_{a-1}, t = (1 + x)/2, and
-    dB^p_a/dt = p (B^{p-1}_{a-1} - B^{p-1}_a) (dt/dx = 1/2).
-    """
-    t = 0.5 * (1.0 + x)
-    s = 1.0 - t
-    v[0] = 1.0
-    for q in range(1, p + 1):
-        if q == p:
-            # the degree p-1 values give the derivatives before the last step overwrites them
-            dv[0] = -0.5 * p * v[0]
-            for a in range(1, p):
-                dv[a] = 0.5 * p * (v[a - 1] - v[a])
-            dv[p] = 0.5 * p * v[p - 1]
-        v[q] = t * v[q - 1]
-        for a in range(q - 1, 0, -1):
-            v[a] = s * v[a] + t * v[a - 1]
-        v[0] = s * v[0]
-    if p == 0:
-        dv[0] = 0.0
 
 
 @njit

@@ -1,7 +1,7 @@
 """The solid model on NURBS patches, with control-point DOFs.
 
 :class:`NurbsSolidModel` runs :class:`~mortar1d3d.physics.solid.SolidModel` (total Lagrangian, every
-material, or linear kinematics) on the ``nurbs27`` mesh of the patches
+material, or linear kinematics) on the ``nurbs27`` or ``nurbs64`` mesh of the patches
 (:func:`~mortar1d3d.nurbs.bezier_mesh`) and maps everything to the global control points with
 T (mesh node values = T · control values): internal forces Tᵀ f, stiffness Tᵀ K T, since the NURBS
 space is the image of T. Surface loads act on patch faces: follower pressure on the current
@@ -14,7 +14,6 @@ control net face carries exactly the face's functions, so fixing them fixes the 
 import numpy as np
 import scipy.sparse as sp
 
-from ..elements.solid import nurbs27
 from ..physics.rational_surface import RATIONAL_FACE_POINTS
 from ..physics.solid import SolidModel
 from ..physics.surface import FACE_DTYPE, Pressure
@@ -22,7 +21,7 @@ from .mesh import bezier_mesh, element_values
 
 
 class NurbsSolidModel:
-    """Internal forces and stiffness of a quadratic :class:`~mortar1d3d.nurbs.NurbsSolid` on its control points.
+    """Internal forces and stiffness of a quadratic or cubic :class:`~mortar1d3d.nurbs.NurbsSolid` on its control points.
 
     Parameters
     ----------
@@ -83,7 +82,7 @@ class NurbsSolidModel:
 
     def write_vtu(self, path, u=None):
         """The solid as sampled spans (:func:`mortar1d3d.io.vtu.write_solid`: every element's exact points
-        at the 27 hexahedron27 lattice parameters; ParaView interpolates between them), with the
+        at the hexahedron27 lattice parameters of (p-1)³ sub-boxes; ParaView interpolates between them), with the
         ``displacement`` of the control-point displacements ``u`` as point data. Returns the path."""
         from ..io.vtu import write_solid
 
@@ -109,7 +108,7 @@ def patch_face_set(mesh, patch, face):
         raise ValueError(f"patch {patch}: the solid has {len(mesh.nurbs.patches)} patch(es)")
     last = {-1.0: 0, 1.0: mesh.nurbs.patches[patch].element_shape[axis] - 1}[side]
     elements = np.flatnonzero((mesh.element_patch == patch) & (mesh.element_span[:, axis] == last))
-    d = nurbs27.DESCRIPTOR
+    d = mesh.solid.blocks[0][0]
     normal = np.zeros(3)
     normal[axis] = side
     local = [f for f in range(d.n_faces) if np.allclose(d.faces[f][3], normal)]

@@ -49,7 +49,7 @@ def assembly_graph(connectivity, codes, n_nodes, block):
 
     Parameters
     ----------
-    connectivity : (n_elements, MAX_NODES) int64, C-contiguous
+    connectivity : (n_elements, m) int64, C-contiguous, m >= the nodes of every element (padded with -1)
     codes : (n_elements,) int64
         Element type codes (:data:`~mortar1d3d.elements.solid.dispatch.N_NODES` gives the nodes).
     n_nodes : int

@@ -205,7 +205,7 @@ class Coupling:
     def _gauss_point_operator(ops, beams, solid, beam_offset, n_dofs):
         p = ops.point_fields
         n_pts = ops.n_integration_points
-        nnz = n_pts * (MAX_FUNCTIONS + solid_types.MAX_NODES)
+        nnz = n_pts * (MAX_FUNCTIONS + solid.connectivity.shape[1])
         rows, cols, vals = np.empty(nnz, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
         k = _point_operator(np.ascontiguousarray(p["beam_element"]), np.ascontiguousarray(p["solid_element"]),
                             np.ascontiguousarray(p["eta"]), np.ascontiguousarray(p["xi"]),

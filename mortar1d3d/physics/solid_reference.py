@@ -47,7 +47,7 @@ def reference_gauss_points(points, connectivity, codes):
     points : (n_nodes, 3) float64
         Or (n_nodes, 4) with the node weights of rational elements in column 3
         (:attr:`mortar1d3d.mesh.SolidMesh.kernel_points`).
-    connectivity : (n_elements, MAX_NODES) int64, C-contiguous
+    connectivity : (n_elements, m) int64, C-contiguous, m >= the nodes of every element (padded with -1)
     codes : (n_elements,) int64, C-contiguous
         Element type codes.
 

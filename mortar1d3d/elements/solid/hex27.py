@@ -9,7 +9,7 @@ import numpy as np
 from ..._config import njit
 from ...quadrature import hexahedron_rule
 from ..descriptor import SolidElementType
-from .hex_family import (HEXAHEDRON, QUADRATIC_NODES, lattice_gradients, lattice_values,
+from .hex_family import (HEXAHEDRON, QUADRATIC_LATTICE, QUADRATIC_NODES, lattice_gradients, lattice_values,
                          triquadratic_bernstein_matrix)
 
 REFERENCE_NODES = QUADRATIC_NODES
@@ -32,7 +32,7 @@ def shape(xi, N):
     dv = np.empty((3, 3))
     for i in range(3):
         _line3(xi[i], v[i], dv[i])
-    lattice_values(v, N)
+    lattice_values(QUADRATIC_LATTICE, v, N)
 
 
 @njit
@@ -42,7 +42,7 @@ def deriv(xi, dN):
     dv = np.empty((3, 3))
     for i in range(3):
         _line3(xi[i], v[i], dv[i])
-    lattice_gradients(v, dv, dN)
+    lattice_gradients(QUADRATIC_LATTICE, v, dv, dN)
 
 
 DESCRIPTOR = SolidElementType(

@@ -158,18 +158,19 @@ QUADRATIC_LATTICE = (QUADRATIC_NODES + 1).astype(np.int64)
 
 
 @njit
-def lattice_values(v, N):
-    """N_a = v[0, l0] v[1, l1] v[2, l2] over the 27 nodes (lattice indices l of QUADRATIC_LATTICE), from
-    the three 1D quadratic functions per direction ``v`` (3, 3): the tensor products of hex27 and nurbs27."""
-    for a in range(27):
-        N[a] = v[0, QUADRATIC_LATTICE[a, 0]] * v[1, QUADRATIC_LATTICE[a, 1]] * v[2, QUADRATIC_LATTICE[a, 2]]
+def lattice_values(lattice, v, N):
+    """N_a = v[0, l0] v[1, l1] v[2, l2] for every node a with lattice index ``lattice[a]`` (n, 3), from the
+    1D functions per direction ``v`` (3, p+1): the tensor products of hex27 and of the rational Bézier
+    hexahedra (one compiled kernel for all of them)."""
+    for a in range(lattice.shape[0]):
+        N[a] = v[0, lattice[a, 0]] * v[1, lattice[a, 1]] * v[2, lattice[a, 2]]
 
 
 @njit
-def lattice_gradients(v, dv, dN):
-    """∂N_a/∂ξ_i (27, 3) of the tensor products of :func:`lattice_values`, with the 1D derivatives ``dv``."""
-    for a in range(27):
-        l0, l1, l2 = QUADRATIC_LATTICE[a, 0], QUADRATIC_LATTICE[a, 1], QUADRATIC_LATTICE[a, 2]
+def lattice_gradients(lattice, v, dv, dN):
+    """∂N_a/∂ξ_i (n, 3) of the tensor products of :func:`lattice_values`, with the 1D derivatives ``dv``."""
+    for a in range(lattice.shape[0]):
+        l0, l1, l2 = lattice[a, 0], lattice[a, 1], lattice[a, 2]
         dN[a, 0] = dv[0, l0] * v[1, l1] * v[2, l2]
         dN[a, 1] = v[0, l0] * dv[1, l1] * v[2, l2]
         dN[a, 2] = v[0, l0] * v[1, l1] * dv[2, l2]
