@@ -10,8 +10,9 @@ log(time) over log(size) is fitted by least squares; 1 means cost proportional t
 
 - ``assembly``: ``assemble_mortar`` (element- and segment-based, 4 Gauss points) on
   ``fibre_cube(n, fibres, n)``, the whole scene grown together at the benchmark scene's density
-  (about ten element-based integration points per solid element, beam elements as long as the solid
-  elements): n = (points / 10)^(1/3), fibres = points / (4 n). Prints the time per call, per
+  (about ten element-based integration points per solid element; each fibre is 0.3 long, the cube
+  1, so its n elements are 0.3 times as long as the solid elements): n = (points / 10)^(1/3),
+  fibres = points / (4 n). Prints the time per call, per
   integration point and per control, for each size, and the slope.
 - ``newton``: one Newton iteration's evaluation ``Model.residual(z, t, tangent=True)`` (residual
   and tangent of the solid, the beams and the penalty coupling, in the basis of the unknowns) of a
@@ -29,7 +30,6 @@ import argparse
 import os
 import resource
 import sys
-import time
 import warnings
 from pathlib import Path
 
@@ -40,6 +40,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # measure this 
 
 import mortar1d3d as m13  # noqa: E402
 from control import control_times  # noqa: E402
+from throughput import _timed  # noqa: E402
 from mortar1d3d.model import Model  # noqa: E402
 from mortar1d3d.model.build import build  # noqa: E402
 
@@ -53,12 +54,6 @@ def slope(sizes, times):
 
 def _control():
     return control_times((1,))[1]
-
-
-def _best(call):
-    t0 = time.perf_counter()
-    out = call()
-    return time.perf_counter() - t0, out
 
 
 def assembly(points, rounds):
@@ -77,7 +72,7 @@ def assembly(points, rounds):
             times, per_control = [], []
             for _ in range(rounds):
                 c = _control()
-                t, ops = _best(lambda: m13.assemble_mortar(beams, solid, integration=integration, n_gauss=N_GAUSS))
+                t, ops = _timed(lambda: m13.assemble_mortar(beams, solid, integration=integration, n_gauss=N_GAUSS))
                 times.append(t)
                 per_control.append(t / c)
                 count = ops.n_integration_points
@@ -129,7 +124,7 @@ def newton(unknowns, rounds):
         nnz = 0
         for _ in range(rounds):
             c = _control()
-            t, (r, K) = _best(lambda: model.residual(z, 1.0, tangent=True))
+            t, (r, K) = _timed(lambda: model.residual(z, 1.0, tangent=True))
             nnz = K.nnz
             del r, K
             times.append(t)

@@ -184,6 +184,8 @@ def test_solve_and_command_line_with_the_petsc_backend():
     scene = _with(SOLVE_SCENES["rebar"](), backend="petsc", rtol=1e-10)
     result = m13.solve(scene)
     assert COMM.tompi4py().allgather(result is None) == [r != 0 for r in range(SIZE)]
+    # the PETSc path ran (on one rank the serial path would also return a Result)
+    assert RANK != 0 or result.distributed["ranks"] == SIZE
     path = Path(tempfile.mkdtemp(prefix=f"mpi-rank{RANK}-"))
     (path / "scene.toml").write_text((ROOT / "examples" / "scenes" / "rebar_cantilever.toml").read_text()
                                      .replace('kinematics = "nonlinear"', 'kinematics = "linear"\nbackend = "petsc"'))

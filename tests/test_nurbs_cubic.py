@@ -97,11 +97,13 @@ def test_vtu_of_cubic_spans(tmp_path):
     from mortar1d3d.io.vtu import write_solid
 
     solid = sector(90.0, (1, 2, 1), height=0.05).solid
-    path = write_solid(tmp_path / "c.vtu", solid, point_data={"x": solid.points},
+    path = write_solid(tmp_path / "c.vtu", solid, point_data={"x": solid.points, "one": np.ones(solid.n_nodes)},
                        cell_data={"id": np.arange(solid.n_elements) * 10})
     mesh = meshio.read(path)
     assert mesh.cells_dict["hexahedron27"].shape == (16, 27)
     assert np.abs(mesh.point_data["x"] - mesh.points).max() < 1e-15
+    # sampled with the rational functions, which sum to one (independent of how the points are made)
+    assert np.abs(mesh.point_data["one"] - 1.0).max() < 1e-14
     r = np.hypot(mesh.points[:, 0], mesh.points[:, 1])
     on_inner = np.abs(r - 0.1) < 1e-9
     assert on_inner.sum() == 2 * 4 * 9 and np.abs(r[on_inner] - 0.1).max() < 1e-15

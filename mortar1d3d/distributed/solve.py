@@ -27,7 +27,7 @@ from ..scene import SceneError
 from .assemble import assemble_distributed, beam_submesh, solid_submesh
 from .numbering import Numbering
 from .partition import partition
-from .petsc import coo_matrix, gather_vector, petsc
+from .petsc import coo_matrix, gather_vector, petsc, summed_vector
 
 
 @dataclass(frozen=True)
@@ -59,6 +59,14 @@ class SystemLayout:
             start = ranges[rank] + sizes[rank, :k].sum(axis=1) - p * num.ranges[rank]
             of_serial[block.start:block.stop] = start + new
         return cls(of_serial, ranges)
+
+    def owned_serial(self, rank):
+        """Serial index of each unknown ``rank`` owns, in the order of its system range."""
+        first, last = self.ranges[rank], self.ranges[rank + 1]
+        out = np.empty(last - first, dtype=np.int64)
+        mine = (self.of_serial >= first) & (self.of_serial < last)
+        out[self.of_serial[mine] - first] = np.flatnonzero(mine)
+        return out
 
 
 def _unsupported(model):
@@ -137,7 +145,6 @@ def _stiffness_triplets(model, part, layout, rank):
 def _coupling_matrix(model, part, numbering, layout, comm):
     """B = [−M, D] of every group in system columns (rows: the groups' LM rows, rank-major per rank),
     the summed κ per row, and each group's distributed operators."""
-    PETSc = petsc()
     rank, n_parts = comm.getRank(), comm.getSize()
     c = model.scene.coupling
     options = {k: c[k] for k in ("integration", "n_gauss", "lm", "search_points")}
@@ -174,13 +181,7 @@ def _coupling_matrix(model, part, numbering, layout, comm):
     local_sys = int(layout.ranges[rank + 1] - layout.ranges[rank])
     B = coo_matrix(comm, np.concatenate(rows), np.concatenate(cols), np.concatenate(vals), (local_rows, n_rows),
                    (local_sys, n_sys))
-    kappa = PETSc.Vec().createMPI((local_rows, n_rows), comm=comm)
-    kappa.set(0.0)
-    idx = np.concatenate(k_idx)
-    if len(idx):
-        kappa.setValues(idx.astype(PETSc.IntType), np.concatenate(k_val), addv=PETSc.InsertMode.ADD_VALUES)
-    kappa.assemblyBegin()
-    kappa.assemblyEnd()
+    kappa = summed_vector(comm, np.concatenate(k_idx), np.concatenate(k_val), (local_rows, n_rows))
     return B, kappa, ops
 
 
@@ -215,10 +216,7 @@ def _near_null_space(model, layout, rank, A):
     """The model's rigid-body modes (translations, rotations; tangent DOFs rotate) as a PETSc null space."""
     PETSc = petsc()
     R = model.rigid_body_modes()                              # serial numbering, (n, 6)
-    first, last = layout.ranges[rank], layout.ranges[rank + 1]
-    owned_serial = np.empty(last - first, dtype=np.int64)
-    mine = (layout.of_serial >= first) & (layout.of_serial < last)
-    owned_serial[layout.of_serial[mine] - first] = np.flatnonzero(mine)
+    owned_serial = layout.owned_serial(rank)
     vecs = []
     for j in range(R.shape[1]):
         v = A.createVecRight()
@@ -298,10 +296,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     clock("coupling")
     # loads: the replicated dead loads on their owners, the body forces added by PETSc
     b = A.createVecLeft()
-    first = int(layout.ranges[rank])
-    owned_serial = np.empty(local, dtype=np.int64)
-    mine = (layout.of_serial >= first) & (layout.of_serial < first + local)
-    owned_serial[layout.of_serial[mine] - first] = np.flatnonzero(mine)
+    owned_serial = layout.owned_serial(rank)
     b.setArray(model.dead_load[owned_serial])
     if len(f_idx):
         b.setValues(f_idx.astype(PETSc.IntType), f_val, addv=PETSc.InsertMode.ADD_VALUES)
@@ -311,6 +306,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     x = A.createVecRight()
     x.set(0.0)
     fixed_sys = layout.of_serial[model.fixed_dofs]
+    first = int(layout.ranges[rank])
     keep = (fixed_sys >= first) & (fixed_sys < first + local)
     rows = fixed_sys[keep].astype(PETSc.IntType)
     x.setValues(rows, model.prescribed(1.0)[keep])

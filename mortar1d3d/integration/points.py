@@ -23,7 +23,7 @@ from ..elements import beam as beam_elements
 from ..elements.solid import dispatch as solid
 from ..geometry.beam import AFFINE_TOL
 from ..elements.beam import CODES as BEAM_CODES
-from ..geometry.beam import beam_point, beam_point_of
+from ..geometry.beam import beam_point_of
 from ..geometry.linalg import norm3
 from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse, first_containing,
                                    is_affine, linear_parameters, load_element, locate_point, point_buffers, polish,

@@ -41,7 +41,7 @@ import math
 import numpy as np
 from numba import prange
 
-from .._config import CHUNK, njit, njit_parallel
+from .._config import CHUNK, njit, njit_inline, njit_parallel
 from .rotations import _cross, exp, jacobian, jacobian_derivative_transpose, jacobian_inverse, log
 
 __all__ = ["element_range", "element_chunks", "strain_range", "N_DOFS", "STEP", "OK", "ROTATION_RANGE",
@@ -139,6 +139,12 @@ def _current_point(e, g, dH, lag, dlag, A0, J, D, Lr, psi_nodes, rp, psi, dpsi, 
     point_kinematics(Lr, psi_nodes, lag[g], dlag[g], J[e, g], rp, psi, dpsi, E, Lam, T, Gam, Kap)
 
 
+@njit_inline
+def _no_force_weight(wF, e, g):
+    # every contribution of point g to the force term is scaled by these weights
+    return wF[e, g, 0] == 0.0 and wF[e, g, 1] == 0.0 and wF[e, g, 2] == 0.0
+
+
 @njit
 def _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, D, triads, want, res, m33, v3, work):
     """Energy and (``want >= 1``) the residual ``res`` (21,) of element ``e`` at the coefficients'
@@ -169,6 +175,8 @@ def _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, D, triads, wa
             fth[i] = 0.0 * D[0, 0]
     n_g = lag.shape[0]
     for g in range(n_g):
+        if wM[e, g] == 0.0 and _no_force_weight(wF, e, g):
+            continue        # a point of another element's rule (mixed force rules): contributes nothing
         Jg = J[e, g]
         _current_point(e, g, dH, lag, dlag, A0, J, D, Lr, psi_nodes, rp, psi, dpsi, E, Lam, T, Gam, Kap)
         for i in range(3):
@@ -329,6 +337,8 @@ def _centreline_columns(e, dH, lag, dlag, A0, J, wF, Gamma0, CF, D, triads, ke, 
             acc[1, col, i] = 0.0
             acc[2, col, i] = 0.0
     for g in range(lag.shape[0]):
+        if _no_force_weight(wF, e, g):
+            continue        # a moment-only point: the centreline columns get nothing from it
         Jg = J[e, g]
         _current_point(e, g, dH, lag, dlag, A0, J, D, Lr, psi_nodes, rp, psi, dpsi, E, Lam, T, Gam, Kap)
         for i in range(3):

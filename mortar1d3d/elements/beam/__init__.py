@@ -37,13 +37,13 @@ MAX_FUNCTIONS = max(d.n_functions for d in BEAM_ELEMENTS.values())
 N_FUNCTIONS = np.array([BY_CODE[c].n_functions for c in range(len(BY_CODE))], dtype=np.int64)
 DEGREE = np.array([BY_CODE[c].degree for c in range(len(BY_CODE))], dtype=np.int64)
 
-#: the registry's codes, for ``literal_unroll`` over the types in njit code
+#: the registry's codes, for ``literal_unroll`` over the types in njit code; import the name itself
+#: (``from ..elements.beam import CODES``): read as ``module.CODES`` Numba types it as a tuple of
+#: int64, not of literals, and ``select`` then finds no kernel
 CODES = tuple(range(len(BEAM_TYPES)))
-_CODES = CODES
 #: ``select(k, name)``: kernel ``name`` of type ``k`` (a literal) in njit code (see :mod:`..selector`);
 #: lets a loop choose the type once and call its kernels directly inside
 select = kernel_selector(BEAM_TYPES)
-_kernel = select
 
 
 def beam_element(name):
@@ -58,34 +58,34 @@ def beam_element(name):
 @njit
 def shape(code, eta, length, H):
     """Centreline functions of type ``code`` at ``eta`` into ``H``."""
-    for k in literal_unroll(_CODES):
+    for k in literal_unroll(CODES):
         if k == code:
-            _kernel(k, "shape")(eta, length, H)
+            select(k, "shape")(eta, length, H)
 
 
 @njit
 def deriv(code, eta, length, dH):
     """d/dη of the centreline functions of type ``code`` at ``eta`` into ``dH``."""
-    for k in literal_unroll(_CODES):
+    for k in literal_unroll(CODES):
         if k == code:
-            _kernel(k, "deriv")(eta, length, dH)
+            select(k, "deriv")(eta, length, dH)
 
 
 @njit
 def deriv2(code, eta, length, ddH):
     """d²/dη² of the centreline functions of type ``code`` at ``eta`` into ``ddH``."""
-    for k in literal_unroll(_CODES):
+    for k in literal_unroll(CODES):
         if k == code:
-            _kernel(k, "deriv2")(eta, length, ddH)
+            select(k, "deriv2")(eta, length, ddH)
 
 
 @njit
 def coefficients(code, positions, tangents, nodes, origin, Qe):
     """Coefficients of the element with node ids ``nodes`` into ``Qe`` (MAX_FUNCTIONS, 3): positions
     minus ``origin`` (3,), tangents as they are, unused rows zero."""
-    for k in literal_unroll(_CODES):
+    for k in literal_unroll(CODES):
         if k == code:
-            _kernel(k, "coefficients")(positions, tangents, nodes, origin, Qe)
+            select(k, "coefficients")(positions, tangents, nodes, origin, Qe)
 
 
 @njit
@@ -93,9 +93,9 @@ def control_points(code, Qe, length, ctrl):
     """Bézier control points of coefficients ``Qe`` (in their frame) into ``ctrl`` (MAX_FUNCTIONS, 3);
     returns their number. The centreline lies in their convex hull."""
     n = 0
-    for k in literal_unroll(_CODES):
+    for k in literal_unroll(CODES):
         if k == code:
-            n = _kernel(k, "control_points")(Qe, length, ctrl)
+            n = select(k, "control_points")(Qe, length, ctrl)
     return n
 
 

@@ -102,8 +102,9 @@ def bernstein_values(p, lattice, xi):
     l = np.arange(p + 1)
     binomial = np.array([comb(p, i) for i in l], dtype=np.float64)
     v = binomial * t[..., None] ** l * s[..., None] ** (p - l)              # (k, 3 directions, p+1)
-    lower = np.concatenate([np.zeros(xi.shape + (1,)), _degree_below(p, t, s)], axis=-1)
-    upper = np.concatenate([_degree_below(p, t, s), np.zeros(xi.shape + (1,))], axis=-1)
+    below = _degree_below(p, t, s)
+    lower = np.concatenate([np.zeros(xi.shape + (1,)), below], axis=-1)
+    upper = np.concatenate([below, np.zeros(xi.shape + (1,))], axis=-1)
     dv = 0.5 * p * (lower - upper)
     L = lattice
     B = v[:, 0, L[:, 0]] * v[:, 1, L[:, 1]] * v[:, 2, L[:, 2]]

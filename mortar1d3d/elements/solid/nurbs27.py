@@ -15,7 +15,6 @@ import numpy as np
 
 from ..._config import njit
 from ...quadrature import hexahedron_rule
-from . import bezier_hex
 from .bezier_hex import rational_descriptor, tensor_bernstein, tensor_bernstein_gradients
 from .hex_family import QUADRATIC_LATTICE, QUADRATIC_NODES, triquadratic_bernstein_matrix
 
