@@ -27,6 +27,7 @@ from ..mortar.assemble import assemble_mortar
 from ..scene import Scene, SceneError
 from ..supports import RotatedBasis, clamp_frame
 from . import checks
+from .tangent import TangentPattern
 from .build import BuiltScene, build
 
 DEFAULT_PENALTY_FACTOR = 1e3     # ε = 1e3 E_solid when the scene gives no penalty
@@ -58,6 +59,7 @@ class Model:
         scene = built.scene
         self.scene = scene
         self.counts = Counter()
+        self._tangent_pattern = None
         self.linear = scene.analysis["kinematics"] == "linear"
         self.solid_mesh = built.solid_mesh
         self.n_solid_nodes = self.solid_mesh.n_nodes if self.solid_mesh is not None else 0
@@ -580,14 +582,14 @@ class Model:
         """Internal forces and tangent of solid + beams + penalty coupling at displacements ``d``."""
         n = self.n_displacement_dofs
         r = np.zeros(n)
-        blocks = []
+        blocks = []          # (tangent, offset or index array of its unknowns)
         if self.solid_mesh is not None:
             nS = 3 * self.n_solid_nodes
             f, K = self.solid_physics.evaluate(d[:nS], tangent=tangent)
             self._count("solid", tangent)
             r[:nS] = f
-            blocks.append(K)
-        framed = []          # tangents of beams with rotations: their unknowns are not contiguous
+            blocks.append((K, 0))
+        framed = False       # beams with rotations: their unknowns are not contiguous
         for g in self.groups:
             sl = g.dofs.slice
             if g.rotations.size:
@@ -596,24 +598,24 @@ class Model:
                 idx = np.concatenate([np.arange(g.dofs.start, g.dofs.stop), np.arange(g.rotations.start,
                                                                                       g.rotations.stop)])
                 r[idx] = f
-                blocks.append(sp.csr_matrix((g.dofs.size, g.dofs.size)))
-                framed.append((K, idx))
+                blocks.append((K, idx))
+                framed = True
                 continue
             f, K = g.physics.evaluate(d[sl], tangent=tangent)
             self._count("beam", tangent)
             r[sl] = f
-            blocks.append(K)
-        if tangent and framed:
-            rotations = sum(g.rotations.size for g in self.groups)
-            blocks.append(sp.csr_matrix((rotations, rotations)))
-        K = sp.block_diag(blocks, format="csr") if tangent else None
-        for Kb, idx in framed if tangent else ():
-            Kb = Kb.tocoo()
-            K = K + sp.csr_matrix((Kb.data, (idx[Kb.row], idx[Kb.col])), shape=(n, n))
-        if self.scene.coupled and not self.lagrange:
+            blocks.append((K, g.dofs.start))
+        penalty = self.scene.coupled and not self.lagrange
+        if penalty:
             r += self.coupling_stiffness @ d
-            if tangent:
-                K = K + self.coupling_stiffness
+        K = None
+        if tangent and (penalty or framed):
+            # a sum of blocks on one cached pattern (see model.tangent)
+            if self._tangent_pattern is None:
+                self._tangent_pattern = TangentPattern(n)
+            K = self._tangent_pattern.assemble(blocks, self.coupling_stiffness if penalty else None)
+        elif tangent:
+            K = sp.block_diag([Kb for Kb, _ in blocks], format="csr")
         for g in self.groups:
             if g.rotational is not None and g.rotational.enforcement == "penalty":
                 f, Kr = g.rotational.evaluate(d[:3 * self.n_solid_nodes], d[g.rotations.slice].reshape(-1, 3),

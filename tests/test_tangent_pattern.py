@@ -1,0 +1,128 @@
+"""The model's tangent summed on one cached pattern (model.tangent) equals scipy's sum bit for bit."""
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import mortar1d3d as m13
+from mortar1d3d.model import Model
+from mortar1d3d.model.build import build
+from mortar1d3d.model.tangent import TangentPattern
+
+
+def _random_block(rng, size, density=0.3):
+    A = sp.random(size, size, density=density, random_state=rng, format="csr")
+    return (A + A.T).tocsr()
+
+
+def _scipy_sum(n, blocks, constant):
+    """The reference: every block placed by a COO matrix, summed with scipy's addition."""
+    K = sp.csr_matrix((n, n)) if constant is None else constant.copy()
+    for B, index in blocks:
+        B = B.tocoo()
+        index = np.arange(B.shape[0]) + index if np.isscalar(index) else index
+        K = K + sp.csr_matrix((B.data, (index[B.row], index[B.col])), shape=(n, n))
+    return K.tocsr()
+
+
+def _assert_same(K, ref):
+    ref = ref.copy()
+    ref.sort_indices()
+    assert K.shape == ref.shape
+    assert np.array_equal(K.indptr, ref.indptr)
+    assert np.array_equal(K.indices, ref.indices)
+    assert np.array_equal(K.data.view(np.int64), ref.data.view(np.int64))      # every bit
+
+
+def _scene_blocks(rng, n=40):
+    """A solid block at 0..19, a beam block at 20..27 and a scattered block (a beam with rotations)
+    on 28..39 in shuffled order, plus a sparse constant over everything."""
+    index = rng.permutation(np.arange(28, n))
+    blocks = [(_random_block(rng, 20), 0), (_random_block(rng, 8), 20), (_random_block(rng, 12), index)]
+    constant = _random_block(rng, n, density=0.05)
+    return n, blocks, constant
+
+
+def test_sum_equals_scipy_bitwise_and_pattern_is_reused():
+    rng = np.random.default_rng(3)
+    n, blocks, constant = _scene_blocks(rng)
+    pattern = TangentPattern(n)
+    for call in range(3):
+        blocks = [(B.copy() if call else B, i) for B, i in blocks]       # new arrays, same patterns
+        for B, _ in blocks:
+            B.data[:] = rng.standard_normal(B.nnz)
+        _assert_same(pattern.assemble(blocks, constant), _scipy_sum(n, blocks, constant))
+    assert pattern.n_builds == 1
+
+
+def test_changed_pattern_or_constant_rebuilds():
+    rng = np.random.default_rng(4)
+    n, blocks, constant = _scene_blocks(rng)
+    pattern = TangentPattern(n)
+    pattern.assemble(blocks, constant)
+    blocks[0] = (_random_block(rng, 20, density=0.5), 0)
+    _assert_same(pattern.assemble(blocks, constant), _scipy_sum(n, blocks, constant))
+    assert pattern.n_builds == 2
+    constant = 2.0 * constant                                        # new values: a new object
+    _assert_same(pattern.assemble(blocks, constant), _scipy_sum(n, blocks, constant))
+    assert pattern.n_builds == 3
+    _assert_same(pattern.assemble(blocks, None), _scipy_sum(n, blocks, None))
+    assert pattern.n_builds == 4
+
+
+def test_cancelled_entries_are_removed_as_scipy_removes_them():
+    n = 6
+    constant = sp.csr_matrix(np.diag(np.arange(1.0, 7.0)))
+    block = sp.csr_matrix(-np.diag([1.0, 2.0]) + np.array([[0.0, 5.0], [5.0, 0.0]]))
+    K = TangentPattern(n).assemble([(block, 0)], constant)
+    assert K.nnz == 6                                                 # (0,0) and (1,1) cancel; (0,1), (1,0) added
+    assert K[0, 0] == 0.0 and K[0, 1] == 5.0
+    _assert_same(K, _scipy_sum(n, [(block, 0)], constant))
+
+
+def test_repeated_entries_in_a_block_are_summed():
+    block = sp.csr_matrix((np.array([1.0, 2.0, 4.0]), np.array([0, 0, 1]), np.array([0, 2, 3])), shape=(2, 2))
+    K = TangentPattern(3).assemble([(block, 1)], None)
+    assert K[1, 1] == 3.0 and K[2, 2] == 4.0 and K.nnz == 2
+
+
+def test_shared_pattern_is_read_only():
+    rng = np.random.default_rng(5)
+    n, blocks, constant = _scene_blocks(rng)
+    for B, _ in blocks:
+        B.data[:] = 1.0 + rng.random(B.nnz)                           # no cancellation: pattern shared
+    K = TangentPattern(n).assemble(blocks, sp.csr_matrix((n, n)) + sp.identity(n, format="csr"))
+    with pytest.raises(ValueError):
+        K.indices[0] = 1
+
+
+@pytest.mark.parametrize("beam_model", ["torsion_free", "simo_reissner"])
+def test_model_tangent_equals_block_sum(beam_model):
+    """Solid + beams + penalty coupling: the model's tangent is the blocks plus the coupling stiffness."""
+    if beam_model == "torsion_free":
+        beam = {"mesh": m13.generate.fibre_cube(2, 3, 2)[0], "section": {"E": 2e11, "radius": 0.05}}
+    else:
+        beam = {"curve": {"line": [[0.1, 0.5, 0.5], [0.9, 0.4, 0.6]]}, "elements": 3, "model": "simo_reissner",
+                "section": {"E": 2e11, "nu": 0.3, "radius": 0.02}}
+    scene = m13.Scene(solid={"mesh": {"box": [[0, 0, 0], [1, 1, 1]], "cells": [2, 2, 2]},
+                             "material": {"model": "saint_venant_kirchhoff", "E": 1e9, "nu": 0.3}},
+                      beams=[beam], coupling={"enforcement": "penalty", "lm": "line2"},
+                      dirichlet=[{"on": "solid:x_min"}]
+                      + ([{"on": "beam:0:start", "rotation": [0, 0, 0]}] if beam_model == "simo_reissner" else []),
+                      analysis={"kinematics": "nonlinear", "steps": 1})
+    model = Model(build(scene))
+    model.prepare()
+    n = model.n_displacement_dofs
+    d = 1e-3 * np.random.default_rng(6).standard_normal(n)
+    _, K = model.internal(d)
+    nS = 3 * model.n_solid_nodes
+    blocks = [(model.solid_physics.evaluate(d[:nS])[1], 0)]
+    for g in model.groups:
+        if g.rotations.size:
+            Kb = g.physics.evaluate(d[g.dofs.slice], d[g.rotations.slice].reshape(-1, 3))[1]
+            blocks.append((Kb, np.concatenate([np.arange(g.dofs.start, g.dofs.stop),
+                                               np.arange(g.rotations.start, g.rotations.stop)])))
+        else:
+            blocks.append((g.physics.evaluate(d[g.dofs.slice])[1], g.dofs.start))
+    _assert_same(K, _scipy_sum(n, blocks, model.coupling_stiffness))
+    _, K2 = model.internal(2.0 * d)
+    assert model._tangent_pattern.n_builds == 1 and not np.array_equal(K2.data, K.data)
