@@ -12,9 +12,10 @@ from pathlib import Path
 import numba
 
 
-#: subpackages without kernels, whose edits cannot change a compiled kernel (the study only calls
-#: the library): left out of the cache key, so editing them keeps the compiled kernels
-KERNEL_FREE = ("study", "distributed")
+#: subpackages without kernels, whose edits cannot change a compiled kernel (they only call the
+#: kernels and no kernel module imports from them; tests/test_config.py checks both): left out of
+#: the cache key, so editing them keeps the compiled kernels
+KERNEL_FREE = ("study", "distributed", "model")
 
 
 def _source_fingerprint(root=None, skip=KERNEL_FREE):

@@ -1,5 +1,6 @@
 """The kernel cache directory: keyed by the package sources, old versions pruned."""
 import os
+import re
 
 from mortar1d3d import _config
 
@@ -30,9 +31,21 @@ def test_kernel_free_subpackages_do_not_change_the_key(tmp_path):
     (tmp_path / "study" / "report.py").write_text("text = 'two'\n")
     assert _config._source_fingerprint(tmp_path) == before
     assert _config._source_fingerprint(tmp_path, skip=()) != _config._source_fingerprint(tmp_path)
-    # the study holds no kernels: nothing it defines is compiled
-    study = _config.Path(_config.__file__).parent / "study"
-    assert all("njit" not in p.read_text() for p in study.rglob("*.py"))
+    # the kernel-free subpackages hold no kernels: nothing they define is compiled, and no kernel
+    # module imports from them (a table frozen into a kernel would then escape the key)
+    package = _config.Path(_config.__file__).parent
+    assert set(_config.KERNEL_FREE) >= {"study", "distributed", "model"}
+    for name in _config.KERNEL_FREE:
+        for p in (package / name).rglob("*.py"):
+            text = p.read_text()
+            assert not re.search(r"njit|@\s*(numba\.)?(jit|vectorize|guvectorize|cfunc)\b|prange", text), p
+    kernel_modules = [p for p in package.rglob("*.py") if p.relative_to(package).parts[0] not in _config.KERNEL_FREE
+                      and "njit" in p.read_text()]
+    assert len(kernel_modules) > 20
+    for p in kernel_modules:
+        for name in _config.KERNEL_FREE:
+            assert f"from ..{name}" not in p.read_text() and f"from .{name}" not in p.read_text() \
+                and f"mortar1d3d.{name}" not in p.read_text(), (p, name)
 
 
 def test_prune_keeps_the_newest_other_versions(tmp_path):
