@@ -54,7 +54,7 @@ def test_sum_equals_scipy_bitwise_and_pattern_is_reused():
     assert pattern.n_builds == 1
 
 
-def test_changed_pattern_or_constant_rebuilds():
+def test_changed_pattern_rebuilds_changed_values_do_not():
     rng = np.random.default_rng(4)
     n, blocks, constant = _scene_blocks(rng)
     pattern = TangentPattern(n)
@@ -62,10 +62,15 @@ def test_changed_pattern_or_constant_rebuilds():
     blocks[0] = (_random_block(rng, 20, density=0.5), 0)
     _assert_same(pattern.assemble(blocks, constant), _scipy_sum(n, blocks, constant))
     assert pattern.n_builds == 2
-    constant = 2.0 * constant                                        # new values: a new object
+    constant = 2.0 * constant                                        # new values, same pattern: no rebuild
     _assert_same(pattern.assemble(blocks, constant), _scipy_sum(n, blocks, constant))
-    assert pattern.n_builds == 3
+    assert pattern.n_builds == 2
     _assert_same(pattern.assemble(blocks, None), _scipy_sum(n, blocks, None))
+    assert pattern.n_builds == 3
+    constant = constant.tolil()
+    constant[0, n - 1] = 7.0                                         # a new entry in the constant
+    constant = constant.tocsr()
+    _assert_same(pattern.assemble(blocks, constant), _scipy_sum(n, blocks, constant))
     assert pattern.n_builds == 4
 
 

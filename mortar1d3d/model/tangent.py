@@ -15,26 +15,45 @@ a sum of two floating-point numbers does not depend on their order. Entries that
 are removed, as scipy's matrix addition removes them, so the pattern is the same too (a direct
 solver's fill-reducing ordering depends on it).
 
-A block whose pattern differs from the one the positions were made for (compared by identity, then
-by value), or another constant matrix object, makes the union be rebuilt: correct for any input,
-fast when patterns are fixed. The constant matrix's values are read when the union is built: change
-it by passing a new matrix, not in place.
+A block or constant whose pattern differs from the one the positions were made for (compared by
+identity, then by value) makes the union be rebuilt: correct for any input, fast when patterns are
+fixed. The union and the positions are built with one byte per entry for the patterns and a
+binary search per entry (:func:`~mortar1d3d.physics.assembly_graph.pattern_positions`), so the
+build needs little more memory than the tangent itself.
 """
 import numpy as np
 import scipy.sparse as sp
 
+from ..physics.assembly_graph import pattern_positions
 
-def _global_keys(K, index, n):
-    """Row-major keys ``i * n + j`` of the entries of CSR block ``K`` (in its ``data`` order), rows
-    and columns mapped to the global unknowns by ``index`` (an int offset or a local → global array)."""
-    rows = np.repeat(np.arange(K.shape[0], dtype=np.int64), np.diff(K.indptr))
-    cols = K.indices.astype(np.int64)
+
+def _placed(K, index, n):
+    """The pattern of square CSR block ``K`` placed in an (n, n) matrix (one byte per entry), with the
+    local → global map of its rows and columns; ``index``: an int offset or a local → global array."""
+    m = K.shape[0]
     if isinstance(index, (int, np.integer)):
-        rows += index
-        cols += index
+        local_to_global = np.arange(index, index + m, dtype=np.int64)
+        # rows offset..offset+m-1 keep their structure: no COO, no sort
+        small = np.int32 if max(n, K.nnz) < np.iinfo(np.int32).max else np.int64
+        indptr = np.concatenate([np.zeros(index, dtype=small), K.indptr.astype(small),
+                                 np.full(n - index - m, K.indptr[-1], dtype=small)])
+        placed = sp.csr_matrix((np.ones(K.nnz, dtype=np.int8), K.indices.astype(small) + small(index), indptr),
+                               shape=(n, n))
     else:
-        rows, cols = index[rows], index[cols]
-    return rows * n + cols
+        local_to_global = np.asarray(index, dtype=np.int64)
+        rows = np.repeat(np.arange(m), np.diff(K.indptr))
+        placed = sp.csr_matrix((np.ones(K.nnz, dtype=np.int8),
+                                (local_to_global[rows], local_to_global[K.indices])), shape=(n, n))
+    return placed, local_to_global
+
+
+def _positions(union, K, local_to_global, index_type):
+    positions = np.empty(K.nnz, dtype=index_type)
+    missing = pattern_positions(union.indptr, union.indices, K.indptr, K.indices, local_to_global,
+                                local_to_global, positions)
+    if missing:
+        raise AssertionError(f"TangentPattern: {missing} entries of a block are not in the union pattern")
+    return positions
 
 
 class TangentPattern:
@@ -53,7 +72,6 @@ class TangentPattern:
     def __init__(self, n):
         self.n = int(n)
         self._signature = None
-        self._constant = None
         self.n_builds = 0
 
     @staticmethod
@@ -75,26 +93,32 @@ class TangentPattern:
 
     def _build(self, blocks, constant, layout):
         n = self.n
-        keys = [_global_keys(K, index, n) for K, index in blocks]
+        placed = [_placed(K, index, n) for K, index in blocks]
+        union = sp.csr_matrix((n, n), dtype=np.int8)
+        for pattern, _ in placed:
+            union = union + pattern
+        identity = np.arange(n, dtype=np.int64)
         if constant is not None:
-            keys.append(_global_keys(constant, 0, n))
-        union = np.unique(np.concatenate(keys)) if keys else np.zeros(0, dtype=np.int64)
-        indptr = np.zeros(n + 1, dtype=np.int64)
-        np.cumsum(np.bincount(union // n, minlength=n), out=indptr[1:])
-        index_type = np.int32 if max(len(union), n) < np.iinfo(np.int32).max else np.int64
-        self._indptr = indptr.astype(index_type)
-        self._indices = (union % n).astype(index_type)
+            union = union + sp.csr_matrix((np.ones(constant.nnz, dtype=np.int8), constant.indices, constant.indptr),
+                                          shape=(n, n))
+        union.sum_duplicates()                                   # canonical: sorted columns, no repeats
+        index_type = np.int32 if max(union.nnz, n) < np.iinfo(np.int32).max else np.int64
+        self._indptr = union.indptr.astype(index_type)
+        self._indices = union.indices.astype(index_type)
         self._indptr.flags.writeable = False
         self._indices.flags.writeable = False
-        self._positions = [np.searchsorted(union, k).astype(index_type) for k in keys[:len(blocks)]]
+        self._positions = [_positions(union, K, rows, index_type) for (K, _), (_, rows) in zip(blocks, placed)]
         # a block with repeated entries (not canonical CSR) is summed entry by entry
-        self._unique = [len(np.unique(k)) == len(k) for k in keys[:len(blocks)]]
-        self._base = np.zeros(len(union))
+        self._unique = [len(np.unique(p)) == len(p) if not K.has_canonical_format else True
+                        for (K, _), p in zip(blocks, self._positions)]
+        self._constant_positions, self._constant_unique = None, True
         if constant is not None:
-            np.add.at(self._base, np.searchsorted(union, keys[-1]), constant.data)
+            self._constant_positions = _positions(union, constant, identity, index_type)
+            self._constant_unique = constant.has_canonical_format or \
+                len(np.unique(self._constant_positions)) == constant.nnz
+        self._nnz = union.nnz
         # copies of the patterns the positions were made for (the caller's arrays may be reused)
         self._signature = [(shape, indptr.copy(), indices.copy()) for shape, indptr, indices in layout]
-        self._constant = constant
         self.n_builds += 1
 
     def assemble(self, blocks, constant=None):
@@ -109,12 +133,16 @@ class TangentPattern:
         """
         blocks = [(K if sp.isspmatrix_csr(K) else K.tocsr(), index) for K, index in blocks]
         layout = self._layout(blocks, constant)
-        if constant is not self._constant or not self._matches(layout):
+        if not self._matches(layout):
             self._build(blocks, constant, layout)
         else:
             # identical patterns by value: keep their arrays, so the next call compares by identity
             self._signature = [(shape, indptr, indices) for shape, indptr, indices in layout]
-        data = self._base.copy()
+        data = np.zeros(self._nnz)
+        if constant is not None and self._constant_unique:
+            data[self._constant_positions] = constant.data
+        elif constant is not None:
+            np.add.at(data, self._constant_positions, constant.data)
         for (K, _), positions, unique in zip(blocks, self._positions, self._unique):
             if unique:
                 data[positions] += K.data

@@ -191,3 +191,34 @@ def _colour_kernel(connectivity, codes, el_ptr, node_elements, block):
         colour_blocks[fill[colour[k]]] = k
         fill[colour[k]] += 1
     return colour_ptr, colour_blocks
+
+
+@njit
+def pattern_positions(indptr, indices, block_indptr, block_indices, row_map, col_map, positions):
+    """Where each entry of a sparse block lies in a larger CSR pattern that contains it.
+
+    Entry k of the block (CSR arrays ``block_indptr``, ``block_indices``; local row i, column j)
+    is entry (``row_map[i]``, ``col_map[j]``) of the pattern (``indptr``, ``indices``, sorted
+    columns in every row); its position in the pattern's data is written to ``positions[k]`` by
+    binary search in that row. Returns the number of block entries not found (0 when the pattern
+    contains the block; their positions are -1).
+    """
+    missing = 0
+    for i in range(block_indptr.shape[0] - 1):
+        row = row_map[i]
+        first, last = indptr[row], indptr[row + 1]
+        for k in range(block_indptr[i], block_indptr[i + 1]):
+            col = col_map[block_indices[k]]
+            lo, hi = first, last
+            while lo < hi:
+                mid = (lo + hi) // 2
+                if indices[mid] < col:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            if lo < last and indices[lo] == col:
+                positions[k] = lo
+            else:
+                positions[k] = -1
+                missing += 1
+    return missing
