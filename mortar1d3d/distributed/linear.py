@@ -85,9 +85,9 @@ class LinearSolver:
         modes, to 1e-8) and preconditions the Schur complement ``S = −B (K + Bᵀ W B)⁻¹ Bᵀ`` by
         ``−W⁻¹ = −diag(κ / γ)`` (applied by Jacobi), the limit of S where ``Bᵀ W B`` dominates K:
         the documented Schur preconditioner. γ is the solid's Young's modulus, which puts ``Bᵀ W B``
-        at the scale of the solid's stiffness (examples/scenes/lagrange_pullout.toml: 9 FGMRES
-        iterations, λ to 4e-9; with γ = 1e3 E 3 iterations, but λ only to 4e-6, the residual test
-        then seeing mostly the augmented rows).
+        at the scale of the solid's stiffness (examples/scenes/lagrange_pullout.toml at rtol 1e-12:
+        9 FGMRES iterations, λ to 3e-8 at 2 ranks; with γ = 1e3 E 3 iterations, but λ only to 4e-6,
+        the residual test then seeing mostly the augmented rows).
         """
         PETSc = petsc()
         split = self.split

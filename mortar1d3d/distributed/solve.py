@@ -280,7 +280,8 @@ def _linear_solver(model, layout, comm, coupling=None, kappa=None):
     return LinearSolver("schur", near_null_space=modes, split=split)
 
 
-def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts=None):
+def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts=None, parallel_output=None,
+                      samples_per_element=8):
     """Solve a scene with distributed assembly and solve (see the module docstring).
 
     Parameters
@@ -295,6 +296,11 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     parts : callable, optional
         ``parts(solid_mesh, beam_meshes, n_ranks)`` returning ``(solid_part, beam_part)``: a given
         partition instead (e.g. one that leaves ranks empty).
+    parallel_output : path, optional
+        A directory (seen by every rank) where each rank writes its owned elements of every state as
+        ``.vtu`` pieces and rank 0 the ``.pvtu`` files and ``result.pvd`` (:mod:`.output`).
+    samples_per_element : int
+        Samples of each beam element in ``parallel_output``.
 
     Returns
     -------
@@ -358,6 +364,11 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
                                                max_iterations=a["max_iterations"], max_cuts=a["max_cuts"],
                                                progress=callback)
     clock("solve")
+    if parallel_output is not None:
+        from .output import write_pieces
+        states = [(0.0, np.zeros_like(z))] + [(rec.load_factor, h) for rec, h in zip(records, history)]
+        write_pieces(parallel_output, model, physics, states, comm, samples_per_element)
+        clock("output")
     info_solve = system.last_linear_info or {}
     # collective: every rank sends its part of the operators and points, rank 0 keeps them
     outputs = [(d.gathered(), _gathered_points(comm, d.local)) for d in ops]

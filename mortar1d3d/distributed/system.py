@@ -54,12 +54,14 @@ class OwnedPhysics:
         self.parts = []          # (physics, serial unknowns of its DOFs, system indices of the same)
         kinematics = "linear" if model.linear else "nonlinear"
         mat = model.scene.solid["material"]
-        sub, nodes = solid_submesh(model.solid_mesh, part.owned_solid(rank))
+        self.solid_elements = part.owned_solid(rank)
+        sub, self.solid_nodes = solid_submesh(model.solid_mesh, self.solid_elements)
         self.solid = None
         if sub is not None:
             self.solid = SolidModel(sub, material(mat["model"], mat["E"], mat["nu"]), kinematics=kinematics)
-            serial = (3 * nodes[:, None] + np.arange(3)[None, :]).ravel()
+            serial = (3 * self.solid_nodes[:, None] + np.arange(3)[None, :]).ravel()
             self.parts.append((self.solid, serial, layout.of_serial[serial]))
+        self.beams = []          # per group with owned elements: (group, owned elements, their entries, mesh, part)
         for k, g in enumerate(model.groups):
             owned = part.owned_beams(rank, k)
             mesh, nodes = beam_submesh(g.mesh, owned)
@@ -70,6 +72,7 @@ class OwnedPhysics:
             per_node = g.type.dofs_per_node
             serial = (g.dofs.start + per_node * nodes[:, None] + np.arange(per_node)[None, :]).ravel()
             self.parts.append((physics, serial, layout.of_serial[serial]))
+            self.beams.append((k, owned, entries, mesh, self.parts[-1]))
 
     def evaluate(self, d, tangent=True):
         """Internal forces and tangent entries at the serial displacements ``d``, in system numbering.
