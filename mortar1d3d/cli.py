@@ -21,10 +21,12 @@ def _run(args):
         if not args.quiet:
             print(f"mortar1d3d run {args.scene}: {scene!r}", flush=True)
         start = time.perf_counter()
-        result = solve(scene, progress=not args.quiet)
+        out = Path(args.out) if args.out else Path("results") / scene.name
+        # a distributed run: every rank writes its elements under out/parallel, rank 0 the Result
+        parallel = out / "parallel" if scene.analysis.get("backend") == "petsc" else None
+        result = solve(scene, progress=not args.quiet, parallel_output=parallel)
         if result is None:          # a rank other than 0 of a distributed run: rank 0 writes
             return 0
-        out = Path(args.out) if args.out else Path("results") / scene.name
         paths = result.write(out, samples_per_element=args.samples)
     except (SceneError, MeshError, ConvergenceError, MissingPackageError) as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -1,19 +1,23 @@
-"""The linear penalty model on PETSc: distributed stiffness, CG + GAMG, the result gathered on rank 0.
+"""A scene on PETSc: distributed assembly, the library's Newton loop or linear step, the result on rank 0.
 
 ``solve(scene)`` with ``analysis.backend = "petsc"`` comes here (under ``mpiexec -n N``; one rank
 works too). Every rank reads the scene and builds the serial meshes, sets, supports and loads (the
-input is replicated in this first slice); the work that grows with the model is distributed:
+input is replicated in this slice); the work that grows with the model is distributed:
 
 * :func:`~.partition.partition` gives each rank its solid and beam elements;
-* each rank assembles the linear stiffness of its owned solid elements and owned beam elements
-  with the serial physics (the same Numba kernels, on meshes of its elements) and its part of D,
-  M and κ (:mod:`.assemble`), all added into one PETSc ``MPIAIJ`` matrix in the system numbering
-  (:class:`SystemLayout`: per rank its solid nodes, then its nodes of each beam group);
-* the penalty stiffness ε Bᵀ diag(κ)⁻¹ B (B = [−M, D], docs/conventions.md §1) is formed by PETSc
-  from the distributed B and κ;
-* supports by ``MatZeroRowsColumns`` (symmetric, the prescribed values moved to the right side);
-* CG with PETSc's algebraic multigrid GAMG, given the model's rigid-body modes as near-null space
-  (``analysis.solver`` = ``"auto"`` or ``"amg"``), or a parallel LU (MUMPS) for ``"direct"``.
+* each rank assembles its part of D, M and κ (:mod:`.assemble`), and PETSc forms the constant
+  coupling matrix from them: the penalty stiffness ε Bᵀ diag(κ)⁻¹ B (B = [−M, D],
+  docs/conventions.md §1), or with Lagrange multipliers the saddle block ``[[0, Bᵀ], [B, 0]]`` on
+  the coupled LM rows, the multipliers numbered rank by rank after each rank's displacements
+  (:class:`SystemLayout`);
+* :class:`~.system.DistributedSystem` evaluates the internal forces and tangents of each rank's
+  owned solid and beam elements (the serial physics, linear or nonlinear kinematics) into PETSc
+  vectors and ``MPIAIJ`` matrices; the library's own
+  :func:`~mortar1d3d.solvers.newton.solve_load_steps` (nonlinear: load steps, Newton iterations,
+  its convergence tests) or :func:`~mortar1d3d.solvers.newton.solve_linear_step` (linear) runs on
+  it, on every rank;
+* each linear solve is a PETSc KSP (:mod:`.linear`): CG + GAMG with the rigid-body modes, MUMPS,
+  or for multipliers a Schur-complement field split.
 
 The solution is gathered on rank 0, which builds the :class:`~mortar1d3d.result.Result` from the
 gathered operators (no serial mortar assembly); the other ranks return None.
@@ -24,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene import SceneError
-from .assemble import assemble_distributed, beam_submesh, solid_submesh
+from .assemble import assemble_distributed
 from .numbering import Numbering
 from .partition import partition
 from .petsc import coo_matrix, gather_vector, petsc, summed_vector
@@ -60,6 +64,24 @@ class SystemLayout:
             of_serial[block.start:block.stop] = start + new
         return cls(of_serial, ranges)
 
+    def with_multipliers(self, owner):
+        """The layout of all unknowns: rank r owns its displacement unknowns (as here), then its
+        multipliers (``owner``: the rank of each serial multiplier), in their serial order."""
+        n_parts = len(self.ranges) - 1
+        disp_owner = np.searchsorted(self.ranges, self.of_serial, side="right") - 1
+        owner = np.asarray(owner, dtype=np.int64)
+        sizes = np.diff(self.ranges) + np.bincount(owner, minlength=n_parts)
+        ranges = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        of_serial = np.empty(len(self.of_serial) + len(owner), dtype=np.int64)
+        of_serial[:len(self.of_serial)] = self.of_serial - self.ranges[disp_owner] + ranges[disp_owner]
+        # after the rank's displacements, in serial order
+        per_rank = np.bincount(owner, minlength=n_parts)
+        position = np.empty(len(owner), dtype=np.int64)
+        position[np.argsort(owner, kind="stable")] = np.arange(len(owner))
+        first = np.cumsum(per_rank) - per_rank
+        of_serial[len(self.of_serial):] = ranges[owner] + np.diff(self.ranges)[owner] + position - first[owner]
+        return SystemLayout(of_serial, ranges)
+
     def owned_serial(self, rank):
         """Serial index of each unknown ``rank`` owns, in the order of its system range."""
         first, last = self.ranges[rank], self.ranges[rank + 1]
@@ -72,11 +94,14 @@ class SystemLayout:
 def _unsupported(model):
     """SceneError naming the key of the first feature this slice does not distribute."""
     sc = model.scene
+    if sc.coupled and sc.coupling["constraint"] != "mortar":
+        return ("coupling.constraint: the PETSc backend couples with the mortar constraint so far (the Gauss-point "
+                "constraint runs with backend = \"serial\")")
     if not model.linear:
-        return "analysis.kinematics: the PETSc backend solves linear analyses so far; use \"linear\" or backend = \"serial\""
-    if sc.coupled and (sc.coupling["enforcement"] != "penalty" or sc.coupling["constraint"] != "mortar"):
-        return ("coupling.enforcement: the PETSc backend couples with mortar penalty so far (Lagrange multipliers "
-                "and the Gauss-point constraint run with backend = \"serial\")")
+        for i, item in enumerate(sc.loads):
+            if item["type"] in ("pressure", "moment"):
+                return (f"load[{i}].type: {item['type']!r} is a follower load in a nonlinear analysis, not distributed "
+                        "yet; use backend = \"serial\"")
     if sc.coupled and sc.coupling.get("rotational") is not None:
         return "coupling.rotational: not distributed yet; use backend = \"serial\""
     if any(g.rotations.size for g in model.groups):
@@ -102,87 +127,90 @@ class _BodyLoads:
         return 0.0
 
 
-def _entry_of_elements(g):
-    entry = np.empty(g.mesh.n_elements, dtype=np.int64)
-    for k, (a, b) in enumerate(g.entry_elements):
-        entry[a:b] = g.entries[k]
-    return entry
-
-
-def _stiffness_triplets(model, part, layout, rank):
-    """This rank's solid and beam stiffness entries and body forces, in system numbering."""
-    from ..physics.materials import material
-    from ..physics.solid import SolidModel
-    rows, cols, vals, f_idx, f_val = [], [], [], [], []
-    mat = model.scene.solid["material"]
-    sub, nodes = solid_submesh(model.solid_mesh, part.owned_solid(rank))
-    if sub is not None:
-        physics = SolidModel(sub, material(mat["model"], mat["E"], mat["nu"]), kinematics="linear")
-        _, K = physics.evaluate(np.zeros(physics.n_dofs))
-        K = K.tocoo()
-        serial = 3 * nodes[:, None] + np.arange(3)[None, :]
-        to_system = layout.of_serial[serial.ravel()]
-        rows.append(to_system[K.row]), cols.append(to_system[K.col]), vals.append(K.data)
-        for b in model._body_loads.values:
-            f_idx.append(to_system), f_val.append(physics.body_force(b))
-    for k, g in enumerate(model.groups):
-        owned = part.owned_beams(rank, k)
-        mesh, nodes = beam_submesh(g.mesh, owned)
-        if mesh is None:
-            continue
-        entries = _entry_of_elements(g)[owned]
-        physics = g.type.make_physics(mesh, [(1, model.scene.beams[e]["section"]) for e in entries])
-        per_node = g.type.dofs_per_node
-        _, K = physics.evaluate(np.zeros(mesh.n_centreline_dofs))
-        K = K.tocoo()
-        serial = g.dofs.start + per_node * nodes[:, None] + np.arange(per_node)[None, :]
-        to_system = layout.of_serial[serial.ravel()]
-        rows.append(to_system[K.row]), cols.append(to_system[K.col]), vals.append(K.data)
-    cat = (lambda parts, dt: np.concatenate(parts).astype(dt) if parts else np.zeros(0, dt))
-    return (cat(rows, np.int64), cat(cols, np.int64), cat(vals, float)), (cat(f_idx, np.int64), cat(f_val, float))
-
-
-def _coupling_matrix(model, part, numbering, layout, comm):
-    """B = [−M, D] of every group in system columns (rows: the groups' LM rows, rank-major per rank),
-    the summed κ per row, and each group's distributed operators."""
-    rank, n_parts = comm.getRank(), comm.getSize()
+def _group_operators(model, part, numbering, comm):
+    """Each group's distributed D, M, κ, and its κ gathered in the serial LM order (every rank)."""
     c = model.scene.coupling
     options = {k: c[k] for k in ("integration", "n_gauss", "lm", "search_points")}
-    # rows: per rank, its LM rows of group 0, then of group 1, ...
+    ops = [assemble_distributed(model.solid_mesh, g.mesh, part, numbering, group=k, comm=comm, **options)
+           for k, g in enumerate(model.groups)]
+    kappa = [gather_vector(d.kappa)[num.new_of_old] for d, num in zip(ops, numbering.lm)]
+    return ops, kappa
+
+
+def _constraint_triplets(model, ops, numbering, layout, k):
+    """Group ``k``'s B = [−M, D] as (rank-major LM rows of the group, system columns, values), this rank's part."""
+    g, dist = model.groups[k], ops[k]
+    per_node = g.type.dofs_per_node
+    # operator columns (rank-major per kind) back to serial, then to the system
+    beam_serial = np.empty(g.dofs.size, dtype=np.int64)
+    beam_serial[numbering.beams[k].dofs(np.arange(g.dofs.size), per_node)] = np.arange(g.dofs.size) + g.dofs.start
+    solid_serial = np.empty(3 * model.n_solid_nodes, dtype=np.int64)
+    solid_serial[numbering.solid.dofs(np.arange(3 * model.n_solid_nodes), 3)] = np.arange(3 * model.n_solid_nodes)
+    (rd, cd, vd), (rm, cm, vm) = dist.local.D, dist.local.M
+    return (np.concatenate([rd, rm]), layout.of_serial[np.concatenate([beam_serial[cd], solid_serial[cm]])],
+            np.concatenate([vd, -vm]))
+
+
+def _penalty_matrix(model, ops, numbering, layout, comm):
+    """ε Bᵀ diag(κ)⁻¹ B, formed by PETSc from the distributed B (rows: per rank, its LM rows of
+    group 0, then of group 1, ...) and the summed κ per row."""
+    rank, n_parts = comm.getRank(), comm.getSize()
     counts = np.array([[3 * num.count(r) for num in numbering.lm] for r in range(n_parts)], dtype=np.int64)
     row_ranges = np.concatenate([[0], np.cumsum(counts.sum(axis=1))])
-    rows, cols, vals, k_idx, k_val, ops = [], [], [], [], [], []
-    for k, g in enumerate(model.groups):
-        dist = assemble_distributed(model.solid_mesh, g.mesh, part, numbering, group=k, comm=comm, **options)
-        ops.append(dist)
-        num = numbering.lm[k]
-        per_node = g.type.dofs_per_node
-
-        def row_of(new_rows, num=num, k=k):
+    rows, cols, vals, k_idx, k_val = [], [], [], [], []
+    for k, num in enumerate(numbering.lm):
+        def row_of(new_rows):
             # the rank that owns a rank-major LM node: the range it falls in
             lm_rank = np.searchsorted(num.ranges, new_rows // 3, side="right") - 1
             return row_ranges[lm_rank] + counts[lm_rank, :k].sum(axis=1) + new_rows - 3 * num.ranges[lm_rank]
 
-        # operator columns (rank-major per kind) back to serial, then to the system
-        beam_serial = np.empty(g.dofs.size, dtype=np.int64)
-        beam_serial[numbering.beams[k].dofs(np.arange(g.dofs.size), per_node)] = np.arange(g.dofs.size) + g.dofs.start
-        solid_serial = np.empty(3 * model.n_solid_nodes, dtype=np.int64)
-        solid_serial[numbering.solid.dofs(np.arange(3 * model.n_solid_nodes), 3)] = np.arange(3 * model.n_solid_nodes)
-        r, cc, v = dist.local.D
-        rows.append(row_of(r)), cols.append(layout.of_serial[beam_serial[cc]]), vals.append(v)
-        r, cc, v = dist.local.M
-        rows.append(row_of(r)), cols.append(layout.of_serial[solid_serial[cc]]), vals.append(-v)
-        lm_new, kappa = dist.local.kappa
-        three = (3 * lm_new[:, None] + np.arange(3)[None, :]).ravel()
-        k_idx.append(row_of(three)), k_val.append(np.repeat(kappa, 3))
-    n_rows = int(row_ranges[-1])
-    local_rows = int(row_ranges[rank + 1] - row_ranges[rank])
-    n_sys = int(layout.ranges[-1])
-    local_sys = int(layout.ranges[rank + 1] - layout.ranges[rank])
+        r, c, v = _constraint_triplets(model, ops, numbering, layout, k)
+        rows.append(row_of(r)), cols.append(c), vals.append(v)
+        lm_new, kappa = ops[k].local.kappa
+        k_idx.append(row_of((3 * lm_new[:, None] + np.arange(3)[None, :]).ravel())), k_val.append(np.repeat(kappa, 3))
+    n_rows, local_rows = int(row_ranges[-1]), int(row_ranges[rank + 1] - row_ranges[rank])
+    n_sys, local_sys = int(layout.ranges[-1]), int(layout.ranges[rank + 1] - layout.ranges[rank])
     B = coo_matrix(comm, np.concatenate(rows), np.concatenate(cols), np.concatenate(vals), (local_rows, n_rows),
                    (local_sys, n_sys))
-    kappa = summed_vector(comm, np.concatenate(k_idx), np.concatenate(k_val), (local_rows, n_rows))
-    return B, kappa, ops
+    w = summed_vector(comm, np.concatenate(k_idx), np.concatenate(k_val), (local_rows, n_rows))
+    arr = w.getArray()
+    arr[arr > 0] = model.penalty / arr[arr > 0]
+    w.setArray(arr)
+    WB = B.copy()
+    WB.diagonalScale(L=w)
+    return B.transposeMatMult(WB)
+
+
+def _multipliers(model, numbering, kappa):
+    """The multipliers in the serial order (group by group, the coupled LM rows κ > 0): per group the
+    map from its rank-major LM rows to the multiplier's serial index (−1: not coupled), and the owner
+    rank of every multiplier (its LM node's)."""
+    maps, owners, start = [], [], 0
+    for num, kap in zip(numbering.lm, kappa):
+        coupled = np.flatnonzero(np.repeat(kap > 0.0, 3))           # serial LM rows
+        serial_row = np.full(3 * num.n, -1, dtype=np.int64)
+        serial_row[coupled] = start + np.arange(len(coupled))
+        maps.append(serial_row[num.dofs(np.arange(3 * num.n), 3).argsort()])     # rank-major row -> multiplier
+        owners.append(num.owner[coupled // 3])
+        start += len(coupled)
+    return maps, (np.concatenate(owners) if owners else np.zeros(0, np.int64))
+
+
+def _saddle_matrix(model, ops, numbering, layout, maps, comm):
+    """``[[0, Bᵀ], [B, 0]]`` on the coupled rows of B, in the system numbering of all unknowns."""
+    n = model.n_displacement_dofs
+    rows, cols, vals = [], [], []
+    for k, row_map in enumerate(maps):
+        r, c, v = _constraint_triplets(model, ops, numbering, layout, k)
+        mult = row_map[r]
+        keep = mult >= 0
+        r = layout.of_serial[n + mult[keep]]
+        rows += [r, c[keep]]
+        cols += [c[keep], r]
+        vals += [v[keep], v[keep]]
+    rank = comm.getRank()
+    sizes = (int(layout.ranges[rank + 1] - layout.ranges[rank]), int(layout.ranges[-1]))
+    return coo_matrix(comm, np.concatenate(rows), np.concatenate(cols), np.concatenate(vals), sizes, sizes)
 
 
 class _Clock:
@@ -212,32 +240,55 @@ def _traffic(A, comm):
     return {"ghosts": comm.tompi4py().allgather(int(len(off))), "nnz": comm.tompi4py().allgather(int(len(indices)))}
 
 
-def _near_null_space(model, layout, rank, A):
-    """The model's rigid-body modes (translations, rotations; tangent DOFs rotate) as a PETSc null space."""
-    PETSc = petsc()
+def _linear_solver(model, layout, comm, coupling=None, kappa=None):
+    """The KSP configuration of ``analysis.solver`` (:mod:`.linear`): penalty systems CG + GAMG, or
+    MUMPS for ``"direct"``; Lagrange multipliers MUMPS for ``"direct"`` and ``"auto"`` (the fallback
+    for small cases), the Schur field split for ``"block"`` (``coupling``: the saddle block,
+    ``kappa``: κ of every multiplier's LM node, serial order)."""
+    from .linear import LinearSolver
+    rank = comm.getRank()
+    solver = model.scene.analysis["solver"]
+    if solver == "direct" or (model.lagrange and solver == "auto"):
+        return LinearSolver("mumps")
+    n = model.n_displacement_dofs
+    owned = layout.owned_serial(rank)
     R = model.rigid_body_modes()                              # serial numbering, (n, 6)
-    owned_serial = layout.owned_serial(rank)
-    vecs = []
-    for j in range(R.shape[1]):
-        v = A.createVecRight()
-        v.setArray(np.ascontiguousarray(R[owned_serial, j]))
-        vecs.append(v)
-    # PETSc wants an orthonormal basis
-    for j, v in enumerate(vecs):
-        for u in vecs[:j]:
-            v.axpy(-v.dot(u), u)
-        v.normalize()
-    return PETSc.NullSpace().create(vectors=vecs, comm=A.getComm())
+    disp = owned < n
+    modes = [R[owned[disp], j] for j in range(R.shape[1])]
+    if not model.lagrange:
+        return LinearSolver("gamg", near_null_space=modes)
+    PETSc = petsc()
+    first = int(layout.ranges[rank])
+    gamma = model.scene.solid["material"]["E"]
+    # T − I = [[0, Bᵀ W], [0, 0]]: the saddle block's multiplier columns scaled by W = γ / κ
+    w = np.zeros(len(owned))
+    w[~disp] = gamma / kappa[owned[~disp] - n]
+    U = coupling.copy()
+    scale = coupling.createVecRight()
+    scale.setArray(w)
+    U.diagonalScale(R=scale)
+    fixed = layout.of_serial[model.fixed_dofs]
+    U.zeroRows(fixed[(fixed >= first) & (fixed < first + len(owned))].astype(PETSc.IntType), diag=0.0)
+    # −W⁻¹ on the multiplier field (numbered in the field: rank by rank)
+    n_mult = int(np.count_nonzero(~disp))
+    first_mult = int(comm.tompi4py().exscan(n_mult) or 0)
+    total = int(comm.tompi4py().allreduce(n_mult))
+    idx = first_mult + np.arange(n_mult)
+    schur = coo_matrix(comm, idx, idx, -kappa[owned[~disp] - n] / gamma, (n_mult, total), (n_mult, total))
+    split = {"transform": U, "schur": schur, "displacements": first + np.flatnonzero(disp),
+             "multipliers": first + np.flatnonzero(~disp)}
+    return LinearSolver("schur", near_null_space=modes, split=split)
 
 
-def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts=None):
-    """Solve a linear penalty scene with distributed assembly and solve (see the module docstring).
+def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts=None, parallel_output=None,
+                      samples_per_element=8):
+    """Solve a scene with distributed assembly and solve (see the module docstring).
 
     Parameters
     ----------
     scene : Scene
     progress : bool
-        True prints the solve's line on rank 0.
+        True prints one line per load step on rank 0.
     comm : PETSc.Comm, optional
         Default ``PETSc.COMM_WORLD``.
     method : {"metis", "geometric"}
@@ -245,6 +296,11 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     parts : callable, optional
         ``parts(solid_mesh, beam_meshes, n_ranks)`` returning ``(solid_part, beam_part)``: a given
         partition instead (e.g. one that leaves ranks empty).
+    parallel_output : path, optional
+        A directory (seen by every rank) where each rank writes its owned elements of every state as
+        ``.vtu`` pieces and rank 0 the ``.pvtu`` files and ``result.pvd`` (:mod:`.output`).
+    samples_per_element : int
+        Samples of each beam element in ``parallel_output``.
 
     Returns
     -------
@@ -252,8 +308,10 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     """
     from ..model.build import build
     from ..model.model import Model
+    from ..model.solve import _print_step
     from ..result import Result
-    from ..solvers.newton import StepRecord
+    from ..solvers.newton import solve_linear_step, solve_load_steps
+    from .system import DistributedSystem, OwnedPhysics
     PETSc = petsc()
     comm = PETSc.COMM_WORLD if comm is None else comm
     rank, size = comm.getRank(), comm.getSize()
@@ -276,87 +334,58 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
         part = partition(model.solid_mesh, beam_meshes, size, solid_part=solid_part, beam_part=beam_part)
     numbering = Numbering.of(part, model.solid_mesh, beam_meshes, scene.coupling["lm"] if scene.coupled else "line2")
     layout = SystemLayout.of(numbering, model.dofmap, [g.type.dofs_per_node for g in model.groups])
-    n_sys = int(layout.ranges[-1])
-    local = int(layout.ranges[rank + 1] - layout.ranges[rank])
     clock("partition")
-    (r, c, v), (f_idx, f_val) = _stiffness_triplets(model, part, layout, rank)
-    A = coo_matrix(comm, r, c, v, (local, n_sys), (local, n_sys), block_size=3)
-    clock("stiffness")
-    ops = []
+    ops, coupling, lagrange, kappa_rows = [], None, model.lagrange, None
     if scene.coupled:
-        B, kappa, ops = _coupling_matrix(model, part, numbering, layout, comm)
-        w = kappa.copy()
-        arr = w.getArray()
-        arr[arr > 0] = model.penalty / arr[arr > 0]
-        w.setArray(arr)
-        WB = B.copy()
-        WB.diagonalScale(L=w)
-        Kc = B.transposeMatMult(WB)
-        A.axpy(1.0, Kc, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        ops, kappa = _group_operators(model, part, numbering, comm)
+        if lagrange:
+            maps, owners = _multipliers(model, numbering, kappa)
+            layout = layout.with_multipliers(owners)
+            coupling = _saddle_matrix(model, ops, numbering, layout, maps, comm)
+            kappa_rows = np.concatenate([np.repeat(k[k > 0.0], 3) for k in kappa])
+        else:
+            coupling = _penalty_matrix(model, ops, numbering, layout, comm)
     clock("coupling")
-    # loads: the replicated dead loads on their owners, the body forces added by PETSc
-    b = A.createVecLeft()
-    owned_serial = layout.owned_serial(rank)
-    b.setArray(model.dead_load[owned_serial])
-    if len(f_idx):
-        b.setValues(f_idx.astype(PETSc.IntType), f_val, addv=PETSc.InsertMode.ADD_VALUES)
-    b.assemblyBegin()
-    b.assemblyEnd()
-    # supports: symmetric elimination, prescribed values to the right-hand side
-    x = A.createVecRight()
-    x.set(0.0)
-    fixed_sys = layout.of_serial[model.fixed_dofs]
-    first = int(layout.ranges[rank])
-    keep = (fixed_sys >= first) & (fixed_sys < first + local)
-    rows = fixed_sys[keep].astype(PETSc.IntType)
-    x.setValues(rows, model.prescribed(1.0)[keep])
-    x.assemblyBegin()
-    x.assemblyEnd()
-    A.zeroRowsColumns(rows, diag=1.0, x=x, b=b)
-    A.setNearNullSpace(_near_null_space(model, layout, rank, A))
-    ksp = PETSc.KSP().create(comm=comm)
-    ksp.setOperators(A)
-    solver = scene.analysis["solver"]
-    if solver == "direct":
-        ksp.setType(PETSc.KSP.Type.PREONLY)
-        ksp.getPC().setType(PETSc.PC.Type.LU)
-        ksp.getPC().setFactorSolverType("mumps")
-    else:
-        ksp.setType(PETSc.KSP.Type.CG)
-        # the true residual, as analysis.rtol means for the serial solvers (not the preconditioned one)
-        ksp.setNormType(PETSc.KSP.NormType.UNPRECONDITIONED)
-        ksp.getPC().setType(PETSc.PC.Type.GAMG)
-        ksp.setTolerances(rtol=scene.analysis["rtol"], atol=0.0, max_it=10000)
-    ksp.setFromOptions()
+    physics = OwnedPhysics(model, part, layout, rank)         # in the numbering of all unknowns
+    clock("stiffness")
+    system = DistributedSystem(model, physics, layout, coupling, physics.body_forces(model._body_loads.values),
+                               _linear_solver(model, layout, comm, coupling, kappa_rows), comm)
     clock("loads_supports")
-    ksp.solve(b, x)
+    callback = _print_step if (progress is True and rank == 0) else None
+    z0 = np.zeros(system.n_unknowns)
+    if model.linear:
+        z, record, _ = solve_linear_step(system, z0, started=start)
+        records, history = [record], [z.copy()]
+        if callback:
+            callback(record, 1, 1)
+    else:
+        a = scene.analysis
+        z, records, history = solve_load_steps(system, z0, a["steps"], rtol=a["rtol"], increment_rtol=a["rtol"],
+                                               max_iterations=a["max_iterations"], max_cuts=a["max_cuts"],
+                                               progress=callback)
     clock("solve")
-    reason = ksp.getConvergedReason()
-    if reason < 0:
-        from ..solvers.newton import ConvergenceError
-        raise ConvergenceError(f"PETSc KSP {ksp.getType()} with {ksp.getPC().getType()} did not converge "
-                               f"(reason {reason}) after {ksp.getIterationNumber()} iterations")
-    iterations = ksp.getIterationNumber()
-    x_all = gather_vector(x)
+    if parallel_output is not None:
+        from .output import write_pieces
+        states = [(0.0, np.zeros_like(z))] + [(rec.load_factor, h) for rec, h in zip(records, history)]
+        write_pieces(parallel_output, model, physics, states, comm, samples_per_element)
+        clock("output")
+    info_solve = system.last_linear_info or {}
     # collective: every rank sends its part of the operators and points, rank 0 keeps them
     outputs = [(d.gathered(), _gathered_points(comm, d.local)) for d in ops]
-    info = {"ranks": size, "unknowns": n_sys, "iterations": iterations, "ksp": ksp.getType(),
-            "pc": ksp.getPC().getType(), "partition": part.stats, "timings": clock.times,
-            "cpu": comm.tompi4py().allgather(clock.cpu),
-            "traffic": _traffic(A, comm)}
+    info = {"ranks": size, "unknowns": system.n_unknowns, "iterations": info_solve.get("iterations"),
+            "ksp": info_solve.get("ksp"), "pc": info_solve.get("pc"), "partition": part.stats,
+            "timings": clock.times, "cpu": comm.tompi4py().allgather(clock.cpu),
+            "traffic": _traffic(system.last_tangent, comm)}
     if rank != 0:
         return None
-    z = np.zeros(model.n_displacement_dofs)
-    z[:] = x_all[layout.of_serial]
     gathered = [_serial_operators(model, g, out, numbering, k) for k, (g, out) in enumerate(zip(model.groups, outputs))]
     served = Model(model_built(model))
     served.prepare(operators=gathered or None)
-    record = StepRecord(load_factor=1.0, iterations=1, residuals=[], increments=[float(np.linalg.norm(z))],
-                        time=time.perf_counter() - start,
-                        notes=[f"PETSc {info['ksp']} + {info['pc']} on {size} rank(s): {iterations} iterations"])
-    if progress is True:
-        print(f"  step    1  load factor   1.0000  {record.notes[0]}  {record.time:6.2f} s", flush=True)
-    result = Result(served, z, [record], [z.copy()], wall_time=time.perf_counter() - start)
+    served.last_residual = system.last_residual
+    note = f"PETSc {info['ksp']} + {info['pc']} on {size} rank(s): {info['iterations']} iterations (last solve)"
+    for rec in records:
+        rec.notes.append(note)
+    result = Result(served, z, records, history, wall_time=time.perf_counter() - start)
     result.distributed = info
     return result
 

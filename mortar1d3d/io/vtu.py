@@ -520,8 +520,11 @@ def write_pvd(path, entries):
         lines.append(f"    <DataSet timestep={quoteattr(repr(timestep))} group=\"\" part=\"{int(part)}\" "
                      f"file={quoteattr(file.as_posix())}/>")
     lines += ["  </Collection>", "</VTKFile>", ""]
-    text = "\n".join(lines)
+    return _write_text(path, "\n".join(lines))
 
+
+def _write_text(path, text):
+    """Write ``text`` (UTF-8) to ``path`` through a temporary file (no partial file on failure)."""
     def write(tmp):
         with open(tmp, "w", encoding="utf-8") as f:
             f.write(text)

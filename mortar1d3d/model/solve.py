@@ -26,7 +26,7 @@ def _print_step(record, index, _n):
           + f"  {record.time:6.2f} s" + "".join(f"; {note}" for note in record.notes), flush=True)
 
 
-def solve(scene, *, progress=False):
+def solve(scene, *, progress=False, parallel_output=None):
     """Run a scene: assemble what it needs, solve, return a :class:`~mortar1d3d.result.Result`.
 
     Parameters
@@ -37,7 +37,8 @@ def solve(scene, *, progress=False):
 
     With ``analysis.backend = "petsc"`` the scene is assembled and solved on PETSc over the MPI
     ranks (:func:`mortar1d3d.distributed.solve.solve_distributed`): rank 0 gets the Result, the
-    other ranks None.
+    other ranks None; ``parallel_output`` (a directory, distributed runs only) has every rank
+    write its own elements as ``.vtu`` pieces joined by ``.pvtu`` files and ``result.pvd``.
 
     Raises
     ------
@@ -61,7 +62,10 @@ def solve(scene, *, progress=False):
         for name in ("mpi4py", "petsc4py", "pymetis"):
             require(name)
         from ..distributed.solve import solve_distributed
-        return solve_distributed(scene, progress=progress)
+        return solve_distributed(scene, progress=progress, parallel_output=parallel_output)
+    if parallel_output is not None:
+        raise ValueError("parallel_output: per-rank output is written by distributed runs (analysis.backend = "
+                         "\"petsc\"); a serial Result writes with Result.write")
     model = Model(build(scene))
     announce_compilation()      # after the scene's checks: an invalid scene fails without it
     model.prepare()

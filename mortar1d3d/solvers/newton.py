@@ -18,7 +18,11 @@ and optionally
 * ``reference()``: the base configuration of the leading unknowns (coordinates and tangents that
   the unknowns displace), for the round-off floor of the residual;
 * ``last_linear_info``: a dict set by ``solve_linear``; its ``note`` (a string, e.g. that an
-  iterative solver broke down and another took over) is copied into the step's record.
+  iterative solver broke down and another took over) is copied into the step's record;
+* ``free_block(K)`` and ``product(K, v, absolute=False)``: the Jacobian on the free unknowns (what
+  ``solve_linear`` takes) and ``K v`` (``|K| v``), for a Jacobian that is no scipy matrix (the
+  distributed system's PETSc matrix, :mod:`mortar1d3d.distributed.system`); default
+  ``K[free][:, free]`` and ``K @ v``.
 """
 import math
 import time
@@ -92,6 +96,20 @@ def _magnitude(system, z):
     return size
 
 
+def _free_block(system, K):
+    """The Jacobian on the free unknowns, what ``system.solve_linear`` takes."""
+    own = getattr(system, "free_block", None)
+    return K[system.free][:, system.free] if own is None else own(K)
+
+
+def _product(system, K, v, absolute=False):
+    """``K v``, or ``|K| v`` (entrywise absolute values) with ``absolute``."""
+    own = getattr(system, "product", None)
+    if own is not None:
+        return own(K, v, absolute=absolute)
+    return (abs(K) if absolute else K) @ v
+
+
 def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence):
     """Iterate to equilibrium at load factor t from z (modified in place).
 
@@ -134,7 +152,7 @@ def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence)
             # (|K| is a copy of the tangent: formed only once the increments have stopped contracting)
             if len(increments) >= 2 and increments[-1] > 0.5 * increments[-2]:
                 floor = ROUNDOFF_FACTOR * np.finfo(float).eps * float(
-                    np.linalg.norm((abs(K) @ _magnitude(system, z))[free]))
+                    np.linalg.norm(_product(system, K, _magnitude(system, z), absolute=True)[free]))
                 if rn <= floor:
                     return residuals, increments, notes
             if rn > divergence * r0:
@@ -144,7 +162,7 @@ def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence)
                               f"target {rtol * r0:.3e})")
         try:
             linear_rtol = min(LINEAR_RTOL_MAX, LINEAR_RTOL_FACTOR * rtol * r0 / rn)
-            dz = system.solve_linear(K[free][:, free], -r[free], z[free], rtol=linear_rtol)
+            dz = system.solve_linear(_free_block(system, K), -r[free], z[free], rtol=linear_rtol)
         except Exception as exc:  # a singular or unsolvable tangent ends this attempt
             raise _StepFailed(f"the linear solve failed: {exc}") from None
         note = (getattr(system, "last_linear_info", None) or {}).get("note")
@@ -275,9 +293,9 @@ def solve_linear_step(system, z0, *, t=1.0, started=None):
     z = z0.copy()
     z[system.fixed] = system.prescribed(t)
     free = system.free
-    rhs = -(r0 + K0 @ (z - z0))[free]
-    z[free] += system.solve_linear(K0[free][:, free], rhs)
-    residual = r0 + K0 @ (z - z0)
+    rhs = -(r0 + _product(system, K0, z - z0))[free]
+    z[free] += system.solve_linear(_free_block(system, K0), rhs)
+    residual = r0 + _product(system, K0, z - z0)
     note = (getattr(system, "last_linear_info", None) or {}).get("note")
     record = StepRecord(load_factor=t, iterations=1,
                         residuals=[float(np.linalg.norm(r0[free])), float(np.linalg.norm(residual[free]))],

@@ -1,0 +1,217 @@
+"""The model's nonlinear system on PETSc: what :mod:`mortar1d3d.solvers.newton` iterates on.
+
+:class:`DistributedSystem` follows the protocol of :mod:`mortar1d3d.solvers.newton` (``fixed``,
+``free``, ``prescribed``, ``residual``, ``solve_linear``, plus ``free_block`` and ``product``),
+so the library's own load steps, Newton iterations and convergence tests run unchanged on every
+rank. What grows with the model is distributed:
+
+* each rank evaluates the internal forces and tangents of its owned solid elements and owned beam
+  elements with the serial physics (the unchanged Numba kernels, on meshes of its elements,
+  :class:`OwnedPhysics`) and adds them into a PETSc vector and ``MPIAIJ`` matrix in the system
+  numbering (:class:`~.solve.SystemLayout`); entries of rows another rank owns go through PETSc's
+  assembly;
+* the coupling is one constant distributed matrix ``C`` (formed once by PETSc from the distributed
+  D, M, κ): the penalty stiffness ε Bᵀ diag(κ)⁻¹ B, or, with Lagrange multipliers, the saddle
+  block ``[[0, Bᵀ], [B, 0]]`` (B = [−M, D] on the coupled LM rows); the residual adds ``C z``, the
+  tangent ``C``;
+* the Newton increment is solved by PETSc KSP (:mod:`.linear`).
+
+The iterate ``z``, the residual handed to the Newton loop and the increment are replicated on
+every rank in the serial numbering (each rank reads the unknowns of its elements from ``z``; the
+vectors are gathered after each assembly and solve): every rank takes the same decisions on
+identical numbers, and the iterates are the serial run's up to the order of summation.
+"""
+import numpy as np
+import scipy.sparse as sp
+
+from .assemble import beam_submesh, solid_submesh
+from .petsc import coo_matrix, gather_vector, petsc, summed_vector
+
+
+def _entry_of_elements(g):
+    """Scene beam entry of every element of group ``g``."""
+    entry = np.empty(g.mesh.n_elements, dtype=np.int64)
+    for k, (a, b) in enumerate(g.entry_elements):
+        entry[a:b] = g.entries[k]
+    return entry
+
+
+class OwnedPhysics:
+    """The solid and beam physics of one rank's owned elements, with their unknowns in the system numbering.
+
+    Parameters
+    ----------
+    model : Model
+        Built (not prepared) on every rank.
+    part : Partition
+    layout : SystemLayout
+    rank : int
+    """
+
+    def __init__(self, model, part, layout, rank):
+        from ..physics.materials import material
+        from ..physics.solid import SolidModel
+        self.parts = []          # (physics, serial unknowns of its DOFs, system indices of the same)
+        kinematics = "linear" if model.linear else "nonlinear"
+        mat = model.scene.solid["material"]
+        self.solid_elements = part.owned_solid(rank)
+        sub, self.solid_nodes = solid_submesh(model.solid_mesh, self.solid_elements)
+        self.solid = None
+        if sub is not None:
+            self.solid = SolidModel(sub, material(mat["model"], mat["E"], mat["nu"]), kinematics=kinematics)
+            serial = (3 * self.solid_nodes[:, None] + np.arange(3)[None, :]).ravel()
+            self.parts.append((self.solid, serial, layout.of_serial[serial]))
+        self.beams = []          # per group with owned elements: (group, owned elements, their entries, mesh, part)
+        for k, g in enumerate(model.groups):
+            owned = part.owned_beams(rank, k)
+            mesh, nodes = beam_submesh(g.mesh, owned)
+            if mesh is None:
+                continue
+            entries = _entry_of_elements(g)[owned]
+            physics = g.type.make_physics(mesh, [(1, model.scene.beams[e]["section"]) for e in entries])
+            per_node = g.type.dofs_per_node
+            serial = (g.dofs.start + per_node * nodes[:, None] + np.arange(per_node)[None, :]).ravel()
+            self.parts.append((physics, serial, layout.of_serial[serial]))
+            self.beams.append((k, owned, entries, mesh, self.parts[-1]))
+
+    def evaluate(self, d, tangent=True):
+        """Internal forces and tangent entries at the serial displacements ``d``, in system numbering.
+
+        Returns
+        -------
+        forces : (index, values)
+        tangent : (rows, cols, values) or None
+        """
+        idx, f_val, rows, cols, vals = [], [], [], [], []
+        for physics, serial, system in self.parts:
+            f, K = physics.evaluate(np.ascontiguousarray(d[serial]), tangent=tangent)
+            idx.append(system), f_val.append(f)
+            if tangent:
+                K = K.tocoo()
+                rows.append(system[K.row]), cols.append(system[K.col]), vals.append(K.data)
+        forces = (_cat(idx, np.int64), _cat(f_val, float))
+        return forces, ((_cat(rows, np.int64), _cat(cols, np.int64), _cat(vals, float)) if tangent else None)
+
+    def body_forces(self, values):
+        """Consistent nodal forces of the body loads ``values`` (each (3,)) over the owned solid elements."""
+        if self.solid is None or not values:
+            return np.zeros(0, np.int64), np.zeros(0)
+        system = self.parts[0][2]
+        return np.tile(system, len(values)), np.concatenate([self.solid.body_force(b) for b in values])
+
+
+def _cat(parts, dtype):
+    return np.concatenate(parts).astype(dtype) if parts else np.zeros(0, dtype)
+
+
+class DistributedSystem:
+    """The Newton protocol of :mod:`mortar1d3d.solvers.newton` on PETSc (see the module docstring).
+
+    Parameters
+    ----------
+    model : Model
+        With its dead loads prepared (the replicated part of the loads).
+    physics : OwnedPhysics
+    layout : SystemLayout
+        Over all unknowns (displacements, then multipliers, rank by rank).
+    coupling : PETSc.Mat or None
+        The constant coupling matrix ``C`` in the system numbering.
+    body : (index, values)
+        This rank's body forces (system numbering), added to the replicated dead load.
+    solver : LinearSolver
+        Solves the reduced tangent system (:mod:`.linear`).
+    comm : PETSc.Comm
+    """
+
+    def __init__(self, model, physics, layout, coupling, body, solver, comm):
+        self.model, self.physics, self.layout, self.coupling = model, physics, layout, coupling
+        self.solver, self.comm = solver, comm
+        self.rank = comm.getRank()
+        self.n = model.n_displacement_dofs
+        self.n_unknowns = len(layout.of_serial)
+        self.fixed = model.fixed_dofs
+        self.free = np.setdiff1d(np.arange(self.n_unknowns), self.fixed)
+        self.owned_serial = layout.owned_serial(self.rank)
+        first = int(layout.ranges[self.rank])
+        self.sizes = (int(layout.ranges[self.rank + 1]) - first, self.n_unknowns)
+        fixed_system = layout.of_serial[self.fixed]
+        self.fixed_rows = fixed_system[(fixed_system >= first) & (fixed_system < first + self.sizes[0])]
+        dead = np.zeros(self.n_unknowns)
+        dead[:self.n] = model.dead_load
+        self.load = summed_vector(comm, *body, self.sizes)
+        self.load.setArray(self.load.getArray() + dead[self.owned_serial])
+        self.last_linear_info = None
+        self.last_residual = self.last_tangent = None
+
+    def prescribed(self, t):
+        return self.model.prescribed(t)
+
+    def reference(self):
+        return self.model.reference()
+
+    def _vector(self, values):
+        """A PETSc vector holding the owned entries of the serial vector ``values``."""
+        v = self.load.duplicate()
+        v.setArray(np.ascontiguousarray(values[self.owned_serial]))
+        return v
+
+    def _serial(self, v):
+        """The distributed vector ``v`` gathered on every rank, in the serial numbering."""
+        return gather_vector(v)[self.layout.of_serial]
+
+    def residual(self, z, t, tangent=True):
+        """``r = f_int(z) + C z − t f_ext`` in the serial numbering (replicated) and its Jacobian (PETSc)."""
+        PETSc = petsc()
+        failed = None
+        try:
+            (f_idx, f_val), K = self.physics.evaluate(z[:self.n], tangent)
+        except (FloatingPointError, ValueError, ArithmeticError) as exc:
+            failed = str(exc)
+        # one rank's failure is every rank's (the Newton loop must take the same branch everywhere)
+        messages = [m for m in self.comm.tompi4py().allgather(failed) if m]
+        if messages:
+            raise ArithmeticError(messages[0])
+        r = summed_vector(self.comm, f_idx, f_val, self.sizes)
+        r.axpy(-t, self.load)
+        z_vec = None
+        if self.coupling is not None:
+            z_vec = self._vector(z)
+            r.axpy(1.0, self.coupling * z_vec)
+        self.last_residual = self._serial(r)
+        if not tangent:
+            return self.last_residual, None
+        A = coo_matrix(self.comm, *K, self.sizes, self.sizes, block_size=self.solver.block_size)
+        if self.coupling is not None:
+            A.axpy(1.0, self.coupling, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        self.last_tangent = A
+        return self.last_residual, A
+
+    def free_block(self, K):
+        """The tangent on the free unknowns: ``K`` itself (the supports are removed in :meth:`solve_linear`)."""
+        return K
+
+    def product(self, K, v, absolute=False):
+        """``K v`` (``|K| v`` with ``absolute``) for the serial vector ``v``, in the serial numbering."""
+        x = self._vector(v)
+        if not absolute:
+            return self._serial(K * x)
+        indptr, indices, data = K.getValuesCSR()
+        local = sp.csr_matrix((np.abs(data), indices, indptr), shape=(len(indptr) - 1, self.n_unknowns))
+        full = np.empty(self.n_unknowns)
+        full[self.layout.of_serial] = v
+        y = x.duplicate()
+        y.setArray(local @ full)
+        return self._serial(y)
+
+    def solve_linear(self, K, b, x0=None, rtol=None):
+        """The increment on the free unknowns: ``K_ff x = b`` (``b`` on the free unknowns, serial order)."""
+        rtol = self.model.scene.analysis["rtol"] if rtol is None else rtol
+        full = np.zeros(self.n_unknowns)
+        full[self.free] = b
+        rhs = self._vector(full)
+        # the supports: rows and columns of the fixed unknowns become the identity, their entries of
+        # the right side are zero already (the increment keeps the prescribed values)
+        K.zeroRowsColumns(self.fixed_rows.astype(petsc().IntType), diag=1.0)
+        x = rhs.duplicate()
+        self.last_linear_info = self.solver.solve(K, rhs, x, rtol)
+        return self._serial(x)[self.free]
