@@ -824,6 +824,8 @@ def _coupling(block, has_beams):
                                           "deformation_gradient_3d_base_1)")
     if str(block.get("COUPLE_RESTART_STATE", "false")).lower() not in ("false", "no", "0"):
         _fail(f"{key}.COUPLE_RESTART_STATE", f"{block['COUPLE_RESTART_STATE']!r} is not supported")
+    if out["constraint"] == "mortar" and out["enforcement"] == "penalty":
+        out["negative_kappa"] = "keep"     # 4C couples every multiplier node of a pair, κ_j < 0 too (fourc.md)
     return out
 
 
