@@ -575,3 +575,26 @@ def test_4c_nurbs27_file_runs():
     computed = [row.computed for row in report.rows]
     assert np.allclose(computed, [-0.51445041289280102, -0.10584570423179150, -0.17782154527444494], rtol=0, atol=1e-9)
     assert report.max_deviation == pytest.approx(1.3216e-6, rel=1e-3)
+
+
+def test_negative_kappa_keep_couples_the_multipliers_that_drop_leaves_out():
+    """A line4 beam with a short piece in the solid: one multiplier node gets κ < 0. ``drop`` (the
+    library's default) leaves it uncoupled; ``keep`` (4C's rule, set by the reader) adds its penalty
+    with the negative weight ε / κ_j."""
+    from mortar1d3d.generate import box
+    from mortar1d3d.physics.coupling import Coupling
+    solid = box([0, 0, 0], [1, 1, 1], [1, 1, 1])
+    beam = BeamMesh("hermite", [[0.7, 0.5, 0.5], [1.7, 0.5, 0.5]], [[0, 1]], tangents=[[1, 0, 0], [1, 0, 0]])
+    ops = m13.assemble_mortar(beam, solid, lm="line4")
+    assert np.allclose(ops.kappa, [0.1243875, 0.0136125, 0.2298375, -0.0678375], rtol=0, atol=1e-12)
+    n_S = 3 * solid.n_nodes
+    args = (ops, beam, solid, n_S, n_S + beam.n_centreline_dofs)
+    drop, keep = Coupling(*args, penalty=10.0), Coupling(*args, penalty=10.0, negative_kappa="keep")
+    assert drop.coupled.tolist() == [True, True, True, False] and keep.coupled.all()
+    B3 = keep.B[9:12]
+    assert abs(keep.K - drop.K - 10.0 / ops.kappa[3] * (B3.T @ B3)).max() < 1e-12 * abs(keep.K).max()
+    with pytest.raises(SceneError, match="coupling.negative_kappa"):
+        Scene(solid={"mesh": {"box": [[0, 0, 0], [1, 1, 1]], "cells": [1, 1, 1]},
+                     "material": {"model": "linear_elastic", "E": 1.0, "nu": 0.3}},
+              beams=[{"mesh": beam, "section": {"E": 1.0, "radius": 0.01}}],
+              coupling={"enforcement": "lagrange", "negative_kappa": "keep"})
