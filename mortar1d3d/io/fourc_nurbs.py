@@ -149,7 +149,7 @@ def nurbs_solid(fc):
 def check_elements(solid, mesh, element_ids, fc, points=3):
     """FourCError naming the 4C element whose points, by 4C's definition of the element, are not the
     points of the Bézier element of its span in ``mesh`` (:class:`~mortar1d3d.nurbs.BezierMesh`), at
-    a ``points``³ lattice of each element."""
+    a lattice of ``points`` per direction in each element."""
     s = np.linspace(-1.0, 1.0, points)
     xi = np.stack(np.meshgrid(s, s, s, indexing="ij"), axis=-1).reshape(-1, 3)
     ours = element_values(mesh.solid, xi, mesh.solid.points)              # (n_elements, q, 3)

@@ -12,17 +12,10 @@ from itertools import combinations, product
 import numpy as np
 
 from ..elements.solid.bezier_hex import lattice_indices
-from .mesh import element_values
+from .mesh import _single_block as _block, element_values
 
 #: sample points per parameter direction of an entity (its corners included)
 SAMPLES = 5
-
-
-class _block:
-    """One block of a mesh seen as a mesh (``blocks`` and ``weights``) for :func:`element_values`."""
-
-    def __init__(self, solid, d, conn):
-        self.blocks, self.weights = [(d, conn)], solid.weights
 
 
 def _entities(p):
