@@ -144,13 +144,13 @@ def _solid(value, base_dir):
         if not file.exists():
             _fail("solid.mesh", f"mesh file {str(file)!r} does not exist")
         mesh_spec = file
-    elif isinstance(mesh, dict) and ("pipe" in mesh or "brick" in mesh):
-        from .nurbs.scene import NURBS_MESHES       # an exact NURBS pipe (section) or a NURBS brick
-        _table(mesh, "solid.mesh", ("pipe",) if "pipe" in mesh else ("brick",))
-        (kind, table), = mesh.items()
-        mesh_spec = {kind: NURBS_MESHES[kind][0](table, f"solid.mesh.{kind}")}
+    elif isinstance(mesh, dict) and any(k in mesh for k in ("pipe", "brick", "patches")):
+        from .nurbs.scene import NURBS_MESHES       # an exact NURBS pipe (section), a NURBS brick, or several patches
+        kind = next(k for k in ("pipe", "brick", "patches") if k in mesh)
+        _table(mesh, "solid.mesh", (kind,))
+        mesh_spec = {kind: NURBS_MESHES[kind][0](mesh[kind], f"solid.mesh.{kind}")}
     else:
-        _table(mesh, "solid.mesh", ("box", "cells", "element", "pipe", "brick"), required=("box", "cells"))
+        _table(mesh, "solid.mesh", ("box", "cells", "element", "pipe", "brick", "patches"), required=("box", "cells"))
         box = _points(mesh["box"], "solid.mesh.box")
         if len(box) != 2:
             _fail("solid.mesh.box", f"expected two corners [[x0, y0, z0], [x1, y1, z1]], got {len(box)} points")
@@ -383,16 +383,19 @@ def _required(table, key, path):
 def _coupling(value):
     path = "coupling"
     _table(value, path, ("constraint", "integration", "enforcement", "penalty", "lm", "n_gauss", "search_points",
-                         "rotational"))
+                         "negative_kappa", "rotational"))
     out = {"constraint": _choice(value.get("constraint", "mortar"), "coupling.constraint", ("mortar", "gauss_point")),
            "integration": _choice(value.get("integration", "segment"), "coupling.integration", ("segment", "element", "auto")),
            "enforcement": _choice(value.get("enforcement", "penalty"), "coupling.enforcement", ("penalty", "lagrange")),
            "lm": _choice(value.get("lm", "line2"), "coupling.lm", ("line2", "line3", "line4")),
            "n_gauss": _integer(value.get("n_gauss", 6), "coupling.n_gauss", 1, 64),
            "search_points": _integer(value.get("search_points", 6), "coupling.search_points", 2, 64),
+           "negative_kappa": _choice(value.get("negative_kappa", "drop"), "coupling.negative_kappa", ("drop", "keep")),
            "penalty": None}
     if "penalty" in value:
         out["penalty"] = _number(value["penalty"], "coupling.penalty", low=0.0, low_open=True)
+    if out["negative_kappa"] == "keep" and not (out["enforcement"] == "penalty" and out["constraint"] == "mortar"):
+        _fail("coupling.negative_kappa", "'keep' is for the mortar constraint with penalty enforcement only")
     if out["constraint"] == "gauss_point" and out["enforcement"] != "penalty":
         _fail("coupling.enforcement", "the gauss_point constraint is enforced by penalty only")
     out["rotational"] = _rotational(value["rotational"]) if "rotational" in value else None

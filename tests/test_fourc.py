@@ -189,10 +189,10 @@ def test_unsupported_keys_are_errors_naming_key_and_value(tmp_path, coupling, ex
     assert isinstance(info.value, SceneError)
 
 
-def test_nurbs27_and_constant_load_are_errors(tmp_path):
+def test_nurbs27_without_knots_and_constant_load_are_errors(tmp_path):
     nurbs = ['  - "1 SOLID NURBS27 ' + " ".join(str(i) for i in range(1, 13)) + ' MAT 1 KINEM nonlinear"']
-    with pytest.raises(FourCError, match="NURBS27"):
-        read_4c(tiny_file(tmp_path, elements=nurbs))
+    with pytest.raises(FourCError, match="STRUCTURE KNOTVECTORS: missing"):
+        scene_from_4c(tiny_file(tmp_path, elements=nurbs))
     with pytest.raises(FourCError, match=r"FUNCT1.*'2\*t\*t'"):
         scene_from_4c(tiny_file(tmp_path, funct="2*t*t"))
 
@@ -427,3 +427,174 @@ def test_input_folder_follows_the_environment_variable(tmp_path, monkeypatch):
     assert fourc.input_folder() == tmp_path
     monkeypatch.setenv(fourc.ENV_VAR, str(tmp_path / "absent"))
     assert fourc.input_folder() is None
+
+
+# -- NURBS27 (STRUCTURE KNOTVECTORS, CP lines) -------------------------------------------------------
+def nurbs_file(tmp_path, solid, elements=None, name="nurbs.4C.yaml"):
+    """A self-made 4C input file of a :class:`~mortar1d3d.nurbs.NurbsSolid` (quadratic patches): knot
+    vectors, control points as CP lines (4C ids = global ids + 1), NURBS27 elements numbered patch after
+    patch with the first direction fastest and their control points listed first direction fastest (4C's
+    layout), the patches' z = 0 faces clamped. ``elements`` overrides the element lines."""
+    knots, lines = ['  - "NURBS_DIMENSION 3"'], []
+    for k, patch in enumerate(solid.patches):
+        knots += ['  - "BEGIN NURBSPATCH"', f'  - "ID {k + 1}"']
+        for U, p in zip(patch.knots, patch.degrees):
+            knots += [f'  - "NUMKNOTS {len(U)}"', f'  - "DEGREE {p}"', '  - "TYPE Interpolated"']
+            knots += [f'  - "{float(u)!r}"' for u in U]
+        knots.append('  - "END NURBSPATCH"')
+        ids = solid.patch_ids[k].reshape(patch.shape) + 1
+        n0, n1, n2 = (n - 2 for n in patch.shape)
+        for m in range(n2):
+            for j in range(n1):
+                for i in range(n0):
+                    listed = ids[i:i + 3, j:j + 3, m:m + 3].transpose(2, 1, 0).ravel()
+                    lines.append(" ".join(map(str, listed)))
+    cps = [f'  - "CP {c + 1} COORD {x!r} {y!r} {z!r} {w!r}"' for c, ((x, y, z), w) in
+           enumerate(zip(solid.control.tolist(), solid.weights.tolist()))]
+    bottom = np.flatnonzero(np.abs(solid.control[:, 2]) < 1e-12) + 1
+    elements = elements or [f'  - "{e + 1} SOLID NURBS27 {ids} MAT 1 KINEM nonlinear"' for e, ids in enumerate(lines)]
+    text = f"""\
+PROBLEM TYPE:
+  PROBLEMTYPE: "Structure"
+  SHAPEFCT: "Nurbs"
+STRUCTURAL DYNAMIC:
+  DYNAMICTYPE: "Statics"
+  TIMESTEP: 1
+  NUMSTEP: 1
+  MAXTIME: 1
+MATERIALS:
+  - MAT: 1
+    MAT_Struct_StVenantKirchhoff:
+      YOUNG: 100
+      NUE: 0.3
+      DENS: 0
+DESIGN SURF DIRICH CONDITIONS:
+  - E: 1
+    NUMDOF: 3
+    ONOFF: [1, 1, 1]
+    VAL: [0, 0, 0]
+    FUNCT: [0, 0, 0]
+DSURF-NODE TOPOLOGY:
+{chr(10).join(f'  - "NODE {c} DSURF 1"' for c in bottom)}
+STRUCTURE KNOTVECTORS:
+{chr(10).join(knots)}
+NODE COORDS:
+{chr(10).join(cps)}
+STRUCTURE ELEMENTS:
+{chr(10).join(elements)}
+"""
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def three_patch_pipe():
+    """A closed pipe (radii 0.2 / 0.3, height 1) as three 120° patches of one element each: the NURBS
+    layout of 4C's NURBS27 file, here generated."""
+    from mortar1d3d import nurbs
+    parts = [nurbs.hollow_cylinder(0.2, 0.3, 1.0, angle=120.0, start=120.0 * k, elements=(1, 1, 1)).patches[0]
+             for k in range(3)]
+    return nurbs.NurbsSolid(parts)
+
+
+def test_nurbs27_file_becomes_the_bezier_mesh_of_its_patches(tmp_path):
+    from mortar1d3d.nurbs.mesh import element_values
+    solid = three_patch_pipe()
+    assert solid.n_control == 54                     # 3 × 27, the 3 × 9 seam points shared
+    scene, nodes = scene_from_4c(nurbs_file(tmp_path, solid))
+    mesh = scene.solid["mesh"]
+    assert mesh.blocks[0][0].name == "nurbs27" and mesh.n_elements == 3 and mesh.n_nodes == 54
+    rows = np.array([nodes[c + 1][1] for c in range(54)])
+    assert np.array_equal(mesh.points[rows], solid.control)          # each CP is the node of its 4C id
+    assert np.array_equal(mesh.weights[rows], solid.weights)
+    assert len(mesh.point_sets["dsurf1"]) == 18               # 3 × 9 on z = 0, 3 × 3 on the seams shared
+    # the exact cylinder: points of every element at the exact radii
+    s = np.linspace(-1.0, 1.0, 5)
+    xi = np.stack(np.meshgrid(s, s, s, indexing="ij"), axis=-1).reshape(-1, 3)
+    x = element_values(mesh, xi, mesh.points).reshape(-1, 3)
+    r = np.hypot(x[:, 0], x[:, 1])
+    on_surface = (np.abs(r - 0.2) < 1e-9) | (np.abs(r - 0.3) < 1e-9)
+    assert on_surface.sum() == 3 * 2 * 25 and (r > 0.2 - 1e-12).all() and (r < 0.3 + 1e-12).all()
+
+
+def test_nurbs27_elements_that_do_not_match_their_span_are_errors_naming_them(tmp_path):
+    from mortar1d3d import nurbs
+    from mortar1d3d.io.fourc_nurbs import nurbs_mesh, nurbs_solid
+    # one patch of two elements along u: element 2 lists a control point of its span wrongly
+    solid = nurbs.brick([0, 0, 0], [2, 1, 1], elements=(2, 1, 1))
+    path = nurbs_file(tmp_path, solid)
+    text = path.read_text()
+    line = next(l for l in text.splitlines() if l.startswith('  - "2 SOLID'))
+    ids = line.split()[4:31]
+    wrong = line.replace(f" {ids[0]} {ids[1]} ", f" {ids[1]} {ids[0]} ", 1)
+    path.write_text(text.replace(line, wrong))
+    with pytest.raises(FourCError, match=r"element 2: its control points do not match span \(1, 0, 0\) of patch 1"):
+        nurbs_solid(read_4c(path))
+    # a smooth two-element patch is read, but scenes would solve on a larger space than 4C's
+    with pytest.raises(FourCError, match=r"patch 1, direction 0: interior knots of multiplicity below"):
+        nurbs_mesh(read_4c(nurbs_file(tmp_path, solid)))
+    # one element listed with u and w swapped: mirrored, so det J < 0, named by the mesh check
+    pipe = three_patch_pipe()
+    path = nurbs_file(tmp_path, pipe)
+    text = path.read_text()
+    line = next(l for l in text.splitlines() if l.startswith('  - "3 SOLID'))
+    ids = np.array(line.split()[4:31]).reshape(3, 3, 3)
+    path.write_text(text.replace(line, line.replace(" ".join(ids.ravel()), " ".join(ids.transpose(2, 1, 0).ravel()))))
+    with pytest.raises(FourCError, match=r"STRUCTURE ELEMENTS"):
+        scene_from_4c(path)
+
+
+def test_nurbs27_knot_section_errors_name_the_key(tmp_path):
+    from mortar1d3d.io.fourc_nurbs import parse_knotvectors
+    with pytest.raises(FourCError, match="STRUCTURE KNOTVECTORS: expected 'NURBS_DIMENSION 3'"):
+        parse_knotvectors(["NURBS_DIMENSION 2"])
+    lines = ["NURBS_DIMENSION 3", "BEGIN NURBSPATCH", "ID 1"] + \
+            ["NUMKNOTS 6", "DEGREE 2", "TYPE Periodic"] + ["0", "0", "0", "1", "1", "1"]
+    with pytest.raises(FourCError, match=r"patch 1, direction 0: TYPE 'Periodic' is not supported"):
+        parse_knotvectors(lines)
+    path = nurbs_file(tmp_path, three_patch_pipe())
+    path.write_text(path.read_text().replace("STRUCTURE KNOTVECTORS:", "STRUCTURE KNOTS:"))
+    with pytest.raises(FourCError, match="STRUCTURE KNOTS: section not supported"):
+        scene_from_4c(path)
+
+
+@needs_inputs
+def test_4c_nurbs27_file_runs():
+    """4C's NURBS27 file (three 120° patches of a hollow cylinder, two Simo–Reissner beams, mortar
+    line4 penalty) runs. With the multiplier nodes of negative κ coupled as in 4C (the reader's
+    ``negative_kappa = "keep"``) it comes to 1.3e-6 of 4C's values (tolerance 1e-10; 3.9e-3 with them
+    dropped): see docs/fourc.md, NURBS27."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene, nodes = scene_from_4c(FOLDER / f"{R}nurbs27_mortar_penalty_line4.4C.yaml")
+        mesh = scene.solid["mesh"]
+        assert mesh.n_elements == 3 and mesh.n_nodes == 54 and sorted(mesh.point_sets) == \
+            ["dsurf1", "dsurf2", "dsurf3", "dvol1"]
+        report = fourc.check(FOLDER / f"{R}nurbs27_mortar_penalty_line4.4C.yaml")
+    assert scene.coupling["negative_kappa"] == "keep"
+    computed = [row.computed for row in report.rows]
+    assert np.allclose(computed, [-0.51445041289280102, -0.10584570423179150, -0.17782154527444494], rtol=0, atol=1e-9)
+    assert report.max_deviation == pytest.approx(1.3216e-6, rel=1e-3)
+
+
+def test_negative_kappa_keep_couples_the_multipliers_that_drop_leaves_out():
+    """A line4 beam with a short piece in the solid: one multiplier node gets κ < 0. ``drop`` (the
+    library's default) leaves it uncoupled; ``keep`` (4C's rule, set by the reader) adds its penalty
+    with the negative weight ε / κ_j."""
+    from mortar1d3d.generate import box
+    from mortar1d3d.physics.coupling import Coupling
+    solid = box([0, 0, 0], [1, 1, 1], [1, 1, 1])
+    beam = BeamMesh("hermite", [[0.7, 0.5, 0.5], [1.7, 0.5, 0.5]], [[0, 1]], tangents=[[1, 0, 0], [1, 0, 0]])
+    ops = m13.assemble_mortar(beam, solid, lm="line4")
+    assert np.allclose(ops.kappa, [0.1243875, 0.0136125, 0.2298375, -0.0678375], rtol=0, atol=1e-12)
+    n_S = 3 * solid.n_nodes
+    args = (ops, beam, solid, n_S, n_S + beam.n_centreline_dofs)
+    drop, keep = Coupling(*args, penalty=10.0), Coupling(*args, penalty=10.0, negative_kappa="keep")
+    assert drop.coupled.tolist() == [True, True, True, False] and keep.coupled.all()
+    B3 = keep.B[9:12]
+    assert abs(keep.K - drop.K - 10.0 / ops.kappa[3] * (B3.T @ B3)).max() < 1e-12 * abs(keep.K).max()
+    with pytest.raises(SceneError, match="coupling.negative_kappa"):
+        Scene(solid={"mesh": {"box": [[0, 0, 0], [1, 1, 1]], "cells": [1, 1, 1]},
+                     "material": {"model": "linear_elastic", "E": 1.0, "nu": 0.3}},
+              beams=[{"mesh": beam, "section": {"E": 1.0, "radius": 0.01}}],
+              coupling={"enforcement": "lagrange", "negative_kappa": "keep"})

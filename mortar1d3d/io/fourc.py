@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import FourCError  # noqa: F401 (raised here; importable from here)
+from .fourc_nurbs import KEY as _KNOTS, NURBS_ELEMENTS
 
 __all__ = ["FourCError", "FourCInput", "read_4c", "scene_from_4c", "run", "check", "ResultEntry", "CheckRow",
            "CheckReport", "ENV_VAR", "input_folder", "FOURC_SOLID_NODES"]
@@ -150,6 +151,8 @@ class FourCInput:
     solids : list of (element id, 4C type, node ids, material id)
     beams : list of (element id, 4C type, node ids, material id, rest of the line)
     sets : dict (kind, id) -> sorted node ids, kind in ``DNODE, DLINE, DSURF, DVOL``
+    control_points : dict int -> ((3,) float64, float)
+        NURBS control points (``CP`` lines of ``NODE COORDS``) by 4C id: position and weight.
     results : list of ResultEntry
     notes : list of str
         What the reader mapped to something other than the file's literal meaning (each one says
@@ -162,6 +165,7 @@ class FourCInput:
     solids: list = field(default_factory=list)
     beams: list = field(default_factory=list)
     sets: dict = field(default_factory=dict)
+    control_points: dict = field(default_factory=dict)
     results: list = field(default_factory=list)
     notes: list = field(default_factory=list)
 
@@ -199,9 +203,9 @@ def read_4c(path):
         parts = str(line).split()
         if len(parts) >= 6 and parts[0] == "NODE" and parts[2] == "COORD":
             out.nodes[int(parts[1])] = np.array([float(v) for v in parts[3:6]])
-        elif parts and parts[0] == "CP":
-            _fail("NODE COORDS", f"{line!r}: NURBS control points (CP) are not supported by the reader yet (NURBS "
-                                 "solids run through mortar1d3d.nurbs, not through scenes)")
+        elif len(parts) >= 7 and parts[0] == "CP" and parts[2] == "COORD":
+            # a NURBS control point: position and weight (mortar1d3d.io.fourc_nurbs)
+            out.control_points[int(parts[1])] = (np.array([float(v) for v in parts[3:6]]), float(parts[6]))
         else:
             _fail("NODE COORDS", f"cannot parse {line!r}")
     for line in data.get("STRUCTURE ELEMENTS") or ():
@@ -220,12 +224,9 @@ def read_4c(path):
             if family != "SOLID":
                 kind = {"SOLIDH8": "HEX8", "SOLIDH27": "HEX27", "SOLIDH20": "HEX20", "SOLIDT4": "TET4",
                         "SOLIDT10": "TET10"}[family]
-            if kind == "NURBS27":
-                _fail("STRUCTURE ELEMENTS", f"element {eid}: SOLID NURBS27 is not supported yet (scenes do not run "
-                                            "NURBS solids)")
-            if kind not in FOURC_SOLID_NODES:
+            if kind not in FOURC_SOLID_NODES and kind not in NURBS_ELEMENTS:
                 _fail("STRUCTURE ELEMENTS", f"element {eid}: solid element type {kind!r} is not supported; supported: "
-                                            f"{', '.join(FOURC_SOLID_NODES)}")
+                                            f"{', '.join([*FOURC_SOLID_NODES, *NURBS_ELEMENTS])}")
             if "KINEM" in rest and rest[rest.index("KINEM") + 1] != "nonlinear":
                 _fail("STRUCTURE ELEMENTS", f"element {eid}: KINEM {rest[rest.index('KINEM') + 1]!r} is not "
                                             "supported (only nonlinear)")
@@ -272,7 +273,7 @@ _IGNORED = ("TITLE", "PROBLEM SIZE", "IO", "IO/RUNTIME VTK OUTPUT", "IO/RUNTIME 
             "STRUCT NOX/Status Test", "BEAM INTERACTION", "BEAM CONTACT",
             "BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING/RUNTIME VTK OUTPUT",
             "BEAM INTERACTION/BEAM TO SOLID SURFACE/RUNTIME VTK OUTPUT")
-_MESH = ("NODE COORDS", "STRUCTURE ELEMENTS", "RESULT DESCRIPTION", "MATERIALS",
+_MESH = ("NODE COORDS", "STRUCTURE ELEMENTS", _KNOTS, "RESULT DESCRIPTION", "MATERIALS",
          "BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING LINE", "BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING VOLUME")
 _COUPLING = "BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING"
 
@@ -569,8 +570,12 @@ def scene_from_4c(source):
         _fail(mkey, "solid material law not supported (only MAT_Struct_StVenantKirchhoff)")
     material = {"model": "saint_venant_kirchhoff", "E": _param(params, "YOUNG", mkey),
                 "nu": _param(params, "NUE", mkey)}
+    nurbs = [eid for eid, kind, _, _ in fc.solids if kind in NURBS_ELEMENTS]
+    if nurbs and len(nurbs) != len(fc.solids):
+        _fail("STRUCTURE ELEMENTS", f"NURBS elements ({nurbs[0]}, …) together with Lagrange solid elements are not "
+                                    "supported")
     blocks = {}
-    for eid, kind, ids, _ in fc.solids:
+    for eid, kind, ids, _ in fc.solids if not nurbs else ():
         if len(ids) != len(FOURC_SOLID_NODES[kind][1]):
             _fail("STRUCTURE ELEMENTS", f"element {eid}: {kind} needs {len(FOURC_SOLID_NODES[kind][1])} nodes, got "
                                         f"{len(ids)}")
@@ -578,17 +583,19 @@ def scene_from_4c(source):
     cells = {}
     for kind, rows in blocks.items():
         cells[FOURC_SOLID_NODES[kind][0]] = np.asarray(rows, dtype=np.int64)[:, _permutation(kind)]
-    points = np.array([fc.nodes[n] for n in solid_ids])
-    point_sets = {}
+    try:
+        if nurbs:
+            from .fourc_nurbs import nurbs_mesh      # control points (CP) -> the Bézier mesh's nodes
+            solid_mesh, solid_row = nurbs_mesh(fc)
+        else:
+            # SolidMesh proves det J > 0 in every element: the geometric check of the permutation
+            solid_mesh = SolidMesh(np.array([fc.nodes[n] for n in solid_ids]), cells)
+    except MeshError as exc:
+        raise FourCError(f"STRUCTURE ELEMENTS: {exc}") from None
     for (kind, sid), ids in fc.sets.items():
         rows = [solid_row[n] for n in ids if n in solid_row]
         if rows:
-            point_sets[f"{kind.lower()}{sid}"] = np.asarray(rows, dtype=np.int64)
-    try:
-        # SolidMesh proves det J > 0 in every element: the geometric check of the permutation
-        solid_mesh = SolidMesh(points, cells, point_sets=point_sets)
-    except MeshError as exc:
-        raise FourCError(f"STRUCTURE ELEMENTS: {exc}") from None
+            solid_mesh.point_sets[f"{kind.lower()}{sid}"] = np.asarray(rows, dtype=np.int64)
 
     # -- beams ----------------------------------------------------------------------------------
     beams, beam_rows, beam_of_node, rotation_beams = [], {}, {}, set()
@@ -817,6 +824,8 @@ def _coupling(block, has_beams):
                                           "deformation_gradient_3d_base_1)")
     if str(block.get("COUPLE_RESTART_STATE", "false")).lower() not in ("false", "no", "0"):
         _fail(f"{key}.COUPLE_RESTART_STATE", f"{block['COUPLE_RESTART_STATE']!r} is not supported")
+    if out["constraint"] == "mortar" and out["enforcement"] == "penalty":
+        out["negative_kappa"] = "keep"     # 4C couples every multiplier node of a pair, κ_j < 0 too (fourc.md)
     return out
 
 

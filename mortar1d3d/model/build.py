@@ -137,7 +137,7 @@ def build_solid_mesh(spec):
     """SolidMesh of a validated ``solid`` entry: generated box, mesh object or file."""
     mesh = spec["mesh"]
     try:
-        if isinstance(mesh, dict) and ("pipe" in mesh or "brick" in mesh):
+        if isinstance(mesh, dict) and any(k in mesh for k in ("pipe", "brick", "patches")):
             from ..nurbs.scene import NURBS_MESHES
             (kind, table), = mesh.items()
             mesh = NURBS_MESHES[kind][1](table)[0]

@@ -318,7 +318,8 @@ class Model:
                     self.counts["mortar.integration_points"] += 1
                     self.counts["mortar.assembly"] += 1
                 g.coupling = Coupling(g.operators, g.mesh, self.solid_mesh, g.dof_offset, n,
-                                      constraint=c["constraint"], enforcement=c["enforcement"], penalty=self.penalty)
+                                      constraint=c["constraint"], enforcement=c["enforcement"], penalty=self.penalty,
+                                      negative_kappa=c.get("negative_kappa", "drop"))
                 self.counts["coupling.lagrange" if self.lagrange else f"coupling.{c['constraint']}_penalty"] += 1
                 self._check_coupled_lengths(g)
             self._prepare_rotational()

@@ -49,7 +49,7 @@ class NamedSets:
             lo, hi = np.asarray(spec["inside"], dtype=float)
             X = self.solid_mesh.points
             tol = 1e-9 * float(np.linalg.norm(np.ptp(X, axis=0)))
-            nodes = np.flatnonzero(((X >= lo - tol) & (X <= hi + tol)).all(axis=1))
+            nodes = self._at(lambda x: ((x >= lo - tol) & (x <= hi + tol)).all(axis=-1))
             if nodes.size == 0:
                 raise SceneError(f"{path}: the box {lo.tolist()} – {hi.tolist()} contains no solid node")
             return ("solid", nodes)
@@ -61,9 +61,14 @@ class NamedSets:
             X = self.solid_mesh.points
             if name in BOX_FACES:
                 axis = "xyz".index(name[0])
-                target = X[:, axis].min() if name.endswith("min") else X[:, axis].max()
+                if self._rational:
+                    from ..nurbs.sets import body_extent       # the body's extent, not its control points'
+                    lo, hi = body_extent(self.solid_mesh, axis)
+                    target = lo if name.endswith("min") else hi
+                else:
+                    target = X[:, axis].min() if name.endswith("min") else X[:, axis].max()
                 tol = 1e-9 * float(np.linalg.norm(np.ptp(X, axis=0)))
-                nodes = np.flatnonzero(np.abs(X[:, axis] - target) <= tol)
+                nodes = self._at(lambda x: np.abs(x[..., axis] - target) <= tol)
             elif name in self.solid_mesh.point_sets:
                 nodes = np.unique(np.asarray(self.solid_mesh.point_sets[name], dtype=np.int64))
             else:
@@ -75,6 +80,22 @@ class NamedSets:
         entry = int(parts[1])
         g, nodes = self.beam_nodes(entry, parts[2] if len(parts) == 3 else None, path)
         return ("beam", g, nodes)
+
+    @property
+    def _rational(self):
+        return any(d.rational for d, _ in self.solid_mesh.blocks)
+
+    def _at(self, inside):
+        """Solid nodes where ``inside(x)`` (points (..., 3) → bool) holds: polynomial elements' nodes by their
+        position; of rational (NURBS) elements the control points of the corners, edges, faces and elements
+        whose body lies there (:func:`mortar1d3d.nurbs.sets.body_nodes`)."""
+        X = self.solid_mesh.points
+        if not self._rational:
+            return np.flatnonzero(inside(X))
+        from ..nurbs.sets import body_nodes
+        polynomial = np.unique(np.concatenate([conn[:, : d.n_nodes].ravel() for d, conn in self.solid_mesh.blocks
+                                               if not d.rational] or [np.zeros(0, np.int64)]))
+        return np.union1d(polynomial[inside(X[polynomial])], body_nodes(self.solid_mesh, inside))
 
     def fibre_regions(self, families):
         """Per ``solid.material.fibres`` family: None (every element) or the mask of the elements

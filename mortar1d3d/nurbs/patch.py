@@ -238,6 +238,17 @@ class NurbsSolid:
     """Patches with global control points: coincident control points (position to ``tol`` times the
     extent, equal weight) of any patches, or of one patch with itself (a closed pipe's seam), are one.
 
+    Parameters
+    ----------
+    patches : list of NurbsPatch
+    tol : float
+        Relative tolerance of coincidence (see :func:`merge_coincident`).
+    ids : list of int arrays, optional
+        Given identification instead of coincidence: ``ids[k]`` (patch k's ``n_control``, flat C order)
+        are labels, equal labels being one control point (e.g. the control-point ids of an input file).
+        Control points with one label must coincide (position to ``tol`` times the extent, weight to
+        ``tol``); ValueError naming the label otherwise. Global ids follow the labels' first appearance.
+
     Attributes
     ----------
     patches : list of NurbsPatch
@@ -247,13 +258,16 @@ class NurbsSolid:
         Global id of every control point of each patch (flat, C order).
     """
 
-    def __init__(self, patches, tol=1e-10):
+    def __init__(self, patches, tol=1e-10, ids=None):
         self.patches = list(patches)
         if not self.patches:
             raise ValueError("NurbsSolid needs at least one patch")
         P = np.vstack([p.control.reshape(-1, 3) for p in self.patches])
         w = np.concatenate([p.weights.reshape(-1) for p in self.patches])
-        ids, keep = merge_coincident(P, w, tol)
+        if ids is None:
+            ids, keep = merge_coincident(P, w, tol)
+        else:
+            ids, keep = _identified(P, w, ids, [p.n_control for p in self.patches], tol)
         self.control = P[keep]
         self.weights = w[keep]
         starts = np.cumsum([0] + [p.n_control for p in self.patches])
@@ -273,6 +287,29 @@ class NurbsSolid:
 
     def __repr__(self):
         return f"NurbsSolid({len(self.patches)} patches, {self.n_elements} elements, {self.n_control} control points)"
+
+
+def _identified(points, weights, labels, sizes, tol):
+    """``(ids, first)`` as :func:`merge_coincident` returns them, from given labels per patch."""
+    if len(labels) != len(sizes):
+        raise ValueError(f"ids: expected one label array per patch ({len(sizes)}), got {len(labels)}")
+    for k, (lab, n) in enumerate(zip(labels, sizes)):
+        if np.shape(lab) != (n,):
+            raise ValueError(f"ids[{k}]: expected {n} labels (the patch's control points), got shape {np.shape(lab)}")
+    flat = np.concatenate([np.asarray(lab, dtype=np.int64) for lab in labels])
+    _, first, inverse = np.unique(flat, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    ids = rank[inverse.ravel()]
+    first = np.sort(first)
+    extent = max(float(np.ptp(points, axis=0).max()), 1e-300)
+    gap = np.linalg.norm(points - points[first][ids], axis=1) / extent
+    bad = np.flatnonzero((gap > tol) | (np.abs(weights - weights[first][ids]) > tol))
+    if len(bad):
+        raise ValueError(f"ids: the control points labelled {int(flat[bad[0]])} differ in position or weight "
+                         f"(one label must be one control point)")
+    return ids, first
 
 
 __all__ = ["NurbsPatch", "NurbsSolid", "merge_coincident"]

@@ -1,5 +1,6 @@
-"""The scene keys ``solid.mesh = { pipe = {...} }`` and ``solid.mesh = { brick = {...} }``: an exact NURBS
-pipe (section) or a NURBS block as the scene's solid.
+"""The scene keys ``solid.mesh = { pipe = {...} }``, ``solid.mesh = { brick = {...} }`` and
+``solid.mesh = { patches = [ {pipe = {...}}, {brick = {...}}, ... ] }``: an exact NURBS pipe (section), a
+NURBS block, or several such patches joined where their control points coincide, as the scene's solid.
 
 The pipe is :func:`~mortar1d3d.nurbs.hollow_cylinder` (about the z axis, from z = 0; quadratic, or
 ``degree = 3``: the exact quadratic geometry degree-elevated to cubic, which leaves it unchanged),
@@ -18,14 +19,19 @@ it acts on exactly that surface and a support on it holds exactly that surface.
 The brick is :func:`~mortar1d3d.nurbs.brick` (the box ``lower <= x <= upper``, all weights 1, degree 2
 or 3, ``elements`` equal spans per direction: h-refinement by knot insertion), with the named sets of
 a generated box: ``x_min``, ``x_max``, ``y_min``, ``y_max``, ``z_min``, ``z_max`` (its faces).
+
+Several patches (:func:`patches_mesh`): one degree for all; a patch that meets another one without
+shared control points is a SceneError naming it; each set name is the union over the patches of its
+faces on the solid's boundary, and ``<name>_<k>`` patch k's own.
 """
 import math
 
 import numpy as np
 
-from ..physics.surface import face_nodes
+from ..physics.surface import boundary_faces, face_nodes
 from .generate import MAX_SEGMENT_ANGLE, arc_segments, brick, hollow_cylinder
-from .mesh import BEZIER_TYPES, bezier_mesh
+from .mesh import BEZIER_TYPES, bezier_mesh, element_values
+from .patch import NurbsSolid
 from .solid import patch_face_set
 
 #: keys of ``solid.mesh.pipe``
@@ -94,38 +100,135 @@ def validate_brick(value, path="solid.mesh.brick"):
 def brick_mesh(spec):
     """The :class:`~mortar1d3d.SolidMesh` (with the sets ``x_min`` … ``z_max``) of a validated ``brick``
     table, and its :class:`~mortar1d3d.nurbs.BezierMesh`."""
-    mesh = bezier_mesh(brick(spec["lower"], spec["upper"], spec["elements"], spec["degree"]))
-    mesh.solid.point_sets.update(_face_sets(mesh, BRICK_FACES))
-    return mesh.solid, mesh
+    return patches_mesh([{"brick": spec}])
 
 
-def _face_sets(mesh, faces):
-    """Named node sets of a one-patch :class:`BezierMesh`: for ``faces`` (set name -> patch face), the nodes
-    of the element faces on that patch face."""
+def _face_sets(mesh, patch, faces, boundary=None):
+    """Named node sets of patch ``patch`` of a :class:`BezierMesh`: for ``faces`` (set name -> patch face),
+    the nodes of the element faces on that patch face (only those in the set of element faces
+    ``boundary``, pairs (element, local face), if given); empty sets are left out."""
     sets = {}
     for name, face in faces.items():
-        element_faces = patch_face_set(mesh, 0, face)
-        local = face_nodes(int(element_faces["code"][0]), int(element_faces["face"][0]))   # one local face throughout
-        sets[name] = np.unique(mesh.solid.connectivity[element_faces["element"][:, None], local[None, :]])
+        element_faces = patch_face_set(mesh, patch, face)
+        if boundary is not None:
+            element_faces = element_faces[[(int(e), int(f)) in boundary for e, f in
+                                           zip(element_faces["element"], element_faces["face"])]]
+        if len(element_faces):
+            local = face_nodes(int(element_faces["code"][0]), int(element_faces["face"][0]))   # one local face throughout
+            sets[name] = np.unique(mesh.solid.connectivity[element_faces["element"][:, None], local[None, :]])
     return sets
 
 
 def pipe_mesh(spec):
     """The :class:`~mortar1d3d.SolidMesh` (``nurbs27`` or ``nurbs64``, with the named sets of the module docstring) of a
     validated ``pipe`` table, and its :class:`~mortar1d3d.nurbs.BezierMesh`."""
-    solid = hollow_cylinder(spec["r_inner"], spec["r_outer"], spec["length"], angle=spec["angle"],
-                            elements=spec["elements"], start=spec["start"], degree=spec.get("degree", 2))
+    return patches_mesh([{"pipe": spec}])
+
+
+def _generate(kind, spec):
+    """The one patch of a validated ``pipe`` or ``brick`` table."""
+    if kind == "pipe":
+        solid = hollow_cylinder(spec["r_inner"], spec["r_outer"], spec["length"], angle=spec["angle"],
+                                elements=spec["elements"], start=spec["start"], degree=spec.get("degree", 2))
+    else:
+        solid = brick(spec["lower"], spec["upper"], spec["elements"], spec["degree"])
+    return solid.patches[0]
+
+
+def validate_patches(value, path="solid.mesh.patches"):
+    """The checked ``patches`` list: one or more ``{ pipe = {...} }`` or ``{ brick = {...} }`` tables of one
+    degree; SceneError naming the key otherwise."""
+    from ..scene import _describe, _fail, _list
+
+    items = _list(value, path)
+    if not items:
+        _fail(path, "expected at least one patch, e.g. [{ pipe = {...} }, { pipe = {...} }]")
+    out = []
+    for i, item in enumerate(items):
+        if not (isinstance(item, dict) and len(item) == 1 and next(iter(item)) in PATCH_KINDS):
+            _fail(f"{path}[{i}]", f"expected {{ pipe = {{...}} }} or {{ brick = {{...}} }}, got {_describe(item)}")
+        (kind, table), = item.items()
+        out.append({kind: NURBS_MESHES[kind][0](table, f"{path}[{i}].{kind}")})
+    for i, entry in enumerate(out):
+        (kind, spec), = entry.items()
+        first = next(iter(out[0].values()))["degree"]
+        if spec["degree"] != first:
+            _fail(f"{path}[{i}].{kind}.degree", f"{spec['degree']}, but patches[0] has degree {first}: the patches of "
+                                                "one solid must have one degree")
+    return out
+
+
+def patches_mesh(spec, path="solid.mesh.patches"):
+    """The :class:`~mortar1d3d.SolidMesh` and :class:`~mortar1d3d.nurbs.BezierMesh` of a validated ``patches``
+    list (or of one pipe or brick): the patches joined where their control points coincide.
+
+    Named sets: the sets of each patch's kind (``inner``, …, ``x_min``, …) as the union over the patches of
+    the nodes of element faces on that patch face that lie on the solid's boundary (a face joined to
+    another patch is inside, so a closed pipe of three 120° patches has no ``cut_start``), and each
+    patch's own as ``<name>_<k>`` (k: the patch's position in the list) where there are several patches.
+    A patch that meets another one without sharing its control points (a non-conforming interface) is a
+    SceneError naming both.
+    """
+    from ..scene import _fail
+
+    kinds = [next(iter(entry)) for entry in spec]
+    solid = NurbsSolid([_generate(kind, entry[kind]) for kind, entry in zip(kinds, spec)])
     mesh = bezier_mesh(solid)
-    closed = abs(spec["angle"] - 360.0) < 1e-12
-    # the seam is inside a closed pipe
-    faces = {name: face for name, face in PIPE_FACES.items() if not (closed and name.startswith("cut"))}
-    mesh.solid.point_sets.update(_face_sets(mesh, faces))
+    boundary = None                      # one patch: every patch face is on the boundary but a closed pipe's seam
+    if len(spec) > 1:
+        faces = boundary_faces(mesh.solid)
+        boundary = set(zip(faces["element"].tolist(), faces["face"].tolist()))
+        clash = _nonconforming(mesh, faces)
+        if clash is not None:
+            a, b, x = clash
+            _fail(f"{path}[{a}]", f"meets patches[{b}] at {np.round(x, 12).tolist()} without sharing its control points "
+                                  "there (a non-conforming interface: other element counts or positions along the "
+                                  "shared face, or overlapping patches); patches are joined only where their control "
+                                  "points coincide")
+    sets = {}
+    for k, kind in enumerate(kinds):
+        named = PIPE_FACES if kind == "pipe" else BRICK_FACES
+        if boundary is None and kind == "pipe" and abs(spec[k][kind]["angle"] - 360.0) < 1e-12:
+            named = {name: face for name, face in named.items() if not name.startswith("cut")}
+        own = _face_sets(mesh, k, named, boundary)
+        for name, nodes in own.items():
+            sets[name] = np.union1d(sets.get(name, np.zeros(0, np.int64)), nodes)
+            if len(spec) > 1:
+                sets[f"{name}_{k}"] = nodes
+    mesh.solid.point_sets.update(sets)
     return mesh.solid, mesh
 
 
+def _nonconforming(mesh, faces):
+    """``(patch a, patch b, point)`` of a boundary face of patch a whose centre lies on an element of another
+    patch b (there the two meet without shared control points), or None."""
+    from ..geometry.projection import INSIDE, project_points
+
+    solid = mesh.solid
+    d = solid.blocks[0][0]
+    centres = np.array([d.faces[f][3] for f in range(d.n_faces)])          # a hexahedron face's centre is ±e_axis
+    points = np.concatenate([element_values(solid, centres[f:f + 1], solid.points)[e, 0][None]
+                             for e, f in zip(faces["element"], faces["face"])]) if len(faces) else np.zeros((0, 3))
+    X = solid.points[solid.connectivity]                                   # control points bound each element
+    lo, hi = X.min(axis=1), X.max(axis=1)
+    tol = 1e-9 * float(np.ptp(solid.points, axis=0).max())
+    for (e, x) in zip(faces["element"], points):
+        a = int(mesh.element_patch[e])
+        near = np.flatnonzero((mesh.element_patch != a) & (lo <= x + tol).all(axis=1) & (hi >= x - tol).all(axis=1))
+        if len(near):
+            _, status = project_points(solid, np.repeat(x[None], len(near), axis=0), near)
+            hit = np.flatnonzero(status == INSIDE)
+            if len(hit):
+                return a, int(mesh.element_patch[near[hit[0]]]), x
+    return None
+
+
 #: the NURBS keys of ``solid.mesh``: name -> (validate, build the SolidMesh and its BezierMesh)
-NURBS_MESHES = {"pipe": (validate_pipe, pipe_mesh), "brick": (validate_brick, brick_mesh)}
+NURBS_MESHES = {"pipe": (validate_pipe, pipe_mesh), "brick": (validate_brick, brick_mesh),
+                "patches": (validate_patches, patches_mesh)}
+#: the kinds of patch an entry of ``solid.mesh.patches`` may be
+PATCH_KINDS = ("pipe", "brick")
 
 
-__all__ = ["validate_pipe", "pipe_mesh", "validate_brick", "brick_mesh", "NURBS_MESHES", "PIPE_FACES", "PIPE_KEYS",
-           "BRICK_FACES", "BRICK_KEYS"]
+__all__ = ["validate_pipe", "pipe_mesh", "validate_brick", "brick_mesh", "validate_patches", "patches_mesh",
+           "NURBS_MESHES", "PIPE_FACES", "PIPE_KEYS", "BRICK_FACES", "BRICK_KEYS", "PATCH_KINDS"]

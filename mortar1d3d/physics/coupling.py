@@ -160,10 +160,14 @@ class Coupling:
     enforcement : {"penalty", "lagrange"}
     penalty : float
         ε, a line-spring stiffness (force / length²).
+    negative_kappa : {"drop", "keep"}
+        A multiplier node whose κ_j = ∫ Φ_j ds is negative (a higher-order multiplier function on a
+        short piece of its element) is not coupled (``"drop"``), or coupled with its negative
+        penalty weight ε / κ_j as 4C does (``"keep"``; mortar penalty only).
     """
 
     def __init__(self, ops, beams, solid, beam_offset, n_dofs, constraint="mortar", enforcement="penalty",
-                 penalty=1.0):
+                 penalty=1.0, negative_kappa="drop"):
         if constraint not in CONSTRAINTS:
             raise ValueError(f"coupling constraint must be one of {CONSTRAINTS}, got {constraint!r}")
         if enforcement not in ENFORCEMENTS:
@@ -179,7 +183,9 @@ class Coupling:
         self.n_dofs = n_dofs
         n_S, n_B = 3 * solid.n_nodes, beams.n_centreline_dofs
         self.n_lm = ops.n_lm
-        self.coupled = ops.kappa > 0.0
+        if negative_kappa not in ("drop", "keep"):
+            raise ValueError(f"negative_kappa must be 'drop' or 'keep', got {negative_kappa!r}")
+        self.coupled = ops.kappa > 0.0 if negative_kappa == "drop" else ops.kappa != 0.0
         self.coupled_rows = np.flatnonzero(np.repeat(self.coupled, 3))
         kinv = np.zeros(ops.n_lm)
         kinv[self.coupled] = 1.0 / ops.kappa[self.coupled]
