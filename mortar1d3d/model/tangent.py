@@ -6,8 +6,9 @@ pattern, placed at the group's unknowns) and the constant penalty coupling stiff
 with ``scipy.sparse`` on every call (``block_diag``, then matrix additions) builds and sorts a new
 matrix each time: COO → CSR conversions, sorted merges and a fresh allocation of the whole tangent.
 Here the union of the patterns is computed once, with, for every block, the position of each of its
-entries in the union's ``data``; an iteration then allocates one ``data`` array, copies the constant
-part in and adds each block's values at their positions.
+entries in the union's ``data``; an iteration then allocates one ``data`` array and adds the
+constant's and each block's values at their positions (a compiled loop: numpy's fancy indexing
+took as long as the solid's element kernel at 3e5 unknowns).
 
 The result has the same entries and the same values bit for bit as the scipy sum: every entry has
 at most one block contribution besides the constant part (the blocks sit on disjoint unknowns), and
@@ -24,7 +25,7 @@ build needs little more memory than the tangent itself.
 import numpy as np
 import scipy.sparse as sp
 
-from ..physics.assembly_graph import pattern_positions
+from ..physics.assembly_graph import add_at_positions, pattern_positions
 
 
 def _placed(K, index, n):
@@ -108,14 +109,9 @@ class TangentPattern:
         self._indptr.flags.writeable = False
         self._indices.flags.writeable = False
         self._positions = [_positions(union, K, rows, index_type) for (K, _), (_, rows) in zip(blocks, placed)]
-        # a block with repeated entries (not canonical CSR) is summed entry by entry
-        self._unique = [len(np.unique(p)) == len(p) if not K.has_canonical_format else True
-                        for (K, _), p in zip(blocks, self._positions)]
-        self._constant_positions, self._constant_unique = None, True
+        self._constant_positions = None
         if constant is not None:
             self._constant_positions = _positions(union, constant, identity, index_type)
-            self._constant_unique = constant.has_canonical_format or \
-                len(np.unique(self._constant_positions)) == constant.nnz
         self._nnz = union.nnz
         # copies of the patterns the positions were made for (the caller's arrays may be reused)
         self._signature = [(shape, indptr.copy(), indices.copy()) for shape, indptr, indices in layout]
@@ -129,7 +125,7 @@ class TangentPattern:
         blocks : list of (scipy.sparse.csr_matrix, int or (m,) int array)
             Square blocks on disjoint sets of unknowns, with their global offset or index array.
         constant : scipy.sparse.csr_matrix (n, n) or None
-            The same matrix object on every call (a new object rebuilds the union).
+            Added to every result (a changed pattern rebuilds the union, like a block's).
         """
         blocks = [(K if sp.isspmatrix_csr(K) else K.tocsr(), index) for K, index in blocks]
         layout = self._layout(blocks, constant)
@@ -139,15 +135,10 @@ class TangentPattern:
             # identical patterns by value: keep their arrays, so the next call compares by identity
             self._signature = [(shape, indptr, indices) for shape, indptr, indices in layout]
         data = np.zeros(self._nnz)
-        if constant is not None and self._constant_unique:
-            data[self._constant_positions] = constant.data
-        elif constant is not None:
-            np.add.at(data, self._constant_positions, constant.data)
-        for (K, _), positions, unique in zip(blocks, self._positions, self._unique):
-            if unique:
-                data[positions] += K.data
-            else:
-                np.add.at(data, positions, K.data)
+        if constant is not None:
+            add_at_positions(data, self._constant_positions, constant.data)
+        for (K, _), positions in zip(blocks, self._positions):
+            add_at_positions(data, positions, K.data)
         if np.any(data == 0.0):
             K = sp.csr_matrix((data, self._indices.copy(), self._indptr.copy()), shape=(self.n, self.n), copy=False)
             K.has_sorted_indices = True

@@ -222,3 +222,10 @@ def pattern_positions(indptr, indices, block_indptr, block_indices, row_map, col
                 positions[k] = -1
                 missing += 1
     return missing
+
+
+@njit
+def add_at_positions(data, positions, values):
+    """``data[positions[k]] += values[k]`` for every k in order (repeated positions sum in entry order)."""
+    for k in range(positions.shape[0]):
+        data[positions[k]] += values[k]
