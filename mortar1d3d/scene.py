@@ -385,7 +385,8 @@ def _coupling(value):
     _table(value, path, ("constraint", "integration", "enforcement", "penalty", "lm", "n_gauss", "search_points",
                          "rotational"))
     out = {"constraint": _choice(value.get("constraint", "mortar"), "coupling.constraint", ("mortar", "gauss_point")),
-           "integration": _choice(value.get("integration", "segment"), "coupling.integration", ("segment", "element", "auto")),
+           "integration": _choice(value.get("integration", "segment"), "coupling.integration",
+                                  ("segment", "element", "auto", "element_boundary")),
            "enforcement": _choice(value.get("enforcement", "penalty"), "coupling.enforcement", ("penalty", "lagrange")),
            "lm": _choice(value.get("lm", "line2"), "coupling.lm", ("line2", "line3", "line4")),
            "n_gauss": _integer(value.get("n_gauss", 6), "coupling.n_gauss", 1, 64),

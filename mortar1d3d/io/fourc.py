@@ -769,13 +769,14 @@ def _coupling(block, has_beams):
     strategy = str(block.get("GEOMETRY_PAIR_STRATEGY", "segmentation"))
     if strategy == "segmentation":
         out["integration"] = "segment"
-    elif strategy in ("gauss_point_projection_without_boundary_segmentation",
-                      "gauss_point_projection_boundary_segmentation"):
-        # the two differ only where a beam element leaves the solid: run() checks that none does
+    elif strategy == "gauss_point_projection_without_boundary_segmentation":
         out["integration"] = "element"
+    elif strategy == "gauss_point_projection_boundary_segmentation":
+        out["integration"] = "element_boundary"
     else:
         _fail(f"{key}.GEOMETRY_PAIR_STRATEGY", f"{strategy!r} is not supported (segmentation, "
-                                               "gauss_point_projection_without_boundary_segmentation)")
+                                               "gauss_point_projection_without_boundary_segmentation, "
+                                               "gauss_point_projection_boundary_segmentation)")
     out["search_points"] = int(block.get("GEOMETRY_PAIR_SEGMENTATION_SEARCH_POINTS", 6))
     out["n_gauss"] = int(block.get("GAUSS_POINTS", 6))
     constraint = str(block.get("CONSTRAINT_STRATEGY", "none"))
@@ -875,12 +876,6 @@ def run(path, progress=False):
     fc = read_4c(path)
     scene, nodes = scene_from_4c(fc)
     result = solve(scene, progress=progress)
-    strategy = (fc.data.get(_COUPLING) or {}).get("GEOMETRY_PAIR_STRATEGY")
-    outside = np.flatnonzero(result.coupled_length < result.beam_length * (1.0 - 1e-12))
-    if strategy == "gauss_point_projection_boundary_segmentation" and outside.size:
-        _fail(f"{_COUPLING}.GEOMETRY_PAIR_STRATEGY", f"{strategy!r} segments the beam elements that leave the solid "
-                                                    f"(beams {outside.tolist()} do), which is not supported; the "
-                                                    "library's element-based integration leaves them unsegmented")
     return result, nodes, fc
 
 

@@ -311,7 +311,7 @@ class Model:
                     g.operators = assemble_mortar(g.mesh, self.solid_mesh, integration=c["integration"],
                                                   n_gauss=c["n_gauss"], lm=c["lm"], search_points=c["search_points"])
                     self.counts["mortar.search"] += 1
-                    if c["integration"] in ("segment", "auto"):
+                    if c["integration"] in ("segment", "auto", "element_boundary"):
                         self.counts["mortar.segmentation"] += 1
                     self.counts["mortar.integration_points"] += 1
                     self.counts["mortar.assembly"] += 1
