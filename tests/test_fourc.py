@@ -173,8 +173,8 @@ def test_cli_check_exit_codes(tmp_path):
     ("  CONTACT_DISCRETIZATION: mortar\n  CONSTRAINT_STRATEGY: lagrange\n  LAGRANGE_FORMULATION: mixed\n"
      "  MORTAR_SHAPE_FUNCTION: line2\n", "", "LAGRANGE_FORMULATION: 'mixed' is not supported"),
     ("  CONTACT_DISCRETIZATION: mortar\n  CONSTRAINT_STRATEGY: penalty\n  MORTAR_SHAPE_FUNCTION: line2\n"
-     "  PENALTY_PARAMETER: 1\n  ROTATION_COUPLING: polar_decomposition_2d\n", "",
-     "ROTATION_COUPLING: 'polar_decomposition_2d' is not supported"),
+     "  PENALTY_PARAMETER: 1\n  ROTATION_COUPLING: deformation_gradient_y_2d\n", "",
+     "ROTATION_COUPLING: 'deformation_gradient_y_2d' is not supported"),
     ("  CONTACT_DISCRETIZATION: mortar\n  CONSTRAINT_STRATEGY: penalty\n  MORTAR_SHAPE_FUNCTION: line2\n"
      "  PENALTY_PARAMETER: 1\n  GEOMETRY_PAIR_STRATEGY: gauss_point_projection_cross_section\n", "",
      "GEOMETRY_PAIR_STRATEGY: 'gauss_point_projection_cross_section'"),
@@ -353,6 +353,34 @@ def test_4c_single_rotation_components_that_are_not_a_gauge_are_errors(tmp_path,
     path = tmp_path / "changed.4C.yaml"
     path.write_text(text)
     with pytest.raises(FourCError, match=message):
+        scene_from_4c(path)
+
+
+POLAR_2D = f"{R}rotational_coupling_gpts_polar_decomposition_2d.4C.yaml"
+
+
+@needs_inputs
+def test_4c_polar_decomposition_2d_file_passes():
+    """Line moments on the BEAM3R beam (about its axis x), the Gauss-point rotational coupling and
+    4C's polar_decomposition_2d, which in the file's y-z plane is the polar triad (measured 2.7e-12
+    against the tolerance 1e-10)."""
+    scene = Scene.from_4c(FOLDER / POLAR_2D)
+    assert scene.coupling["rotational"]["triad"] == "polar"
+    assert scene.coupling["rotational"]["constraint"] == "gauss_point"
+    assert [item["type"] for item in scene.loads] == ["line_moment"]
+    report = fourc.check(FOLDER / POLAR_2D)
+    assert report.passed, report.table()
+    assert report.max_deviation < 1e-11
+
+
+@needs_inputs
+def test_4c_polar_decomposition_2d_needs_rotations_about_x(tmp_path):
+    text = (FOLDER / POLAR_2D).read_text()
+    triads = "TRIADS 0.523598775598 0 0 0.523598775598 0 0 0.523598775598 0 0"
+    assert text.count(triads) == 1
+    path = tmp_path / "tilted.4C.yaml"
+    path.write_text(text.replace(triads, "TRIADS 0.523598775598 0.1 0 0.523598775598 0.1 0 0.523598775598 0.1 0"))
+    with pytest.raises(FourCError, match="ROTATION_COUPLING: 'polar_decomposition_2d' needs reference triads"):
         scene_from_4c(path)
 
 

@@ -118,7 +118,8 @@ def effects(model):
     for kind, when, detail in (("point", "once", "dead nodal forces"),
                                ("traction", "once", "dead surface traction"),
                                ("body", "once", "dead body force"),
-                               ("line", "once", "dead line load per reference length on beams")):
+                               ("line", "once", "dead line load per reference length on beams"),
+                               ("line_moment", "once", "dead moment per reference length on beams with rotations")):
         if kind in kinds:
             out.append(Effect(f"load.{kind}", when, detail))
     if "pressure" in kinds:

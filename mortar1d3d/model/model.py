@@ -378,7 +378,7 @@ class Model:
                 g.rotational = RotationalCoupling(g.operators, g.physics, self.solid_mesh, g.rotations.start,
                                                   self.n_displacement_dofs, triad=rot["triad"],
                                                   penalty=rot["penalty"], lm=rot["lm"],
-                                                  enforcement=rot["enforcement"])
+                                                  enforcement=rot["enforcement"], constraint=rot["constraint"])
                 self.counts[f"coupling.rotational_{rot['enforcement']}"] += 1
 
     def _check_operators(self, operators):
@@ -465,6 +465,15 @@ class Model:
                 dofs, f = line_force(g.mesh, np.arange(a, b), item["value"])
                 np.add.at(self.dead_load, g.dofs.start + dofs, f)
                 self.counts["load.line"] += 1
+            elif kind == "line_moment":
+                # moment per reference length: nodal moments ∫ L_k m ds on the rotation nodes (dead)
+                from ..physics.simo_reissner import line_moment
+                g, entry = sel[1], int(item["on"].split(":")[1])
+                a, b = g.entry_elements[g.entries.index(entry)]
+                nodes, moments = line_moment(g.physics, np.arange(a, b), item["value"])
+                np.add.at(self.dead_load, (g.rotations.start + 3 * nodes[:, None] + np.arange(3)).ravel(),
+                          moments.ravel())
+                self.counts["load.line_moment"] += 1
             elif sel[1].rotations.size:
                 # moment on the rotation nodes of a beam with a material frame: virtual work M·δθ
                 # with spatial spins δθ, a dead load on the rotation unknowns

@@ -19,6 +19,12 @@ decomposition, or the deformed reference base vectors averaged), by the relative
   ``G_j = Σ_p Φ_j w_p J_p`` (spins multiplicative, like the beam's own tangent: not symmetric
   away from equilibrium).
 
+- point-wise penalty (``constraint="gauss_point"``, 4C's ``gauss_point_to_segment`` rotational
+  coupling): ``Π = ε/2 Σ_p w_p |ψ_p|²`` at the integration points themselves, as the positional
+  Gauss-point coupling does with the gap; the rows of every formula above are then the points
+  (Φ → identity, κ_p = w_p). The line moments reported at the LM nodes are the lumped projection
+  ``λ_j = κ_j⁻¹ Σ_p Φ_j(η_p) w_p ε ψ_p``, the same formula as with the mortar constraint.
+
 - Lagrange enforcement (:meth:`RotationalCoupling.constraint`): multipliers λ_j at the coupled LM
   nodes (κ_j > 0) with the Lagrangian ``Σ_j λ_j · g_j``; the constraint rows are the nonlinear
   ``g_j``, their linearisation ``G_j`` the saddle point's constraint block, and ``λᵀ ∂²g`` (the
@@ -48,6 +54,7 @@ DEFAULT_PENALTY_FACTOR = 1e3
 TRIADS = tuple(kernel.TRIADS)
 LMS = ("line2", "line3")
 ENFORCEMENTS = ("penalty", "lagrange")
+CONSTRAINTS = ("mortar", "gauss_point")
 
 
 class RotationalCoupling:
@@ -78,10 +85,18 @@ class RotationalCoupling:
     enforcement : {"penalty", "lagrange"}
         Penalty (:meth:`evaluate`) or Lagrange multipliers (:meth:`constraint`, the model adds
         :attr:`n_multipliers` unknowns); ``penalty`` is then not used.
+    constraint : {"mortar", "gauss_point"}
+        Weighted constraints per rotational LM node (mortar) or the point-wise penalty at every
+        integration point (gauss_point; penalty only). ``lm`` then only sets the functions of the
+        reported line moments.
     """
 
     def __init__(self, ops, beam, solid, rotation_offset, n_dofs, triad="polar", penalty=None, lm="line3",
-                 enforcement="penalty"):
+                 enforcement="penalty", constraint="mortar"):
+        if constraint not in CONSTRAINTS:
+            raise ValueError(f"coupling.rotational.constraint must be one of {CONSTRAINTS}, got {constraint!r}")
+        if constraint == "gauss_point" and enforcement != "penalty":
+            raise ValueError("coupling.rotational: the gauss_point constraint is enforced by penalty only")
         if enforcement not in ENFORCEMENTS:
             raise ValueError(f"coupling.rotational.enforcement must be one of {ENFORCEMENTS}, got {enforcement!r}")
         if triad not in kernel.TRIADS:
@@ -94,7 +109,7 @@ class RotationalCoupling:
         if not (np.isfinite(penalty) and penalty > 0):
             raise ValueError(f"coupling.rotational.penalty must be a finite number > 0, got {penalty!r}")
         self.beam, self.solid, self.triad, self.kind = beam, solid, triad, kernel.TRIADS[triad]
-        self.penalty, self.lm, self.enforcement = float(penalty), lm, enforcement
+        self.penalty, self.lm, self.enforcement, self.constraint = float(penalty), lm, enforcement, constraint
         self.rotation_offset, self.n_dofs = int(rotation_offset), int(n_dofs)
         p = ops.point_fields
         self.beam_element = np.ascontiguousarray(p["beam_element"], dtype=np.int64)
@@ -134,6 +149,13 @@ class RotationalCoupling:
         self.kappa_inverse = np.divide(1.0, self.kappa, out=np.zeros_like(self.kappa), where=self.kappa > 0)
         # LM nodes some integration point touched: only they carry a Lagrange multiplier (three rows each)
         self.coupled_rows = np.flatnonzero(np.repeat(self.kappa > 0, 3))
+        # the rows of the constraint: the LM functions (mortar), or every point on its own
+        if constraint == "gauss_point":
+            self.rows = sp.identity(n_pts, format="csr")
+            self.rows_kappa_inverse = np.divide(1.0, self.weight, out=np.zeros_like(self.weight),
+                                                where=self.weight > 0)
+        else:
+            self.rows, self.rows_kappa_inverse = self.Phi, self.kappa_inverse
         self.X = X
         self.n_evaluations = 0
 
@@ -221,40 +243,43 @@ class RotationalCoupling:
             psi = np.asarray(psi, dtype=float).ravel()
             d[self.rotation_offset: self.rotation_offset + psi.size] = psi
             gap = (self._reference_rows @ d).reshape(-1, 3)
+            if self.constraint == "gauss_point":
+                gap = self.Phi @ gap
         else:
             gap = self.weighted_gap(u_solid, psi)
         return self.penalty * self.kappa_inverse[:, None] * gap
 
     def energy(self, u_solid, psi):
-        """Penalty energy ``ε/2 Σ_j κ_j⁻¹ |g_j|²``."""
-        g = self.weighted_gap(u_solid, psi)
-        return 0.5 * self.penalty * float(np.sum(self.kappa_inverse[:, None] * g * g))
+        """Penalty energy ``ε/2 Σ_j κ_j⁻¹ |g_j|²`` (gauss_point: ``ε/2 Σ_p w_p |ψ_p|²``)."""
+        g = np.asarray(self.rows @ (self.weight[:, None] * self.relative_rotations(u_solid, psi)))
+        return 0.5 * self.penalty * float(np.sum(self.rows_kappa_inverse[:, None] * g * g))
 
     def _linearise(self, u_solid, psi, moments, tangent):
-        """What both enforcements share: the weighted gaps ``g`` (n_lm, 3), the forces ``Gᵀλ``
-        (n_dofs,) of the line moments ``λ = moments(g)`` (n_lm, 3), and with ``tangent`` the
-        constraint's linearisation ``G`` (3 n_lm, n_dofs, csr) and ``λᵀ ∂²g`` (n_dofs, n_dofs, csr)."""
+        """What both enforcements share: the weighted gaps ``g`` (n_rows, 3), the forces ``Gᵀλ``
+        (n_dofs,) of the line moments ``λ = moments(g)`` (n_rows, 3), and with ``tangent`` the
+        constraint's linearisation ``G`` (3 n_rows, n_dofs, csr) and ``λᵀ ∂²g`` (n_dofs, n_dofs,
+        csr). Rows: the LM nodes (mortar) or the points (gauss_point), :attr:`rows`."""
         self.n_evaluations += 1
         x, triads, psi_p, J18 = self._run(u_solid, psi, True)
         J = self._local_jacobian(J18)
         cols = self._columns()
-        g = np.asarray(self.Phi @ (self.weight[:, None] * psi_p))
+        g = np.asarray(self.rows @ (self.weight[:, None] * psi_p))
         lam_j = moments(g)
-        lam_p = np.asarray(self.Phi.T @ lam_j)                                       # (n_pts, 3)
+        lam_p = np.asarray(self.rows.T @ lam_j)                                      # (n_pts, 3)
         used = cols >= 0
         local = np.einsum("pic,pi->pc", J, lam_p) * self.weight[:, None]
         r = np.bincount(cols[used], weights=local[used], minlength=self.n_dofs)
         if not tangent:
             return g, r, None, None
-        # G_j = Σ_p Φ_j w_p J_p (3 n_lm, n_dofs)
-        Phi = self.Phi.tocoo()
+        # G_j = Σ_p Φ_j w_p J_p (3 n_rows, n_dofs)
+        Phi = self.rows.tocoo()
         k, pts = Phi.row, Phi.col
         scale = Phi.data * self.weight[pts]
         rows = (3 * k[:, None, None] + np.arange(3)[None, :, None]) + 0 * cols[pts][:, None, :]
         vals = scale[:, None, None] * J[pts]
         cc = np.broadcast_to(cols[pts][:, None, :], vals.shape)
         mask = cc >= 0
-        Gm = sp.csr_matrix((vals[mask], (rows[mask], cc[mask])), shape=(3 * self.n_lm, self.n_dofs))
+        Gm = sp.csr_matrix((vals[mask], (rows[mask], cc[mask])), shape=(3 * self.rows.shape[0], self.n_dofs))
         H = np.zeros((self.n_points, 18, 18))
         status = np.empty(self.n_points, dtype=np.int64)
         kernel.hessian_range(self.kind, x, self.nodes, self.n_local, self.G, self.L0, triads, self.rotation_nodes,
@@ -276,12 +301,12 @@ class RotationalCoupling:
         u_solid : (3 n_solid_nodes,) solid displacements.
         psi : (n_rotation_nodes, 3) total rotation vectors of the group.
         """
-        _, r, Gm, K_lam = self._linearise(u_solid, psi, lambda g: self.penalty * self.kappa_inverse[:, None] * g,
-                                          tangent)
+        kinv = self.rows_kappa_inverse
+        _, r, Gm, K_lam = self._linearise(u_solid, psi, lambda g: self.penalty * kinv[:, None] * g, tangent)
         if not tangent:
             return r, None
         # ε Gᵀ κ⁻¹ G, plus the geometric part of the constraint's second derivative
-        K = self.penalty * (Gm.T @ sp.diags(np.repeat(self.kappa_inverse, 3)) @ Gm)
+        K = self.penalty * (Gm.T @ sp.diags(np.repeat(kinv, 3)) @ Gm)
         K = K + K_lam
         return r, K.tocsr()
 
@@ -313,8 +338,8 @@ class RotationalCoupling:
         n_rot = self.beam.n_rotation_nodes
         J = self._run(np.zeros(self.X.size), np.zeros((n_rot, 3)), True)[3][:, :, 9:]
         cols = self._columns()[:, -9:] - self.rotation_offset
-        Phi = self.Phi.tocoo()
+        Phi = self.rows.tocoo()
         rows = 3 * Phi.row[:, None, None] + np.arange(3)[None, :, None] + np.zeros((1, 1, 9), dtype=np.int64)
         vals = (Phi.data * self.weight[Phi.col])[:, None, None] * J[Phi.col]
         cc = np.broadcast_to(cols[Phi.col][:, None, :], vals.shape)
-        return sp.csr_matrix((vals.ravel(), (rows.ravel(), cc.ravel())), shape=(3 * self.n_lm, 3 * n_rot))
+        return sp.csr_matrix((vals.ravel(), (rows.ravel(), cc.ravel())), shape=(3 * self.rows.shape[0], 3 * n_rot))
