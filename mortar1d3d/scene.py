@@ -403,12 +403,13 @@ def _coupling(value):
 def _rotational(value):
     """``coupling.rotational``: cross-sections of beams with rotations tied to a solid triad."""
     path = "coupling.rotational"
-    _table(value, path, ("triad", "enforcement", "penalty", "lm", "constraint"))
+    _table(value, path, ("triad", "enforcement", "penalty", "lm", "constraint", "forces"))
     out = {"triad": _choice(value.get("triad", "polar"), f"{path}.triad",
                             ("polar", "deformation_gradient", "deformation_gradient_symmetric")),
            "enforcement": _choice(value.get("enforcement", "penalty"), f"{path}.enforcement", ("penalty", "lagrange")),
            "lm": _choice(value.get("lm", "line3"), f"{path}.lm", ("line2", "line3")),
            "constraint": _choice(value.get("constraint", "mortar"), f"{path}.constraint", ("mortar", "gauss_point")),
+           "forces": _choice(value.get("forces", "variational"), f"{path}.forces", ("variational", "fourc")),
            "penalty": None}
     if "penalty" in value:
         out["penalty"] = _number(value["penalty"], f"{path}.penalty", low=0.0, low_open=True)

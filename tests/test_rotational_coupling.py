@@ -299,6 +299,49 @@ def test_gauss_point_constraint_is_the_point_wise_penalty(kind):
         rod_coupling(kind, constraint="gauss_point", enforcement="lagrange")
 
 
+def _state(model, g, scale, seed=2):
+    rng = np.random.default_rng(seed)
+    return (scale * 0.03 * rng.standard_normal(3 * model.n_solid_nodes),
+            scale * 0.2 * rng.standard_normal((g.physics.n_rotation_nodes, 3)))
+
+
+def test_fourc_forces_are_the_documented_formula_and_close_to_the_variational_ones():
+    """``forces = "fourc"``: the solid's share is the exact gradient's, the beam's on the spins of
+    rotation node k is Σ_p w_p L_k(η_p) T(ψ_p)⁻¹ λ_p (T the library's left Jacobian, inverted here
+    with numpy); the difference to the variational forces is of the order of ψ times the moment
+    (a state scaled by 1/10 shrinks it relative to the forces by about 10)."""
+    from mortar1d3d.physics.rotations import jacobian
+    model, g, rc = rod_coupling("deformation_gradient_symmetric", penalty=1e3, lm="line2", forces="fourc")
+    variational = rod_coupling("deformation_gradient_symmetric", penalty=1e3, lm="line2")[2]
+    nS = 3 * model.n_solid_nodes
+    relative = []
+    for scale in (1.0, 0.1):
+        u, psi = _state(model, g, scale)
+        r, _ = rc.evaluate(u, psi, tangent=False)
+        rv, _ = variational.evaluate(u, psi, tangent=False)
+        np.testing.assert_allclose(r[:nS], rv[:nS], rtol=0, atol=1e-13 * np.abs(rv).max())
+        psi_p = rc.relative_rotations(u, psi)
+        lam_p = rc.Phi.T @ (1e3 * rc.kappa_inverse[:, None] * (rc.Phi @ (rc.weight[:, None] * psi_p)))
+        expected = np.zeros(rc.n_dofs)
+        for p in range(rc.n_points):
+            T = np.empty((3, 3))
+            jacobian(psi_p[p], T)
+            f = rc.weight[p] * np.linalg.solve(T, lam_p[p])
+            for k in range(3):
+                start = rc.rotation_offset + 3 * rc.rotation_nodes[rc.beam_element[p], k]
+                expected[start: start + 3] += rc.lag[p, k] * f
+        np.testing.assert_allclose(r[nS:], expected[nS:], rtol=0, atol=1e-13 * np.abs(expected).max())
+        relative.append(np.abs(r - rv).max() / np.abs(rv).max())
+    assert relative[0] > 1e-2 and 5 < relative[0] / relative[1] < 20     # measured 5.5e-2, ratio 11.1
+
+
+def test_fourc_forces_have_their_own_consistent_tangent():
+    model, g, rc = rod_coupling("deformation_gradient_symmetric", penalty=1e3, lm="line2", forces="fourc")
+    worst_r, worst_K = _central_differences(model, g, rc)
+    assert worst_r > 1e-3                   # not the gradient of the penalty energy (measured 3.6e-2)
+    assert worst_K < 1e-8                   # but its tangent is the derivative of its forces (2e-11)
+
+
 def test_polar_triad_is_4c_polar_decomposition_2d_in_the_y_z_plane():
     """4C's polar_decomposition_2d: Λ_S = exp((θ_R + |ψ0|) e_x), θ_R the angle of the rotation of
     the 2D polar decomposition of F's y-z block, ψ0 = a e_x (a ≥ 0) the beam's reference rotation.
@@ -320,13 +363,15 @@ def test_polar_triad_is_4c_polar_decomposition_2d_in_the_y_z_plane():
             assert np.abs(_triad("polar", F, L0) - expected).max() < 1e-14
 
 
-@pytest.mark.parametrize("kind, constraint", [("polar", "mortar"), ("deformation_gradient", "mortar"),
-                                              ("deformation_gradient_symmetric", "mortar"), ("polar", "gauss_point")])
-def test_a_constant_rotation_of_the_solid_is_reproduced_exactly(kind, constraint):
+@pytest.mark.parametrize("kind, constraint, forces", [
+    ("polar", "mortar", "variational"), ("deformation_gradient", "mortar", "variational"),
+    ("deformation_gradient_symmetric", "mortar", "variational"), ("polar", "gauss_point", "variational"),
+    ("deformation_gradient_symmetric", "mortar", "fourc")])
+def test_a_constant_rotation_of_the_solid_is_reproduced_exactly(kind, constraint, forces):
     """The solid rigidly turned by 0.8 rad: the free fibre's triads all become Q Λ0 (consistency)."""
     Q = Rotation.from_rotvec([0.2, 0.5, -0.6])
-    model, d, iterations = solve_prescribed(block(2, 4, {"triad": kind, "constraint": constraint}),
-                                            lambda X: Q.apply(X))
+    model, d, iterations = solve_prescribed(block(2, 4, {"triad": kind, "constraint": constraint,
+                                                         "forces": forces}), lambda X: Q.apply(X))
     g = model.groups[0]
     psi = d[g.rotations.slice].reshape(-1, 3)
     assert np.abs(psi - Q.as_rotvec()).max() < 1e-10
@@ -407,7 +452,8 @@ kinematics = "linear"
 """, encoding="utf-8")
     scene = m13.Scene.from_toml(path)
     assert scene.coupling["rotational"] == {"triad": "deformation_gradient", "enforcement": "penalty",
-                                            "lm": "line2", "penalty": 2e4, "constraint": "mortar"}
+                                            "lm": "line2", "penalty": 2e4, "constraint": "mortar",
+                                            "forces": "variational"}
     result = m13.solve(path)               # no rotation support: the rotational coupling holds the twist
     assert result.model.counts["coupling.rotational_penalty"] >= 2
     g = result.model.groups[0]

@@ -838,6 +838,9 @@ def _coupling(block, has_beams):
             if shape not in ("line2", "line3"):
                 _fail(f"{key}.ROTATION_COUPLING_MORTAR_SHAPE_FUNCTION", f"{shape!r} is not supported (line2, line3)")
             rot["lm"] = shape
+            # 4C's mortar rotation pair: its beam forces use the plain Lagrange functions, not the
+            # derivative of its constraint (physics/rotational_fourc.py)
+            rot["forces"] = "fourc"
         else:
             # 4C's gauss_point_to_segment pair: the penalty ε/2 |ψ|² at each integration point
             rot["constraint"] = "gauss_point"

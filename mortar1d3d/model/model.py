@@ -378,7 +378,8 @@ class Model:
                 g.rotational = RotationalCoupling(g.operators, g.physics, self.solid_mesh, g.rotations.start,
                                                   self.n_displacement_dofs, triad=rot["triad"],
                                                   penalty=rot["penalty"], lm=rot["lm"],
-                                                  enforcement=rot["enforcement"], constraint=rot["constraint"])
+                                                  enforcement=rot["enforcement"], constraint=rot["constraint"],
+                                                  forces=rot["forces"])
                 self.counts[f"coupling.rotational_{rot['enforcement']}"] += 1
 
     def _check_operators(self, operators):

@@ -44,6 +44,7 @@ from ..elements.multiplier import multiplier as multiplier_type
 from ..mortar.assemble import lm_numbering
 from .coupling import _lm_projection, rational_guard
 from . import rotational_coupling_kernel as kernel
+from . import rotational_fourc
 from .simo_reissner import _lagrange_tables
 
 __all__ = ["RotationalCoupling", "DEFAULT_PENALTY_FACTOR", "TRIADS", "LMS", "ENFORCEMENTS"]
@@ -89,10 +90,17 @@ class RotationalCoupling:
         Weighted constraints per rotational LM node (mortar) or the point-wise penalty at every
         integration point (gauss_point; penalty only). ``lm`` then only sets the functions of the
         reported line moments.
+    forces : {"variational", "fourc"}
+        The coupling forces: the exact gradient of the penalty energy (or of the Lagrangian), or
+        4C's form, whose beam share uses the plain Lagrange functions (:mod:`.rotational_fourc`);
+        the constraint, its multipliers and the line moments are the same. With ``fourc`` the
+        tangent is the exact derivative of those forces (not symmetric).
     """
 
     def __init__(self, ops, beam, solid, rotation_offset, n_dofs, triad="polar", penalty=None, lm="line3",
-                 enforcement="penalty", constraint="mortar"):
+                 enforcement="penalty", constraint="mortar", forces="variational"):
+        if forces not in rotational_fourc.FORCES:
+            raise ValueError(f"coupling.rotational.forces must be one of {rotational_fourc.FORCES}, got {forces!r}")
         if constraint not in CONSTRAINTS:
             raise ValueError(f"coupling.rotational.constraint must be one of {CONSTRAINTS}, got {constraint!r}")
         if constraint == "gauss_point" and enforcement != "penalty":
@@ -110,6 +118,7 @@ class RotationalCoupling:
             raise ValueError(f"coupling.rotational.penalty must be a finite number > 0, got {penalty!r}")
         self.beam, self.solid, self.triad, self.kind = beam, solid, triad, kernel.TRIADS[triad]
         self.penalty, self.lm, self.enforcement, self.constraint = float(penalty), lm, enforcement, constraint
+        self.forces = forces
         self.rotation_offset, self.n_dofs = int(rotation_offset), int(n_dofs)
         p = ops.point_fields
         self.beam_element = np.ascontiguousarray(p["beam_element"], dtype=np.int64)
@@ -258,7 +267,9 @@ class RotationalCoupling:
         """What both enforcements share: the weighted gaps ``g`` (n_rows, 3), the forces ``Gᵀλ``
         (n_dofs,) of the line moments ``λ = moments(g)`` (n_rows, 3), and with ``tangent`` the
         constraint's linearisation ``G`` (3 n_rows, n_dofs, csr) and ``λᵀ ∂²g`` (n_dofs, n_dofs,
-        csr). Rows: the LM nodes (mortar) or the points (gauss_point), :attr:`rows`."""
+        csr). Rows: the LM nodes (mortar) or the points (gauss_point), :attr:`rows`. Last, the
+        rows of the forces' own Jacobians ``Σ_p R_jp w_p Jf_p`` (``G`` itself for variational forces;
+        with ``forces="fourc"`` ``r`` and ``λᵀ ∂²g`` are those of 4C's forces)."""
         self.n_evaluations += 1
         x, triads, psi_p, J18 = self._run(u_solid, psi, True)
         J = self._local_jacobian(J18)
@@ -267,11 +278,36 @@ class RotationalCoupling:
         lam_j = moments(g)
         lam_p = np.asarray(self.rows.T @ lam_j)                                      # (n_pts, 3)
         used = cols >= 0
-        local = np.einsum("pic,pi->pc", J, lam_p) * self.weight[:, None]
+        Jf = J
+        if self.forces == "fourc":
+            # 4C's forces: the beam columns L_k T⁻ᵀ(ψ_p) instead of ∂ψ_p/∂θ_k = T⁻¹(ψ_p) Ĩ_k
+            Jf = J.copy()
+            Jf[:, :, -9:] = rotational_fourc.beam_columns(psi_p, self.lag)
+        local = np.einsum("pic,pi->pc", Jf, lam_p) * self.weight[:, None]
         r = np.bincount(cols[used], weights=local[used], minlength=self.n_dofs)
         if not tangent:
-            return g, r, None, None
-        # G_j = Σ_p Φ_j w_p J_p (3 n_rows, n_dofs)
+            return g, r, None, None, None
+        # G_j = Σ_p Φ_j w_p J_p (3 n_rows, n_dofs), and the same rows of the force Jacobians
+        Gm = self._row_sums(J, cols)
+        Gf = Gm if Jf is J else self._row_sums(Jf, cols)
+        H = np.zeros((self.n_points, 18, 18))
+        status = np.empty(self.n_points, dtype=np.int64)
+        kernel.hessian_range(self.kind, x, self.nodes, self.n_local, self.G, self.L0, triads, self.rotation_nodes,
+                             self.beam_element, self.lag, np.ascontiguousarray(lam_p), H, status)
+        self._check(status, psi_p)
+        H = self._local_hessian(H * self.weight[:, None, None])
+        if self.forces == "fourc":
+            # rows of the beam spins: ∂(w_p L_k T⁻¹(ψ_p) λ_p)/∂(u, θ) at fixed λ = w_p L_k ∂(T⁻¹λ_p)/∂ψ J_p
+            DJ = np.einsum("pab,pbc->pac", rotational_fourc.inverse_jacobian_derivative(psi_p, lam_p), J)
+            H[:, -9:, :] = (self.weight[:, None, None, None] * self.lag[:, :, None, None]
+                            * DJ[:, None, :, :]).reshape(self.n_points, 9, -1)
+        both = used[:, :, None] & used[:, None, :]
+        ri = np.broadcast_to(cols[:, :, None], H.shape)[both]
+        ci = np.broadcast_to(cols[:, None, :], H.shape)[both]
+        return g, r, Gm, sp.csr_matrix((H[both], (ri, ci)), shape=(self.n_dofs, self.n_dofs)), Gf
+
+    def _row_sums(self, J, cols):
+        """``Σ_p R_jp w_p J_p`` (3 n_rows, n_dofs, csr) for the constraint rows R (:attr:`rows`)."""
         Phi = self.rows.tocoo()
         k, pts = Phi.row, Phi.col
         scale = Phi.data * self.weight[pts]
@@ -279,17 +315,7 @@ class RotationalCoupling:
         vals = scale[:, None, None] * J[pts]
         cc = np.broadcast_to(cols[pts][:, None, :], vals.shape)
         mask = cc >= 0
-        Gm = sp.csr_matrix((vals[mask], (rows[mask], cc[mask])), shape=(3 * self.rows.shape[0], self.n_dofs))
-        H = np.zeros((self.n_points, 18, 18))
-        status = np.empty(self.n_points, dtype=np.int64)
-        kernel.hessian_range(self.kind, x, self.nodes, self.n_local, self.G, self.L0, triads, self.rotation_nodes,
-                             self.beam_element, self.lag, np.ascontiguousarray(lam_p), H, status)
-        self._check(status, psi_p)
-        H = self._local_hessian(H * self.weight[:, None, None])
-        both = used[:, :, None] & used[:, None, :]
-        ri = np.broadcast_to(cols[:, :, None], H.shape)[both]
-        ci = np.broadcast_to(cols[:, None, :], H.shape)[both]
-        return g, r, Gm, sp.csr_matrix((H[both], (ri, ci)), shape=(self.n_dofs, self.n_dofs))
+        return sp.csr_matrix((vals[mask], (rows[mask], cc[mask])), shape=(3 * self.rows.shape[0], self.n_dofs))
 
     def evaluate(self, u_solid, psi, tangent=True):
         """Penalty: residual (n_dofs,) and tangent (n_dofs, n_dofs, csr, or None) in the global
@@ -302,11 +328,12 @@ class RotationalCoupling:
         psi : (n_rotation_nodes, 3) total rotation vectors of the group.
         """
         kinv = self.rows_kappa_inverse
-        _, r, Gm, K_lam = self._linearise(u_solid, psi, lambda g: self.penalty * kinv[:, None] * g, tangent)
+        _, r, Gm, K_lam, Gf = self._linearise(u_solid, psi, lambda g: self.penalty * kinv[:, None] * g, tangent)
         if not tangent:
             return r, None
-        # ε Gᵀ κ⁻¹ G, plus the geometric part of the constraint's second derivative
-        K = self.penalty * (Gm.T @ sp.diags(np.repeat(kinv, 3)) @ Gm)
+        # ε Gᵀ κ⁻¹ G, plus the geometric part of the constraint's second derivative (fourc forces:
+        # their rows Gf instead of the left G, and their own second part)
+        K = self.penalty * (Gf.T @ sp.diags(np.repeat(kinv, 3)) @ Gm)
         K = K + K_lam
         return r, K.tocsr()
 
@@ -327,7 +354,7 @@ class RotationalCoupling:
         """
         lam = np.zeros(3 * self.n_lm)
         lam[self.coupled_rows] = multipliers
-        g, r, Gm, K = self._linearise(u_solid, psi, lambda _: lam.reshape(-1, 3), tangent)
+        g, r, Gm, K, _ = self._linearise(u_solid, psi, lambda _: lam.reshape(-1, 3), tangent)
         c = g.ravel()[self.coupled_rows]
         return r, c, (Gm[self.coupled_rows] if tangent else None), K
 
