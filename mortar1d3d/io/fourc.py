@@ -21,7 +21,7 @@ What maps to what:
 ``DESIGN SURF/VOL/POINT DIRICH CONDITIONS``     ``dirichlet`` on the condition's node set
 ``DESIGN SURF NEUMANN CONDITIONS``              ``traction`` (force per reference area)
 ``DESIGN LINE NEUMANN CONDITIONS`` (beams)      ``line`` load (force per reference length), ``line_moment``
-                                               (moment components of a BEAM3R beam)
+                                                (moment components of a BEAM3R beam)
 ``DESIGN POINT NEUMANN CONDITIONS``             ``point`` load, or ``moment`` on BEAM3R nodes
 ``FUNCT<k>`` ``SYMBOLIC_FUNCTION_OF_...: a*t``  load factor ``t / MAXTIME`` (linear in t only)
 ``STRUCTURAL DYNAMIC`` (Statics)                ``analysis.steps = NUMSTEP``
