@@ -117,7 +117,8 @@ class RotationalCoupling:
         if not (np.isfinite(penalty) and penalty > 0):
             raise ValueError(f"coupling.rotational.penalty must be a finite number > 0, got {penalty!r}")
         self.beam, self.solid, self.triad, self.kind = beam, solid, triad, kernel.TRIADS[triad]
-        self.penalty, self.lm, self.enforcement, self.constraint = float(penalty), lm, enforcement, constraint
+        self.penalty, self.lm, self.enforcement = float(penalty), lm, enforcement
+        self.constraint_type = constraint          # (the method constraint() is the Lagrange evaluation)
         self.forces = forces
         self.rotation_offset, self.n_dofs = int(rotation_offset), int(n_dofs)
         p = ops.point_fields
@@ -252,7 +253,7 @@ class RotationalCoupling:
             psi = np.asarray(psi, dtype=float).ravel()
             d[self.rotation_offset: self.rotation_offset + psi.size] = psi
             gap = (self._reference_rows @ d).reshape(-1, 3)
-            if self.constraint == "gauss_point":
+            if self.constraint_type == "gauss_point":
                 gap = self.Phi @ gap
         else:
             gap = self.weighted_gap(u_solid, psi)
