@@ -22,7 +22,7 @@ MATERIAL_MODELS = ("linear_elastic", "saint_venant_kirchhoff", "neo_hooke")
 #: beam models a scene may name (the registry's, then the planned ones) and those that run
 IMPLEMENTED_BEAM_MODELS = tuple(BEAM_TYPES)
 BEAM_MODELS = IMPLEMENTED_BEAM_MODELS + PLANNED_BEAM_TYPES
-LOAD_TYPES = ("point", "traction", "pressure", "body", "moment", "line")
+LOAD_TYPES = ("point", "traction", "pressure", "body", "moment", "line", "line_moment")
 SOLVERS = ("auto", "direct", "amg", "block")
 # "petsc": distributed assembly and solve under MPI (mortar1d3d.distributed, the optional extra "mpi")
 BACKENDS = ("serial", "petsc")
@@ -385,7 +385,8 @@ def _coupling(value):
     _table(value, path, ("constraint", "integration", "enforcement", "penalty", "lm", "n_gauss", "search_points",
                          "negative_kappa", "rotational"))
     out = {"constraint": _choice(value.get("constraint", "mortar"), "coupling.constraint", ("mortar", "gauss_point")),
-           "integration": _choice(value.get("integration", "segment"), "coupling.integration", ("segment", "element", "auto")),
+           "integration": _choice(value.get("integration", "segment"), "coupling.integration",
+                                  ("segment", "element", "auto", "element_boundary")),
            "enforcement": _choice(value.get("enforcement", "penalty"), "coupling.enforcement", ("penalty", "lagrange")),
            "lm": _choice(value.get("lm", "line2"), "coupling.lm", ("line2", "line3", "line4")),
            "n_gauss": _integer(value.get("n_gauss", 6), "coupling.n_gauss", 1, 64),
@@ -405,14 +406,18 @@ def _coupling(value):
 def _rotational(value):
     """``coupling.rotational``: cross-sections of beams with rotations tied to a solid triad."""
     path = "coupling.rotational"
-    _table(value, path, ("triad", "enforcement", "penalty", "lm"))
+    _table(value, path, ("triad", "enforcement", "penalty", "lm", "constraint", "forces"))
     out = {"triad": _choice(value.get("triad", "polar"), f"{path}.triad",
                             ("polar", "deformation_gradient", "deformation_gradient_symmetric")),
            "enforcement": _choice(value.get("enforcement", "penalty"), f"{path}.enforcement", ("penalty", "lagrange")),
            "lm": _choice(value.get("lm", "line3"), f"{path}.lm", ("line2", "line3")),
+           "constraint": _choice(value.get("constraint", "mortar"), f"{path}.constraint", ("mortar", "gauss_point")),
+           "forces": _choice(value.get("forces", "variational"), f"{path}.forces", ("variational", "fourc")),
            "penalty": None}
     if "penalty" in value:
         out["penalty"] = _number(value["penalty"], f"{path}.penalty", low=0.0, low_open=True)
+    if out["constraint"] == "gauss_point" and out["enforcement"] != "penalty":
+        _fail(f"{path}.enforcement", "the gauss_point constraint is enforced by penalty only")
     return out
 
 
@@ -493,9 +498,10 @@ def _load(value, i):
         out["value"] = _vector(value["value"], f"{path}.value")
     if kind in ("traction", "pressure") and not (isinstance(out["on"], str) and out["on"].startswith("solid:")):
         _fail(f"{path}.on", f"a {kind} acts on a solid surface: use 'solid:x_max' or a solid point set")
-    if kind == "line" and not (isinstance(out["on"], str) and out["on"].startswith("beam:")
-                               and out["on"].count(":") == 1):
-        _fail(f"{path}.on", "a line load acts along a whole beam: use 'beam:<i>'")
+    if kind in ("line", "line_moment") and not (isinstance(out["on"], str) and out["on"].startswith("beam:")
+                                               and out["on"].count(":") == 1):
+        _fail(f"{path}.on", f"a {'line load' if kind == 'line' else 'line moment'} acts along a whole beam: use "
+                            "'beam:<i>'")
     if kind == "moment" and not (isinstance(out["on"], str) and out["on"].startswith("beam:")):
         _fail(f"{path}.on", "a moment acts on beam nodes: use 'beam:<i>:start' or 'beam:<i>:end' (or 'beam:<i>' "
                             "for a beam with rotations)")
@@ -571,6 +577,11 @@ class Scene:
         for i, item in enumerate(self.loads):
             if item["type"] == "body" and self.solid is None:
                 _fail(f"load[{i}]", "a body force needs a solid")
+            if item["type"] == "line_moment":
+                beam = int(item["on"].split(":")[1])
+                if beam < len(self.beams) and BEAM_TYPES[self.beams[beam]["model"]].triads is None:
+                    _fail(f"load[{i}].on", f"a line moment needs a beam with rotations (simo_reissner); beam {beam} "
+                                           f"is a {self.beams[beam]['model']}")
             if item["type"] == "moment":
                 beam = int(item["on"].split(":")[1])
                 if beam < len(self.beams) and not BEAM_TYPES[self.beams[beam]["model"]].bending:

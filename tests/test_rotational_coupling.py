@@ -245,6 +245,13 @@ def test_constraint_vanishes_in_the_reference_and_under_rigid_motions(kind, elem
                                            ("deformation_gradient_symmetric", "hexahedron")])
 def test_tangent_matches_central_differences(kind, element):
     model, g, rc = rod_coupling(kind, element, penalty=1e3, lm="line2")
+    worst_r, worst_K = _central_differences(model, g, rc)
+    assert worst_r < 1e-8 and worst_K < 1e-8          # measured 7e-11, 6e-11 (polar, hexahedron)
+
+
+def _central_differences(model, g, rc):
+    """Largest deviations of the residual from the energy's and of the tangent from the residual's
+    central differences (relative to the largest entry) at a random state."""
     nS, n_rot = 3 * model.n_solid_nodes, g.physics.n_rotation_nodes
     rng = np.random.default_rng(1)
     u, psi = 0.03 * rng.standard_normal(nS), 0.2 * rng.standard_normal((n_rot, 3))
@@ -268,14 +275,103 @@ def test_tangent_matches_central_differences(kind, element):
         worst_r = max(worst_r, abs(fd - r[c]) / np.abs(r).max())
         column = (rc.evaluate(*states[0], tangent=False)[0] - rc.evaluate(*states[1], tangent=False)[0]) / (2 * h)
         worst_K = max(worst_K, np.abs(column - K[:, c].toarray().ravel()).max() / abs(K).max())
-    assert worst_r < 1e-8 and worst_K < 1e-8          # measured 7e-11, 6e-11 (polar, hexahedron)
+    return worst_r, worst_K
 
 
-@pytest.mark.parametrize("kind", ["polar", "deformation_gradient", "deformation_gradient_symmetric"])
-def test_a_constant_rotation_of_the_solid_is_reproduced_exactly(kind):
+@pytest.mark.parametrize("kind", ["polar", "deformation_gradient_symmetric"])
+def test_gauss_point_constraint_is_the_point_wise_penalty(kind):
+    """``constraint = "gauss_point"`` (4C's gauss_point_to_segment rotational coupling): the energy
+    is ε/2 Σ_p w_p |ψ_p|², its residual and tangent match central differences, it differs from
+    the mortar constraint's energy, and the reported line moments are the lumped projection
+    κ_j⁻¹ Σ_p Φ_j w_p ε ψ_p."""
+    model, g, rc = rod_coupling(kind, penalty=1e3, lm="line2", constraint="gauss_point")
+    mortar = rod_coupling(kind, penalty=1e3, lm="line2")[2]
+    rng = np.random.default_rng(4)
+    u, psi = 0.03 * rng.standard_normal(3 * model.n_solid_nodes), 0.2 * rng.standard_normal((g.physics.n_rotation_nodes, 3))
+    psi_p = rc.relative_rotations(u, psi)
+    assert rc.energy(u, psi) == pytest.approx(0.5e3 * np.sum(rc.weight * np.sum(psi_p ** 2, axis=1)), rel=1e-13)
+    assert abs(rc.energy(u, psi) / mortar.energy(u, psi) - 1.0) > 1e-3
+    lumped = rc.kappa_inverse[:, None] * (rc.Phi @ (rc.weight[:, None] * 1e3 * psi_p))
+    np.testing.assert_allclose(rc.line_moment(u, psi), lumped, rtol=1e-13, atol=1e-13 * np.abs(lumped).max())
+    worst_r, worst_K = _central_differences(model, g, rc)
+    assert worst_r < 1e-8 and worst_K < 1e-8
+    with pytest.raises(ValueError, match="penalty only"):
+        rod_coupling(kind, constraint="gauss_point", enforcement="lagrange")
+
+
+def _state(model, g, scale, seed=2):
+    rng = np.random.default_rng(seed)
+    return (scale * 0.03 * rng.standard_normal(3 * model.n_solid_nodes),
+            scale * 0.2 * rng.standard_normal((g.physics.n_rotation_nodes, 3)))
+
+
+def test_fourc_forces_are_the_documented_formula_and_close_to_the_variational_ones():
+    """``forces = "fourc"``: the solid's share is the exact gradient's, the beam's on the spins of
+    rotation node k is Σ_p w_p L_k(η_p) T(ψ_p)⁻¹ λ_p (T the library's left Jacobian, inverted here
+    with numpy); the difference to the variational forces is of the order of ψ times the moment
+    (a state scaled by 1/10 shrinks it relative to the forces by about 10)."""
+    from mortar1d3d.physics.rotations import jacobian
+    model, g, rc = rod_coupling("deformation_gradient_symmetric", penalty=1e3, lm="line2", forces="fourc")
+    variational = rod_coupling("deformation_gradient_symmetric", penalty=1e3, lm="line2")[2]
+    nS = 3 * model.n_solid_nodes
+    relative = []
+    for scale in (1.0, 0.1):
+        u, psi = _state(model, g, scale)
+        r, _ = rc.evaluate(u, psi, tangent=False)
+        rv, _ = variational.evaluate(u, psi, tangent=False)
+        np.testing.assert_allclose(r[:nS], rv[:nS], rtol=0, atol=1e-13 * np.abs(rv).max())
+        psi_p = rc.relative_rotations(u, psi)
+        lam_p = rc.Phi.T @ (1e3 * rc.kappa_inverse[:, None] * (rc.Phi @ (rc.weight[:, None] * psi_p)))
+        expected = np.zeros(rc.n_dofs)
+        for p in range(rc.n_points):
+            T = np.empty((3, 3))
+            jacobian(psi_p[p], T)
+            f = rc.weight[p] * np.linalg.solve(T, lam_p[p])
+            for k in range(3):
+                start = rc.rotation_offset + 3 * rc.rotation_nodes[rc.beam_element[p], k]
+                expected[start: start + 3] += rc.lag[p, k] * f
+        np.testing.assert_allclose(r[nS:], expected[nS:], rtol=0, atol=1e-13 * np.abs(expected).max())
+        relative.append(np.abs(r - rv).max() / np.abs(rv).max())
+    assert relative[0] > 1e-2 and 5 < relative[0] / relative[1] < 20     # measured 5.5e-2, ratio 11.1
+
+
+def test_fourc_forces_have_their_own_consistent_tangent():
+    model, g, rc = rod_coupling("deformation_gradient_symmetric", penalty=1e3, lm="line2", forces="fourc")
+    worst_r, worst_K = _central_differences(model, g, rc)
+    assert worst_r > 1e-3                   # not the gradient of the penalty energy (measured 3.6e-2)
+    assert worst_K < 1e-8                   # but its tangent is the derivative of its forces (2e-11)
+
+
+def test_polar_triad_is_4c_polar_decomposition_2d_in_the_y_z_plane():
+    """4C's polar_decomposition_2d: Λ_S = exp((θ_R + |ψ0|) e_x), θ_R the angle of the rotation of
+    the 2D polar decomposition of F's y-z block, ψ0 = a e_x (a ≥ 0) the beam's reference rotation.
+    For an F that keeps the y-z plane that is the library's polar triad R Λ0 (an independent
+    2D polar decomposition by the SVD here)."""
+    rng = np.random.default_rng(11)
+    for a in (0.0, 0.5235987756, 2.0):
+        L0 = Rotation.from_rotvec([a, 0.0, 0.0]).as_matrix()
+        for _ in range(4):
+            F2 = np.eye(2) + 0.4 * rng.standard_normal((2, 2))
+            if np.linalg.det(F2) <= 0.1:
+                continue
+            F = np.zeros((3, 3))
+            F[0, 0], F[1:, 1:] = rng.uniform(0.5, 1.5), F2
+            U, _, Vt = np.linalg.svd(F2)
+            R2 = U @ Vt
+            theta = np.arctan2(R2[1, 0], R2[0, 0])
+            expected = Rotation.from_rotvec([theta + a, 0.0, 0.0]).as_matrix()
+            assert np.abs(_triad("polar", F, L0) - expected).max() < 1e-14
+
+
+@pytest.mark.parametrize("kind, constraint, forces", [
+    ("polar", "mortar", "variational"), ("deformation_gradient", "mortar", "variational"),
+    ("deformation_gradient_symmetric", "mortar", "variational"), ("polar", "gauss_point", "variational"),
+    ("deformation_gradient_symmetric", "mortar", "fourc")])
+def test_a_constant_rotation_of_the_solid_is_reproduced_exactly(kind, constraint, forces):
     """The solid rigidly turned by 0.8 rad: the free fibre's triads all become Q Λ0 (consistency)."""
     Q = Rotation.from_rotvec([0.2, 0.5, -0.6])
-    model, d, iterations = solve_prescribed(block(2, 4, {"triad": kind}), lambda X: Q.apply(X))
+    model, d, iterations = solve_prescribed(block(2, 4, {"triad": kind, "constraint": constraint,
+                                                         "forces": forces}), lambda X: Q.apply(X))
     g = model.groups[0]
     psi = d[g.rotations.slice].reshape(-1, 3)
     assert np.abs(psi - Q.as_rotvec()).max() < 1e-10
@@ -356,7 +452,8 @@ kinematics = "linear"
 """, encoding="utf-8")
     scene = m13.Scene.from_toml(path)
     assert scene.coupling["rotational"] == {"triad": "deformation_gradient", "enforcement": "penalty",
-                                            "lm": "line2", "penalty": 2e4}
+                                            "lm": "line2", "penalty": 2e4, "constraint": "mortar",
+                                            "forces": "variational"}
     result = m13.solve(path)               # no rotation support: the rotational coupling holds the twist
     assert result.model.counts["coupling.rotational_penalty"] >= 2
     g = result.model.groups[0]

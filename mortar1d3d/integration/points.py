@@ -8,6 +8,8 @@ the projection. Only the set of points differs (docs/conventions.md §1):
 - segment-based: ``n_gauss`` points on every segment [η_a, η_b], in its owning element;
 - element-based: ``n_gauss`` points on the whole beam element, each given to the lowest-index
   candidate element that contains it; points inside no element are not coupled;
+- element_boundary: element-based, except that the beam elements crossing the solid's boundary
+  get the segment-based points on their pieces inside (:func:`boundary_segmented_points`);
 - auto: the segments of segment-based integration, found without the crossing search where
   possible (:mod:`~mortar1d3d.geometry.auto_segments`; beam elements certified inside one
   element keep the element-based points), and per segment the minimal exact Gauss rule where
@@ -28,7 +30,7 @@ from ..geometry.linalg import norm3
 from ..geometry.projection import (CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse, first_containing,
                                    is_affine, linear_parameters, load_element, locate_point, point_buffers, polish,
                                    project_point, search_buffers)
-from ..geometry.segmentation import resegment
+from ..geometry.segmentation import resegment, segment
 from ..quadrature import gauss_legendre, gauss_tables
 
 #: point outcome codes (as stored in ``status``)
@@ -229,7 +231,13 @@ def checked_segment_points(ctx, segments, bad, n_gauss, search_points, diagnosti
 
 def element_points(ctx, n_gauss):
     """Integration points of element-based integration, uncoupled points included (owner -1)."""
-    gx, gw = gauss_legendre(n_gauss)
+    return _points_on_elements(ctx, *gauss_legendre(n_gauss))
+
+
+def _points_on_elements(ctx, gx, gw):
+    """The points ``gx`` (weights ``gw``) of [-1, 1] on every beam element, each in the lowest-index
+    candidate element containing it (owner -1 and status POINT_UNCOUPLED where none does)."""
+    n_gauss = len(gx)
     n_beam = len(ctx.pair_offsets) - 1
     n = n_beam * n_gauss
     beam, owner, eta, weight, xi, position, status = carve(
@@ -240,6 +248,32 @@ def element_points(ctx, n_gauss):
                     ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths,
                     ctx.beam_origin, beam, owner, eta, xi, weight, position, status, workers())
     return beam, owner, eta, xi, weight, position, status
+
+
+def boundary_segmented_points(ctx, n_gauss, search_points, diagnostics):
+    """Integration points of ``integration="element_boundary"``: element-based, except on the beam
+    elements that cross the solid's boundary, which are segmented.
+
+    A beam element crosses the boundary when one of its ``n_gauss`` Gauss points or one of its two
+    ends lies in no solid element. Such an element gets ``n_gauss`` Gauss points on each of its
+    pieces inside a solid element (the segments of segment-based integration, with their fallback
+    :func:`checked_segment_points`); its part outside the solid is not coupled. Every other beam
+    element keeps the element-based points on the whole element. Taking the ends into the test
+    makes the points continuous in the beam's position: the segment of an element whose end just
+    left the solid is the whole element up to a sliver. ``diagnostics`` receives
+    ``boundary_segmented_elements`` and the counts of :func:`checked_segment_points`.
+    """
+    points = element_points(ctx, n_gauss)
+    ends = _points_on_elements(ctx, np.array([-1.0, 1.0]), np.zeros(2))
+    crossing = np.union1d(points[0][points[6] == POINT_UNCOUPLED], ends[0][ends[6] == POINT_UNCOUPLED])
+    diagnostics["boundary_segmented_elements"] = len(crossing)
+    if not len(crossing):
+        return points
+    *segments, bad_crossing = segment(ctx.beam_subset(crossing), search_points)
+    bad = np.zeros(len(ctx.pair_offsets) - 1, dtype=np.bool_)
+    bad[crossing] = bad_crossing
+    _, crossing_points = checked_segment_points(ctx, segments, bad, n_gauss, search_points, diagnostics)
+    return _splice(points, crossing_points, crossing)
 
 
 # ------------------------------------------------------------------------------------------------

@@ -20,7 +20,8 @@ What maps to what:
                                                 ``TRIADS`` as reference triads
 ``DESIGN SURF/VOL/POINT DIRICH CONDITIONS``     ``dirichlet`` on the condition's node set
 ``DESIGN SURF NEUMANN CONDITIONS``              ``traction`` (force per reference area)
-``DESIGN LINE NEUMANN CONDITIONS`` (beams)      ``line`` load (force per reference length)
+``DESIGN LINE NEUMANN CONDITIONS`` (beams)      ``line`` load (force per reference length), ``line_moment``
+                                                (moment components of a BEAM3R beam)
 ``DESIGN POINT NEUMANN CONDITIONS``             ``point`` load, or ``moment`` on BEAM3R nodes
 ``FUNCT<k>`` ``SYMBOLIC_FUNCTION_OF_...: a*t``  load factor ``t / MAXTIME`` (linear in t only)
 ``STRUCTURAL DYNAMIC`` (Statics)                ``analysis.steps = NUMSTEP``
@@ -677,16 +678,23 @@ def scene_from_4c(source):
             rot = [(c - 3, v) for c, v in zip(comps, values) if c >= 3]
             comps, values = [c for c in comps if c < 3], [v for c, v in zip(comps, values) if c < 3]
             if rot and what == "NEUMANN":
-                if kind != "POINT":
-                    _fail(f"{ckey}.ONOFF", f"moments distributed over a {kind.lower()} are not supported (point "
-                                           "moments only)")
-                if comps:
-                    _fail(ckey, "forces and moments in one condition are not supported")
                 vec = [0.0, 0.0, 0.0]
                 for c, v in rot:
                     vec[c] = v
-                loads.append({"type": "moment", "on": on, "value": vec})
-                continue
+                if kind == "LINE" and on.count(":") == 1:
+                    # BEAM3R: moment per reference length, spread with the triad nodes' Lagrange functions
+                    loads.append({"type": "line_moment", "on": on, "value": vec})
+                    if not comps:
+                        continue
+                    rot = []
+                elif kind != "POINT":
+                    _fail(f"{ckey}.ONOFF", f"moments distributed over a {kind.lower()} are not supported (point "
+                                           "moments, and line moments along a whole BEAM3R beam)")
+                else:
+                    if comps:
+                        _fail(ckey, "forces and moments in one condition are not supported")
+                    loads.append({"type": "moment", "on": on, "value": vec})
+                    continue
             if rot:
                 if [c for c, _ in rot] != [0, 1, 2] or any(v != 0.0 for _, v in rot):
                     entry = _twist_gauge(rot, ckey, on, beams, data.get(_COUPLING) or {}, fc.notes)
@@ -735,6 +743,8 @@ def scene_from_4c(source):
         for note in fc.notes:
             warnings.warn(f"{fc.path.name}: {note}", UserWarning, stacklevel=2)
     coupling = _coupling(data.get(_COUPLING), bool(beams)) if beams else None
+    if beams and (data.get(_COUPLING) or {}).get("ROTATION_COUPLING") == "polar_decomposition_2d":
+        _check_plane_rotations(beams)
     if beams:
         for key in ("BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING LINE",
                     "BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING VOLUME"):
@@ -747,6 +757,21 @@ def scene_from_4c(source):
     nodes = {nid: ("solid", r) for nid, r in solid_row.items()}
     nodes.update({nid: ("beam", r) for nid, r in beam_rows.items()})
     return scene, nodes
+
+
+def _check_plane_rotations(beams):
+    """4C's ``polar_decomposition_2d`` triad is ``exp((θ_R + |ψ0|) e_x)``: θ_R the angle of the polar
+    rotation of F's y-z block, ψ0 the beam's reference rotation vector, which 4C requires to lie
+    along x. That is the library's polar triad ``R Λ0`` where the reference triads turn about +x
+    by an angle in [0, π) (so that |ψ0| is the angle) and F keeps the y-z plane (4C stops
+    otherwise; the library's polar triad continues as the three-dimensional polar rotation)."""
+    key = f"{_COUPLING}.ROTATION_COUPLING"
+    for i, b in enumerate(beams):
+        T = np.asarray(b["triads"], dtype=float)
+        off = max(np.abs(T[:, 0, 0] - 1.0).max(), np.abs(T[:, 0, 1:]).max(), np.abs(T[:, 1:, 0]).max())
+        if off > 1e-10 or np.any(np.arctan2(T[:, 2, 1], T[:, 1, 1]) < -1e-12):
+            _fail(key, f"'polar_decomposition_2d' needs reference triads that turn about +x only (a problem in the "
+                       f"y-z plane); those of beam {i} do not")
 
 
 def _coupling(block, has_beams):
@@ -776,13 +801,14 @@ def _coupling(block, has_beams):
     strategy = str(block.get("GEOMETRY_PAIR_STRATEGY", "segmentation"))
     if strategy == "segmentation":
         out["integration"] = "segment"
-    elif strategy in ("gauss_point_projection_without_boundary_segmentation",
-                      "gauss_point_projection_boundary_segmentation"):
-        # the two differ only where a beam element leaves the solid: run() checks that none does
+    elif strategy == "gauss_point_projection_without_boundary_segmentation":
         out["integration"] = "element"
+    elif strategy == "gauss_point_projection_boundary_segmentation":
+        out["integration"] = "element_boundary"
     else:
         _fail(f"{key}.GEOMETRY_PAIR_STRATEGY", f"{strategy!r} is not supported (segmentation, "
-                                               "gauss_point_projection_without_boundary_segmentation)")
+                                               "gauss_point_projection_without_boundary_segmentation, "
+                                               "gauss_point_projection_boundary_segmentation)")
     out["search_points"] = int(block.get("GEOMETRY_PAIR_SEGMENTATION_SEARCH_POINTS", 6))
     out["n_gauss"] = int(block.get("GAUSS_POINTS", 6))
     constraint = str(block.get("CONSTRAINT_STRATEGY", "none"))
@@ -804,9 +830,12 @@ def _coupling(block, has_beams):
     else:
         _fail(f"{key}.CONSTRAINT_STRATEGY", f"{constraint!r} is not supported (penalty, lagrange)")
     rotation = str(block.get("ROTATION_COUPLING", "none"))
-    # 4C's 3d_general treats the three deformed base vectors alike; its 3d_base_1 starts from the first
+    # 4C's 3d_general treats the three deformed base vectors alike; its 3d_base_1 starts from the first;
+    # its polar_decomposition_2d is the polar rotation of F in the y-z plane, the library's polar triad
+    # there (the reader checks that the problem is that plane one: _check_plane_rotations)
     triads = {"deformation_gradient_3d_general": "deformation_gradient_symmetric",
-              "deformation_gradient_3d_base_1": "deformation_gradient"}
+              "deformation_gradient_3d_base_1": "deformation_gradient",
+              "polar_decomposition_2d": "polar"}
     if rotation in triads:
         rot = {"triad": triads[rotation], "enforcement": "penalty",
                "penalty": _num(block.get("ROTATION_COUPLING_PENALTY_PARAMETER"),
@@ -816,12 +845,16 @@ def _coupling(block, has_beams):
             if shape not in ("line2", "line3"):
                 _fail(f"{key}.ROTATION_COUPLING_MORTAR_SHAPE_FUNCTION", f"{shape!r} is not supported (line2, line3)")
             rot["lm"] = shape
+            # 4C's mortar rotation pair: its beam forces use the plain Lagrange functions, not the
+            # derivative of its constraint (physics/rotational_fourc.py)
+            rot["forces"] = "fourc"
         else:
-            _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} with {disc!r} is not supported (mortar only)")
+            # 4C's gauss_point_to_segment pair: the penalty ε/2 |ψ|² at each integration point
+            rot["constraint"] = "gauss_point"
         out["rotational"] = rot
     elif rotation != "none":
         _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} is not supported (deformation_gradient_3d_general, "
-                                          "deformation_gradient_3d_base_1)")
+                                          "deformation_gradient_3d_base_1, polar_decomposition_2d)")
     if str(block.get("COUPLE_RESTART_STATE", "false")).lower() not in ("false", "no", "0"):
         _fail(f"{key}.COUPLE_RESTART_STATE", f"{block['COUPLE_RESTART_STATE']!r} is not supported")
     if out["constraint"] == "mortar" and out["enforcement"] == "penalty":
@@ -884,12 +917,6 @@ def run(path, progress=False):
     fc = read_4c(path)
     scene, nodes = scene_from_4c(fc)
     result = solve(scene, progress=progress)
-    strategy = (fc.data.get(_COUPLING) or {}).get("GEOMETRY_PAIR_STRATEGY")
-    outside = np.flatnonzero(result.coupled_length < result.beam_length * (1.0 - 1e-12))
-    if strategy == "gauss_point_projection_boundary_segmentation" and outside.size:
-        _fail(f"{_COUPLING}.GEOMETRY_PAIR_STRATEGY", f"{strategy!r} segments the beam elements that leave the solid "
-                                                    f"(beams {outside.tolist()} do), which is not supported; the "
-                                                    "library's element-based integration leaves them unsegmented")
     return result, nodes, fc
 
 

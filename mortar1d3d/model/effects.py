@@ -70,6 +70,9 @@ def effects(model):
         elif c["integration"] == "auto":
             out.append(Effect("mortar.segmentation", "once", "only beam elements that cross element faces "
                                                              f"({c['search_points']} search points)"))
+        elif c["integration"] == "element_boundary":
+            out.append(Effect("mortar.segmentation", "once", "only beam elements that cross the solid's boundary "
+                                                             f"({c['search_points']} search points)"))
         out.append(Effect("mortar.integration_points", "once", f"{c['integration']}-based, n_gauss={c['n_gauss']}"))
         out.append(Effect("mortar.assembly", "once", f"D, M, kappa (lm={c['lm']})"))
         if c["enforcement"] == "lagrange":
@@ -115,7 +118,8 @@ def effects(model):
     for kind, when, detail in (("point", "once", "dead nodal forces"),
                                ("traction", "once", "dead surface traction"),
                                ("body", "once", "dead body force"),
-                               ("line", "once", "dead line load per reference length on beams")):
+                               ("line", "once", "dead line load per reference length on beams"),
+                               ("line_moment", "once", "dead moment per reference length on beams with rotations")):
         if kind in kinds:
             out.append(Effect(f"load.{kind}", when, detail))
     if "pressure" in kinds:

@@ -313,7 +313,7 @@ class Model:
                     g.operators = assemble_mortar(g.mesh, self.solid_mesh, integration=c["integration"],
                                                   n_gauss=c["n_gauss"], lm=c["lm"], search_points=c["search_points"])
                     self.counts["mortar.search"] += 1
-                    if c["integration"] in ("segment", "auto"):
+                    if c["integration"] in ("segment", "auto", "element_boundary"):
                         self.counts["mortar.segmentation"] += 1
                     self.counts["mortar.integration_points"] += 1
                     self.counts["mortar.assembly"] += 1
@@ -381,7 +381,8 @@ class Model:
                 g.rotational = RotationalCoupling(g.operators, g.physics, self.solid_mesh, g.rotations.start,
                                                   self.n_displacement_dofs, triad=rot["triad"],
                                                   penalty=rot["penalty"], lm=rot["lm"],
-                                                  enforcement=rot["enforcement"])
+                                                  enforcement=rot["enforcement"], constraint=rot["constraint"],
+                                                  forces=rot["forces"])
                 self.counts[f"coupling.rotational_{rot['enforcement']}"] += 1
 
     def _check_operators(self, operators):
@@ -468,6 +469,15 @@ class Model:
                 dofs, f = line_force(g.mesh, np.arange(a, b), item["value"])
                 np.add.at(self.dead_load, g.dofs.start + dofs, f)
                 self.counts["load.line"] += 1
+            elif kind == "line_moment":
+                # moment per reference length: nodal moments ∫ L_k m ds on the rotation nodes (dead)
+                from ..physics.simo_reissner import line_moment
+                g, entry = sel[1], int(item["on"].split(":")[1])
+                a, b = g.entry_elements[g.entries.index(entry)]
+                nodes, moments = line_moment(g.physics, np.arange(a, b), item["value"])
+                np.add.at(self.dead_load, (g.rotations.start + 3 * nodes[:, None] + np.arange(3)).ravel(),
+                          moments.ravel())
+                self.counts["load.line_moment"] += 1
             elif sel[1].rotations.size:
                 # moment on the rotation nodes of a beam with a material frame: virtual work M·δθ
                 # with spatial spins δθ, a dead load on the rotation unknowns

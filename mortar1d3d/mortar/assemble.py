@@ -26,8 +26,8 @@ from ..elements.solid import dispatch as solid_types
 from ..geometry.auto_segments import auto_segments
 from ..geometry.context import KernelInput
 from ..geometry.segmentation import segment
-from ..integration.points import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, checked_segment_points,
-                                  element_points, exact_rule_counts, segment_points)
+from ..integration.points import (POINT_INSIDE, POINT_NOT_CONVERGED, POINT_OUTSIDE, boundary_segmented_points,
+                                  checked_segment_points, element_points, exact_rule_counts, segment_points)
 from ..mesh import BeamMesh, SolidMesh
 from .sparse import gathered_block_csr, relative_residual, row_sources
 
@@ -36,7 +36,7 @@ SEGMENT_DTYPE = np.dtype([("beam_element", np.int64), ("solid_element", np.int64
 POINT_DTYPE = np.dtype([("beam_element", np.int64), ("solid_element", np.int64), ("eta", np.float64),
                         ("xi", np.float64, (3,)), ("weight", np.float64), ("position", np.float64, (3,)),
                         ("status", np.int64)])
-INTEGRATIONS = ("segment", "element", "auto")
+INTEGRATIONS = ("segment", "element", "auto", "element_boundary")
 
 
 @dataclass
@@ -252,18 +252,22 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     ----------
     beams : BeamMesh
     solid : SolidMesh
-    integration : {"segment", "element", "auto"}
+    integration : {"segment", "element", "auto", "element_boundary"}
         Segment-based: Gauss points on each piece of a beam element inside one solid element
         (exact up to quadrature). Element-based: Gauss points on the whole beam element, each
-        owned by the lowest-index solid element that contains it. Auto: segment-based results
+        owned by the lowest-index solid element that contains it. Element_boundary:
+        element-based, except that the beam elements crossing the solid's boundary (a Gauss point
+        or an end in no solid element) are segmented, so that their part outside is left out
+        exactly (4C's ``gauss_point_projection_boundary_segmentation``; see
+        :func:`~mortar1d3d.integration.points.boundary_segmented_points`). Auto: segment-based results
         at close to element-based cost: beam elements certified to lie inside one solid element
         are not cut (their points are the element-based ones), the others are cut at their face
         crossings (closed form for straight beams in affine elements); segments where the
         integrand is a polynomial (straight beam in tet4 / parallelepiped hex8 / affine quadratic
         elements) get the minimal exact Gauss rule instead of ``n_gauss``.
     n_gauss : int
-        Gauss points per segment (segment-based, auto where not polynomial) or per beam element
-        (element-based).
+        Gauss points per segment (segment-based, auto where not polynomial, the segmented beam
+        elements of element_boundary) or per beam element (element-based).
     lm : {"line2", "line3", "line4"}
         Lagrange multiplier interpolation.
     search_points : int
@@ -316,6 +320,11 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
         # the fallback (beam elements whose pieces or points fail are segmented again) runs with the points
         (seg_beam, seg_solid, seg_start, seg_end), (p_beam, p_solid, eta, xi, weight, position, status) = \
             checked_segment_points(ctx, segments, bad, n_gauss, search_points, diagnostics)
+    elif integration == "element_boundary":
+        t2 = t1
+        timings["segmentation"] = 0.0
+        p_beam, p_solid, eta, xi, weight, position, status = boundary_segmented_points(ctx, n_gauss, search_points,
+                                                                                       diagnostics)
     else:
         t2 = t1
         timings["segmentation"] = 0.0
@@ -326,7 +335,7 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
     not_converged, outside, uncoupled = _status_counts(status, p_solid)
     diagnostics["points_not_converged"] = not_converged
     diagnostics["points_outside_element"] = outside
-    if integration == "element":
+    if integration in ("element", "element_boundary"):
         diagnostics["points_uncoupled"] = uncoupled
     if diagnostics.get("segmentation_unresolved"):
         warnings.warn(f"assemble_mortar: the segments of {diagnostics['segmentation_unresolved']} beam elements "

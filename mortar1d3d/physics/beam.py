@@ -771,16 +771,23 @@ def line_force(beams, elements, value):
     """
     elements = np.asarray(elements, dtype=np.int64)
     q = np.asarray(value, dtype=float).reshape(3)
+    n_f = beams.element_type.n_functions
+    eta, w = gauss_legendre(LINE_LOAD_GAUSS)
+    H, J = reference_speed(beams, elements, eta)
+    weights = np.einsum("egk,eg->ek", H[..., :n_f], J * w[None, :])
+    cols = beams.function_columns()[elements, :n_f]
+    dofs = (3 * cols[:, :, None] + np.arange(3)).ravel()
+    return dofs, (weights[:, :, None] * q[None, None, :]).ravel()
+
+
+def reference_speed(beams, elements, eta):
+    """The centreline functions ``H`` (m, n_g, n) and the reference speed ``|r0'(η)|`` (m, n_g)
+    of beam ``elements`` at the parameters ``eta`` (n_g,)."""
     kind = beams.element_type
     n_f = kind.n_functions
-    eta, w = gauss_legendre(LINE_LOAD_GAUSS)
     H, dH, _ = _tables(kind, eta, beams.lengths[elements])
-    cols = beams.function_columns()[elements, :n_f]
     Q0 = beams.coefficients(elements)[:, :n_f]
     position = np.array(kind.function_offset[:n_f]) == 0
     # r0' from positions relative to each element's first node (no cancellation against |X|)
     Q0 = Q0 - position[None, :, None] * Q0[:, :1, :]
-    J = np.linalg.norm(np.einsum("egk,eki->egi", dH[..., :n_f], Q0), axis=2)
-    weights = np.einsum("egk,eg->ek", H[..., :n_f], J * w[None, :])
-    dofs = (3 * cols[:, :, None] + np.arange(3)).ravel()
-    return dofs, (weights[:, :, None] * q[None, None, :]).ravel()
+    return H, np.linalg.norm(np.einsum("egk,eki->egi", dH[..., :n_f], Q0), axis=2)

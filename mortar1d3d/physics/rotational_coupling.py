@@ -19,6 +19,12 @@ decomposition, or the deformed reference base vectors averaged), by the relative
   ``G_j = Σ_p Φ_j w_p J_p`` (spins multiplicative, like the beam's own tangent: not symmetric
   away from equilibrium).
 
+- point-wise penalty (``constraint="gauss_point"``, 4C's ``gauss_point_to_segment`` rotational
+  coupling): ``Π = ε/2 Σ_p w_p |ψ_p|²`` at the integration points themselves, as the positional
+  Gauss-point coupling does with the gap; the rows of every formula above are then the points
+  (Φ → identity, κ_p = w_p). The line moments reported at the LM nodes are the lumped projection
+  ``λ_j = κ_j⁻¹ Σ_p Φ_j(η_p) w_p ε ψ_p``, the same formula as with the mortar constraint.
+
 - Lagrange enforcement (:meth:`RotationalCoupling.constraint`): multipliers λ_j at the coupled LM
   nodes (κ_j > 0) with the Lagrangian ``Σ_j λ_j · g_j``; the constraint rows are the nonlinear
   ``g_j``, their linearisation ``G_j`` the saddle point's constraint block, and ``λᵀ ∂²g`` (the
@@ -38,6 +44,7 @@ from ..elements.multiplier import multiplier as multiplier_type
 from ..mortar.assemble import lm_numbering
 from .coupling import _lm_projection, rational_guard
 from . import rotational_coupling_kernel as kernel
+from . import rotational_fourc
 from .simo_reissner import _lagrange_tables
 
 __all__ = ["RotationalCoupling", "DEFAULT_PENALTY_FACTOR", "TRIADS", "LMS", "ENFORCEMENTS"]
@@ -48,6 +55,7 @@ DEFAULT_PENALTY_FACTOR = 1e3
 TRIADS = tuple(kernel.TRIADS)
 LMS = ("line2", "line3")
 ENFORCEMENTS = ("penalty", "lagrange")
+CONSTRAINTS = ("mortar", "gauss_point")
 
 
 class RotationalCoupling:
@@ -78,10 +86,25 @@ class RotationalCoupling:
     enforcement : {"penalty", "lagrange"}
         Penalty (:meth:`evaluate`) or Lagrange multipliers (:meth:`constraint`, the model adds
         :attr:`n_multipliers` unknowns); ``penalty`` is then not used.
+    constraint : {"mortar", "gauss_point"}
+        Weighted constraints per rotational LM node (mortar) or the point-wise penalty at every
+        integration point (gauss_point; penalty only). ``lm`` then only sets the functions of the
+        reported line moments.
+    forces : {"variational", "fourc"}
+        The coupling forces: the exact gradient of the penalty energy (or of the Lagrangian), or
+        4C's form, whose beam share uses the plain Lagrange functions (:mod:`.rotational_fourc`);
+        the constraint, its multipliers and the line moments are the same. With ``fourc`` the
+        tangent is the exact derivative of those forces (not symmetric).
     """
 
     def __init__(self, ops, beam, solid, rotation_offset, n_dofs, triad="polar", penalty=None, lm="line3",
-                 enforcement="penalty"):
+                 enforcement="penalty", constraint="mortar", forces="variational"):
+        if forces not in rotational_fourc.FORCES:
+            raise ValueError(f"coupling.rotational.forces must be one of {rotational_fourc.FORCES}, got {forces!r}")
+        if constraint not in CONSTRAINTS:
+            raise ValueError(f"coupling.rotational.constraint must be one of {CONSTRAINTS}, got {constraint!r}")
+        if constraint == "gauss_point" and enforcement != "penalty":
+            raise ValueError("coupling.rotational: the gauss_point constraint is enforced by penalty only")
         if enforcement not in ENFORCEMENTS:
             raise ValueError(f"coupling.rotational.enforcement must be one of {ENFORCEMENTS}, got {enforcement!r}")
         if triad not in kernel.TRIADS:
@@ -95,6 +118,8 @@ class RotationalCoupling:
             raise ValueError(f"coupling.rotational.penalty must be a finite number > 0, got {penalty!r}")
         self.beam, self.solid, self.triad, self.kind = beam, solid, triad, kernel.TRIADS[triad]
         self.penalty, self.lm, self.enforcement = float(penalty), lm, enforcement
+        self.constraint_type = constraint          # (the method constraint() is the Lagrange evaluation)
+        self.forces = forces
         self.rotation_offset, self.n_dofs = int(rotation_offset), int(n_dofs)
         p = ops.point_fields
         self.beam_element = np.ascontiguousarray(p["beam_element"], dtype=np.int64)
@@ -134,6 +159,13 @@ class RotationalCoupling:
         self.kappa_inverse = np.divide(1.0, self.kappa, out=np.zeros_like(self.kappa), where=self.kappa > 0)
         # LM nodes some integration point touched: only they carry a Lagrange multiplier (three rows each)
         self.coupled_rows = np.flatnonzero(np.repeat(self.kappa > 0, 3))
+        # the rows of the constraint: the LM functions (mortar), or every point on its own
+        if constraint == "gauss_point":
+            self.rows = sp.identity(n_pts, format="csr")
+            self.rows_kappa_inverse = np.divide(1.0, self.weight, out=np.zeros_like(self.weight),
+                                                where=self.weight > 0)
+        else:
+            self.rows, self.rows_kappa_inverse = self.Phi, self.kappa_inverse
         self.X = X
         self.n_evaluations = 0
 
@@ -221,50 +253,70 @@ class RotationalCoupling:
             psi = np.asarray(psi, dtype=float).ravel()
             d[self.rotation_offset: self.rotation_offset + psi.size] = psi
             gap = (self._reference_rows @ d).reshape(-1, 3)
+            if self.constraint_type == "gauss_point":
+                gap = self.Phi @ gap
         else:
             gap = self.weighted_gap(u_solid, psi)
         return self.penalty * self.kappa_inverse[:, None] * gap
 
     def energy(self, u_solid, psi):
-        """Penalty energy ``ε/2 Σ_j κ_j⁻¹ |g_j|²``."""
-        g = self.weighted_gap(u_solid, psi)
-        return 0.5 * self.penalty * float(np.sum(self.kappa_inverse[:, None] * g * g))
+        """Penalty energy ``ε/2 Σ_j κ_j⁻¹ |g_j|²`` (gauss_point: ``ε/2 Σ_p w_p |ψ_p|²``)."""
+        g = np.asarray(self.rows @ (self.weight[:, None] * self.relative_rotations(u_solid, psi)))
+        return 0.5 * self.penalty * float(np.sum(self.rows_kappa_inverse[:, None] * g * g))
 
     def _linearise(self, u_solid, psi, moments, tangent):
-        """What both enforcements share: the weighted gaps ``g`` (n_lm, 3), the forces ``Gᵀλ``
-        (n_dofs,) of the line moments ``λ = moments(g)`` (n_lm, 3), and with ``tangent`` the
-        constraint's linearisation ``G`` (3 n_lm, n_dofs, csr) and ``λᵀ ∂²g`` (n_dofs, n_dofs, csr)."""
+        """What both enforcements share: the weighted gaps ``g`` (n_rows, 3), the forces ``Gᵀλ``
+        (n_dofs,) of the line moments ``λ = moments(g)`` (n_rows, 3), and with ``tangent`` the
+        constraint's linearisation ``G`` (3 n_rows, n_dofs, csr) and ``λᵀ ∂²g`` (n_dofs, n_dofs,
+        csr). Rows: the LM nodes (mortar) or the points (gauss_point), :attr:`rows`. Last, the
+        rows of the forces' own Jacobians ``Σ_p R_jp w_p Jf_p`` (``G`` itself for variational forces;
+        with ``forces="fourc"`` ``r`` and ``λᵀ ∂²g`` are those of 4C's forces)."""
         self.n_evaluations += 1
         x, triads, psi_p, J18 = self._run(u_solid, psi, True)
         J = self._local_jacobian(J18)
         cols = self._columns()
-        g = np.asarray(self.Phi @ (self.weight[:, None] * psi_p))
+        g = np.asarray(self.rows @ (self.weight[:, None] * psi_p))
         lam_j = moments(g)
-        lam_p = np.asarray(self.Phi.T @ lam_j)                                       # (n_pts, 3)
+        lam_p = np.asarray(self.rows.T @ lam_j)                                      # (n_pts, 3)
         used = cols >= 0
-        local = np.einsum("pic,pi->pc", J, lam_p) * self.weight[:, None]
+        Jf = J
+        if self.forces == "fourc":
+            # 4C's forces: the beam columns L_k T⁻ᵀ(ψ_p) instead of ∂ψ_p/∂θ_k = T⁻¹(ψ_p) Ĩ_k
+            Jf = J.copy()
+            Jf[:, :, -9:] = rotational_fourc.beam_columns(psi_p, self.lag)
+        local = np.einsum("pic,pi->pc", Jf, lam_p) * self.weight[:, None]
         r = np.bincount(cols[used], weights=local[used], minlength=self.n_dofs)
         if not tangent:
-            return g, r, None, None
-        # G_j = Σ_p Φ_j w_p J_p (3 n_lm, n_dofs)
-        Phi = self.Phi.tocoo()
-        k, pts = Phi.row, Phi.col
-        scale = Phi.data * self.weight[pts]
-        rows = (3 * k[:, None, None] + np.arange(3)[None, :, None]) + 0 * cols[pts][:, None, :]
-        vals = scale[:, None, None] * J[pts]
-        cc = np.broadcast_to(cols[pts][:, None, :], vals.shape)
-        mask = cc >= 0
-        Gm = sp.csr_matrix((vals[mask], (rows[mask], cc[mask])), shape=(3 * self.n_lm, self.n_dofs))
+            return g, r, None, None, None
+        # G_j = Σ_p Φ_j w_p J_p (3 n_rows, n_dofs), and the same rows of the force Jacobians
+        Gm = self._row_sums(J, cols)
+        Gf = Gm if Jf is J else self._row_sums(Jf, cols)
         H = np.zeros((self.n_points, 18, 18))
         status = np.empty(self.n_points, dtype=np.int64)
         kernel.hessian_range(self.kind, x, self.nodes, self.n_local, self.G, self.L0, triads, self.rotation_nodes,
                              self.beam_element, self.lag, np.ascontiguousarray(lam_p), H, status)
         self._check(status, psi_p)
         H = self._local_hessian(H * self.weight[:, None, None])
+        if self.forces == "fourc":
+            # rows of the beam spins: ∂(w_p L_k T⁻¹(ψ_p) λ_p)/∂(u, θ) at fixed λ = w_p L_k ∂(T⁻¹λ_p)/∂ψ J_p
+            DJ = np.einsum("pab,pbc->pac", rotational_fourc.inverse_jacobian_derivative(psi_p, lam_p), J)
+            H[:, -9:, :] = (self.weight[:, None, None, None] * self.lag[:, :, None, None]
+                            * DJ[:, None, :, :]).reshape(self.n_points, 9, -1)
         both = used[:, :, None] & used[:, None, :]
         ri = np.broadcast_to(cols[:, :, None], H.shape)[both]
         ci = np.broadcast_to(cols[:, None, :], H.shape)[both]
-        return g, r, Gm, sp.csr_matrix((H[both], (ri, ci)), shape=(self.n_dofs, self.n_dofs))
+        return g, r, Gm, sp.csr_matrix((H[both], (ri, ci)), shape=(self.n_dofs, self.n_dofs)), Gf
+
+    def _row_sums(self, J, cols):
+        """``Σ_p R_jp w_p J_p`` (3 n_rows, n_dofs, csr) for the constraint rows R (:attr:`rows`)."""
+        Phi = self.rows.tocoo()
+        k, pts = Phi.row, Phi.col
+        scale = Phi.data * self.weight[pts]
+        rows = (3 * k[:, None, None] + np.arange(3)[None, :, None]) + 0 * cols[pts][:, None, :]
+        vals = scale[:, None, None] * J[pts]
+        cc = np.broadcast_to(cols[pts][:, None, :], vals.shape)
+        mask = cc >= 0
+        return sp.csr_matrix((vals[mask], (rows[mask], cc[mask])), shape=(3 * self.rows.shape[0], self.n_dofs))
 
     def evaluate(self, u_solid, psi, tangent=True):
         """Penalty: residual (n_dofs,) and tangent (n_dofs, n_dofs, csr, or None) in the global
@@ -276,12 +328,13 @@ class RotationalCoupling:
         u_solid : (3 n_solid_nodes,) solid displacements.
         psi : (n_rotation_nodes, 3) total rotation vectors of the group.
         """
-        _, r, Gm, K_lam = self._linearise(u_solid, psi, lambda g: self.penalty * self.kappa_inverse[:, None] * g,
-                                          tangent)
+        kinv = self.rows_kappa_inverse
+        _, r, Gm, K_lam, Gf = self._linearise(u_solid, psi, lambda g: self.penalty * kinv[:, None] * g, tangent)
         if not tangent:
             return r, None
-        # ε Gᵀ κ⁻¹ G, plus the geometric part of the constraint's second derivative
-        K = self.penalty * (Gm.T @ sp.diags(np.repeat(self.kappa_inverse, 3)) @ Gm)
+        # ε Gᵀ κ⁻¹ G, plus the geometric part of the constraint's second derivative (fourc forces:
+        # their rows Gf instead of the left G, and their own second part)
+        K = self.penalty * (Gf.T @ sp.diags(np.repeat(kinv, 3)) @ Gm)
         K = K + K_lam
         return r, K.tocsr()
 
@@ -302,7 +355,7 @@ class RotationalCoupling:
         """
         lam = np.zeros(3 * self.n_lm)
         lam[self.coupled_rows] = multipliers
-        g, r, Gm, K = self._linearise(u_solid, psi, lambda _: lam.reshape(-1, 3), tangent)
+        g, r, Gm, K, _ = self._linearise(u_solid, psi, lambda _: lam.reshape(-1, 3), tangent)
         c = g.ravel()[self.coupled_rows]
         return r, c, (Gm[self.coupled_rows] if tangent else None), K
 
@@ -313,8 +366,8 @@ class RotationalCoupling:
         n_rot = self.beam.n_rotation_nodes
         J = self._run(np.zeros(self.X.size), np.zeros((n_rot, 3)), True)[3][:, :, 9:]
         cols = self._columns()[:, -9:] - self.rotation_offset
-        Phi = self.Phi.tocoo()
+        Phi = self.rows.tocoo()
         rows = 3 * Phi.row[:, None, None] + np.arange(3)[None, :, None] + np.zeros((1, 1, 9), dtype=np.int64)
         vals = (Phi.data * self.weight[Phi.col])[:, None, None] * J[Phi.col]
         cc = np.broadcast_to(cols[Phi.col][:, None, :], vals.shape)
-        return sp.csr_matrix((vals.ravel(), (rows.ravel(), cc.ravel())), shape=(3 * self.n_lm, 3 * n_rot))
+        return sp.csr_matrix((vals.ravel(), (rows.ravel(), cc.ravel())), shape=(3 * self.rows.shape[0], 3 * n_rot))

@@ -32,7 +32,7 @@ from . import simo_reissner_kernel as kernel
 from .beam import BeamModel, _positive
 from .rotations import compose_rows, exp_rows
 
-__all__ = ["Section", "SimoReissnerBeam", "reference_triads", "check_triads", "RotationRangeError",
+__all__ = ["Section", "SimoReissnerBeam", "line_moment", "reference_triads", "check_triads", "RotationRangeError",
            "N_GAUSS", "FORCE_GAUSS", "FORCE_RULES", "LOBATTO3"]
 
 #: Gauss points of the moment (curvature) term per element (see :class:`SimoReissnerBeam` Notes)
@@ -276,6 +276,38 @@ def _lagrange_tables(eta):
     line3 = BEAM_ELEMENTS["line3"]
     eta = np.asarray(eta, dtype=float)
     return tuple(np.ascontiguousarray(evaluate(line3, eta, derivative=k)[:, :3]) for k in range(2))
+
+
+def line_moment(beam, elements, value):
+    """Nodal moments of a dead moment per reference length on Simo–Reissner beam elements.
+
+    The virtual work ``∫ m · δθ ds`` with the spins interpolated by the line3 Lagrange functions
+    L_k of the element's three rotation nodes: ``M_k = ∫ L_k m ds`` (``ds = |r0'| dη``,
+    :data:`~mortar1d3d.physics.beam.LINE_LOAD_GAUSS` Gauss points), fixed in space and
+    independent of the deformation, so no tangent. The exact spin interpolation of the element
+    (``Ĩ_k``, :mod:`.simo_reissner_kernel`) equals ``L_k I`` where the triads turn about one fixed
+    axis (a planar problem) and differs from it at the order of the rotations' out-of-plane part
+    otherwise; 4C's BEAM3R distributes a line moment with the same ``L_k`` (and no tangent).
+
+    Parameters
+    ----------
+    beam : SimoReissnerBeam
+    elements : (m,) int array_like
+    value : (3,) array_like of float
+        Moment per unit reference arc length, spatial components.
+
+    Returns
+    -------
+    nodes : (3 m,) int64
+        Rotation nodes (:attr:`SimoReissnerBeam.rotation_nodes`), three per element.
+    moments : (3 m, 3) float64
+    """
+    from .beam import LINE_LOAD_GAUSS, reference_speed
+    elements = np.asarray(elements, dtype=np.int64)
+    eta, w = gauss_legendre(LINE_LOAD_GAUSS)
+    J = reference_speed(beam.beams, elements, eta)[1]
+    weights = np.einsum("gk,eg->ek", _lagrange_tables(eta)[0], J * w[None, :])
+    return beam.rotation_nodes[elements].ravel(), weights.ravel()[:, None] * np.asarray(value, dtype=float)[None, :]
 
 
 class SimoReissnerBeam:
