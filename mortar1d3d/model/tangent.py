@@ -17,7 +17,7 @@ are removed, as scipy's matrix addition removes them, so the pattern is the same
 solver's fill-reducing ordering depends on it).
 
 A block or constant whose pattern differs from the one the positions were made for (compared by
-identity, then by value) makes the union be rebuilt: correct for any input, fast when patterns are
+memory address, then by value) makes the union be rebuilt: correct for any input, fast when patterns are
 fixed. The union and the positions are built with one byte per entry for the patterns and a
 binary search per entry (:func:`~mortar1d3d.physics.assembly_graph.pattern_positions`), so the
 build needs little more memory than the tangent itself.
@@ -26,6 +26,13 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..physics.assembly_graph import add_at_positions, pattern_positions
+
+
+def _same_memory(a, b):
+    """Whether two arrays are the same memory (scipy wraps a matrix's index arrays in new array
+    objects on every construction, so identity of the objects says nothing)."""
+    return a is b or (a.__array_interface__["data"][0] == b.__array_interface__["data"][0]
+                      and a.shape == b.shape and a.dtype == b.dtype and a.strides == b.strides)
 
 
 def _placed(K, index, n):
@@ -86,7 +93,7 @@ class TangentPattern:
         for (shape, indptr, indices), (shape0, indptr0, indices0) in zip(layout, self._signature):
             if shape != shape0:
                 return False
-            if indptr is indptr0 and indices is indices0:
+            if _same_memory(indptr, indptr0) and _same_memory(indices, indices0):
                 continue
             if not (np.array_equal(indptr, indptr0) and np.array_equal(indices, indices0)):
                 return False
@@ -132,7 +139,7 @@ class TangentPattern:
         if not self._matches(layout):
             self._build(blocks, constant, layout)
         else:
-            # identical patterns by value: keep their arrays, so the next call compares by identity
+            # equal patterns: keep the caller's arrays, so the next call compares memory addresses
             self._signature = [(shape, indptr, indices) for shape, indptr, indices in layout]
         data = np.zeros(self._nnz)
         if constant is not None:
