@@ -418,6 +418,12 @@ def _rotational(value):
         out["penalty"] = _number(value["penalty"], f"{path}.penalty", low=0.0, low_open=True)
     if out["constraint"] == "gauss_point" and out["enforcement"] != "penalty":
         _fail(f"{path}.enforcement", "the gauss_point constraint is enforced by penalty only")
+    if out["forces"] == "fourc" and not (out["constraint"] == "mortar" and out["enforcement"] == "penalty"):
+        # 4C's force form is that of its mortar penalty pair; with multipliers the saddle point would
+        # need the form's own constraint gradient, which is not built
+        _fail(f"{path}.forces", "'fourc' is 4C's force form of the mortar constraint with penalty enforcement; "
+                                "use forces = \"variational\" with constraint = \"gauss_point\" or "
+                                "enforcement = \"lagrange\"")
     return out
 
 

@@ -162,16 +162,20 @@ def test_distributed_solution_equals_the_serial_one(name):
                                                  [np.full(b.n_elements, n - 1) for b in beams])):
         result = solve_distributed(_with(SOLVE_SCENES[name](), solver="amg", backend="petsc", rtol=1e-12), comm=COMM,
                                    parts=parts)
-        errors = (None, None)
+        errors = (None, None, None)
         if RANK == 0:
             assert result.distributed["ranks"] == SIZE
+            # the support reactions (from the linear step's residual r0 + K (z - z0)) as the serial ones
+            reactions, reference = np.array(result.reactions), np.array(serial.reactions)
             errors = (np.linalg.norm(result.z - serial.z) / np.linalg.norm(serial.z),
-                      np.abs(result.line_load - serial.line_load).max() / np.abs(serial.line_load).max())
+                      np.abs(result.line_load - serial.line_load).max() / np.abs(serial.line_load).max(),
+                      np.abs(reactions - reference).max() / np.abs(reference).max())
         else:
             assert result is None
         # decided together: a rank that failed alone would leave the others waiting in the next test
-        error, line_error = COMM.tompi4py().bcast(errors, root=0)
+        error, line_error, reaction_error = COMM.tompi4py().bcast(errors, root=0)
         assert error <= 1e-10, (name, error)
+        assert reaction_error <= 1e-8, (name, reaction_error)
         # the line load of the output, from the gathered operators: λ = ε κ⁻¹ (D d_B − M d_S) takes
         # the difference of nearly equal displacements times the penalty, so it is only as accurate
         # as the solution times ε / E (1e3 here)

@@ -385,6 +385,20 @@ def test_4c_polar_decomposition_2d_needs_rotations_about_x(tmp_path):
 
 
 @needs_inputs
+def test_4c_point_wise_rotational_coupling_in_3d_is_an_error(tmp_path):
+    """The library's variational forces are 4C's point-wise ones only in the plane problem of
+    polar_decomposition_2d; a three-dimensional triad there is refused, not approximated."""
+    text = (FOLDER / POLAR_2D).read_text()
+    assert text.count("ROTATION_COUPLING: polar_decomposition_2d") == 1
+    path = tmp_path / "three_d.4C.yaml"
+    path.write_text(text.replace("ROTATION_COUPLING: polar_decomposition_2d",
+                                 "ROTATION_COUPLING: deformation_gradient_3d_general"))
+    with pytest.raises(FourCError, match="ROTATION_COUPLING: 'deformation_gradient_3d_general' with "
+                                         "CONTACT_DISCRETIZATION gauss_point_to_segment"):
+        scene_from_4c(path)
+
+
+@needs_inputs
 def test_4c_rotational_mortar_file_with_4c_forces():
     """The reader selects 4C's force form (coupling.rotational.forces = "fourc"); the line4/line3
     file then comes to 9.4e-8 of 4C's values (1.1e-4 with the variational forces; 4C's tolerance
@@ -584,12 +598,22 @@ def test_nurbs27_elements_that_do_not_match_their_span_are_errors_naming_them(tm
     line = next(l for l in text.splitlines() if l.startswith('  - "3 SOLID'))
     ids = np.array(line.split()[4:31]).reshape(3, 3, 3)
     path.write_text(text.replace(line, line.replace(" ".join(ids.ravel()), " ".join(ids.transpose(2, 1, 0).ravel()))))
-    with pytest.raises(FourCError, match=r"STRUCTURE ELEMENTS"):
+    with pytest.raises(FourCError, match=r"STRUCTURE ELEMENTS: inverted nurbs27 elements \(negative Jacobian "
+                                         r"determinant at a corner"):
+        scene_from_4c(path)
+    # an element beyond those the knot vectors give is named, not ignored
+    path = nurbs_file(tmp_path, pipe)
+    text = path.read_text()
+    line = next(l for l in text.splitlines() if l.startswith('  - "3 SOLID'))
+    path.write_text(text.replace(line, line + "\n" + line.replace('"3 SOLID', '"99 SOLID', 1)))
+    with pytest.raises(FourCError, match=r"STRUCTURE ELEMENTS: NURBS element\(s\) \[99\] lie beyond the"):
         scene_from_4c(path)
 
 
 def test_nurbs27_knot_section_errors_name_the_key(tmp_path):
     from mortar1d3d.io.fourc_nurbs import parse_knotvectors
+    with pytest.raises(FourCError, match=r"STRUCTURE KNOTVECTORS: 'ID x' at entry 2: expected an integer"):
+        parse_knotvectors(["NURBS_DIMENSION 3", "BEGIN NURBSPATCH", "ID x"])
     with pytest.raises(FourCError, match="STRUCTURE KNOTVECTORS: expected 'NURBS_DIMENSION 3'"):
         parse_knotvectors(["NURBS_DIMENSION 2"])
     lines = ["NURBS_DIMENSION 3", "BEGIN NURBSPATCH", "ID 1"] + \

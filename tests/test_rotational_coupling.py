@@ -461,3 +461,11 @@ kinematics = "linear"
     u_solid = np.linalg.norm(result.solid_displacement, axis=1).max()
     assert 0.5 * u_solid < u_beam < u_solid
     assert g.rotational.triad == "deformation_gradient"
+
+
+@pytest.mark.parametrize("rotational", [{"forces": "fourc", "constraint": "gauss_point"},
+                                        {"forces": "fourc", "enforcement": "lagrange"}])
+def test_fourc_forces_are_for_the_mortar_penalty_pair_only(rotational):
+    with pytest.raises(SceneError, match=r"^coupling.rotational.forces: 'fourc' is 4C's force form of the mortar "
+                                         r"constraint with penalty enforcement"):
+        block(2, 2, rotational)

@@ -174,7 +174,10 @@ def _penalty_matrix(model, ops, numbering, layout, comm):
                    (local_sys, n_sys))
     w = summed_vector(comm, np.concatenate(k_idx), np.concatenate(k_val), (local_rows, n_rows))
     arr = w.getArray()
-    arr[arr > 0] = model.penalty / arr[arr > 0]
+    # the serial rule (physics.coupling.PenaltyCoupling): rows with κ_j > 0 coupled with ε/κ_j, or
+    # every row with κ_j != 0 under negative_kappa = "keep"; the others not at all
+    coupled = arr != 0.0 if model.scene.coupling.get("negative_kappa", "drop") == "keep" else arr > 0.0
+    arr = np.where(coupled, model.penalty / np.where(coupled, arr, 1.0), 0.0)
     w.setArray(arr)
     WB = B.copy()
     WB.diagonalScale(L=w)
@@ -354,7 +357,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     callback = _print_step if (progress is True and rank == 0) else None
     z0 = np.zeros(system.n_unknowns)
     if model.linear:
-        z, record, _ = solve_linear_step(system, z0, started=start)
+        z, record, linear_residual = solve_linear_step(system, z0, started=start)
         records, history = [record], [z.copy()]
         if callback:
             callback(record, 1, 1)
@@ -381,7 +384,9 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     gathered = [_serial_operators(model, g, out, numbering, k) for k, (g, out) in enumerate(zip(model.groups, outputs))]
     served = Model(model_built(model))
     served.prepare(operators=gathered or None)
-    served.last_residual = system.last_residual
+    # the reactions come from the last residual: of the linear step (r(z0) + K (z - z0), as the serial
+    # path keeps it) or of the last Newton iterate
+    served.last_residual = linear_residual if model.linear else system.last_residual
     note = f"PETSc {info['ksp']} + {info['pc']} on {size} rank(s): {info['iterations']} iterations (last solve)"
     for rec in records:
         rec.notes.append(note)

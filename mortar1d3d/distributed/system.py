@@ -210,7 +210,9 @@ class DistributedSystem:
         full[self.free] = b
         rhs = self._vector(full)
         # the supports: rows and columns of the fixed unknowns become the identity, their entries of
-        # the right side are zero already (the increment keeps the prescribed values)
+        # the right side are zero already (the increment keeps the prescribed values); on a copy, since
+        # the caller still needs K (the linear step's residual r0 + K (z - z0), the reactions)
+        K = K.duplicate(copy=True)
         K.zeroRowsColumns(self.fixed_rows.astype(petsc().IntType), diag=1.0)
         x = rhs.duplicate()
         self.last_linear_info = self.solver.solve(K, rhs, x, rtol)

@@ -767,6 +767,9 @@ def _check_plane_rotations(beams):
     otherwise; the library's polar triad continues as the three-dimensional polar rotation)."""
     key = f"{_COUPLING}.ROTATION_COUPLING"
     for i, b in enumerate(beams):
+        if "triads" not in b:
+            _fail(key, f"'polar_decomposition_2d' couples cross-section rotations; beam {i} has none "
+                       "(a BEAM3EB beam: use BEAM3R)")
         T = np.asarray(b["triads"], dtype=float)
         off = max(np.abs(T[:, 0, 0] - 1.0).max(), np.abs(T[:, 0, 1:]).max(), np.abs(T[:, 1:, 0]).max())
         if off > 1e-10 or np.any(np.arctan2(T[:, 2, 1], T[:, 1, 1]) < -1e-12):
@@ -849,7 +852,14 @@ def _coupling(block, has_beams):
             # derivative of its constraint (physics/rotational_fourc.py)
             rot["forces"] = "fourc"
         else:
-            # 4C's gauss_point_to_segment pair: the penalty ε/2 |ψ|² at each integration point
+            # 4C's gauss_point_to_segment pair: the penalty ε/2 |ψ|² at each integration point. Its
+            # forces equal the library's variational ones only where the rotations stay in one
+            # plane (polar_decomposition_2d); 4C's own point-wise force form is not built
+            if rotation != "polar_decomposition_2d":
+                _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} with CONTACT_DISCRETIZATION gauss_point_to_segment: "
+                                                  "4C's point-wise rotational force form is not supported (only "
+                                                  "polar_decomposition_2d, a plane problem, where it equals the "
+                                                  "library's)")
             rot["constraint"] = "gauss_point"
         out["rotational"] = rot
     elif rotation != "none":

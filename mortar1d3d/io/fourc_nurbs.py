@@ -57,15 +57,22 @@ def parse_knotvectors(lines):
         pos += 1
         return items[pos - 1].split()[1]
 
+    def take_int(word):
+        value = take(word)
+        try:
+            return int(value)
+        except ValueError:
+            _fail(KEY, f"'{word} {value}' at entry {pos - 1}: expected an integer")
+
     while pos < len(items):
         if items[pos] != "BEGIN NURBSPATCH":
             _fail(KEY, f"expected 'BEGIN NURBSPATCH' at entry {pos}, got {items[pos]!r}")
         pos += 1
-        pid = int(take("ID"))
+        pid = take_int("ID")
         degrees, knots = [], []
         for d in range(3):
-            n = int(take("NUMKNOTS"))
-            degrees.append(int(take("DEGREE")))
+            n = take_int("NUMKNOTS")
+            degrees.append(take_int("DEGREE"))
             kind = take("TYPE")
             if kind != "Interpolated":
                 _fail(f"{KEY}: patch {pid}, direction {d}", f"TYPE {kind!r} is not supported (only Interpolated, "
@@ -131,6 +138,10 @@ def nurbs_solid(fc):
             _fail(f"{pkey}", f"control point(s) {missing[:5]} of its elements are not CP lines of NODE COORDS")
         nets.append(net)
         element_ids.append(eids)
+    extra = sorted(eid for eid, (kind, _) in by_id.items() if kind in NURBS_ELEMENTS and not 1 <= eid <= offset)
+    if extra:
+        _fail("STRUCTURE ELEMENTS", f"NURBS element(s) {extra[:5]} lie beyond the {offset} elements the knot vectors "
+                                    f"of {KEY} give")
     out = []
     for k, ((degrees, knots), net) in enumerate(zip(patches, nets)):
         control = np.array([fc.control_points[int(c)][0] for c in net.ravel()]).reshape(net.shape + (3,))

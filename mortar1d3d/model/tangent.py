@@ -17,7 +17,7 @@ are removed, as scipy's matrix addition removes them, so the pattern is the same
 solver's fill-reducing ordering depends on it).
 
 A block or constant whose pattern differs from the one the positions were made for (compared by
-memory address, then by value) makes the union be rebuilt: correct for any input, fast when patterns are
+value; read-only pattern arrays, like the solid's, by memory address) makes the union be rebuilt: correct for any input, fast when patterns are
 fixed. The union and the positions are built with one byte per entry for the patterns and a
 binary search per entry (:func:`~mortar1d3d.physics.assembly_graph.pattern_positions`), so the
 build needs little more memory than the tangent itself.
@@ -30,7 +30,8 @@ from ..physics.assembly_graph import add_at_positions, pattern_positions
 
 def _same_memory(a, b):
     """Whether two arrays are the same memory (scipy wraps a matrix's index arrays in new array
-    objects on every construction, so identity of the objects says nothing)."""
+    objects on every construction, so identity of the objects says nothing). Trusted as "the same
+    pattern" only for read-only arrays, which no one can have changed in place (the solid's)."""
     return a is b or (a.__array_interface__["data"][0] == b.__array_interface__["data"][0]
                       and a.shape == b.shape and a.dtype == b.dtype and a.strides == b.strides)
 
@@ -93,7 +94,8 @@ class TangentPattern:
         for (shape, indptr, indices), (shape0, indptr0, indices0) in zip(layout, self._signature):
             if shape != shape0:
                 return False
-            if _same_memory(indptr, indptr0) and _same_memory(indices, indices0):
+            if _same_memory(indptr, indptr0) and _same_memory(indices, indices0) \
+                    and not (indptr.flags.writeable or indices.flags.writeable):
                 continue
             if not (np.array_equal(indptr, indptr0) and np.array_equal(indices, indices0)):
                 return False
