@@ -16,10 +16,11 @@ compiled for, and the sum over all functions, which is the time spent compiling.
 a little to the wall time.
 
 To compare two versions, pair whole runs of this script so that both see the machine of the same
-minutes, e.g. with an A/B timer that alternates the two commands::
+minutes: alternate the two commands (A B A B ...) and compare their CPU seconds (user + system of
+the whole process, e.g. from ``/usr/bin/time``) run by run::
 
-    farm-bench -n 3 --warmup 0 --vs ".venv/bin/python benchmarks/cold_start.py --package OLD" \\
-        -- .venv/bin/python benchmarks/cold_start.py --package .
+    /usr/bin/time -f "%U %S" .venv/bin/python benchmarks/cold_start.py --package OLD
+    /usr/bin/time -f "%U %S" .venv/bin/python benchmarks/cold_start.py --package .
 """
 import argparse
 import os
