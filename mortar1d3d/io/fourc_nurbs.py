@@ -42,6 +42,13 @@ def _fail(key, message):
     raise FourCError(f"{key}: {message}")
 
 
+def _net_order(ids, degrees):
+    """An element's control-point ids as listed by 4C (first direction fastest) as a
+    (p0 + 1, p1 + 1, p2 + 1) block indexed like the control net."""
+    p0, p1, p2 = degrees
+    return np.asarray(ids, dtype=np.int64).reshape(p2 + 1, p1 + 1, p0 + 1).transpose(2, 1, 0)
+
+
 def parse_knotvectors(lines):
     """The patches of a ``STRUCTURE KNOTVECTORS`` section: a list (by patch ID 1, 2, …) of
     ``(degrees (3,), knot vectors [3 arrays])``; FourCError naming the line otherwise."""
@@ -124,7 +131,7 @@ def nurbs_solid(fc):
             if len(ids) != (p0 + 1) * (p1 + 1) * (p2 + 1):
                 _fail(f"STRUCTURE ELEMENTS: element {int(eid)}", f"{kind} lists {(p0 + 1) * (p1 + 1) * (p2 + 1)} control "
                                                                    f"points, got {len(ids)}")
-            listed = np.asarray(ids, dtype=np.int64).reshape(p2 + 1, p1 + 1, p0 + 1).transpose(2, 1, 0)
+            listed = _net_order(ids, degrees)
             block = net[i:i + p0 + 1, j:j + p1 + 1, m:m + p2 + 1]
             clash = (block != 0) & (block != listed)
             if clash.any():
@@ -178,7 +185,7 @@ def check_elements(solid, mesh, element_ids, fc, points=3):
             e = in_patch[np.flatnonzero((mesh.element_span[in_patch] == rank).all(axis=1))[0]]
             # 4C's element: local knots around its span, its listed control points in 4C's order
             local = [U[c + 1: c + 2 * p + 1] for U, p, c in zip(patch.knots, patch.degrees, cart)]
-            listed = np.asarray(by_id[int(eid)]).reshape(p2 + 1, p1 + 1, p0 + 1).transpose(2, 1, 0).ravel()
+            listed = _net_order(by_id[int(eid)], patch.degrees).ravel()
             X = np.array([fc.control_points[int(c)][0] for c in listed])
             w = np.array([fc.control_points[int(c)][1] for c in listed])
             R, dR = np.empty(len(w)), np.empty((len(w), 3))

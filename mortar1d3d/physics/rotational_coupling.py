@@ -307,8 +307,9 @@ class RotationalCoupling:
         ci = np.broadcast_to(cols[:, None, :], H.shape)[both]
         return g, r, Gm, sp.csr_matrix((H[both], (ri, ci)), shape=(self.n_dofs, self.n_dofs)), Gf
 
-    def _row_sums(self, J, cols):
-        """``Σ_p R_jp w_p J_p`` (3 n_rows, n_dofs, csr) for the constraint rows R (:attr:`rows`)."""
+    def _row_sums(self, J, cols, n_cols=None):
+        """``Σ_p R_jp w_p J_p`` (3 n_rows, n_cols (default n_dofs), csr) for the constraint rows R
+        (:attr:`rows`); ``cols[p]`` the column of each of J_p's columns, -1 for none."""
         Phi = self.rows.tocoo()
         k, pts = Phi.row, Phi.col
         scale = Phi.data * self.weight[pts]
@@ -316,7 +317,8 @@ class RotationalCoupling:
         vals = scale[:, None, None] * J[pts]
         cc = np.broadcast_to(cols[pts][:, None, :], vals.shape)
         mask = cc >= 0
-        return sp.csr_matrix((vals[mask], (rows[mask], cc[mask])), shape=(3 * self.rows.shape[0], self.n_dofs))
+        return sp.csr_matrix((vals[mask], (rows[mask], cc[mask])),
+                             shape=(3 * self.rows.shape[0], self.n_dofs if n_cols is None else n_cols))
 
     def evaluate(self, u_solid, psi, tangent=True):
         """Penalty: residual (n_dofs,) and tangent (n_dofs, n_dofs, csr, or None) in the global
@@ -366,8 +368,4 @@ class RotationalCoupling:
         n_rot = self.beam.n_rotation_nodes
         J = self._run(np.zeros(self.X.size), np.zeros((n_rot, 3)), True)[3][:, :, 9:]
         cols = self._columns()[:, -9:] - self.rotation_offset
-        Phi = self.rows.tocoo()
-        rows = 3 * Phi.row[:, None, None] + np.arange(3)[None, :, None] + np.zeros((1, 1, 9), dtype=np.int64)
-        vals = (Phi.data * self.weight[Phi.col])[:, None, None] * J[Phi.col]
-        cc = np.broadcast_to(cols[Phi.col][:, None, :], vals.shape)
-        return sp.csr_matrix((vals.ravel(), (rows.ravel(), cc.ravel())), shape=(3 * self.rows.shape[0], 3 * n_rot))
+        return self._row_sums(J, cols, 3 * n_rot)
