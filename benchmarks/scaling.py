@@ -2,6 +2,7 @@
 
     .venv/bin/python benchmarks/scaling.py [--part assembly newton] [--rounds 3]
                                            [--points 1e4 1e5 1e6 1e7] [--unknowns 1e4 1e5 1e6]
+                                           [--profile TOP] [--package CHECKOUT]
 
 Issue 22, item 4. One thread throughout; every timed call is paired with the control loop of
 ``control.py`` (1 thread) in the same round, and the figure kept per size is the median over the
@@ -22,6 +23,8 @@ log(time) over log(size) is fitted by least squares; 1 means cost proportional t
   count; the fibres grow with n² and their elements with n (constant density per solid element).
   Prints the time per iteration and per unknown, and the slope. The coupling operators (the
   mortar assembly) are built once in ``Model.prepare`` and are not part of the iteration.
+  ``--profile TOP`` profiles one more call per size (cProfile) and prints the TOP functions by
+  their own time.
 
 Peak memory (``ru_maxrss`` of the process) is printed at the end. On this shared machine the
 largest sizes take minutes; choose the sizes with ``--points`` / ``--unknowns``.
@@ -36,11 +39,11 @@ from pathlib import Path
 import numba
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # measure this checkout's package
+# throughput puts the measured checkout (``--package CHECKOUT``, default this one) first on the path
+from throughput import _timed  # noqa: E402,I100
 
 import mortar1d3d as m13  # noqa: E402
 from control import control_times  # noqa: E402
-from throughput import _timed  # noqa: E402
 from mortar1d3d.model import Model  # noqa: E402
 from mortar1d3d.model.build import build  # noqa: E402
 
@@ -102,7 +105,22 @@ def _unknowns(n):
     return 3 * (n + 1) ** 3 + 6 * fibres * (elements + 1)
 
 
-def newton(unknowns, rounds):
+def _profile(call, top):
+    """cProfile of one ``call()``: the ``top`` functions by own time (seconds), printed."""
+    import cProfile
+    import pstats
+    profile = cProfile.Profile()
+    profile.enable()
+    call()
+    profile.disable()
+    stats = pstats.Stats(profile).stats
+    rows = sorted(((tt, f"{Path(f).name}:{name}") for (f, _, name), (_, _, tt, _, _) in stats.items()), reverse=True)
+    total = sum(tt for tt, _ in rows)
+    print(f"      profile of one call ({total:.3f} s): " + ", ".join(f"{label} {tt:.3f}" for tt, label in rows[:top]),
+          flush=True)
+
+
+def newton(unknowns, rounds, profile=0):
     print(f"newton: Model.residual(z, t, tangent=True) of fibre_cube(n, n²/4, n/2), Saint Venant–Kirchhoff, "
           f"torsion-free fibres, penalty; 1 thread; median over {rounds} rounds")
     print(f"{'n':>4}{'unknowns':>11}{'time s':>9}{'us/unknown':>12}{'/control':>10}{'nnz(K)':>12}")
@@ -133,6 +151,8 @@ def newton(unknowns, rounds):
         sizes.append(size)
         ratios.append(ratio)
         print(f"{n:>4}{size:>11}{t:>9.3f}{1e6 * t / size:>12.2f}{ratio:>10.3g}{nnz:>12}", flush=True)
+        if profile:
+            _profile(lambda: model.residual(z, 1.0, tangent=True), profile)
         del model
     print(f"slope of log(time/control) over log(unknowns): {slope(sizes, ratios):.3f}")
 
@@ -143,6 +163,11 @@ def main(argv=None):
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--points", nargs="+", type=float, default=[1e4, 1e5, 1e6, 1e7])
     parser.add_argument("--unknowns", nargs="+", type=float, default=[1e4, 1e5, 1e6])
+    parser.add_argument("--package", metavar="CHECKOUT", help="measure the package of this checkout (default: "
+                                                              "this one), to compare versions")
+    parser.add_argument("--profile", type=int, default=0, metavar="TOP",
+                        help="newton: after the timed rounds, profile one more call per size and print the TOP "
+                             "functions by own time")
     args = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     numba.set_num_threads(1)
@@ -150,7 +175,7 @@ def main(argv=None):
     if "assembly" in args.part:
         assembly(args.points, args.rounds)
     if "newton" in args.part:
-        newton(args.unknowns, args.rounds)
+        newton(args.unknowns, args.rounds, args.profile)
     print(f"peak memory {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20:.2f} GB; "
           f"load average {os.getloadavg()[0]:.2f}")
 

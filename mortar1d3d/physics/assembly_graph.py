@@ -132,16 +132,8 @@ def _pattern_kernel(connectivity, codes, n_nodes, el_ptr, node_elements):
             v = connectivity[e, a]
             lo0 = node_ptr[v]
             for b in range(n):
-                m = connectivity[e, b]
-                lo = lo0
-                hi = node_ptr[v + 1]
-                while hi - lo > 1:
-                    mid = (lo + hi) // 2
-                    if neighbours[mid] <= m:
-                        lo = mid
-                    else:
-                        hi = mid
-                slots[slot_ptr[e] + a * n + b] = lo - lo0
+                slots[slot_ptr[e] + a * n + b] = sorted_position(neighbours, lo0, node_ptr[v + 1],
+                                                                 connectivity[e, b]) - lo0
     # scalar CSR pattern: the block row of node v expanded to rows 3v, 3v+1, 3v+2
     indptr = np.empty(3 * n_nodes + 1, dtype=np.int64)
     indptr[0] = 0
@@ -194,6 +186,21 @@ def _colour_kernel(connectivity, codes, el_ptr, node_elements, block):
 
 
 @njit
+def sorted_position(values, first, last, target):
+    """Position of ``target`` in the ascending ``values[first:last]`` (binary search), -1 if absent."""
+    lo, hi = first, last
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if values[mid] < target:
+            lo = mid + 1
+        else:
+            hi = mid
+    if lo < last and values[lo] == target:
+        return lo
+    return -1
+
+
+@njit
 def pattern_positions(indptr, indices, block_indptr, block_indices, row_map, col_map, positions):
     """Where each entry of a sparse block lies in a larger CSR pattern that contains it.
 
@@ -208,18 +215,8 @@ def pattern_positions(indptr, indices, block_indptr, block_indices, row_map, col
         row = row_map[i]
         first, last = indptr[row], indptr[row + 1]
         for k in range(block_indptr[i], block_indptr[i + 1]):
-            col = col_map[block_indices[k]]
-            lo, hi = first, last
-            while lo < hi:
-                mid = (lo + hi) // 2
-                if indices[mid] < col:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            if lo < last and indices[lo] == col:
-                positions[k] = lo
-            else:
-                positions[k] = -1
+            positions[k] = sorted_position(indices, first, last, col_map[block_indices[k]])
+            if positions[k] < 0:
                 missing += 1
     return missing
 
