@@ -6,7 +6,7 @@ import scipy.sparse as sp
 import mortar1d3d as m13
 from mortar1d3d.model import Model
 from mortar1d3d.model.build import build
-from mortar1d3d.model.tangent import TangentPattern
+from mortar1d3d.model.tangent import FilledBlock, TangentPattern
 
 
 def _random_block(rng, size, density=0.3):
@@ -118,16 +118,60 @@ def test_model_tangent_equals_block_sum(beam_model):
     model.prepare()
     n = model.n_displacement_dofs
     d = 1e-3 * np.random.default_rng(6).standard_normal(n)
-    _, K = model.internal(d)
+    r, K = model.internal(d)
     nS = 3 * model.n_solid_nodes
-    blocks = [(model.solid_physics.evaluate(d[:nS])[1], 0)]
+    r_ref = np.zeros(n)
+    r_ref[:nS], K_solid = model.solid_physics.evaluate(d[:nS])
+    blocks = [(K_solid, 0)]
     for g in model.groups:
         if g.rotations.size:
-            Kb = g.physics.evaluate(d[g.dofs.slice], d[g.rotations.slice].reshape(-1, 3))[1]
-            blocks.append((Kb, np.concatenate([np.arange(g.dofs.start, g.dofs.stop),
-                                               np.arange(g.rotations.start, g.rotations.stop)])))
+            idx = np.concatenate([np.arange(g.dofs.start, g.dofs.stop), np.arange(g.rotations.start, g.rotations.stop)])
+            r_ref[idx], Kb = g.physics.evaluate(d[g.dofs.slice], d[g.rotations.slice].reshape(-1, 3))
+            blocks.append((Kb, idx))
         else:
-            blocks.append((g.physics.evaluate(d[g.dofs.slice])[1], g.dofs.start))
+            r_ref[g.dofs.slice], Kb = g.physics.evaluate(d[g.dofs.slice])
+            blocks.append((Kb, g.dofs.start))
+    r_ref += model.coupling_stiffness @ d
     _assert_same(K, _scipy_sum(n, blocks, model.coupling_stiffness))
+    assert np.array_equal(r.view(np.int64), r_ref.view(np.int64))      # the solid's force added in the fill
     _, K2 = model.internal(2.0 * d)
     assert model._tangent_pattern.n_builds == 1 and not np.array_equal(K2.data, K.data)
+
+
+def test_filled_block_equals_matrix_block():
+    """A block that adds its own values at the given positions gives the same result as the matrix."""
+    rng = np.random.default_rng(11)
+    n, blocks, constant = _scene_blocks(rng)
+    B, index = blocks[0]
+    calls = []
+
+    def fill(data, positions):
+        calls.append(len(positions))
+        np.add.at(data, positions, B.data)
+
+    filled = [(FilledBlock(B.shape, B.indptr, B.indices, fill), index)] + blocks[1:]
+    pattern = TangentPattern(n)
+    _assert_same(pattern.assemble(filled, constant), _scipy_sum(n, blocks, constant))
+    pattern.assemble(filled, constant)
+    assert calls == [B.nnz, B.nnz] and pattern.n_builds == 1
+
+
+def test_solid_add_tangent_into_checks_its_input():
+    """Linear kinematics keep one cached matrix, and a map of the wrong length is refused."""
+    from mortar1d3d.physics.materials import material
+    from mortar1d3d.physics.solid import SolidModel
+    mesh = m13.generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1))
+    mat = material("saint_venant_kirchhoff", 1e9, 0.3)
+    solid = SolidModel(mesh, mat, kinematics="nonlinear")
+    _, indptr, indices = solid.pattern
+    data = np.zeros(len(indices))
+    with pytest.raises(ValueError, match="data_map must have"):
+        solid.add_tangent_into(np.zeros(solid.n_dofs), data, np.arange(3, dtype=np.int32))
+    with pytest.raises(ValueError, match="linear kinematics"):
+        SolidModel(mesh, mat, kinematics="linear").add_tangent_into(np.zeros(solid.n_dofs), data,
+                                                                   np.arange(len(indices), dtype=np.int32))
+    # the identity map gives the solid's own matrix, bit for bit
+    u = 1e-3 * np.random.default_rng(2).standard_normal(solid.n_dofs)
+    f = solid.add_tangent_into(u, data, np.arange(len(indices), dtype=np.int32))
+    f_ref, K_ref = solid.evaluate(u)
+    assert np.array_equal(f, f_ref) and np.array_equal(data.view(np.int64), K_ref.data.view(np.int64))

@@ -27,7 +27,7 @@ from ..mortar.assemble import assemble_mortar
 from ..scene import Scene, SceneError
 from ..supports import RotatedBasis, clamp_frame
 from . import checks
-from .tangent import TangentPattern
+from .tangent import FilledBlock, TangentPattern
 from .build import BuiltScene, build
 
 DEFAULT_PENALTY_FACTOR = 1e3     # ε = 1e3 E_solid when the scene gives no penalty
@@ -594,13 +594,21 @@ class Model:
         n = self.n_displacement_dofs
         r = np.zeros(n)
         blocks = []          # (tangent, offset or index array of its unknowns)
+        penalty = self.scene.coupled and not self.lagrange
+        framed = any(g.rotations.size for g in self.groups)   # beams with rotations: unknowns not contiguous
+        on_pattern = tangent and (penalty or framed)
         if self.solid_mesh is not None:
             nS = 3 * self.n_solid_nodes
-            f, K = self.solid_physics.evaluate(d[:nS], tangent=tangent)
             self._count("solid", tangent)
-            r[:nS] = f
-            blocks.append((K, 0))
-        framed = False       # beams with rotations: their unknowns are not contiguous
+            if on_pattern and not self.linear:
+                # the solid's element kernel adds straight into the tangent's data (model.tangent)
+                def fill(data, positions):
+                    r[:nS] += self.solid_physics.add_tangent_into(d[:nS], data, positions)
+                blocks.append((FilledBlock(*self.solid_physics.pattern, fill), 0))
+            else:
+                f, K = self.solid_physics.evaluate(d[:nS], tangent=tangent)
+                r[:nS] = f
+                blocks.append((K, 0))
         for g in self.groups:
             sl = g.dofs.slice
             if g.rotations.size:
@@ -610,17 +618,15 @@ class Model:
                                                                                       g.rotations.stop)])
                 r[idx] = f
                 blocks.append((K, idx))
-                framed = True
                 continue
             f, K = g.physics.evaluate(d[sl], tangent=tangent)
             self._count("beam", tangent)
             r[sl] = f
             blocks.append((K, g.dofs.start))
-        penalty = self.scene.coupled and not self.lagrange
         if penalty:
             r += self.coupling_stiffness @ d
         K = None
-        if tangent and (penalty or framed):
+        if on_pattern:
             # a sum of blocks on one cached pattern (see model.tangent)
             if self._tangent_pattern is None:
                 self._tangent_pattern = TangentPattern(n)

@@ -65,6 +65,26 @@ def _positions(union, K, local_to_global, index_type):
     return positions
 
 
+class FilledBlock:
+    """A block whose pattern is known before its values, which it adds straight into the result.
+
+    ``fill(data, positions)`` adds the block's value of entry k (of the CSR pattern ``indptr``,
+    ``indices``) at ``data[positions[k]]``, starting from zero there. The solid is passed this way
+    (:meth:`~mortar1d3d.physics.solid.SolidModel.add_tangent_into`): its element kernel writes
+    into the tangent's data, so no separate solid matrix is allocated, filled and copied.
+    """
+
+    def __init__(self, shape, indptr, indices, fill):
+        self.shape = tuple(shape)
+        self.indptr = indptr
+        self.indices = indices
+        self.fill = fill
+
+    @property
+    def nnz(self):
+        return len(self.indices)
+
+
 class TangentPattern:
     """Sums of fixed-pattern sparse blocks into an (n, n) CSR matrix over one cached pattern.
 
@@ -74,8 +94,8 @@ class TangentPattern:
         Size of the square result.
 
     Use :meth:`assemble` with the same list layout on every call: ``blocks`` is a list of
-    ``(K, index)`` pairs (CSR blocks and their offset or local → global index array) and
-    ``constant`` a CSR matrix of the full size added to every result (or None).
+    ``(K, index)`` pairs (CSR blocks or :class:`FilledBlock`, and their offset or local → global
+    index array) and ``constant`` a CSR matrix of the full size added to every result (or None).
     """
 
     def __init__(self, n):
@@ -131,12 +151,15 @@ class TangentPattern:
 
         Parameters
         ----------
-        blocks : list of (scipy.sparse.csr_matrix, int or (m,) int array)
+        blocks : list of (scipy.sparse.csr_matrix or FilledBlock, int or (m,) int array)
             Square blocks on disjoint sets of unknowns, with their global offset or index array.
+            Filled blocks are filled first, then the constant and the matrices are added (the
+            order of the two terms an entry may have does not change the sum's bits).
         constant : scipy.sparse.csr_matrix (n, n) or None
             Added to every result (a changed pattern rebuilds the union, like a block's).
         """
-        blocks = [(K if sp.isspmatrix_csr(K) else K.tocsr(), index) for K, index in blocks]
+        blocks = [(K if isinstance(K, FilledBlock) or sp.isspmatrix_csr(K) else K.tocsr(), index)
+                  for K, index in blocks]
         layout = self._layout(blocks, constant)
         if not self._matches(layout):
             self._build(blocks, constant, layout)
@@ -144,10 +167,14 @@ class TangentPattern:
             # equal patterns: keep the caller's arrays, so the next call compares memory addresses
             self._signature = [(shape, indptr, indices) for shape, indptr, indices in layout]
         data = np.zeros(self._nnz)
+        for (K, _), positions in zip(blocks, self._positions):
+            if isinstance(K, FilledBlock):
+                K.fill(data, positions)
         if constant is not None:
             add_at_positions(data, self._constant_positions, constant.data)
         for (K, _), positions in zip(blocks, self._positions):
-            add_at_positions(data, positions, K.data)
+            if not isinstance(K, FilledBlock):
+                add_at_positions(data, positions, K.data)
         if np.any(data == 0.0):
             K = sp.csr_matrix((data, self._indices.copy(), self._indptr.copy()), shape=(self.n, self.n), copy=False)
             K.has_sorted_indices = True

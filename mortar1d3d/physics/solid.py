@@ -31,6 +31,10 @@ KINEMATICS = ("nonlinear", "linear")
 ASSEMBLY_BLOCK = 64
 
 
+#: ``data_map`` of :func:`assemble_kernel` meaning "the mesh's own CSR pattern"
+_OWN_PATTERN = np.empty(0, dtype=np.int32)
+
+
 class SolidModel:
     """A solid body: internal forces, tangent stiffness and energy of a displacement field.
 
@@ -120,20 +124,23 @@ class SolidModel:
             raise ValueError(f"SolidModel: u must have {self.n_dofs} entries (3 per node), got {u.size}")
         return u
 
-    def _assemble(self, u, want_tangent, linear):
+    def _assemble(self, u, want_tangent, linear, data=None, data_map=_OWN_PATTERN):
         f = np.zeros(self.n_dofs)
-        data = np.zeros(len(self._indices) if want_tangent else 0)
+        own = data is None
+        if own:
+            data = np.zeros(len(self._indices) if want_tangent else 0)
         energy = np.empty(self.mesh.n_elements)
         status = np.empty(self.mesh.n_elements, dtype=np.int64)
         assemble_kernel(u, self._connectivity, self._codes, self._gp_ptr, self._dn_ptr, self._dNdX, self._wJ,
                         self._colour_ptr, self._colour_blocks, self.assembly_block, self._node_ptr, self._slot_ptr,
                         self._slots, self.material.code, self._lam, self._mu, linear, want_tangent,
-                        self.fibres.set_ptr, self.fibres.data, self.fibres.element_set, f, data, energy, status)
+                        self.fibres.set_ptr, self.fibres.data, self.fibres.element_set, f, data, data_map, energy,
+                        status)
         bad = np.flatnonzero(status)
         if bad.size:
             raise InvertedElementsError(bad)
         K = None
-        if want_tangent:
+        if want_tangent and own:
             K = sp.csr_matrix((data, self._indices, self._indptr), shape=(self.n_dofs, self.n_dofs), copy=False)
             K.has_sorted_indices = True
             self.n_tangents += 1
@@ -173,6 +180,43 @@ class SolidModel:
             return K @ u, (K if tangent else None)
         f, K, _ = self._assemble(u, tangent, False)
         return f, K
+
+    @property
+    def pattern(self):
+        """``(shape, indptr, indices)`` of the tangent's CSR pattern: fixed for the mesh, read-only."""
+        return (self.n_dofs, self.n_dofs), self._indptr, self._indices
+
+    def add_tangent_into(self, u, data, data_map):
+        """Internal force at ``u``, with the tangent's entries added into a larger matrix's data.
+
+        Nonlinear kinematics only (linear: :meth:`evaluate` returns the cached matrix). Entry k of
+        :attr:`pattern` is added at ``data[data_map[k]]``, element by element in the same order as
+        :meth:`evaluate` sums them, so each entry's value equals that of :meth:`evaluate`'s ``K``
+        when ``data`` starts at zero there; the model's tangent is filled this way without a
+        separate solid matrix (see :mod:`mortar1d3d.model.tangent`).
+
+        Parameters
+        ----------
+        u : (n_dofs,) array_like of float
+        data : (nnz,) float64, modified in place
+        data_map : (len(pattern indices),) int32 or int64
+            Positions in ``data`` of the entries of :attr:`pattern`, each a node's three columns
+            adjacent (true of any sorted CSR pattern holding this one).
+
+        Returns
+        -------
+        f_int : (n_dofs,) float64
+        """
+        if self._linear:
+            raise ValueError("SolidModel.add_tangent_into: linear kinematics keep one cached matrix; use evaluate")
+        u = self._displacement(u)
+        if data_map.shape != self._indices.shape:
+            raise ValueError(f"SolidModel.add_tangent_into: data_map must have {len(self._indices)} entries, "
+                             f"got {data_map.shape}")
+        self.n_evaluations += 1
+        f, _, _ = self._assemble(u, True, False, data=data, data_map=data_map)
+        self.n_tangents += 1
+        return f
 
     def energy(self, u):
         """Total strain energy ``Σ_gp w det J W`` at ``u`` (float).

@@ -207,16 +207,22 @@ def _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam,
 @njit_parallel
 def assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_ptr, colour_blocks, block, node_ptr,
                     slot_ptr, slots, mat_code, lam, mu, linear, want_tangent, fibre_ptr, fibre_data, fibre_set, f,
-                    data, element_energy, status):
+                    data, data_map, element_energy, status):
     """Add every element's f_e (and K_e) into ``f`` and the CSR ``data``, colour by colour.
 
     The colouring and the CSR slots are those of :mod:`~mortar1d3d.physics.assembly_graph`:
     blocks of one colour share no node, so they add into ``f`` and ``data`` in parallel without
     races, and every entry receives its contributions in the same order for any thread count.
+
+    ``data_map`` empty: ``data`` is the data of the mesh's own CSR pattern. Otherwise entry k of
+    that pattern is added at ``data[data_map[k]]`` (a larger pattern holding the mesh's, e.g. the
+    model's tangent with coupling and beams; its rows keep the three columns of a node together,
+    so one look-up serves a node pair's row of three).
     """
     C0 = np.empty((6, 6))
     hooke(lam, mu, C0)
     n_el = codes.shape[0]
+    mapped = data_map.shape[0] > 0
     for colour in range(colour_ptr.shape[0] - 1):
         for c in prange(colour_ptr[colour], colour_ptr[colour + 1]):
             ue = np.empty((MAX_NODES, 3))
@@ -252,6 +258,8 @@ def assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_ptr
                         col = row0 + 3 * slots[base_slot + a * n + b]
                         for i in range(3):
                             pos = col + 3 * i * deg
+                            if mapped:
+                                pos = data_map[pos]
                             r = 9 * a + 3 * i
                             data[pos] += Ke[r, b]
                             data[pos + 1] += Ke[r + 1, b]
