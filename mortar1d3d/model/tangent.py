@@ -25,7 +25,7 @@ build needs little more memory than the tangent itself.
 import numpy as np
 import scipy.sparse as sp
 
-from ..physics.assembly_graph import add_at_positions, pattern_positions
+from ..physics.assembly_graph import add_at_positions, has_zero, pattern_positions
 
 
 def _same_memory(a, b):
@@ -175,7 +175,7 @@ class TangentPattern:
         for (K, _), positions in zip(blocks, self._positions):
             if not isinstance(K, FilledBlock):
                 add_at_positions(data, positions, K.data)
-        if np.any(data == 0.0):
+        if has_zero(data):
             K = sp.csr_matrix((data, self._indices.copy(), self._indptr.copy()), shape=(self.n, self.n), copy=False)
             K.has_sorted_indices = True
             K.eliminate_zeros()

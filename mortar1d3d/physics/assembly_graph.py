@@ -226,3 +226,12 @@ def add_at_positions(data, positions, values):
     """``data[positions[k]] += values[k]`` for every k in order (repeated positions sum in entry order)."""
     for k in range(positions.shape[0]):
         data[positions[k]] += values[k]
+
+
+@njit
+def has_zero(data):
+    """Whether any entry of ``data`` equals zero (stops at the first; no temporary array)."""
+    for k in range(data.shape[0]):
+        if data[k] == 0.0:
+            return True
+    return False
