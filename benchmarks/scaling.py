@@ -3,6 +3,7 @@
     .venv/bin/python benchmarks/scaling.py [--part assembly newton] [--rounds 3]
                                            [--points 1e4 1e5 1e6 1e7] [--unknowns 1e4 1e5 1e6]
                                            [--profile TOP] [--package CHECKOUT]
+                                           [--enforcement penalty|lagrange]
 
 Issue 22, item 4. One thread throughout; every timed call is paired with the control loop of
 ``control.py`` (1 thread) in the same round, and the figure kept per size is the median over the
@@ -24,7 +25,8 @@ log(time) over log(size) is fitted by least squares; 1 means cost proportional t
   Prints the time per iteration and per unknown, and the slope. The coupling operators (the
   mortar assembly) are built once in ``Model.prepare`` and are not part of the iteration.
   ``--profile TOP`` profiles one more call per size (cProfile) and prints the TOP functions by
-  their own time.
+  their own time. ``--enforcement lagrange`` runs the same scene with Lagrange multipliers (the
+  unknowns then include them, and the Jacobian is the saddle-point matrix).
 
 Peak memory (``ru_maxrss`` of the process) is printed at the end. On this shared machine the
 largest sizes take minutes; choose the sizes with ``--points`` / ``--unknowns``.
@@ -89,12 +91,12 @@ def assembly(points, rounds):
         print(f"{integration:<12}slope of log(time/control) over log(points): {slope(sizes, ratios):.3f}")
 
 
-def newton_scene(n):
+def newton_scene(n, enforcement="penalty"):
     fibres = max(4, n * n // 4)
     beams, solid = m13.generate.fibre_cube(n, fibres, max(2, n // 2))
     return m13.Scene(solid={"mesh": solid, "material": {"model": "saint_venant_kirchhoff", "E": 1e9, "nu": 0.3}},
                      beams=[{"mesh": beams, "section": {"E": 2e11, "radius": 0.2 / n}}],
-                     coupling={"enforcement": "penalty", "lm": "line2"},
+                     coupling={"enforcement": enforcement, "lm": "line2"},
                      dirichlet=[{"on": "solid:x_min"}],
                      load=[{"type": "traction", "on": "solid:x_max", "value": [0, 0, -2e7]}],
                      analysis={"kinematics": "nonlinear", "steps": 1})
@@ -120,11 +122,11 @@ def _profile(call, top):
           flush=True)
 
 
-def newton(unknowns, rounds, profile=0):
+def newton(unknowns, rounds, profile=0, enforcement="penalty"):
     print(f"newton: Model.residual(z, t, tangent=True) of fibre_cube(n, n²/4, n/2), Saint Venant–Kirchhoff, "
-          f"torsion-free fibres, penalty; 1 thread; median over {rounds} rounds")
+          f"torsion-free fibres, {enforcement}; 1 thread; median over {rounds} rounds")
     print(f"{'n':>4}{'unknowns':>11}{'time s':>9}{'us/unknown':>12}{'/control':>10}{'nnz(K)':>12}")
-    model = Model(build(newton_scene(2)))       # compile before timing
+    model = Model(build(newton_scene(2, enforcement)))       # compile before timing
     model.prepare()
     model.residual(np.zeros(model.n_unknowns), 1.0)
     sizes, ratios = [], []
@@ -133,7 +135,7 @@ def newton(unknowns, rounds, profile=0):
         n = 2
         while _unknowns(n + 1) <= target:
             n += 1
-        model = Model(build(newton_scene(n)))
+        model = Model(build(newton_scene(n, enforcement)))
         model.prepare()
         size = model.n_unknowns
         z = 1e-6 * rng.standard_normal(size)
@@ -168,6 +170,9 @@ def main(argv=None):
     parser.add_argument("--profile", type=int, default=0, metavar="TOP",
                         help="newton: after the timed rounds, profile one more call per size and print the TOP "
                              "functions by own time")
+    parser.add_argument("--enforcement", choices=["penalty", "lagrange"], default="penalty",
+                        help="newton: the coupling of the scene (lagrange: the unknowns include the multipliers, "
+                             "and the Jacobian is the saddle-point matrix)")
     args = parser.parse_args(argv)
     warnings.simplefilter("ignore")
     numba.set_num_threads(1)
@@ -175,7 +180,7 @@ def main(argv=None):
     if "assembly" in args.part:
         assembly(args.points, args.rounds)
     if "newton" in args.part:
-        newton(args.unknowns, args.rounds, args.profile)
+        newton(args.unknowns, args.rounds, args.profile, args.enforcement)
     print(f"peak memory {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20:.2f} GB; "
           f"load average {os.getloadavg()[0]:.2f}")
 

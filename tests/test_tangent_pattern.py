@@ -175,3 +175,77 @@ def test_solid_add_tangent_into_checks_its_input():
     f = solid.add_tangent_into(u, data, np.arange(len(indices), dtype=np.int32))
     f_ref, K_ref = solid.evaluate(u)
     assert np.array_equal(f, f_ref) and np.array_equal(data.view(np.int64), K_ref.data.view(np.int64))
+
+
+def _reference_jacobian(model, z, t):
+    """The Jacobian as the model summed it before everything went on one pattern: scipy's
+    ``block_diag`` (or its sum with the penalty stiffness), then each load's ``K − t Kp`` and
+    ``K − Km``, then ``sp.bmat`` with the constraint matrix."""
+    from mortar1d3d.physics.beam import end_moment
+    n, nS = model.n_displacement_dofs, 3 * model.n_solid_nodes
+    d = z[:n]
+    blocks = [(model.solid_physics.evaluate(d[:nS])[1], 0)]
+    blocks += [(g.physics.evaluate(d[g.dofs.slice])[1], g.dofs.start) for g in model.groups]
+    penalty = model.scene.coupled and not model.lagrange
+    if penalty:
+        K = _scipy_sum(n, blocks, model.coupling_stiffness)
+    else:
+        K = sp.block_diag([B for B, _ in blocks], format="csr")
+    for p in model.pressures:
+        Kp = p.evaluate(d[:nS])[1].tocoo()
+        K = K - t * sp.csr_matrix((Kp.data, (Kp.row, Kp.col)), shape=(n, n))
+    q = model.reference() + d
+    for dofs, moment in model.moments:
+        Km = end_moment(q[dofs], t * moment)[1]
+        K = K - sp.csr_matrix((Km.ravel(), (np.repeat(dofs, 3), np.tile(dofs, 3))), shape=K.shape)
+    if model.lagrange:
+        B = model.constraint_matrix
+        K = sp.bmat([[K, B.T], [B, None]], format="csr")
+    return K
+
+
+@pytest.mark.parametrize("case", ["lagrange", "lagrange_pressure", "penalty_loads", "uncoupled_pressure"])
+def test_jacobian_with_loads_and_multipliers_equals_scipy(case):
+    """Lagrange multipliers (the saddle point's border), follower pressure and end moments are summed
+    on the cached pattern too: same entries, same stored zeros, same bits as scipy's operations."""
+    loads = [{"type": "pressure", "on": "solid:z_max", "value": 0.7}] if "pressure" in case or case == "penalty_loads" \
+        else [{"type": "traction", "on": "solid:x_max", "value": [0, 0, -0.1]}]
+    if case == "penalty_loads":
+        loads.append({"type": "moment", "on": "beam:0:end", "value": [0.0, 0.3, 0.1]})
+    coupling = {"enforcement": "lagrange", "lm": "line2"} if case.startswith("lagrange") else \
+        {"enforcement": "penalty", "penalty": 50.0} if case == "penalty_loads" else None
+    scene = m13.Scene(solid={"mesh": {"box": [[0, 0, 0], [1, 0.3, 0.3]], "cells": [3, 1, 1]},
+                             "material": {"model": "neo_hooke", "E": 10.0, "nu": 0.3}},
+                      beams=[{"curve": {"line": [[0.1, 0.1, 0.12], [0.9, 0.2, 0.17]]}, "elements": 3,
+                              "section": {"EA": 3.0, "EI": 0.2}}],
+                      coupling=coupling, dirichlet=[{"on": "solid:x_min"}], load=loads,
+                      analysis={"kinematics": "nonlinear", "steps": 1})
+    model = Model(build(scene))
+    model.prepare()
+    z = 0.01 * np.random.default_rng(5).standard_normal(model.n_unknowns)
+    r, K = model.residual(z, 0.8)
+    ref = _reference_jacobian(model, z, 0.8)
+    _assert_same(K, ref)
+    _assert_same(model.residual(0.0 * z, 0.8)[1], _reference_jacobian(model, 0.0 * z, 0.8))   # the reference state
+    # a second state reuses the pattern
+    z2 = 1.5 * z
+    _, K2 = model.residual(z2, 0.8)
+    _assert_same(K2, _reference_jacobian(model, z2, 0.8))
+    assert model._tangent_pattern.n_builds == 1
+
+
+def test_zero_modes():
+    """zeros = keep leaves every union entry (as bmat would), keep_constant removes all zeros but the
+    constant's, eliminate removes all."""
+    n = 4
+    A = sp.csr_matrix(np.array([[1.0, 2.0], [2.0, 1.0]]))
+    L = sp.csr_matrix(np.array([[1.0, 0.0], [0.0, 0.0]]))             # cancels A[0, 0]
+    C = sp.csr_matrix((np.array([0.0, 3.0]), np.array([2, 3]), np.array([0, 1, 2, 2, 2])), shape=(n, n))   # a stored zero
+    counts = {}
+    for zeros in ("keep", "keep_constant", "eliminate"):
+        K = TangentPattern(n).assemble([(A, 0)], C, [(L, 0, 1.0)], zeros=zeros)
+        counts[zeros] = K.nnz
+        assert K[0, 0] == 0.0 and K[0, 1] == 2.0 and K[1, 3] == 3.0
+    assert counts == {"keep": 6, "keep_constant": 5, "eliminate": 4}
+    with pytest.raises(ValueError, match="zeros must be"):
+        TangentPattern(n).assemble([(A, 0)], zeros="drop")

@@ -60,6 +60,7 @@ class Model:
         self.scene = scene
         self.counts = Counter()
         self._tangent_pattern = None
+        self._border = None
         self.linear = scene.analysis["kinematics"] == "linear"
         self.solid_mesh = built.solid_mesh
         self.n_solid_nodes = self.solid_mesh.n_nodes if self.solid_mesh is not None else 0
@@ -589,14 +590,23 @@ class Model:
             if tangent:
                 self.counts[f"{part}.tangent"] += 1
 
-    def internal(self, d, tangent=True):
-        """Internal forces and tangent of solid + beams + penalty coupling at displacements ``d``."""
+    def internal(self, d, tangent=True, subtract=(), border=None):
+        """Internal forces and tangent of solid + beams + penalty coupling at displacements ``d``.
+
+        The tangent also gets the terms ``subtract`` (``(L, index, s)``: ``− s L`` placed at
+        ``index``, the loads' tangents, in order) and, with ``border`` (the constraint matrix B of
+        Lagrange multipliers), becomes the saddle-point matrix ``[[K, Bᵀ], [B, 0]]``. All of it is
+        summed on one cached pattern (:mod:`.tangent`), unless rotational penalty coupling adds its
+        state-dependent pattern: then those terms follow as scipy sums, in the same order.
+        """
         n = self.n_displacement_dofs
         r = np.zeros(n)
         blocks = []          # (tangent, offset or index array of its unknowns)
         penalty = self.scene.coupled and not self.lagrange
         framed = any(g.rotations.size for g in self.groups)   # beams with rotations: unknowns not contiguous
-        on_pattern = tangent and (penalty or framed)
+        rotational = [g for g in self.groups if g.rotational is not None and g.rotational.enforcement == "penalty"]
+        late = bool(rotational)                 # loads' and border terms after the rotational penalty's
+        on_pattern = tangent and (penalty or framed or (not late and (bool(subtract) or border is not None)))
         if self.solid_mesh is not None:
             nS = 3 * self.n_solid_nodes
             self._count("solid", tangent)
@@ -627,21 +637,51 @@ class Model:
             r += self.coupling_stiffness @ d
         K = None
         if on_pattern:
-            # a sum of blocks on one cached pattern (see model.tangent)
-            if self._tangent_pattern is None:
-                self._tangent_pattern = TangentPattern(n)
-            K = self._tangent_pattern.assemble(blocks, self.coupling_stiffness if penalty else None)
+            # a sum of blocks on one cached pattern (see model.tangent); the zeros removed are those
+            # scipy's sums would remove: all of them once anything is summed, none of the border's
+            # (as sp.bmat keeps them), none at all for solid + beams + border alone (block_diag and
+            # bmat keep them)
+            summed = penalty or framed or (not late and bool(subtract))
+            size = n if late or border is None else n + border.shape[0]
+            constant = self.coupling_stiffness if penalty else None
+            zeros = "eliminate" if summed else "keep"
+            if not late and border is not None:
+                constant = self._border_matrix(border)
+                zeros = "keep_constant" if summed else "keep"
+            if self._tangent_pattern is None or self._tangent_pattern.n != size:
+                self._tangent_pattern = TangentPattern(size)
+            K = self._tangent_pattern.assemble(blocks, constant, () if late else subtract, zeros=zeros)
         elif tangent:
             K = sp.block_diag([Kb for Kb, _ in blocks], format="csr")
-        for g in self.groups:
-            if g.rotational is not None and g.rotational.enforcement == "penalty":
-                f, Kr = g.rotational.evaluate(d[:3 * self.n_solid_nodes], d[g.rotations.slice].reshape(-1, 3),
-                                              tangent=tangent)
-                self.counts["coupling.rotational_penalty"] += 1
-                r += f
-                if tangent:
-                    K = K + Kr
+        for g in rotational:
+            f, Kr = g.rotational.evaluate(d[:3 * self.n_solid_nodes], d[g.rotations.slice].reshape(-1, 3),
+                                          tangent=tangent)
+            self.counts["coupling.rotational_penalty"] += 1
+            r += f
+            if tangent:
+                K = K + Kr
+        if tangent and (late or not on_pattern):
+            for L, index, scale in subtract:
+                K = K - scale * self._placed(L, index)
+            if border is not None:
+                K = sp.bmat([[K, border.T], [border, None]], format="csr")
         return r, K
+
+    def _placed(self, L, index):
+        """Square block ``L`` placed at ``index`` (an offset or the unknowns of its rows and columns)
+        in an (n_displacement_dofs)² matrix."""
+        if isinstance(index, (int, np.integer)):
+            return self._embed(L, index)
+        L = L.tocoo()
+        index = np.asarray(index)
+        return sp.csr_matrix((L.data, (index[L.row], index[L.col])), shape=(self.n_displacement_dofs,) * 2)
+
+    def _border_matrix(self, B):
+        """``[[0, Bᵀ], [B, 0]]`` of the constraint matrix ``B``, built once (B does not change)."""
+        if self._border is None or self._border[0] is not B:
+            self._border = (B, sp.bmat([[sp.csr_matrix((self.n_displacement_dofs,) * 2), B.T], [B, None]],
+                                       format="csr"))
+        return self._border[1]
 
     def update(self, z, free, dz):
         """Apply a Newton increment ``dz`` (on the ``free`` unknowns) to ``z`` in place.
@@ -681,30 +721,38 @@ class Model:
         """
         n = self.n_displacement_dofs
         d = self.basis.to_physical(z[:n])
-        r, K = self.internal(d, tangent)
-        r -= t * self.dead_load
         nS = 3 * self.n_solid_nodes
+        # the loads' forces and tangents first: the tangents are summed with the internal ones
+        # (model.tangent), the forces applied after the internal forces as before
+        loads, subtract = [], []
         for p in self.pressures:
             f, Kp = p.evaluate(d[:nS], tangent=tangent)
             self.counts["load.pressure"] += 1
-            r[:nS] -= t * f
+            loads.append((slice(0, nS), t * f))
             if tangent:
                 self.counts["load.pressure_tangent"] += 1
-                K = K - t * self._embed(Kp, 0)
+                subtract.append((Kp, 0, t))
         if self.moments:
             from ..physics.beam import end_moment
             q = self.reference() + d
             for dofs, moment in self.moments:
                 f, Km = end_moment(q[dofs], t * moment)
                 self.counts["load.moment"] += 1
-                r[dofs] -= f
+                loads.append((dofs, f))
                 if tangent:
-                    K = K - sp.csr_matrix((Km.ravel(), (np.repeat(dofs, 3), np.tile(dofs, 3))), shape=K.shape)
-        if self.lagrange and not self.rotational_lagrange:
-            B, lam = self.constraint_matrix, z[n:]
+                    # every entry stored, zeros too: the pattern must not depend on the state
+                    m = len(dofs)
+                    subtract.append((sp.csr_matrix((np.asarray(Km, dtype=float).ravel(), np.tile(np.arange(m), m),
+                                                    np.arange(0, m * m + 1, m)), shape=(m, m)), np.asarray(dofs), 1.0))
+        border = self.lagrange and not self.rotational_lagrange
+        B = self.constraint_matrix if border else None
+        r, K = self.internal(d, tangent, subtract, B if tangent else None)
+        r -= t * self.dead_load
+        for where, f in loads:
+            r[where] -= f
+        if border:
+            lam = z[n:]
             r = np.concatenate([r + B.T @ lam, B @ d])
-            if tangent:
-                K = sp.bmat([[K, B.T], [B, None]], format="csr")
         elif self.n_multipliers:
             r, K = self._saddle_residual(z, d, r, K, tangent)
         if self.twist_starts.size:

@@ -25,7 +25,7 @@ build needs little more memory than the tangent itself.
 import numpy as np
 import scipy.sparse as sp
 
-from ..physics.assembly_graph import add_at_positions, has_zero, pattern_positions
+from ..physics.assembly_graph import add_at_positions, has_zero, pattern_positions, subtract_at_positions
 
 
 def _same_memory(a, b):
@@ -54,6 +54,16 @@ def _placed(K, index, n):
         placed = sp.csr_matrix((np.ones(K.nnz, dtype=np.int8),
                                 (local_to_global[rows], local_to_global[K.indices])), shape=(n, n))
     return placed, local_to_global
+
+
+def _canonical(K):
+    """CSR without repeated entries (a load's values are subtracted entry by entry, so repeats must be
+    summed first, as scipy's conversion to CSR sums them)."""
+    K = K if sp.isspmatrix_csr(K) else K.tocsr()
+    if not K.has_canonical_format:
+        K = K.copy()
+        K.sum_duplicates()
+    return K
 
 
 def _positions(union, K, local_to_global, index_type):
@@ -104,9 +114,10 @@ class TangentPattern:
         self.n_builds = 0
 
     @staticmethod
-    def _layout(blocks, constant):
+    def _layout(blocks, constant, subtract):
         return [(K.shape, K.indptr, K.indices) for K, _ in blocks] + \
-            ([(constant.shape, constant.indptr, constant.indices)] if constant is not None else [])
+            ([(constant.shape, constant.indptr, constant.indices)] if constant is not None else []) + \
+            [(K.shape, K.indptr, K.indices) for K, _, _ in subtract]
 
     def _matches(self, layout):
         if self._signature is None or len(layout) != len(self._signature):
@@ -121,11 +132,12 @@ class TangentPattern:
                 return False
         return True
 
-    def _build(self, blocks, constant, layout):
+    def _build(self, blocks, constant, subtract, layout):
         n = self.n
         placed = [_placed(K, index, n) for K, index in blocks]
+        placed_subtract = [_placed(K, index, n) for K, index, _ in subtract]
         union = sp.csr_matrix((n, n), dtype=np.int8)
-        for pattern, _ in placed:
+        for pattern, _ in placed + placed_subtract:
             union = union + pattern
         identity = np.arange(n, dtype=np.int64)
         if constant is not None:
@@ -138,16 +150,21 @@ class TangentPattern:
         self._indptr.flags.writeable = False
         self._indices.flags.writeable = False
         self._positions = [_positions(union, K, rows, index_type) for (K, _), (_, rows) in zip(blocks, placed)]
+        self._subtract_positions = [_positions(union, K, rows, index_type)
+                                    for (K, _, _), (_, rows) in zip(subtract, placed_subtract)]
         self._constant_positions = None
+        self._protected = None
         if constant is not None:
             self._constant_positions = _positions(union, constant, identity, index_type)
+            self._protected = np.zeros(union.nnz, dtype=bool)
+            self._protected[self._constant_positions] = True
         self._nnz = union.nnz
         # copies of the patterns the positions were made for (the caller's arrays may be reused)
         self._signature = [(shape, indptr.copy(), indices.copy()) for shape, indptr, indices in layout]
         self.n_builds += 1
 
-    def assemble(self, blocks, constant=None):
-        """``constant + Σ_k P_k K_k P_kᵀ`` as CSR (sorted indices, no stored zeros).
+    def assemble(self, blocks, constant=None, subtract=(), zeros="eliminate"):
+        """``constant + Σ_k P_k K_k P_kᵀ − Σ_l s_l P_l L_l P_lᵀ`` as CSR (sorted indices).
 
         Parameters
         ----------
@@ -157,12 +174,26 @@ class TangentPattern:
             order of the two terms an entry may have does not change the sum's bits).
         constant : scipy.sparse.csr_matrix (n, n) or None
             Added to every result (a changed pattern rebuilds the union, like a block's).
+        subtract : list of (scipy.sparse.csr_matrix, int or (m,) int array, float)
+            Terms ``s_l L_l`` subtracted last, one after the other (loads' tangents: they may share
+            entries with the blocks and with each other); each value is subtracted as
+            ``a − (s·v)``, which is what ``K − s * L`` gives in scipy.
+        zeros : {"eliminate", "keep", "keep_constant"}
+            Which entries that come out exactly zero are removed: all (what scipy's sums do), none
+            (the union pattern as it is, as ``scipy.sparse.bmat`` keeps stored zeros), or all but
+            the constant's (a saddle point's constraint border keeps its stored zeros next to a
+            stiffness without any).
         """
+        if zeros not in ("eliminate", "keep", "keep_constant"):
+            raise ValueError(f"TangentPattern.assemble: zeros must be eliminate, keep or keep_constant, got {zeros!r}")
+        if zeros == "keep_constant" and constant is None:
+            zeros = "eliminate"
         blocks = [(K if isinstance(K, FilledBlock) or sp.isspmatrix_csr(K) else K.tocsr(), index)
                   for K, index in blocks]
-        layout = self._layout(blocks, constant)
+        subtract = [(_canonical(K), index, float(scale)) for K, index, scale in subtract]
+        layout = self._layout(blocks, constant, subtract)
         if not self._matches(layout):
-            self._build(blocks, constant, layout)
+            self._build(blocks, constant, subtract, layout)
         else:
             # equal patterns: keep the caller's arrays, so the next call compares memory addresses
             self._signature = [(shape, indptr, indices) for shape, indptr, indices in layout]
@@ -175,13 +206,21 @@ class TangentPattern:
         for (K, _), positions in zip(blocks, self._positions):
             if not isinstance(K, FilledBlock):
                 add_at_positions(data, positions, K.data)
-        if has_zero(data):
+        for (K, _, scale), positions in zip(subtract, self._subtract_positions):
+            subtract_at_positions(data, positions, K.data, scale)
+        if zeros == "keep_constant" and self._protected is not None and has_zero(data):
+            keep = (data != 0.0) | self._protected
+            counts = np.concatenate([[0], np.cumsum(keep)])
+            K = sp.csr_matrix((data[keep], self._indices[keep], counts[self._indptr]), shape=(self.n, self.n))
+            K.has_sorted_indices = True
+            return K
+        if zeros == "eliminate" and has_zero(data):
             K = sp.csr_matrix((data, self._indices.copy(), self._indptr.copy()), shape=(self.n, self.n), copy=False)
             K.has_sorted_indices = True
             K.eliminate_zeros()
             return K
-        # no zeros: the result shares the cached pattern, which is read-only so that no caller can
-        # change it in place
+        # the union pattern as it is: the result shares it, read-only so that no caller can change
+        # it in place
         K = sp.csr_matrix((data, self._indices, self._indptr), shape=(self.n, self.n), copy=False)
         K.has_sorted_indices = True
         return K

@@ -229,6 +229,13 @@ def add_at_positions(data, positions, values):
 
 
 @njit
+def subtract_at_positions(data, positions, values, scale):
+    """``data[positions[k]] -= scale * values[k]`` for every k in order (a load's tangent term)."""
+    for k in range(positions.shape[0]):
+        data[positions[k]] -= scale * values[k]
+
+
+@njit
 def has_zero(data):
     """Whether any entry of ``data`` equals zero (stops at the first; no temporary array)."""
     for k in range(data.shape[0]):
