@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/scaling.py [--part assembly newton] [--rounds 3]
                                            [--points 1e4 1e5 1e6 1e7] [--unknowns 1e4 1e5 1e6]
                                            [--profile TOP] [--package CHECKOUT]
-                                           [--enforcement penalty|lagrange]
+                                           [--enforcement penalty|lagrange] [--stages]
 
 Issue 22, item 4. One thread throughout; every timed call is paired with the control loop of
 ``control.py`` (1 thread) in the same round, and the figure kept per size is the median over the
@@ -61,7 +61,7 @@ def _control():
     return control_times((1,))[1]
 
 
-def assembly(points, rounds):
+def assembly(points, rounds, stages=False):
     print(f"assembly: assemble_mortar on fibre_cube(n, fibres, n), {N_GAUSS} Gauss points, 1 thread; "
           f"median over {rounds} rounds")
     print(f"{'integration':<12}{'n':>5}{'fibres':>8}{'points':>11}{'time s':>9}{'ns/point':>10}{'/control':>10}")
@@ -81,12 +81,17 @@ def assembly(points, rounds):
                 times.append(t)
                 per_control.append(t / c)
                 count = ops.n_integration_points
+                timings = dict(ops.timings)
                 del ops
             t, r = float(np.median(times)), float(np.median(per_control))
             sizes.append(count)
             ratios.append(r)
             print(f"{integration:<12}{n:>5}{fibres:>8}{count:>11.3g}{t:>9.3f}{1e9 * t / count:>10.1f}{r:>10.3g}",
                   flush=True)
+            if stages:
+                print("      ns per point by stage (last round): " + ", ".join(
+                    f"{name} {1e9 * seconds / count:.0f}" for name, seconds in timings.items() if name != "total"),
+                    flush=True)
             del beams, solid
         print(f"{integration:<12}slope of log(time/control) over log(points): {slope(sizes, ratios):.3f}")
 
@@ -170,6 +175,9 @@ def main(argv=None):
     parser.add_argument("--profile", type=int, default=0, metavar="TOP",
                         help="newton: after the timed rounds, profile one more call per size and print the TOP "
                              "functions by own time")
+    parser.add_argument("--stages", action="store_true",
+                        help="assembly: also print the time per integration point of each stage of the call "
+                             "(search, segmentation, integration points, assembly, csr)")
     parser.add_argument("--enforcement", choices=["penalty", "lagrange"], default="penalty",
                         help="newton: the coupling of the scene (lagrange: the unknowns include the multipliers, "
                              "and the Jacobian is the saddle-point matrix)")
@@ -178,7 +186,7 @@ def main(argv=None):
     numba.set_num_threads(1)
     print(f"load average {os.getloadavg()[0]:.2f}")
     if "assembly" in args.part:
-        assembly(args.points, args.rounds)
+        assembly(args.points, args.rounds, args.stages)
     if "newton" in args.part:
         newton(args.unknowns, args.rounds, args.profile, args.enforcement)
     print(f"peak memory {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20:.2f} GB; "
