@@ -4,6 +4,7 @@
                                            [--points 1e4 1e5 1e6 1e7] [--unknowns 1e4 1e5 1e6]
                                            [--profile TOP] [--package CHECKOUT]
                                            [--enforcement penalty|lagrange] [--stages]
+                                           [--order generated|morton]
 
 Issue 22, item 4. One thread throughout; every timed call is paired with the control loop of
 ``control.py`` (1 thread) in the same round, and the figure kept per size is the median over the
@@ -61,7 +62,28 @@ def _control():
     return control_times((1,))[1]
 
 
-def assembly(points, rounds, stages=False):
+def _morton(points, bits=10):
+    """Morton (Z-order) code of points in the unit cube, ``bits`` per axis."""
+    q = np.clip((np.asarray(points) * (1 << bits)).astype(np.int64), 0, (1 << bits) - 1)
+    code = np.zeros(len(q), dtype=np.int64)
+    for b in range(bits):
+        for axis in range(3):
+            code |= ((q[:, axis] >> b) & 1) << (3 * b + axis)
+    return code
+
+
+def spatially_ordered(beams, fibres):
+    """The fibres of ``fibre_cube`` renumbered in the Morton order of their midpoints (same
+    centrelines, same elements per fibre): beam elements that follow each other in memory then
+    lie near each other in the solid."""
+    m = beams.n_nodes // fibres - 1
+    positions = beams.positions.reshape(fibres, m + 1, 3)
+    tangents = beams.tangents.reshape(fibres, m + 1, 3)
+    order = np.argsort(_morton(positions.mean(axis=1)), kind="stable")
+    return m13.BeamMesh.hermite(positions[order].reshape(-1, 3), tangents[order].reshape(-1, 3), beams.elements)
+
+
+def assembly(points, rounds, stages=False, order="generated"):
     print(f"assembly: assemble_mortar on fibre_cube(n, fibres, n), {N_GAUSS} Gauss points, 1 thread; "
           f"median over {rounds} rounds")
     print(f"{'integration':<12}{'n':>5}{'fibres':>8}{'points':>11}{'time s':>9}{'ns/point':>10}{'/control':>10}")
@@ -73,6 +95,8 @@ def assembly(points, rounds, stages=False):
             n = max(2, int(round((target / 10) ** (1 / 3))))
             fibres = max(1, int(round(target / (N_GAUSS * n))))
             beams, solid = m13.generate.fibre_cube(n, fibres, n)
+            if order == "morton":
+                beams = spatially_ordered(beams, fibres)
             m13.assemble_mortar(beams, solid, integration=integration, n_gauss=N_GAUSS)      # first touch
             times, per_control = [], []
             for _ in range(rounds):
@@ -178,6 +202,9 @@ def main(argv=None):
     parser.add_argument("--stages", action="store_true",
                         help="assembly: also print the time per integration point of each stage of the call "
                              "(search, segmentation, integration points, assembly, csr)")
+    parser.add_argument("--order", choices=["generated", "morton"], default="generated",
+                        help="assembly: the fibres in fibre_cube's (random) order, or renumbered in the Morton "
+                             "order of their midpoints (memory locality of the solid's data)")
     parser.add_argument("--enforcement", choices=["penalty", "lagrange"], default="penalty",
                         help="newton: the coupling of the scene (lagrange: the unknowns include the multipliers, "
                              "and the Jacobian is the saddle-point matrix)")
@@ -186,7 +213,7 @@ def main(argv=None):
     numba.set_num_threads(1)
     print(f"load average {os.getloadavg()[0]:.2f}")
     if "assembly" in args.part:
-        assembly(args.points, args.rounds, args.stages)
+        assembly(args.points, args.rounds, args.stages, args.order)
     if "newton" in args.part:
         newton(args.unknowns, args.rounds, args.profile, args.enforcement)
     print(f"peak memory {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20:.2f} GB; "
