@@ -237,8 +237,8 @@ def _curve(value, path):
 
 def _beam(value, i, base_dir):
     path = f"beams[{i}]"
-    _table(value, path, ("curve", "mesh", "elements", "model", "section", "normal", "triads", "force_rule"),
-           required=("section",))
+    _table(value, path, ("curve", "mesh", "elements", "model", "section", "normal", "triads", "force_rule",
+                         "virtual_spins"), required=("section",))
     model = _choice(value.get("model", DEFAULT_BEAM_TYPE), f"{path}.model", BEAM_MODELS)
     if model not in IMPLEMENTED_BEAM_MODELS:
         _fail(f"{path}.model", f"{model!r} beams are not implemented yet; use one of "
@@ -261,6 +261,12 @@ def _beam(value, i, base_dir):
             _fail(f"{path}.force_rule", f"a {model} beam has no force (shear) term of its own rule; force_rule is for "
                                         "model = \"simo_reissner\"")
         out["force_rule"] = _choice(value["force_rule"], f"{path}.force_rule", ("gauss", "lobatto3"))
+    out["virtual_spins"] = None
+    if "virtual_spins" in value:
+        if kind.triads is None:
+            _fail(f"{path}.virtual_spins", f"a {model} beam has no spins; virtual_spins is for model = "
+                                           "\"simo_reissner\"")
+        out["virtual_spins"] = _choice(value["virtual_spins"], f"{path}.virtual_spins", ("exact", "lagrange"))
     out["triads"] = None
     if "triads" in value:
         if kind.triads is None or "normal" in value:
