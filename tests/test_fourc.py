@@ -304,9 +304,9 @@ R = "beam3r_herm2line3_static_beam_to_solid_volume_meshtying_"
                                   "beam_in_solid_column_gauss_point_projection_boundary_segmentation",
                                   "beam_along_solid_boundary_gauss_point_projection_boundary_segmentation"])
 def test_4c_beam3r_gauss_point_projection_files_pass(name):
-    """With 4C's Gauss–Lobatto force rule the BEAM3R files reproduce 4C (measured 3.1e-13 and
-    8.2e-14 against the tolerance 1e-8; with the 3-point Gauss force rule they missed by 7e-3 and 1e-2).
-    The boundary-segmentation pair runs with ``integration = "element_boundary"`` (1.6e-13, 1.9e-13;
+    """With 4C's Gauss–Lobatto force rule the BEAM3R files reproduce 4C (measured 1.7e-13 and
+    1.1e-13 against the tolerance 1e-8; with the 3-point Gauss force rule they missed by 7e-3 and 1e-2).
+    The boundary-segmentation pair runs with ``integration = "element_boundary"`` (4.4e-13, 1.2e-13;
     4C's values for the two strategies differ by 5e-3 and 1.9e-2)."""
     report = fourc.check(FOLDER / f"{R}{name}.4C.yaml")
     assert report.passed, report.table()
@@ -319,8 +319,8 @@ def test_4c_beam3r_gauss_point_projection_files_pass(name):
                                   "mortar_lagrange_saddlepoint_line3"])
 def test_4c_beam3r_mortar_files_pass_with_the_twist_gauge(name):
     """The spin about global z held at the start of a beam along x only removes the beam's free
-    twist: read as a twist support, with a note (measured 1.7e-11, 3.3e-11, 5.0e-12, 9.0e-12 and
-    8.2e-13 against the tolerance 1e-10)."""
+    twist: read as a twist support, with a note (measured 1.8e-11, 3.7e-11, 2.0e-11, 3.9e-11 and
+    3.5e-12 against the tolerance 1e-10)."""
     with pytest.warns(UserWarning, match=r"rotation components \[5\] .* read as twist = true"):
         scene, _ = scene_from_4c(FOLDER / f"{R}{name}.4C.yaml")
     twist = [d for d in scene.dirichlet if d["twist"]]
@@ -362,7 +362,7 @@ POLAR_2D = f"{R}rotational_coupling_gpts_polar_decomposition_2d.4C.yaml"
 @needs_inputs
 def test_4c_polar_decomposition_2d_file_passes():
     """Line moments on the BEAM3R beam (about its axis x), the Gauss-point rotational coupling and
-    4C's polar_decomposition_2d, which in the file's y-z plane is the polar triad (measured 2.7e-12
+    4C's polar_decomposition_2d, which in the file's y-z plane is the polar triad (measured 3.4e-12
     against the tolerance 1e-10)."""
     scene = Scene.from_4c(FOLDER / POLAR_2D)
     assert scene.coupling["rotational"]["triad"] == "polar"

@@ -23,6 +23,10 @@ the internal virtual work in these variations,
   ``δψ_k = T(ψ_k)⁻¹ Λ_rᵀ (δθ_k - δθ_r)`` and ``δθ_r = δθ_2``; so
   ``δK = exp(-ψ) dT[ψ_s] δψ + T(ψ)ᵀ δψ_s``.
 
+Per element, :data:`LAGRANGE` virtual spins replace that spin field in the spin rows by
+``δθ(η) = Σ L_k δθ_k`` (4C's ``BEAM3R``): the rows of node k are ``Σ_g [L_k (n × r_s) + L_k,s m]``
+with the weights ``w_g J_g`` (the centreline rows are the same).
+
 The tangent is the derivative of that residual with respect to the 21 unknowns, triads perturbed
 multiplicatively like the Newton update. Its 9 rotation columns are computed by the *complex
 step*: column j is ``Im r(q ⊕ i h e_j) / h`` with ``h = 1e-30``, exact to round-off (no
