@@ -255,18 +255,14 @@ def _beam(value, i, base_dir):
         if np.linalg.norm(normal) == 0.0:
             _fail(f"{path}.normal", "must not be zero")
         out["normal"] = normal / np.linalg.norm(normal)
-    out["force_rule"] = None
-    if "force_rule" in value:
-        if kind.triads is None:
-            _fail(f"{path}.force_rule", f"a {model} beam has no force (shear) term of its own rule; force_rule is for "
-                                        "model = \"simo_reissner\"")
-        out["force_rule"] = _choice(value["force_rule"], f"{path}.force_rule", ("gauss", "lobatto3"))
-    out["virtual_spins"] = None
-    if "virtual_spins" in value:
-        if kind.triads is None:
-            _fail(f"{path}.virtual_spins", f"a {model} beam has no spins; virtual_spins is for model = "
-                                           "\"simo_reissner\"")
-        out["virtual_spins"] = _choice(value["virtual_spins"], f"{path}.virtual_spins", ("exact", "lagrange"))
+    # options of the simo_reissner element (None: its default)
+    for key, lacks, choices in (("force_rule", "no force (shear) term of its own rule", ("gauss", "lobatto3")),
+                                ("virtual_spins", "no spins", ("exact", "lagrange"))):
+        out[key] = None
+        if key in value:
+            if kind.triads is None:
+                _fail(f"{path}.{key}", f"a {model} beam has {lacks}; {key} is for model = \"simo_reissner\"")
+            out[key] = _choice(value[key], f"{path}.{key}", choices)
     out["triads"] = None
     if "triads" in value:
         if kind.triads is None or "normal" in value:
