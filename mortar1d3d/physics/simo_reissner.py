@@ -392,7 +392,7 @@ class SimoReissnerBeam:
     functions instead, ``δθ(η) = Σ_k L_k(η) δθ_k``: the spin rows are
     ``Σ_g w_g J_g [L_k (n × r_s) + L_k,s m]`` (n, m the spatial force and moment), the internal
     force vector of Jelenić & Crisfield 1999, eq. (4.3), and of 4C's ``BEAM3R`` element
-    (``Beam3r::calc_internal_and_inertia_forces_and_stiff``); it is a Petrov–Galerkin form, not
+    (``Beam3r::calc_internal_force_and_stiff``); it is a Petrov–Galerkin form, not
     the gradient of an energy. The two agree while an element's triads turn about one common
     axis (Ĩ_k = L_k I, every plane problem); otherwise they differ at the order of the relative
     nodal rotations times the section moments, and converge to the same solution as the mesh is
