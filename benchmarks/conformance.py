@@ -53,10 +53,10 @@ def run_one(path):
                note=f"{len(compared)} values" + (f", {special} SPECIAL not comparable" if special else ""))
     coupling = report.result.scene.coupling if report.result.scene.coupled else {}
     if not report.passed and coupling.get("rotational") is not None:
-        row["note"] += ("; run with 4C's rotational force form (coupling.rotational.forces = \"fourc\"); what "
-                        "remains is not isolated (see fourc.md, Rotational coupling)")
+        row["note"] += ("; run with 4C's rotational force form (coupling.rotational.forces = \"fourc\") and "
+                        "BEAM3R's Lagrange virtual spins (see fourc.md, Rotational coupling)")
     if not report.passed and any(d.rational for d, _ in report.result.model.solid_mesh.blocks):
-        row["note"] += "; NURBS27: what remains after 4C's rule for negative κ is not found yet (see fourc.md, NURBS27)"
+        row["note"] += "; NURBS27: run with 4C's rule for negative κ and BEAM3R's Lagrange virtual spins (see fourc.md, NURBS27)"
     if report.notes:
         row["note"] += "; " + "; ".join(report.notes).replace("|", "\\|")
     return row

@@ -237,8 +237,8 @@ def _curve(value, path):
 
 def _beam(value, i, base_dir):
     path = f"beams[{i}]"
-    _table(value, path, ("curve", "mesh", "elements", "model", "section", "normal", "triads", "force_rule"),
-           required=("section",))
+    _table(value, path, ("curve", "mesh", "elements", "model", "section", "normal", "triads", "force_rule",
+                         "virtual_spins"), required=("section",))
     model = _choice(value.get("model", DEFAULT_BEAM_TYPE), f"{path}.model", BEAM_MODELS)
     if model not in IMPLEMENTED_BEAM_MODELS:
         _fail(f"{path}.model", f"{model!r} beams are not implemented yet; use one of "
@@ -255,12 +255,14 @@ def _beam(value, i, base_dir):
         if np.linalg.norm(normal) == 0.0:
             _fail(f"{path}.normal", "must not be zero")
         out["normal"] = normal / np.linalg.norm(normal)
-    out["force_rule"] = None
-    if "force_rule" in value:
-        if kind.triads is None:
-            _fail(f"{path}.force_rule", f"a {model} beam has no force (shear) term of its own rule; force_rule is for "
-                                        "model = \"simo_reissner\"")
-        out["force_rule"] = _choice(value["force_rule"], f"{path}.force_rule", ("gauss", "lobatto3"))
+    # options of the simo_reissner element (None: its default)
+    for key, lacks, choices in (("force_rule", "no force (shear) term of its own rule", ("gauss", "lobatto3")),
+                                ("virtual_spins", "no spins", ("exact", "lagrange"))):
+        out[key] = None
+        if key in value:
+            if kind.triads is None:
+                _fail(f"{path}.{key}", f"a {model} beam has {lacks}; {key} is for model = \"simo_reissner\"")
+            out[key] = _choice(value[key], f"{path}.{key}", choices)
     out["triads"] = None
     if "triads" in value:
         if kind.triads is None or "normal" in value:

@@ -222,6 +222,76 @@ def test_force_rule_is_checked():
         SimoReissnerBeam(straight_beam(2), SECTION, force_rule=["gauss"] * 3)
 
 
+# -- Lagrange virtual spins (4C's BEAM3R residual) -------------------------------------------------------
+
+def lagrange_spin_rows(model, d, psi, force_points, force_weights):
+    """Spin rows ``Σ_g w_g J_g [L_k (n × r_s) + L_k,s m]`` per rotation node, written out from the
+    model's own strain sampling (not from the kernel's residual code)."""
+    from mortar1d3d.elements.beam import evaluate as beam_functions
+    from mortar1d3d.physics.simo_reissner import _lagrange_tables
+    eta_m, w_m = np.polynomial.legendre.leggauss(model.n_gauss)
+    sm, sf = model.sample(d, psi, eta_m), model.sample(d, psi, force_points)
+    lag_f = _lagrange_tables(force_points)[0]
+    dlag_m = _lagrange_tables(eta_m)[1]
+    dH = beam_functions(model.beams.element_type, np.asarray(force_points)[None, :],
+                        model.beams.lengths[:, None], derivative=1)[..., :4]
+    q = model._coefficients(np.concatenate([model._q0 + d, np.zeros(3 * model.n_rotation_nodes)]))
+    q0 = model._coefficients(np.concatenate([model._q0, np.zeros(3 * model.n_rotation_nodes)]))
+    rp, J = np.einsum("egk,eki->egi", dH, q), np.linalg.norm(np.einsum("egk,eki->egi", dH, q0), axis=2)
+    rows = np.zeros((model.n_rotation_nodes, 3))
+    for e, nodes in enumerate(model.rotation_nodes):
+        for k, node in enumerate(nodes):
+            for g in range(len(force_points)):
+                rows[node] += force_weights[g] * lag_f[g, k] * np.cross(sf["n"][e, g], rp[e, g] / J[e, g]) * J[e, g]
+            for g in range(model.n_gauss):
+                rows[node] += w_m[g] * dlag_m[g, k] * sm["m"][e, g]
+    return rows.ravel()
+
+
+@pytest.mark.parametrize("rule", ["gauss", "lobatto3"])
+def test_lagrange_virtual_spins_are_the_internal_force_of_jelenic_and_crisfield(rule):
+    """``virtual_spins = "lagrange"``: the centreline rows are unchanged, the spin rows are
+    Σ w J [L_k (n × r_s) + L_k,s m] (Jelenić & Crisfield 1999, eq. (4.3); 4C's BEAM3R) and differ
+    from the energy's gradient where the triads do not turn about one axis."""
+    exact = SimoReissnerBeam(helix_beam(3), SECTION, force_rule=rule)
+    model = SimoReissnerBeam(helix_beam(3), SECTION, force_rule=rule, virtual_spins="lagrange")
+    d, psi = deformed_state(model, seed=2)
+    f, _ = model.evaluate(d, psi, tangent=False)
+    f_exact, _ = exact.evaluate(d, psi, tangent=False)
+    nc = model.n_centreline_dofs
+    assert np.array_equal(f[:nc], f_exact[:nc])
+    points = (np.array([-1.0, 0.0, 1.0]), np.array([1.0, 4.0, 1.0]) / 3) if rule == "lobatto3" else \
+        np.polynomial.legendre.leggauss(3)
+    expected = lagrange_spin_rows(model, d, psi, *points)
+    assert np.abs(f[nc:] - expected).max() < 1e-13 * np.abs(expected).max()
+    assert np.abs(f[nc:] - f_exact[nc:]).max() > 1e-2 * np.abs(expected).max()
+
+
+def test_lagrange_virtual_spins_tangent_against_central_differences():
+    model = SimoReissnerBeam(helix_beam(3), SECTION, force_rule=["lobatto3", "gauss", "lobatto3"],
+                             virtual_spins="lagrange")
+    d, psi = deformed_state(model)
+    K = model.evaluate(d, psi)[1].toarray()
+    fd = central_differences(lambda x: model.evaluate(*perturbed(model, d, psi, x), tangent=False)[0],
+                             np.zeros(model.n_dofs), 1e-6).T
+    assert np.abs(K - fd).max() < 1e-9 * np.abs(K).max()
+
+
+def test_lagrange_and_exact_virtual_spins_agree_for_turns_about_one_axis():
+    """Triads all turned about the same axis (a plane problem): Ĩ_k = L_k I, the same residual."""
+    beams = straight_beam(3)
+    exact = SimoReissnerBeam(beams, SECTION, force_rule="lobatto3")
+    model = SimoReissnerBeam(beams, SECTION, force_rule="lobatto3", virtual_spins=["lagrange"] * 3)
+    rng = np.random.default_rng(3)
+    d = 0.05 * rng.normal(size=model.n_centreline_dofs)
+    psi = np.zeros((model.n_rotation_nodes, 3))
+    psi[:, 2] = 0.4 * rng.normal(size=model.n_rotation_nodes)
+    f, f_exact = model.evaluate(d, psi, tangent=False)[0], exact.evaluate(d, psi, tangent=False)[0]
+    assert np.abs(f - f_exact).max() < 1e-14 * np.abs(f).max()
+    with pytest.raises(ValueError, match="virtual_spins of elements 0: 'lagrangian' is not one of"):
+        SimoReissnerBeam(beams, SECTION, virtual_spins=["lagrangian", "exact", "exact"])
+
+
 # -- invariance -----------------------------------------------------------------------------------------
 
 def rotation_vector(R):

@@ -17,7 +17,8 @@ What maps to what:
 ``MAT_Struct_StVenantKirchhoff``                ``saint_venant_kirchhoff``
 ``BEAM3EB LINE2``                               ``model = "beam3eb"``, one beam per chain of elements
 ``BEAM3R LINE3``, Hermite centreline            ``model = "simo_reissner"``, ``force_rule = "lobatto3"``,
-                                                ``TRIADS`` as reference triads
+                                                ``virtual_spins = "lagrange"``, ``TRIADS`` as
+                                                reference triads
 ``DESIGN SURF/VOL/POINT DIRICH CONDITIONS``     ``dirichlet`` on the condition's node set
 ``DESIGN SURF NEUMANN CONDITIONS``              ``traction`` (force per reference area)
 ``DESIGN LINE NEUMANN CONDITIONS`` (beams)      ``line`` load (force per reference length), ``line_moment``
@@ -476,9 +477,11 @@ def _beam3r(info, nodes, X, connectivity, params, law, mkey):
                "I3": _param(params, "MOMIN3", mkey), "I_T": _param(params, "MOMINPOL", mkey),
                "shear_correction": _num(params.get("SHEARCORR", 1.0), f"{mkey}.SHEARCORR")}
     # 4C integrates the force (Γ) term of a Hermite-centreline BEAM3R with 3-point Gauss–Lobatto and
-    # the moment term with 3-point Gauss (Beam3r::my_gauss_rule): the library's rule "lobatto3"
+    # the moment term with 3-point Gauss (Beam3r::my_gauss_rule): the library's rule "lobatto3"; its
+    # spin rows test with the Lagrange functions of the triad nodes (Jelenić & Crisfield 1999,
+    # eq. (4.3)), not with the exact spin variation: virtual_spins "lagrange"
     return {"mesh": mesh, "model": "simo_reissner", "section": section, "triads": triads.tolist(),
-            "force_rule": "lobatto3"}
+            "force_rule": "lobatto3", "virtual_spins": "lagrange"}
 
 
 def _twist_gauge(rot, key, on, beams, coupling, notes):

@@ -302,7 +302,8 @@ class Model:
         for g in self.groups:
             sections = [(b - a, sc.beams[i]["section"]) for i, (a, b) in zip(g.entries, g.entry_elements)]
             g.physics = g.type.make_physics(g.mesh, sections, g.triads,
-                                            [sc.beams[i].get("force_rule") for i in g.entries])
+                                            [sc.beams[i].get("force_rule") for i in g.entries],
+                                            [sc.beams[i].get("virtual_spins") for i in g.entries])
             if g.rotations.size:
                 self.counts["beam.rotations"] += 1
         if sc.coupled:

@@ -91,7 +91,7 @@ class BeamType:
         """The module of this beam's physics."""
         return importlib.import_module(self.physics.split(":")[0])
 
-    def make_physics(self, mesh, sections, triads=None, force_rules=None):
+    def make_physics(self, mesh, sections, triads=None, force_rules=None, virtual_spins=None):
         """The physics of a beam group.
 
         Parameters
@@ -105,6 +105,9 @@ class BeamType:
         force_rules : list of str or None, optional
             Per beam, the rule of its force term (``force_rule`` of the physics; None: its
             default). Beams with triads only.
+        virtual_spins : list of str or None, optional
+            Per beam, the test functions of its spin rows (``virtual_spins`` of the physics; None:
+            its default). Beams with triads only.
         """
         cls = self.physics_class()
         if self.triads is None:
@@ -114,10 +117,11 @@ class BeamType:
         Section = self.physics_module().Section
         per_beam = [Section(**{k: s[k] for k in ("EA", "GA2", "GA3", "GI_T", "EI2", "EI3")}) for _, s in sections]
         per_element = [section for (n, _), section in zip(sections, per_beam) for _ in range(n)]
-        if force_rules is None or all(r is None for r in force_rules):
-            return cls(mesh, per_element, reference_triads=triads)
-        rules = [r or "gauss" for (n, _), r in zip(sections, force_rules) for _ in range(n)]
-        return cls(mesh, per_element, reference_triads=triads, force_rule=rules)
+        options = {}
+        for key, per_beam, default in (("force_rule", force_rules, "gauss"), ("virtual_spins", virtual_spins, "exact")):
+            if per_beam is not None and any(r is not None for r in per_beam):
+                options[key] = [r or default for (n, _), r in zip(sections, per_beam) for _ in range(n)]
+        return cls(mesh, per_element, reference_triads=triads, **options)
 
     def reference_triads(self, mesh, normal=None, given=None):
         """Reference triads at the rotation nodes of ``mesh``: ``given`` checked (orthonormal,

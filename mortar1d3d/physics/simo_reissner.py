@@ -33,7 +33,7 @@ from .beam import BeamModel, _positive
 from .rotations import compose_rows, exp_rows
 
 __all__ = ["Section", "SimoReissnerBeam", "line_moment", "reference_triads", "check_triads", "RotationRangeError",
-           "N_GAUSS", "FORCE_GAUSS", "FORCE_RULES", "LOBATTO3"]
+           "N_GAUSS", "FORCE_GAUSS", "FORCE_RULES", "LOBATTO3", "VIRTUAL_SPINS"]
 
 #: Gauss points of the moment (curvature) term per element (see :class:`SimoReissnerBeam` Notes)
 N_GAUSS = 3
@@ -43,6 +43,10 @@ FORCE_GAUSS = None
 #: rules of the force term a beam may choose (``force_rule``): ``"gauss"`` (Gauss–Legendre with
 #: ``force_gauss`` points) or ``"lobatto3"`` (3-point Gauss–Lobatto, :data:`LOBATTO3`)
 FORCE_RULES = ("gauss", "lobatto3")
+#: virtual spins of the residual's spin rows a beam may choose (``virtual_spins``): ``"exact"`` (the
+#: variation of the interpolated triads, the residual is the energy's gradient) or ``"lagrange"``
+#: (spins interpolated with the line3 Lagrange functions, 4C's ``BEAM3R``)
+VIRTUAL_SPINS = ("exact", "lagrange")
 #: the 3-point Gauss–Lobatto rule on [-1, 1]: points (-1, 0, 1), weights (1/3, 4/3, 1/3)
 LOBATTO3 = (np.array([-1.0, 0.0, 1.0]), np.array([1.0, 4.0, 1.0]) / 3.0)
 #: given reference triads: largest |ΛᵀΛ - I| accepted (then projected to the nearest rotation)
@@ -331,6 +335,9 @@ class SimoReissnerBeam:
         ``"gauss"`` (default: Gauss–Legendre with ``force_gauss`` points) or ``"lobatto3"`` (3-point
         Gauss–Lobatto, η = -1, 0, 1 with weights 1/3, 4/3, 1/3, for all three components; the
         moment term keeps its ``n_gauss`` Gauss points). See Notes.
+    virtual_spins : str or sequence of str, optional
+        Test functions of the spin rows, one for all elements or one per element
+        (:data:`VIRTUAL_SPINS`): ``"exact"`` (default) or ``"lagrange"``. See Notes.
 
     Attributes
     ----------
@@ -377,10 +384,23 @@ class SimoReissnerBeam:
     the 2-point rule's spurious modes. The 4C reader chooses it for every ``BEAM3R`` element. The
     reference strains Γ0, K0 are always taken at the same points as the terms that use them, so
     that a curved reference stays stress-free with either rule.
+
+    *Virtual spins.* With ``"exact"`` the spin rows are the internal virtual work in the exact
+    variation of the interpolated triad field, ``δθ(η) = Σ_k Ĩ_k(η) δθ_k`` (Ĩ_k the generalised
+    interpolation matrices of Jelenić & Crisfield 1999), so the residual is the gradient of the
+    stored energy. ``"lagrange"`` interpolates the virtual spins with the line3 Lagrange
+    functions instead, ``δθ(η) = Σ_k L_k(η) δθ_k``: the spin rows are
+    ``Σ_g w_g J_g [L_k (n × r_s) + L_k,s m]`` (n, m the spatial force and moment), the internal
+    force vector of Jelenić & Crisfield 1999, eq. (4.3), and of 4C's ``BEAM3R`` element
+    (``Beam3r::calc_internal_force_and_stiff``); it is a Petrov–Galerkin form, not
+    the gradient of an energy. The two agree while an element's triads turn about one common
+    axis (Ĩ_k = L_k I, every plane problem); otherwise they differ at the order of the relative
+    nodal rotations times the section moments, and converge to the same solution as the mesh is
+    refined. The 4C reader chooses ``"lagrange"`` for every ``BEAM3R`` element.
     """
 
     def __init__(self, beams, section, reference_triads=None, *, n_gauss=N_GAUSS, force_gauss=FORCE_GAUSS,
-                 force_rule="gauss"):
+                 force_rule="gauss", virtual_spins="exact"):
         if not isinstance(beams, BeamMesh):
             raise TypeError(f"SimoReissnerBeam: expected a BeamMesh, got {type(beams).__name__}")
         if beams.element_type.name != "hermite":
@@ -407,7 +427,10 @@ class SimoReissnerBeam:
         if n_gauss < 1 or min(force_gauss) < 1:
             raise ValueError(f"need n_gauss >= 1 and force_gauss >= 1, got {n_gauss}, {force_gauss}")
         self.n_gauss, self.force_gauss = n_gauss, force_gauss
-        self.force_rule = _force_rules(force_rule, n_el)
+        self.force_rule = _per_element(force_rule, n_el, FORCE_RULES, "force_rule")
+        self.virtual_spins = _per_element(virtual_spins, n_el, VIRTUAL_SPINS, "virtual_spins")
+        self._spins = np.ascontiguousarray(np.where(self.virtual_spins == "lagrange", kernel.LAGRANGE, kernel.EXACT),
+                                           dtype=np.int64)
         lobatto = self.force_rule == "lobatto3"
         eta, wF, wM, wL = _rules(n_gauss, force_gauss, lobatto.any())
         self._q0 = beams.centreline_dofs()
@@ -486,7 +509,7 @@ class SimoReissnerBeam:
         status = np.empty(n_el, dtype=np.int64)
         dH, lag, dlag, A0, J = self._points
         args = (dH, lag, dlag, A0, J, self._wF, self._wM, self._Gamma0, self._K0, self.CF, self.CM, Dd, triads_e,
-                want, energy, fe, ke, status)
+                self._spins, want, energy, fe, ke, status)
         if n_el <= CHUNK:
             kernel.element_range(0, n_el, *args)
         else:
@@ -590,14 +613,14 @@ class SimoReissnerBeam:
                 f"{self.n_dofs} DOFs)")
 
 
-def _force_rules(force_rule, n_el):
-    """``force_rule`` (one name or one per element) as an (n_el,) array of names of :data:`FORCE_RULES`."""
-    rules = np.array([force_rule] * n_el if isinstance(force_rule, str) else list(force_rule), dtype=object)
+def _per_element(value, n_el, choices, name):
+    """``value`` (one name or one per element) as an (n_el,) array of names of ``choices``."""
+    rules = np.array([value] * n_el if isinstance(value, str) else list(value), dtype=object)
     if rules.shape != (n_el,):
-        raise ValueError(f"force_rule: expected one of {FORCE_RULES} or one per element ({n_el}), got {len(rules)}")
-    bad = [k for k, r in enumerate(rules) if r not in FORCE_RULES]
+        raise ValueError(f"{name}: expected one of {choices} or one per element ({n_el}), got {len(rules)}")
+    bad = [k for k, r in enumerate(rules) if r not in choices]
     if bad:
-        raise ValueError(f"force_rule of elements {format_ids(bad)}: {rules[bad[0]]!r} is not one of {FORCE_RULES}")
+        raise ValueError(f"{name} of elements {format_ids(bad)}: {rules[bad[0]]!r} is not one of {choices}")
     return rules.astype(str)
 
 

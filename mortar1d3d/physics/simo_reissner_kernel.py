@@ -23,6 +23,10 @@ the internal virtual work in these variations,
   ``δψ_k = T(ψ_k)⁻¹ Λ_rᵀ (δθ_k - δθ_r)`` and ``δθ_r = δθ_2``; so
   ``δK = exp(-ψ) dT[ψ_s] δψ + T(ψ)ᵀ δψ_s``.
 
+Per element, :data:`LAGRANGE` virtual spins replace that spin field in the spin rows by
+``δθ(η) = Σ L_k δθ_k`` (4C's ``BEAM3R``): the rows of node k are ``Σ_g [L_k (n × r_s) + L_k,s m]``
+with the weights ``w_g J_g`` (the centreline rows are the same).
+
 The tangent is the derivative of that residual with respect to the 21 unknowns, triads perturbed
 multiplicatively like the Newton update. Its 9 rotation columns are computed by the *complex
 step*: column j is ``Im r(q ⊕ i h e_j) / h`` with ``h = 1e-30``, exact to round-off (no
@@ -45,7 +49,7 @@ from .._config import CHUNK, njit, njit_inline, njit_parallel
 from .rotations import _cross, exp, jacobian, jacobian_derivative_transpose, jacobian_inverse, log
 
 __all__ = ["element_range", "element_chunks", "strain_range", "N_DOFS", "STEP", "OK", "ROTATION_RANGE",
-           "NOT_FINITE", "MAX_RELATIVE_ROTATION"]
+           "NOT_FINITE", "MAX_RELATIVE_ROTATION", "EXACT", "LAGRANGE"]
 
 #: unknowns per element: 12 centreline coefficients, 3 × 3 triad spins
 N_DOFS = 21
@@ -53,6 +57,11 @@ N_DOFS = 21
 STEP = 1e-30
 #: status per element
 OK, ROTATION_RANGE, NOT_FINITE = 0, 1, 2
+#: virtual spins of the spin rows per element: the exact variation of the interpolated triads
+#: (``δθ(η) = Σ Ĩ_k δθ_k``, the residual is the energy's gradient), or the spins interpolated with
+#: the line3 Lagrange functions (``δθ(η) = Σ L_k δθ_k``, Jelenić & Crisfield 1999, eq. (4.3): 4C's
+#: ``BEAM3R``; the same residual while the element's triads turn about one common axis)
+EXACT, LAGRANGE = 0, 1
 #: largest rotation of an end triad relative to the middle one that the interpolation accepts (rad):
 #: the local rotation vectors ψ_k = log(Λ_rᵀ Λ_k) jump at π
 MAX_RELATIVE_ROTATION = 0.99 * math.pi
@@ -146,10 +155,11 @@ def _no_force_weight(wF, e, g):
 
 
 @njit
-def _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, D, triads, want, res, m33, v3, work):
+def _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, D, triads, want, lagrange, res, m33, v3, work):
     """Energy and (``want >= 1``) the residual ``res`` (21,) of element ``e`` at the coefficients'
     displacement ``D`` (4, 3) and the triads (3, 3, 3); returns (energy, status).
 
+    ``lagrange``: the spin rows with :data:`LAGRANGE` virtual spins instead of the exact variation.
     ``m33``: (8, 3, 3), ``v3``: (24, 3) and ``work``: (9,) scratch of the type of ``D``.
     """
     psi_nodes = v3[0:3]
@@ -199,6 +209,13 @@ def _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, D, triads, wa
         for i in range(3):
             rp[i] /= Jg                          # r_s
         _cross(n, rp, nxr)
+        if lagrange:
+            # δθ(η) = Σ L_k δθ_k: the spin rows are Σ_g [L_k (n × r_s) + L_k,s m] w_g J_g
+            _matvec(Lam, Kap, y)                 # w m (spatial moment)
+            for k in range(3):
+                for i in range(3):
+                    res[12 + 3 * k + i] += lag[g, k] * nxr[i] + dlag[g, k] / Jg * y[i]
+            continue
         for i in range(3):
             fth[i] += nxr[i]                     # δθ_r directly
         _matvec_t(Lr, nxr, y)
@@ -210,7 +227,7 @@ def _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, D, triads, wa
             fpsi[i] += z[i]
             fp0[i] += lag[g, 0] * fpsi[i] + dlag[g, 0] / Jg * fpsis[i]
             fp1[i] += lag[g, 1] * fpsi[i] + dlag[g, 1] / Jg * fpsis[i]
-    if want == 0:
+    if want == 0 or lagrange:
         return energy, status
     # δψ_k = T_k⁻¹ Λ_rᵀ (δθ_k - δθ_r): the conjugate of δθ_k is Λ_r T_k⁻ᵀ f_ψk
     _matvec_t(Tinv0, fp0, y)
@@ -225,8 +242,8 @@ def _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, D, triads, wa
 
 
 @njit
-def element_range(first, last, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dd, triads, want, energy, fe,
-                  ke, status):
+def element_range(first, last, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dd, triads, spins, want, energy,
+                  fe, ke, status):
     """Energy, residual and tangent of elements ``first`` ... ``last - 1``.
 
     Parameters
@@ -252,6 +269,8 @@ def element_range(first, last, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM,
         Displacement of the coefficients ``(r1, t1, r2, t2)``.
     triads : (n_el, 3, 3, 3) float64
         Current nodal triads per element in line3 order (columns g1, g2, g3).
+    spins : (n_el,) int64
+        Virtual spins of the spin rows per element: :data:`EXACT` or :data:`LAGRANGE`.
     want : int
         0 energy, 1 and residual, 2 and tangent.
     energy : (n_el,) float64
@@ -276,8 +295,9 @@ def element_range(first, last, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM,
     rwork = np.empty(9)
     acc = np.empty((3, 12, 3))
     for e in range(first, last):
-        W, st = _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dd[e], triads[e], want, rres, r33,
-                          rv3, rwork)
+        lagrange = spins[e] == LAGRANGE
+        W, st = _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dd[e], triads[e], want, lagrange, rres,
+                          r33, rv3, rwork)
         energy[e] = W
         if not math.isfinite(W):
             st = NOT_FINITE
@@ -289,7 +309,7 @@ def element_range(first, last, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM,
         status[e] = st
         if want < 2:
             continue
-        _centreline_columns(e, dH, lag, dlag, A0, J, wF, Gamma0, CF, Dd[e], triads[e], ke, r33, rv3, acc)
+        _centreline_columns(e, dH, lag, dlag, A0, J, wF, Gamma0, CF, Dd[e], triads[e], lagrange, ke, r33, rv3, acc)
         # rotation columns: complex step of the residual, triad k turned by exp(i h e_c)
         for i in range(4):
             for l in range(3):
@@ -308,19 +328,20 @@ def element_range(first, last, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM,
                 for l in range(3):
                     m33[7, i, l] = Lc[node, i, l]
             _matmul(rot, m33[7], Lc[node])
-            _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dc, Lc, 1, res, m33, v3, work)
+            _residual(e, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dc, Lc, 1, lagrange, res, m33, v3, work)
             for i in range(N_DOFS):
                 ke[e, i, j] = res[i].imag / STEP
 
 
 @njit
-def _centreline_columns(e, dH, lag, dlag, A0, J, wF, Gamma0, CF, D, triads, ke, m33, v3, acc):
+def _centreline_columns(e, dH, lag, dlag, A0, J, wF, Gamma0, CF, D, triads, lagrange, ke, m33, v3, acc):
     """Columns 0-11 of the tangent (derivatives along the centreline coefficients), written out.
 
     The centreline enters the residual only through ``r_s``, in the force term: with
     ``S = Λ diag(w C_F) Λᵀ`` and ``δr_s = dH_k/J e_c``, ``δn = S δr_s``, the centreline rows get
     ``dH_l/J δn``, and the spin rows get ``δ(n × r_s) = δn × r_s + n × δr_s`` through the same
-    transformation as the residual (``δθ_r`` directly, ``Tᵀ Λ_rᵀ`` for the local rotation vectors).
+    transformation as the residual (``δθ_r`` directly, ``Tᵀ Λ_rᵀ`` for the local rotation vectors;
+    with ``lagrange`` virtual spins, ``L_k`` on the spin rows of node k).
     ``acc``: (3, 12, 3) scratch (accumulators of δθ_r, δψ_0, δψ_1 per column).
     """
     psi_nodes = v3[0:3]
@@ -363,6 +384,11 @@ def _centreline_columns(e, dH, lag, dlag, A0, J, wF, Gamma0, CF, D, triads, ke, 
                         ke[e, 3 * m + i, col] += cm * dn[i]
                 _cross(dn, rp, dnxr)
                 _cross(n, drs, y)
+                if lagrange:
+                    for k2 in range(3):
+                        for i in range(3):
+                            ke[e, 12 + 3 * k2 + i, col] += lag[g, k2] * (dnxr[i] + y[i])
+                    continue
                 for i in range(3):
                     dnxr[i] += y[i]
                     acc[0, col, i] += dnxr[i]
@@ -371,6 +397,8 @@ def _centreline_columns(e, dH, lag, dlag, A0, J, wF, Gamma0, CF, D, triads, ke, 
                 for i in range(3):
                     acc[1, col, i] += lag[g, 0] * z[i]
                     acc[2, col, i] += lag[g, 1] * z[i]
+    if lagrange:
+        return
     for k in range(2):
         jacobian_inverse(psi_nodes[k], Tinv)
         for col in range(12):
@@ -385,13 +413,13 @@ def _centreline_columns(e, dH, lag, dlag, A0, J, wF, Gamma0, CF, D, triads, ke, 
 
 
 @njit_parallel
-def element_chunks(dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dd, triads, want, energy, fe, ke, status):
+def element_chunks(dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dd, triads, spins, want, energy, fe, ke, status):
     """:func:`element_range` over chunks of :data:`CHUNK` elements in parallel (bit-identical for any
     number of threads: every element is computed by the same serial code)."""
     n_el = dH.shape[0]
     for c in prange((n_el + CHUNK - 1) // CHUNK):
         element_range(c * CHUNK, min(n_el, (c + 1) * CHUNK), dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dd,
-                      triads, want, energy, fe, ke, status)
+                      triads, spins, want, energy, fe, ke, status)
 
 
 @njit
