@@ -14,7 +14,6 @@ control net face carries exactly the face's functions, so fixing them fixes the 
 import numpy as np
 import scipy.sparse as sp
 
-from ..physics.rational_surface import RATIONAL_FACE_POINTS
 from ..physics.solid import SolidModel
 from ..physics.surface import FACE_DTYPE, Pressure
 from .mesh import bezier_mesh, element_values
@@ -59,13 +58,14 @@ class NurbsSolidModel:
         structured array of :data:`~mortar1d3d.physics.surface.FACE_DTYPE` (surface loads)."""
         return patch_face_set(self.mesh, patch, face)
 
-    def pressure_load(self, patch, face, p, n_gauss=RATIONAL_FACE_POINTS):
+    def pressure_load(self, patch, face, p, n_gauss=None):
         """Follower pressure ``p`` (force per current area, pushing into the body) on face ``face`` of
         patch ``patch``, on control points: a :class:`ControlPointLoad` whose ``evaluate(u, tangent)``
-        gives Tᵀ f(T u) and its derivative Tᵀ K T (``n_gauss`` points per direction on each span face)."""
+        gives Tᵀ f(T u) and its derivative Tᵀ K T (``n_gauss`` points per direction on each span face; None:
+        the rule of the face's degree, :func:`~mortar1d3d.physics.rational_surface.rational_face_points`)."""
         return ControlPointLoad(Pressure(self.mesh.solid, self.face_set(patch, face), p, n_gauss), self.T3)
 
-    def pressure(self, patch, face, p, n_gauss=RATIONAL_FACE_POINTS):
+    def pressure(self, patch, face, p, n_gauss=None):
         """Consistent control-point forces of a pressure ``p`` (force per reference area, pushing into the
         body) on face ``face`` (``"u0_min"``, ...) of patch ``patch``, dead load on the reference surface:
         f_i = -∫ p R_i n dA with n the outward normal. Returns (n_dofs,)."""
