@@ -12,6 +12,7 @@ from mortar1d3d.nurbs.patch import NurbsPatch, NurbsSolid
 from mortar1d3d.nurbs.scene import patches_mesh, validate_patches
 from mortar1d3d.nurbs.solid import NurbsSolidModel
 from mortar1d3d.physics.materials import material
+from mortar1d3d.physics.rational_surface import polynomial_values
 
 RI, RO, L = 0.1, 0.2, 0.3
 
@@ -53,9 +54,13 @@ def test_mixed_degrees_keep_the_geometry(degrees, element):
     lo, hi = patch.element_ranges()[:, :, 0], patch.element_ranges()[:, :, 1]
     u = lo[:, None, :] + 0.5 * (xi[None] + 1.0) * (hi - lo)[:, None, :]
     assert np.abs(x - patch.evaluate(u.reshape(-1, 3)).reshape(x.shape)).max() < 1e-14
-    # the weight function too: W of the elements = W of the patch (Σ_i N_i w_i)
-    W = element_values(solid, xi, np.ones((solid.n_nodes, 1)) * 0.0 + 1.0)     # partition of unity
-    assert np.abs(W - 1.0).max() < 1e-14
+    # the weight function too: W = Σ_a w_a B_a of the elevated elements = Σ_i w_i N_i of the patch
+    d, conn = solid.blocks[0]
+    B, _ = polynomial_values(d.code, xi, d.n_nodes)
+    W = np.einsum("qa,ea->eq", B, solid.weights[conn])
+    N = [kv.bspline_values(U, q, u.reshape(-1, 3)[:, k]) for k, (U, q) in enumerate(zip(patch.knots, patch.degrees))]
+    W_patch = np.einsum("mi,mj,mk,ijk->m", *N, patch.weights).reshape(W.shape)
+    assert np.abs(W - W_patch).max() < 1e-14
     # nodes and weights = those of the patch degree-elevated globally (knot vectors and control net)
     p = common_degree(degrees)
     global_ = patch.elevate(0, p - degrees[0]).elevate(1, p - degrees[1]).elevate(2, p - degrees[2])
