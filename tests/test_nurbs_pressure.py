@@ -132,3 +132,27 @@ def test_newton_with_follower_pressure_converges_quadratically():
     assert rel[-1] < 1e2 * rel[-2] ** 2, rel
     ur = np.hypot(*model.sample(u, points=3)[0, 0, :2]) - A
     assert 0.1 * A < ur < 0.2 * A          # measured 0.134 A
+
+
+def test_cubic_face_rule_follows_the_degree_and_converges():
+    """Pressure resultant on the inner face of a cubic (``nurbs64``) 90° pipe span against the closed form
+    P A H (1, 1, 0). The integrand with unit weights has degree 3p − 1 = 8 per direction (5 points are
+    exact for it); the default is 6 × 6 points on cubic faces (one more for the rational weight) and
+    4 × 4 on quadratic ones. Measured relative errors with n = 3 … 8 points: 6.6e-4, 3.4e-5, 1.7e-6,
+    7.9e-8, 3.6e-9, 1.6e-10."""
+    from mortar1d3d.physics.rational_surface import rational_face_points
+
+    assert (rational_face_points(2), rational_face_points(3)) == (4, 6)
+    model = NurbsSolidModel(nurbs.hollow_cylinder(A, B, H, angle=90.0, elements=(1, 1, 1), degree=3),
+                            material("linear_elastic", 1.0, 0.3), kinematics="linear")
+    assert model.mesh.solid.blocks[0][0].name == "nurbs64"
+    exact = np.array([P * A * H, P * A * H, 0.0])
+
+    def error(n_gauss):
+        f = model.pressure(0, "u0_min", P, n_gauss=n_gauss).reshape(-1, 3)
+        return np.abs(f.sum(axis=0) - exact).max() / (P * A * H)
+
+    errors = [error(n) for n in range(3, 9)]
+    assert all(b < 0.1 * a for a, b in zip(errors, errors[1:])), errors      # converging with the rule
+    assert errors[-1] < 1e-9
+    assert error(None) == errors[3] < 1e-7                                   # the default is the 6-point rule

@@ -82,7 +82,9 @@ def test_named_sets_of_a_pipe_section():
     ({"r_outer": 0.05}, r"solid\.mesh\.pipe\.r_outer: must be greater than r_inner"),
     ({"elements": [1, 2, 1]}, r"solid\.mesh\.pipe\.elements\[1\]: 2 element\(s\) cannot cover 360"),
     ({"angle": 400.0}, r"solid\.mesh\.pipe\.angle"),
-    ({"degree": 4}, r"solid\.mesh\.pipe\.degree: expected an integer in \[2, 3\]"),
+    ({"degree": 4}, r"solid\.mesh\.pipe\.degree: degree 4 is above what the element registry has; supported are "
+                    r"degrees 1 to 3 per direction, elevated exactly to nurbs27 \(degree 2\), nurbs64 \(degree 3\)"),
+    ({"degree": [2, 1, 2]}, r"solid\.mesh\.pipe\.degree\[1\]: degree 1 in direction 1: must be at least 2"),
     ({"order": 3}, r"solid\.mesh\.pipe\.order: unknown key"),
 ])
 def test_pipe_key_errors(spec, match):
@@ -129,8 +131,8 @@ def test_helical_fibres_coupled_to_the_pipe_and_written(tmp_path):
     assert any("beams" in str(f) for f in files)
 
 
-@pytest.mark.parametrize("degree", [2, 3])
-def test_brick_in_uniaxial_tension_is_exact(degree):
+@pytest.mark.parametrize("degree, p", [(2, 2), (3, 3), (1, 2), ([1, 3, 2], 3)])
+def test_brick_in_uniaxial_tension_is_exact(degree, p):
     """``solid.mesh = { brick = ... }``: a NURBS block (weights 1) held on three faces by symmetry, a
     traction on x_max. The linear field u = σ/E (x, -ν y, -ν z) lies in the space, so the node
     displacements (Bézier control points of a linear field: the field at the nodes) are exact."""
@@ -143,19 +145,21 @@ def test_brick_in_uniaxial_tension_is_exact(degree):
         analysis={"kinematics": "linear"})
     result = m13.solve(scene)
     mesh = result.model.solid_mesh
-    assert mesh.blocks[0][0].name == {2: "nurbs27", 3: "nurbs64"}[degree] and mesh.n_elements == 4
+    assert mesh.blocks[0][0].name == {2: "nurbs27", 3: "nurbs64"}[p] and mesh.n_elements == 4     # elevated to p
     X = mesh.points
     exact = sigma / E * X * [1.0, -NU, -NU]
     assert np.abs(result.solid_displacement - exact).max() < 1e-12 * sigma / E
     sets = mesh.point_sets
     assert sorted(sets) == ["x_max", "x_min", "y_max", "y_min", "z_max", "z_min"]
-    assert len(sets["x_min"]) == (degree + 1) * (2 * degree + 1) and np.abs(X[sets["x_min"], 0]).max() == 0.0
+    assert len(sets["x_min"]) == (p + 1) * (2 * p + 1) and np.abs(X[sets["x_min"], 0]).max() == 0.0
     assert np.abs(X[sets["z_max"], 2] - 0.4).max() < 1e-15
 
 
 @pytest.mark.parametrize("spec, match", [
     ({"upper": [1.0, 0.0, 1.0]}, r"solid\.mesh\.brick\.upper: must be greater than lower"),
-    ({"degree": 1}, r"solid\.mesh\.brick\.degree: expected an integer in \[2, 3\]"),
+    ({"degree": 0}, r"solid\.mesh\.brick\.degree: degree 0 in direction 0: must be at least 1"),
+    ({"degree": [1, 2, 5]}, r"solid\.mesh\.brick\.degree\[2\]: degree 5 is above what the element registry has"),
+    ({"degree": [1, 2]}, r"solid\.mesh\.brick\.degree"),
     ({"elements": [1, 0, 1]}, r"solid\.mesh\.brick\.elements\[1\]"),
     ({"cells": [1, 1, 1]}, r"solid\.mesh\.brick\.cells: unknown key"),
 ])

@@ -59,3 +59,21 @@ def test_brick_faces_by_position_are_its_face_sets():
     for name in ("x_min", "x_max", "y_min", "z_max"):
         _, nodes = b.sets.select(f"solid:{name}", "on")
         assert np.array_equal(nodes, np.sort(b.solid_mesh.point_sets[name]))
+
+
+def test_fibre_regions_test_the_body_centre_of_a_thick_curved_element():
+    """``fibres[].inside`` on NURBS: the centroid of a 90° span's control points lies at 0.94 r_mid
+    (the arc's middle control points bulge out to √2 r, the ends lie on r), the body centre at r_mid.
+    A box around the body centre (r_mid = 0.15 at 45°: x = y = 0.1061) but not the control-point
+    centroid (x = y = 0.1) selects that element and no other one."""
+    b = sets(pipe(4))
+    centre = 0.15 * np.sqrt(0.5)
+    lo, hi = np.array([centre - 0.003, centre - 0.003, 0.0]), np.array([centre + 0.003, centre + 0.003, L])
+    X = b.solid_mesh.points[b.solid_mesh.connectivity]
+    cp_centroid = X.mean(axis=1)
+    assert not ((cp_centroid >= lo) & (cp_centroid <= hi)).all(axis=1).any()    # the old rule found nothing
+    elements, = b.sets.fibre_regions([{"inside": (lo, hi)}])
+    assert elements.tolist() == [True, False, False, False]
+    # a box around the control-point centroids only (off the body's centre) selects nothing
+    with pytest.raises(SceneError, match=r"fibres\[0\]\.inside: no element centroid"):
+        b.sets.fibre_regions([{"inside": (np.array([0.098, 0.098, 0.0]), np.array([0.102, 0.102, L]))}])

@@ -99,16 +99,21 @@ class NamedSets:
 
     def fibre_regions(self, families):
         """Per ``solid.material.fibres`` family: None (every element) or the mask of the elements
-        whose node centroid lies in its ``inside`` box."""
+        whose node centroid lies in its ``inside`` box (of a rational element: its body point at the
+        parameter centre, :func:`mortar1d3d.nurbs.sets.element_centres`)."""
         mesh = self.solid_mesh
         out = []
         for i, f in enumerate(families):
             elements = None
             if f["inside"] is not None:
                 lo, hi = f["inside"]
-                conn = mesh.connectivity
-                valid = conn >= 0
-                centroid = (mesh.points[np.where(valid, conn, 0)] * valid[..., None]).sum(axis=1) / valid.sum(axis=1)[:, None]
+                if self._rational:
+                    from ..nurbs.sets import element_centres
+                    centroid = element_centres(mesh)
+                else:
+                    conn = mesh.connectivity
+                    valid = conn >= 0
+                    centroid = (mesh.points[np.where(valid, conn, 0)] * valid[..., None]).sum(axis=1) / valid.sum(axis=1)[:, None]
                 tol = 1e-9 * float(np.linalg.norm(np.ptp(mesh.points, axis=0)))
                 elements = ((centroid >= lo - tol) & (centroid <= hi + tol)).all(axis=1)
                 if not elements.any():

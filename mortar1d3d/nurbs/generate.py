@@ -16,11 +16,22 @@ MAX_SEGMENT_ANGLE = 120.0
 
 
 def _elevate_to(patch, degree):
+    """``patch`` degree-elevated (exactly) to ``degree``: one int for every direction or three."""
+    degrees = _degrees(degree)
     for d in range(3):
-        if degree < patch.degrees[d]:
-            raise ValueError(f"degree: must be >= {patch.degrees[d]} in direction {d}, got {degree}")
-        patch = patch.elevate(d, degree - patch.degrees[d])
+        if degrees[d] < patch.degrees[d]:
+            raise ValueError(f"degree: must be >= {patch.degrees[d]} in direction {d} (the exact geometry's "
+                             f"degree there), got {degrees[d]}")
+        patch = patch.elevate(d, degrees[d] - patch.degrees[d])
     return patch
+
+
+def _degrees(degree):
+    """Three ints from one degree (every direction) or three."""
+    degrees = np.broadcast_to(np.asarray(degree), (3,))
+    if not all(float(q) == int(q) for q in degrees):
+        raise ValueError(f"degree: expected an integer or three, got {degree}")
+    return tuple(int(q) for q in degrees)
 
 
 def _counts(elements):
@@ -54,8 +65,10 @@ def hollow_cylinder(r_inner, r_outer, height, angle=360.0, elements=(1, 4, 1), d
         Opening angle in degrees, 0 < angle <= 360, starting at ``start`` degrees from the x axis.
     elements : (3,) int
         Elements (knot spans) radially, around the circumference, along the axis.
-    degree : int >= 2
-        Degree in every direction (the circle needs 2).
+    degree : int or (3,) ints
+        Degree in every direction, or per direction (radial, circumferential, axial): at least
+        (1, 2, 1), the exact geometry's degrees (the circle needs 2); higher ones are reached by
+        degree elevation, which leaves the geometry unchanged.
 
     Returns
     -------
@@ -91,13 +104,13 @@ def hollow_cylinder(r_inner, r_outer, height, angle=360.0, elements=(1, 4, 1), d
     arc_knots = np.concatenate([[0.0] * 3, np.repeat(np.arange(1, segments), 2), [float(segments)] * 3])
     linear = np.array([0.0, 0.0, 1.0, 1.0])
     patch = NurbsPatch(control, weights, (linear, arc_knots, linear), (1, 2, 1))
-    patch = _elevate_to(patch, int(degree)).refine((nr, nc // segments, nz))
+    patch = _elevate_to(patch, degree).refine((nr, nc // segments, nz))
     return NurbsSolid([patch])
 
 
 def brick(lower, upper, elements=(1, 1, 1), degree=2):
-    """The box ``lower <= x <= upper`` as one NURBS patch (all weights 1) of ``degree`` with
-    ``elements`` equal spans per direction; parameter direction d runs along x_d."""
+    """The box ``lower <= x <= upper`` as one NURBS patch (all weights 1) of ``degree`` (>= 1, one for every
+    direction or three) with ``elements`` equal spans per direction; parameter direction d runs along x_d."""
     lower = np.asarray(lower, dtype=np.float64)
     upper = np.asarray(upper, dtype=np.float64)
     if lower.shape != (3,) or upper.shape != (3,) or not (upper > lower).all():
@@ -105,7 +118,7 @@ def brick(lower, upper, elements=(1, 1, 1), degree=2):
     corners = np.stack(np.meshgrid(*[np.array([lo, hi]) for lo, hi in zip(lower, upper)], indexing="ij"), axis=-1)
     linear = np.array([0.0, 0.0, 1.0, 1.0])
     patch = NurbsPatch(corners, np.ones((2, 2, 2)), (linear, linear, linear), (1, 1, 1))
-    return NurbsSolid([_elevate_to(patch, int(degree)).refine(_counts(elements))])
+    return NurbsSolid([_elevate_to(patch, degree).refine(_counts(elements))])
 
 
 __all__ = ["hollow_cylinder", "brick", "arc_segments", "MAX_SEGMENT_ANGLE"]

@@ -174,5 +174,20 @@ def bernstein_values(degree, x):
     return np.stack([comb(degree, a) * (1.0 - t) ** (degree - a) * t ** a for a in range(degree + 1)], axis=1)
 
 
+def bernstein_elevation(degree, target):
+    """Degree elevation of the Bernstein basis: ``M`` (p+1, q+1) with ``B^p_i = Σ_j M[i, j] B^q_j`` for the
+    target degree q >= p, ``M[i, j] = C(p, i) C(q − p, j − i) / C(q, j)`` for 0 <= j − i <= q − p (the
+    product of B^p_i with the partition of unity of degree q − p, term by term). Exact; a Bézier
+    segment's control points (homogeneous, for rational ones) elevate as ``Mᵀ P``."""
+    p, q = int(degree), int(target)
+    if q < p:
+        raise ValueError(f"Bernstein elevation from degree {p} to {q}: the target must not be lower")
+    M = np.zeros((p + 1, q + 1))
+    for i in range(p + 1):
+        for j in range(i, i + q - p + 1):
+            M[i, j] = comb(p, i) * comb(q - p, j - i) / comb(q, j)
+    return M
+
+
 __all__ = ["check_knots", "n_functions", "spans", "find_span", "bspline_values", "insertion_matrix",
-           "elevation_matrix", "extraction_operators", "bernstein_values"]
+           "elevation_matrix", "extraction_operators", "bernstein_values", "bernstein_elevation"]

@@ -1,8 +1,12 @@
 """From NURBS patches to the engine: a mesh of rational Bézier elements and the map to control points.
 
-Every NURBS element of degree p in all three directions becomes the rational Bézier element type of
-that degree (``nurbs27`` for p = 2, ``nurbs64`` for p = 3: :mod:`mortar1d3d.elements.solid.bezier_hex`):
-its (p+1)³ Bézier control points and weights from Bézier extraction, in the type's node order. Bézier
+Every NURBS element becomes the rational Bézier element type of the solid's common degree p
+(``nurbs27`` for p = 2, ``nurbs64`` for p = 3: :mod:`mortar1d3d.elements.solid.bezier_hex`): its
+(p+1)³ Bézier control points and weights from Bézier extraction, in the type's node order. A patch
+of lower degree in some direction (1 … 3 per direction, mixed across directions and patches) is
+degree-elevated span by span to p (:func:`~mortar1d3d.nurbs.knots.bernstein_elevation`): exact, the
+same rational functions and geometry in a larger Bernstein basis; p is the smallest registered
+degree that is at least every patch's highest (:func:`common_degree`). Bézier
 points that coincide (same position and weight: the shared faces, edges and corners of neighbouring
 elements, which are the same rational functions there) are one mesh node. The NURBS functions are
 combinations of the Bézier ones, R_i = Σ_a E_ia R^b_a, so anything the engine or the model computes
@@ -11,6 +15,8 @@ on the Bézier mesh maps to the control points by the sparse matrix ``T`` (n_mes
     node values = T @ control-point values,   M_control = M_mesh (T ⊗ I₃),   K_control = Tᵀ K_mesh T
 
 (the mesh's nodes are ``T @ control``, so the constraint residual D q_B - M X_S is the same in both).
+The control points stay the patches' own (a degree-1 direction keeps its linear space of
+control-point values; only its elements are written at the higher degree).
 """
 import numpy as np
 import scipy.sparse as sp
@@ -26,19 +32,42 @@ from .patch import NurbsSolid, merge_coincident
 BEZIER_TYPES = {d.degree: d for d in SOLID_ELEMENTS.values() if d.rational and d.family == "hex"}
 
 
-def bezier_type(degrees, what="patch"):
-    """The rational Bézier element type of a patch of ``degrees`` (three equal degrees with a registered
-    type); ValueError naming ``what`` otherwise."""
-    p = degrees[0]
-    if len(set(degrees)) != 1 or p not in BEZIER_TYPES:
-        raise ValueError(f"{what}: the engine takes NURBS of equal degree in the three directions, one of "
-                         f"{sorted(BEZIER_TYPES)} (element types {', '.join(d.name for d in BEZIER_TYPES.values())}); "
-                         f"got degrees {tuple(degrees)}")
-    return BEZIER_TYPES[p]
+def bezier_type(degrees, what="patches"):
+    """The rational Bézier element type of patches of ``degrees`` (per direction, or a list of such triples
+    for several patches): the registered type of :func:`common_degree`. ValueError naming ``what``
+    otherwise."""
+    return BEZIER_TYPES[common_degree(degrees, what)]
+
+
+def common_degree(degrees, what="patches"):
+    """The degree of the elements a solid's patches become: the smallest registered rational Bézier
+    degree (2: ``nurbs27``, 3: ``nurbs64``) that is at least every given degree.
+
+    Parameters
+    ----------
+    degrees : (3,) ints, or a list of (3,) ints (one triple per patch)
+    what : str
+        Named in the error (``patches`` gives ``patches[k]`` for the k-th triple).
+
+    Raises ValueError naming the patch and direction for a degree below 1 or above the highest
+    registered one (the supported degrees are 1 … max, each elevated exactly).
+    """
+    triples = [tuple(degrees)] if np.ndim(degrees) == 1 else [tuple(t) for t in degrees]
+    top = max(BEZIER_TYPES)
+    for k, triple in enumerate(triples):
+        name = what if len(triples) == 1 and np.ndim(degrees) == 1 else f"{what}[{k}]"
+        for d, p in enumerate(triple):
+            if not 1 <= int(p) <= top:
+                raise ValueError(f"{name}: degree {int(p)} in direction {d}; supported are degrees 1 to {top} per "
+                                 f"direction, elevated exactly to the element types "
+                                 f"{', '.join(f'{t.name} (degree {q})' for q, t in sorted(BEZIER_TYPES.items()))}")
+    highest = max(max(int(p) for p in t) for t in triples)
+    return min(q for q in BEZIER_TYPES if q >= highest)
 
 
 class BezierMesh:
-    """The engine's view of a :class:`~mortar1d3d.nurbs.NurbsSolid` (patches of one degree p = 2 or 3).
+    """The engine's view of a :class:`~mortar1d3d.nurbs.NurbsSolid` (patches of degree 1 … 3 per direction,
+    elements of their common degree p = 2 or 3, module docstring).
 
     Attributes
     ----------
@@ -57,40 +86,40 @@ class BezierMesh:
     def __init__(self, nurbs, tol=1e-10):
         if not isinstance(nurbs, NurbsSolid):
             raise TypeError(f"expected a NurbsSolid, got {type(nurbs).__name__}")
-        ids, vals = [], []
+        flat_rows, flat_cols, flat_vals = [], [], []
         control, weights, patch_of, spans = [], [], [], []
-        d = bezier_type(nurbs.patches[0].degrees, "patches[0]")
+        d = bezier_type([patch.degrees for patch in nurbs.patches])
         n = d.n_nodes
         order = tensor_order(d.reference_nodes, d.degree)                 # tensor index of each node
+        n_el = 0
         for k, patch in enumerate(nurbs.patches):
-            if patch.degrees != nurbs.patches[0].degrees:
-                raise ValueError(f"patches[{k}]: degrees {patch.degrees}, patches[0] has {nurbs.patches[0].degrees}; "
-                                 f"all patches of a solid must have the same degrees")
-            P, w, functions, E = patch.bezier_elements()
-            ids.append(nurbs.patch_ids[k][functions])                    # (m, n) global control points
+            P, w, functions, E = patch.bezier_elements((d.degree,) * 3)
+            E = E[:, :, order]                                            # [element, function, node]
+            rows = n * (n_el + np.arange(len(P)))[:, None, None] + np.arange(n)[None, None, :]
+            flat_rows.append(np.broadcast_to(rows, E.shape).ravel())
+            flat_cols.append(np.broadcast_to(nurbs.patch_ids[k][functions][:, :, None], E.shape).ravel())
+            flat_vals.append(E.ravel())
             control.append(P[:, order])
             weights.append(w[:, order])
-            vals.append(E[:, :, order])                                   # [element, function, node]
             patch_of.append(np.full(len(P), k, dtype=np.int64))
             spans.append(np.stack(np.unravel_index(np.arange(len(P)), patch.element_shape), axis=1))
+            n_el += len(P)
         P = np.concatenate(control)                                       # (n_el, n, 3)
         w = np.concatenate(weights)
-        n_el = len(P)
         merged, keep = merge_coincident(P.reshape(-1, 3), w.reshape(-1), tol)
         node = merged.reshape(n_el, n)
         points = P.reshape(-1, 3)[keep]
         node_weights = w.reshape(-1)[keep]
         # T: the row of a mesh node from the first element that has it (the others agree to round-off)
-        E = np.concatenate(vals)
-        flat_rows = np.broadcast_to(n * np.arange(n_el)[:, None, None] + np.arange(n)[None, None, :], E.shape).ravel()
-        flat_cols = np.broadcast_to(np.concatenate(ids)[:, :, None], E.shape).ravel()
-        flat_vals = E.ravel()
+        flat_rows, flat_cols, flat_vals = (np.concatenate(a) for a in (flat_rows, flat_cols, flat_vals))
         local_to_node = np.full(n_el * n, -1, dtype=np.int64)
         local_to_node[keep] = np.arange(len(keep))
         take = local_to_node[flat_rows] >= 0
         nonzero = take & (flat_vals != 0.0)
         self.T = sp.csr_matrix((flat_vals[nonzero], (local_to_node[flat_rows[nonzero]], flat_cols[nonzero])),
                                shape=(len(keep), nurbs.n_control))
+        if len(nurbs.patches) > 1 and len({patch.degrees for patch in nurbs.patches}) > 1:
+            _check_joins(self.T, merged, flat_rows, flat_cols, flat_vals, n, np.concatenate(patch_of))
         self.solid = SolidMesh(points, {d.name: node}, weights=node_weights)
         self.element_patch = np.concatenate(patch_of)
         self.element_span = np.concatenate(spans).astype(np.int64)
@@ -107,6 +136,22 @@ class BezierMesh:
     def __repr__(self):
         return f"BezierMesh({self.solid.n_elements} {self.solid.blocks[0][0].name} elements, {self.solid.n_nodes} nodes, " \
                f"{self.nurbs.n_control} control points)"
+
+
+def _check_joins(T, merged, rows, cols, vals, n, element_patch):
+    """ValueError unless every element's own map of its nodes (COO ``rows`` = element n + node, ``cols``,
+    ``vals``) equals the row of ``T`` the node took from the first element that has it. Patches of
+    different degrees joined at coincident control points can share Bézier nodes whose values their
+    control points give differently (a quadratic face of one against a linear face of the other)."""
+    local = sp.csr_matrix((vals, (rows, cols)), shape=(len(merged), T.shape[1]))
+    gap = abs(local - T[merged]).max(axis=1).toarray().ravel()
+    bad = np.flatnonzero(gap > 1e-10)
+    if len(bad):
+        other = np.flatnonzero(merged == merged[bad[0]])[0]
+        a, b = int(element_patch[other // n]), int(element_patch[bad[0] // n])
+        raise ValueError(f"patches[{b}] meets patches[{a}] where their control nets differ (a face of other degrees "
+                         "shares Bézier points with it); elevate the patches to one degree (NurbsPatch.elevate) "
+                         "before joining them")
 
 
 def element_values(solid, xi, values):
@@ -173,9 +218,9 @@ class _single_block:
 
 
 def bezier_mesh(nurbs, tol=1e-10):
-    """The engine's mesh of a quadratic or cubic :class:`~mortar1d3d.nurbs.NurbsSolid`: a :class:`BezierMesh`."""
+    """The engine's mesh of a :class:`~mortar1d3d.nurbs.NurbsSolid` (degrees 1 … 3 per direction): a :class:`BezierMesh`."""
     return BezierMesh(nurbs, tol)
 
 
-__all__ = ["BezierMesh", "bezier_mesh", "bezier_type", "element_values", "sampled_cells", "sub_box_points",
+__all__ = ["BezierMesh", "bezier_mesh", "bezier_type", "common_degree", "element_values", "sampled_cells", "sub_box_points",
            "BEZIER_TYPES"]

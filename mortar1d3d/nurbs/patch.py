@@ -152,37 +152,54 @@ class NurbsPatch:
                     out.append((((f0 + i) * n1 + (f1 + j)) * n2 + (f2 + k)).ravel())
         return np.array(out, dtype=np.int64)
 
-    def extraction(self):
-        """Per element the tensor extraction operator C (n_elements, n_local, n_local):
-        ``N_{functions[e, i]} = Σ_a C[e, i, a] B_a`` (Bernstein polynomials on [-1, 1]³)."""
+    def _bezier_degrees(self, degrees):
+        """The Bernstein degrees of :meth:`extraction`: the patch's own (None) or ``degrees``, each at least the
+        patch's degree in its direction; ValueError otherwise."""
+        if degrees is None:
+            return self.degrees
+        degrees = tuple(int(q) for q in degrees)
+        if len(degrees) != 3 or any(q < p for q, p in zip(degrees, self.degrees)):
+            raise ValueError(f"Bézier degrees {degrees}: expected three, each at least the patch's {self.degrees}")
+        return degrees
+
+    def extraction(self, degrees=None):
+        """Per element the tensor extraction operator C (n_elements, n_local, n_bezier):
+        ``N_{functions[e, i]} = Σ_a C[e, i, a] B_a`` (Bernstein polynomials on [-1, 1]³ of the patch's
+        degrees, or of ``degrees`` (q0, q1, q2) >= them: the span's Bézier segment degree-elevated by
+        :func:`~mortar1d3d.nurbs.knots.bernstein_elevation`, exact; n_bezier = Π (q_d + 1))."""
+        degrees = self._bezier_degrees(degrees)
         C0, C1, C2 = (kv.extraction_operators(U, p)[0] for U, p in zip(self.knots, self.degrees))
+        if degrees != self.degrees:
+            C0, C1, C2 = (C @ kv.bernstein_elevation(p, q) for C, p, q in zip((C0, C1, C2), self.degrees, degrees))
         out = []
         for c0 in C0:
             for c1 in C1:
                 for c2 in C2:
                     n_local = len(c0) * len(c1) * len(c2)
-                    out.append(np.einsum("ia,jb,kc->ijkabc", c0, c1, c2).reshape(n_local, n_local))
+                    n_bezier = c0.shape[1] * c1.shape[1] * c2.shape[1]
+                    out.append(np.einsum("ia,jb,kc->ijkabc", c0, c1, c2).reshape(n_local, n_bezier))
         return np.array(out)
 
-    def bezier_elements(self):
-        """Rational Bézier form of every element.
+    def bezier_elements(self, degrees=None):
+        """Rational Bézier form of every element (of the patch's degrees, or degree-elevated to ``degrees``:
+        the same rational functions, so the same geometry, in a larger Bernstein basis).
 
-        With extraction C (n_local × n_local per element), the Bézier weights are ``w^b = Cᵀ w`` and
+        With extraction C (n_local × n_bezier per element), the Bézier weights are ``w^b = Cᵀ w`` and
         the rational NURBS functions are ``R_i = Σ_a E[i, a] R^b_a`` with ``E[i, a] = C[i, a] w_i / w^b_a``
         (R^b: rational Bernstein functions with the weights w^b), so the Bézier control points are
         ``P^b = Eᵀ P``.
 
         Returns
         -------
-        control : (n_elements, n_local, 3)
-        weights : (n_elements, n_local)
+        control : (n_elements, n_bezier, 3)
+        weights : (n_elements, n_bezier)
         functions : (n_elements, n_local) int64
             Patch control-point ids (flat, C order) of each element's NURBS functions.
-        E : (n_elements, n_local, n_local)
+        E : (n_elements, n_local, n_bezier)
             The map above: Bézier control values = ``E[e].T @ values at the control points``.
         """
         functions = self.element_functions()
-        C = self.extraction()
+        C = self.extraction(degrees)
         P = self.control.reshape(-1, 3)[functions]
         w = self.weights.reshape(-1)[functions]
         wb = np.einsum("eia,ei->ea", C, w)

@@ -2,11 +2,12 @@
 ``solid.mesh = { patches = [ {pipe = {...}}, {brick = {...}}, ... ] }``: an exact NURBS pipe (section), a
 NURBS block, or several such patches joined where their control points coincide, as the scene's solid.
 
-The pipe is :func:`~mortar1d3d.nurbs.hollow_cylinder` (about the z axis, from z = 0; quadratic, or
-``degree = 3``: the exact quadratic geometry degree-elevated to cubic, which leaves it unchanged),
-and the scene runs on its Bézier mesh (:func:`~mortar1d3d.nurbs.bezier_mesh`): the solid's unknowns
-are the displacements of the ``nurbs27`` (``nurbs64``) nodes (Bézier control points), i.e. the C⁰ space of the
-rational Bézier elements on the exact geometry. It contains the smoother NURBS space of the patch
+The pipe is :func:`~mortar1d3d.nurbs.hollow_cylinder` (about the z axis, from z = 0; quadratic by
+default, ``degree`` one integer or three per direction, at least [1, 2, 1]: the exact geometry
+degree-elevated, which leaves it unchanged), and the scene runs on its Bézier mesh
+(:func:`~mortar1d3d.nurbs.bezier_mesh`): the solid's unknowns are the displacements of the ``nurbs27``
+(``nurbs64``) nodes (Bézier control points), i.e. the C⁰ space of the rational Bézier elements on the
+exact geometry. It contains the smoother NURBS space of the patch
 (``T`` maps one into the other) and is what every path of the model evaluates (the solid, the
 mortar coupling, surface loads and output take rational elements).
 
@@ -16,11 +17,15 @@ for a section (angle < 360°), ``cut_start`` and ``cut_end`` (the planes at the 
 start + angle). Each is the set of the nodes of the element faces on that surface, so a pressure on
 it acts on exactly that surface and a support on it holds exactly that surface.
 
-The brick is :func:`~mortar1d3d.nurbs.brick` (the box ``lower <= x <= upper``, all weights 1, degree 2
-or 3, ``elements`` equal spans per direction: h-refinement by knot insertion), with the named sets of
+The brick is :func:`~mortar1d3d.nurbs.brick` (the box ``lower <= x <= upper``, all weights 1, degree 1 to
+3, one or per direction, ``elements`` equal spans per direction: h-refinement by knot insertion), with the named sets of
 a generated box: ``x_min``, ``x_max``, ``y_min``, ``y_max``, ``z_min``, ``z_max`` (its faces).
 
-Several patches (:func:`patches_mesh`): one degree for all; a patch that meets another one without
+Degrees 1 to 3 are taken (per direction, mixed across patches); the elements are of the smallest
+registered degree that is at least every patch's highest (2: ``nurbs27``, 3: ``nurbs64``), every patch
+degree-elevated to it exactly; a degree above 3 is a SceneError saying so.
+
+Several patches (:func:`patches_mesh`): a patch that meets another one without
 shared control points is a SceneError naming it; each set name is the union over the patches of its
 faces on the solid's boundary, and ``<name>_<k>`` patch k's own.
 """
@@ -30,7 +35,7 @@ import numpy as np
 
 from ..physics.surface import boundary_faces, face_nodes
 from .generate import MAX_SEGMENT_ANGLE, arc_segments, brick, hollow_cylinder
-from .mesh import BEZIER_TYPES, bezier_mesh, element_values
+from .mesh import BEZIER_TYPES, bezier_mesh, common_degree, element_values
 from .patch import NurbsSolid
 from .solid import patch_face_set
 
@@ -38,6 +43,8 @@ from .solid import patch_face_set
 PIPE_KEYS = ("r_inner", "r_outer", "length", "angle", "start", "elements", "degree")
 #: most elements a scene's pipe or brick generates (the box key's limit)
 MAX_PIPE_ELEMENTS = 1_000_000
+#: the lowest degrees of the exact pipe (radial, circumferential, axial): the circle needs 2
+PIPE_LOWEST_DEGREES = (1, 2, 1)
 #: keys of ``solid.mesh.brick``
 BRICK_KEYS = ("lower", "upper", "elements", "degree")
 #: set name -> patch face of :func:`brick` (parameter direction d along x_d)
@@ -49,9 +56,9 @@ PIPE_FACES = {"inner": "u0_min", "outer": "u0_max", "cut_start": "u1_min", "cut_
 
 def validate_pipe(value, path="solid.mesh.pipe"):
     """The checked ``pipe`` table: radii, length, angle (degrees, default 360), start angle (default 0),
-    ``elements = [radial, circumferential, axial]`` and ``degree`` (2 or 3, default 2). SceneError
-    naming the key otherwise."""
-    from ..scene import _fail, _integer, _list, _number, _table
+    ``elements = [radial, circumferential, axial]`` and ``degree`` (default 2; one integer or three, at least
+    [1, 2, 1], at most 3). SceneError naming the key otherwise."""
+    from ..scene import _fail, _number, _table
 
     _table(value, path, PIPE_KEYS, required=("r_inner", "r_outer", "length", "elements"))
     r_inner = _number(value["r_inner"], f"{path}.r_inner", low=0.0, low_open=True)
@@ -67,9 +74,30 @@ def validate_pipe(value, path="solid.mesh.pipe"):
     except ValueError:
         _fail(f"{path}.elements[1]", f"{elements[1]} element(s) cannot cover {angle}° with arcs of at most "
                                      f"{MAX_SEGMENT_ANGLE}°; use at least {math.ceil(angle / MAX_SEGMENT_ANGLE)}")
-    degree = _integer(value.get("degree", 2), f"{path}.degree", min(BEZIER_TYPES), max(BEZIER_TYPES))
+    degree = _degree(value.get("degree", 2), f"{path}.degree", PIPE_LOWEST_DEGREES)
     return {"r_inner": r_inner, "r_outer": r_outer, "length": length, "angle": angle, "start": start,
             "elements": elements, "degree": degree}
+
+
+def _degree(value, path, lowest):
+    """A checked degree: one integer for every direction or a list of three, each at least ``lowest[d]`` (the
+    exact geometry's degree) and at most the highest registered rational Bézier degree. SceneError naming
+    the key otherwise."""
+    from ..scene import _fail, _integer, _list
+
+    one = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+    entries = [(path, value)] * 3 if one else [(f"{path}[{d}]", q) for d, q in enumerate(_list(value, path, 3))]
+    out = []
+    for d, (key, q) in enumerate(entries):
+        q = _integer(q, key, low=-2 ** 62)
+        if q > max(BEZIER_TYPES):
+            _fail(key, f"degree {q} is above what the element registry has; supported are degrees "
+                       f"{lowest[d]} to {max(BEZIER_TYPES)} per direction, elevated exactly to "
+                       f"{', '.join(f'{t.name} (degree {p})' for p, t in sorted(BEZIER_TYPES.items()))}")
+        if q < lowest[d]:
+            _fail(key, f"degree {q} in direction {d}: must be at least {lowest[d]} (the exact geometry's degree there)")
+        out.append(q)
+    return out[0] if one else out
 
 
 def _elements(value, path):
@@ -84,8 +112,8 @@ def _elements(value, path):
 
 def validate_brick(value, path="solid.mesh.brick"):
     """The checked ``brick`` table: corners ``lower`` < ``upper``, ``elements = [nx, ny, nz]`` and ``degree``
-    (2 or 3, default 2). SceneError naming the key otherwise."""
-    from ..scene import _fail, _integer, _list, _number, _table
+    (default 2; one integer or three, 1 to 3). SceneError naming the key otherwise."""
+    from ..scene import _fail, _list, _number, _table
 
     _table(value, path, BRICK_KEYS, required=("lower", "upper", "elements"))
     corners = [[_number(c, f"{path}.{key}[{i}]") for i, c in enumerate(_list(value[key], f"{path}.{key}", 3))]
@@ -93,7 +121,7 @@ def validate_brick(value, path="solid.mesh.brick"):
     if not all(hi > lo for lo, hi in zip(*corners)):
         _fail(f"{path}.upper", f"must be greater than lower in x, y and z, got {corners[1]} and {corners[0]}")
     elements = _elements(value["elements"], f"{path}.elements")
-    degree = _integer(value.get("degree", 2), f"{path}.degree", min(BEZIER_TYPES), max(BEZIER_TYPES))
+    degree = _degree(value.get("degree", 2), f"{path}.degree", (1, 1, 1))
     return {"lower": corners[0], "upper": corners[1], "elements": elements, "degree": degree}
 
 
@@ -136,8 +164,8 @@ def _generate(kind, spec):
 
 
 def validate_patches(value, path="solid.mesh.patches"):
-    """The checked ``patches`` list: one or more ``{ pipe = {...} }`` or ``{ brick = {...} }`` tables of one
-    degree; SceneError naming the key otherwise."""
+    """The checked ``patches`` list: one or more ``{ pipe = {...} }`` or ``{ brick = {...} }`` tables (of any
+    degrees 1 to 3); SceneError naming the key otherwise."""
     from ..scene import _describe, _fail, _list
 
     items = _list(value, path)
@@ -149,12 +177,6 @@ def validate_patches(value, path="solid.mesh.patches"):
             _fail(f"{path}[{i}]", f"expected {{ pipe = {{...}} }} or {{ brick = {{...}} }}, got {_describe(item)}")
         (kind, table), = item.items()
         out.append({kind: NURBS_MESHES[kind][0](table, f"{path}[{i}].{kind}")})
-    for i, entry in enumerate(out):
-        (kind, spec), = entry.items()
-        first = next(iter(out[0].values()))["degree"]
-        if spec["degree"] != first:
-            _fail(f"{path}[{i}].{kind}.degree", f"{spec['degree']}, but patches[0] has degree {first}: the patches of "
-                                                "one solid must have one degree")
     return out
 
 
@@ -172,7 +194,11 @@ def patches_mesh(spec, path="solid.mesh.patches"):
     from ..scene import _fail
 
     kinds = [next(iter(entry)) for entry in spec]
-    solid = NurbsSolid([_generate(kind, entry[kind]) for kind, entry in zip(kinds, spec)])
+    patches = [_generate(kind, entry[kind]) for kind, entry in zip(kinds, spec)]
+    # one degree before joining: patches of other degrees share control points only once elevated alike
+    p = common_degree([patch.degrees for patch in patches])
+    solid = NurbsSolid([patch.elevate(0, p - patch.degrees[0]).elevate(1, p - patch.degrees[1])
+                        .elevate(2, p - patch.degrees[2]) for patch in patches])
     mesh = bezier_mesh(solid)
     boundary = None                      # one patch: every patch face is on the boundary but a closed pipe's seam
     if len(spec) > 1:

@@ -71,4 +71,19 @@ def body_extent(solid, axis):
     return lo, hi
 
 
-__all__ = ["body_nodes", "body_extent", "SAMPLES"]
+def element_centres(solid):
+    """A point of the body per element (n_elements, 3): for a rational element its point at the parameter
+    centre ξ = 0 (its control points' centroid may lie off the body: an arc's middle control point bulges
+    out), for a polynomial element the centroid of its nodes (its point at ξ = 0 where it is affine)."""
+    out = []
+    for d, conn in solid.blocks:
+        conn = conn[:, : d.n_nodes]
+        if d.rational:
+            # rational types are Bézier hexahedra on [-1, 1]³: the centre is ξ = 0
+            out.append(element_values(_block(solid, d, conn), np.zeros((1, 3)), solid.points)[:, 0])
+        else:
+            out.append(solid.points[conn].mean(axis=1))
+    return np.concatenate(out)
+
+
+__all__ = ["body_nodes", "body_extent", "element_centres", "SAMPLES"]

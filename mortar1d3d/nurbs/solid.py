@@ -1,8 +1,8 @@
 """The solid model on NURBS patches, with control-point DOFs.
 
 :class:`NurbsSolidModel` runs :class:`~mortar1d3d.physics.solid.SolidModel` (total Lagrangian, every
-material, or linear kinematics) on the ``nurbs27`` or ``nurbs64`` mesh of the patches
-(:func:`~mortar1d3d.nurbs.bezier_mesh`) and maps everything to the global control points with
+material, or linear kinematics) on the ``nurbs27`` or ``nurbs64`` mesh of the patches (any degree 1 … 3
+per direction, elevated to the common degree there: :func:`~mortar1d3d.nurbs.bezier_mesh`) and maps everything to the global control points with
 T (mesh node values = T · control values): internal forces Tᵀ f, stiffness Tᵀ K T, since the NURBS
 space is the image of T. Surface loads act on patch faces: follower pressure on the current
 surface (:meth:`NurbsSolidModel.pressure_load`, with its load stiffness) or dead pressure on the
@@ -14,14 +14,14 @@ control net face carries exactly the face's functions, so fixing them fixes the 
 import numpy as np
 import scipy.sparse as sp
 
-from ..physics.rational_surface import RATIONAL_FACE_POINTS
 from ..physics.solid import SolidModel
 from ..physics.surface import FACE_DTYPE, Pressure
 from .mesh import bezier_mesh, element_values
 
 
 class NurbsSolidModel:
-    """Internal forces and stiffness of a quadratic or cubic :class:`~mortar1d3d.nurbs.NurbsSolid` on its control points.
+    """Internal forces and stiffness of a :class:`~mortar1d3d.nurbs.NurbsSolid` (degrees 1 … 3 per direction) on its
+    control points.
 
     Parameters
     ----------
@@ -59,13 +59,14 @@ class NurbsSolidModel:
         structured array of :data:`~mortar1d3d.physics.surface.FACE_DTYPE` (surface loads)."""
         return patch_face_set(self.mesh, patch, face)
 
-    def pressure_load(self, patch, face, p, n_gauss=RATIONAL_FACE_POINTS):
+    def pressure_load(self, patch, face, p, n_gauss=None):
         """Follower pressure ``p`` (force per current area, pushing into the body) on face ``face`` of
         patch ``patch``, on control points: a :class:`ControlPointLoad` whose ``evaluate(u, tangent)``
-        gives Tᵀ f(T u) and its derivative Tᵀ K T (``n_gauss`` points per direction on each span face)."""
+        gives Tᵀ f(T u) and its derivative Tᵀ K T (``n_gauss`` points per direction on each span face; None:
+        the rule of the face's degree, :func:`~mortar1d3d.physics.rational_surface.rational_face_points`)."""
         return ControlPointLoad(Pressure(self.mesh.solid, self.face_set(patch, face), p, n_gauss), self.T3)
 
-    def pressure(self, patch, face, p, n_gauss=RATIONAL_FACE_POINTS):
+    def pressure(self, patch, face, p, n_gauss=None):
         """Consistent control-point forces of a pressure ``p`` (force per reference area, pushing into the
         body) on face ``face`` (``"u0_min"``, ...) of patch ``patch``, dead load on the reference surface:
         f_i = -∫ p R_i n dA with n the outward normal. Returns (n_dofs,)."""

@@ -13,31 +13,42 @@ restricted to the face nodes (the other nodes' B_a vanish on the face, so R on a
 on the face's own weights: neighbouring elements agree there). Faces of polynomial elements in the
 same set keep their type's table.
 
-Quadrature: R is a quotient, so no Gauss rule integrates the loads exactly; rational faces use a
-``n × n`` Gauss–Legendre rule (default 4, one point more per direction than the polynomial
-quadratic faces; the error falls quickly with ``n``, tests/test_nurbs_pressure.py).
+Quadrature: R is a quotient, so no Gauss rule integrates the loads exactly. The rule follows the
+face's degree p (:func:`rational_face_points`): with unit weights the pressure integrand
+``N_a (x_,u × x_,v)`` is a polynomial of degree 3p − 1 per direction (N_a: p; a tangent component:
+p − 1 in its own direction and p in the other, so the cross product: 2p − 1), which ⌈3p/2⌉ Gauss
+points integrate exactly; one point more per direction for the rational weight W in the
+functions and the geometry. That is 4 × 4 points on quadratic faces and 6 × 6 on cubic ones; the
+error falls quickly with ``n`` (tests/test_nurbs_pressure.py).
 """
 import numpy as np
 
 from ..elements.solid.dispatch import BY_CODE, RATIONAL, deriv, shape
 from ..quadrature import gauss_legendre
 
-#: Gauss points per direction on a rational face
-RATIONAL_FACE_POINTS = 4
+
+def rational_face_points(degree):
+    """Gauss points per direction on a rational face of ``degree`` p: ⌈3p/2⌉ (exact for the degree-(3p − 1)
+    integrand with unit weights, module docstring) plus one for the rational weight."""
+    return (3 * int(degree) + 1) // 2 + 1
 
 
 class FaceInstanceTables:
     """The tables of :class:`~mortar1d3d.physics.surface._FaceTables` with one entry per face of a
-    face set: index them with code ``i`` (the face's position in the set) and face 0.
+    face set: index them with code ``i`` (the face's position in the set) and face 0. ``n_gauss``:
+    Gauss points per direction on every rational face, or None for :func:`rational_face_points` of
+    each face's degree.
 
     nodes : (n, 1, m) int64, n_nodes : (n, 1) int64, n_points : (n, 1) int64,
     weights : (n, 1, q) float64, N, dN_du, dN_dv : (n, 1, q, m) float64, orientation : (n, 1) float64
     """
 
-    def __init__(self, solid, code, face, element, tables, n_gauss=RATIONAL_FACE_POINTS):
+    def __init__(self, solid, code, face, element, tables, n_gauss=None):
         n = len(code)
-        t, w = gauss_legendre(n_gauss)
-        q_rat = n_gauss * n_gauss
+        groups = sorted(set(zip(code[RATIONAL[code]].tolist(), face[RATIONAL[code]].tolist())))
+        rule = {c: int(n_gauss) if n_gauss is not None else rational_face_points(BY_CODE[c].degree)
+                for c, _ in groups}
+        q_rat = max([r * r for r in rule.values()], default=0)
         m_max, q_max = tables.nodes.shape[2], max(tables.weights.shape[2], q_rat)
         self.nodes = tables.nodes[code, face][:, None, :].copy()
         self.n_nodes = tables.n_nodes[code, face][:, None].copy()
@@ -50,9 +61,11 @@ class FaceInstanceTables:
         self.weights[polynomial, 0, :q0] = tables.weights[code[polynomial], face[polynomial]]
         for name in ("N", "dN_du", "dN_dv"):
             getattr(self, name)[polynomial, 0, :q0] = getattr(tables, name)[code[polynomial], face[polynomial]]
-        uv = np.column_stack([np.repeat(t, n_gauss), np.tile(t, n_gauss)])
-        for c, f in sorted(set(zip(code[~polynomial].tolist(), face[~polynomial].tolist()))):
+        for c, f in groups:
             d = BY_CODE[c]
+            t, w = gauss_legendre(rule[c])
+            q = rule[c] * rule[c]
+            uv = np.column_stack([np.repeat(t, rule[c]), np.tile(t, rule[c])])
             if d.family_type.face_shapes[f].n_corners != 4:
                 raise ValueError(f"rational {d.name} face {f}: only quadrilateral faces are tabulated")
             idx = np.flatnonzero((code == c) & (face == f))
@@ -62,11 +75,11 @@ class FaceInstanceTables:
             R, dR = rational_values(B, dB, wts)
             local = tables.nodes[c, f, : tables.n_nodes[c, f]]
             m = len(local)
-            self.n_points[idx, 0] = q_rat
-            self.weights[idx, 0, :q_rat] = np.outer(w, w).ravel()
-            self.N[idx, 0, :q_rat, :m] = R[:, :, local]
-            self.dN_du[idx, 0, :q_rat, :m] = dR[:, :, local] @ a
-            self.dN_dv[idx, 0, :q_rat, :m] = dR[:, :, local] @ b
+            self.n_points[idx, 0] = q
+            self.weights[idx, 0, :q] = np.outer(w, w).ravel()
+            self.N[idx, 0, :q, :m] = R[:, :, local]
+            self.dN_du[idx, 0, :q, :m] = dR[:, :, local] @ a
+            self.dN_dv[idx, 0, :q, :m] = dR[:, :, local] @ b
 
 
 def polynomial_values(code, xi, n):
@@ -89,13 +102,14 @@ def rational_values(B, dB, weights):
     return R, dR
 
 
-def kernel_tables(solid, code, face, element, tables, n_gauss=RATIONAL_FACE_POINTS):
+def kernel_tables(solid, code, face, element, tables, n_gauss=None):
     """``(codes, faces, tables)`` that the surface kernels index: the type tables unchanged when no
-    face is rational, else one table per face (:class:`FaceInstanceTables`)."""
+    face is rational, else one table per face (:class:`FaceInstanceTables`; ``n_gauss`` None: the
+    rule of each face's degree)."""
     if not RATIONAL[code].any():
         return code, face, tables
     return (np.arange(len(code), dtype=np.int64), np.zeros(len(code), dtype=np.int64),
             FaceInstanceTables(solid, code, face, element, tables, n_gauss))
 
 
-__all__ = ["FaceInstanceTables", "kernel_tables", "polynomial_values", "rational_values", "RATIONAL_FACE_POINTS"]
+__all__ = ["FaceInstanceTables", "kernel_tables", "polynomial_values", "rational_values", "rational_face_points"]

@@ -42,7 +42,7 @@ from numba import prange
 from .._config import njit, njit_parallel
 from ..elements.solid.dispatch import BY_CODE, MAX_FACES, MAX_NODES, deriv, shape
 from ..geometry.linalg import norm3
-from .rational_surface import RATIONAL_FACE_POINTS, kernel_tables
+from .rational_surface import kernel_tables
 
 #: dtype of face lists (see :func:`boundary_faces`)
 FACE_DTYPE = np.dtype([("element", np.int64), ("face", np.int64), ("code", np.int64)])
@@ -436,9 +436,10 @@ class Pressure:
     p : float
         Pressure (force per current area). Positive ``p`` pushes against the outward normal,
         i.e. into the body, like a gas pressure acting from outside.
-    rational_points : int
-        Gauss points per direction on faces of rational (NURBS) elements
-        (:mod:`mortar1d3d.physics.rational_surface`); polynomial faces use their exact rule.
+    rational_points : int, optional
+        Gauss points per direction on faces of rational (NURBS) elements; default: the rule of the
+        face's degree (:func:`~mortar1d3d.physics.rational_surface.rational_face_points`, 4 on
+        quadratic and 6 on cubic faces). Polynomial faces use their exact rule.
 
     Attributes
     ----------
@@ -464,7 +465,7 @@ class Pressure:
     integrates both exactly (module docstring).
     """
 
-    def __init__(self, solid, faces, p, rational_points=RATIONAL_FACE_POINTS):
+    def __init__(self, solid, faces, p, rational_points=None):
         self.solid = solid
         self._faces = _FaceSet(solid, faces)
         self.faces = np.empty(len(self._faces), dtype=FACE_DTYPE)
