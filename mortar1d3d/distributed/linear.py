@@ -23,12 +23,14 @@ class LinearSolver:
     split : dict, optional
         ``schur``: ``displacements``, ``multipliers`` (owned system indices of each field) and
         ``augmentation`` (see :meth:`_schur`).
+    symmetric : bool
+        False (follower loads of a nonlinear analysis): GAMG preconditions GMRES instead of CG.
     """
 
     block_size = 3
 
-    def __init__(self, method, near_null_space=None, split=None):
-        self.method, self.modes, self.split = method, near_null_space, split
+    def __init__(self, method, near_null_space=None, split=None, symmetric=True):
+        self.method, self.modes, self.split, self.symmetric = method, near_null_space, split, symmetric
 
     def _null_space(self, comm):
         """The rigid-body modes as an orthonormal PETSc null space (this rank's entries: ``self.modes``)."""
@@ -57,7 +59,7 @@ class LinearSolver:
             ksp.getPC().setFactorSolverType("mumps")
         elif self.method == "gamg":
             A.setNearNullSpace(self._null_space(A.getComm()))
-            ksp.setType(PETSc.KSP.Type.CG)
+            ksp.setType(PETSc.KSP.Type.CG if self.symmetric else PETSc.KSP.Type.GMRES)
             # the true residual, as analysis.rtol means for the serial solvers (not the preconditioned one)
             ksp.setNormType(PETSc.KSP.NormType.UNPRECONDITIONED)
             ksp.getPC().setType(PETSc.PC.Type.GAMG)
