@@ -252,8 +252,12 @@ def test_newton_iterates_equal_the_serial_ones():
     """The rebar cantilever, nonlinear in 4 load steps: the same Newton iterations per step, the
     converged state of every step equal to the serial one (both with a direct solver).
 
-    With the penalty at 100 E (the scene file's 1000 E gives differences up to 1.4e-10 at 2 ranks:
-    round-off of the solves, which grows with the penalty's conditioning, 9e-12 at 100 E)."""
+    With the penalty at 100 E: at the scene file's 1000 E the two runs differ by 1.5e-10 (1 rank),
+    and so do two serial runs that differ only in SuperLU's ordering (1.05e-10); a Newton tolerance
+    of 1e-12 or iterative refinement of every MUMPS solve leave it at 1.0e-10 … 1.2e-10, with the
+    residual stalled at its round-off floor (5e-10 relative): the conditioning of the penalty
+    system, not the Newton stopping point or the linear solve (benchmarks/distributed_roundoff.py;
+    at 100 E 9e-12)."""
     make = _rebar_data()
 
     def nonlinear(**analysis):
@@ -427,7 +431,8 @@ def test_benchmark_and_composite_plate_solves_equal_the_serial_ones(name):
     and the explicit composite plate (level 1, nonlinear, hex20, anchored fibres; penalty 100 E)
     solved on PETSc with MUMPS: the serial direct solution to 1e-10, the same Newton iterations."""
     def plate():
-        # the penalty at 100 E (default 1e3 E: 2.3e-10 at 2 ranks, round-off of the solves, as for the rebar)
+        # the penalty at 100 E (default 1e3 E: 2.3e-10 at 2 ranks, the conditioning of the penalty
+        # system, which benchmarks/distributed_roundoff.py measures on the rebar)
         scene = _plate_scene()
         scene.coupling = {**scene.coupling, "penalty": 100.0 * scene.solid["material"]["E"]}
         return scene
