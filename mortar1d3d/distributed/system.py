@@ -241,7 +241,11 @@ class DistributedSystem:
         if self.coupling is not None:
             A.axpy(1.0, self.coupling, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
         if self.rotation is not None:
-            A = A.PtAP(self.rotation)
+            physical, A = A, A.PtAP(self.rotation)
+            physical.destroy()
+        # the Newton loop holds one tangent at a time: the last one is freed now (as the KSP is)
+        if self.last_tangent is not None:
+            self.last_tangent.destroy()
         self.last_tangent = A
         return self.last_residual, A
 
@@ -282,5 +286,8 @@ class DistributedSystem:
             K.assemble()
         K.zeroRowsColumns(self.fixed_rows.astype(petsc().IntType), diag=1.0)
         x = rhs.duplicate()
-        self.last_linear_info = self.solver.solve(K, rhs, x, rtol)
+        try:
+            self.last_linear_info = self.solver.solve(K, rhs, x, rtol)
+        finally:
+            K.destroy()         # the copy (see LinearSolver.solve: freed now, not by the garbage collector)
         return self._serial(x)[self.free]
