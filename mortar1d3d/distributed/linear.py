@@ -24,7 +24,8 @@ class LinearSolver:
         ``schur``: ``displacements``, ``multipliers`` (owned system indices of each field) and
         ``augmentation`` (see :meth:`_schur`).
     symmetric : bool
-        False (follower loads of a nonlinear analysis): GAMG preconditions GMRES instead of CG.
+        False (follower loads of a nonlinear analysis): GAMG preconditions GMRES (restarted after
+        200 iterations) instead of CG.
     """
 
     block_size = 3
@@ -60,6 +61,10 @@ class LinearSolver:
         elif self.method == "gamg":
             A.setNearNullSpace(self._null_space(A.getComm()))
             ksp.setType(PETSc.KSP.Type.CG if self.symmetric else PETSc.KSP.Type.GMRES)
+            if not self.symmetric:
+                # GMRES(30) stalls on penalty systems (an end moment on the rebar cantilever: no
+                # convergence in 10,000 iterations; unrestarted, 45): restarted only after 200
+                ksp.setGMRESRestart(200)
             # the true residual, as analysis.rtol means for the serial solvers (not the preconditioned one)
             ksp.setNormType(PETSc.KSP.NormType.UNPRECONDITIONED)
             ksp.getPC().setType(PETSc.PC.Type.GAMG)
