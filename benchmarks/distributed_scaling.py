@@ -22,6 +22,7 @@ entries per rank and the peak resident memory per rank. Run it twice and take th
 """
 import argparse
 import json
+import os
 import resource
 import time
 
@@ -133,6 +134,7 @@ def main():
             newton = sum(s.iterations for s in result.steps)
             # the residual evaluations: one per Newton iteration and one more per step (the converged one)
             stage = _stage_messages(log)
+            os.remove(log)
             traffic = {"newton_iterations": newton, "residual_evaluations": newton + len(result.steps),
                        "petsc_messages_per_iteration": round(stage["messages"] / newton, 1),
                        "petsc_bytes_per_iteration": round(stage["messages"] * stage["mean_bytes"] / newton),
