@@ -4,10 +4,17 @@
     mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 12 --fibres 300     # strong scaling
     mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 15 --fibres 600     # weak: ~2x the work
     python benchmarks/distributed_scaling.py --cells 12 --fibres 300 --partition-only  # METIS vs geometric
+    mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 12 --fibres 300 --nonlinear 2   # Newton on PETSc
+
+With ``--nonlinear STEPS`` the analysis is geometrically nonlinear (Saint Venant–Kirchhoff, STEPS
+load steps of the library's Newton loop on PETSc) and the communication per Newton iteration is
+measured: PETSc's own log of the load steps' stage (messages, their bytes, global reductions: what
+the assembly, the matrix products and GAMG send) and, counted separately, the vectors every rank
+gathers because the Newton loop's iterate is replicated (bytes each rank receives).
 
 The scene is the benchmark cube (docs/conventions.md §5) with hexahedra, ``--fibres`` straight fibres
-of 10 Hermite elements as one beam entry, clamped at z = 0 and pulled at z = 1, linear, mortar
-penalty, CG + GAMG to rtol 1e-8. Rank 0 prints the stage times (slowest rank, after a barrier),
+of 10 Hermite elements as one beam entry, clamped at z = 0 and pulled at z = 1, linear (or nonlinear,
+above), mortar penalty, CG + GAMG to rtol 1e-8. Rank 0 prints the stage times (slowest rank, after a barrier),
 each rank's CPU time per stage up to the barrier (its own work: on a loaded machine the fairer
 measure of balance), the CG iterations, the vector entries each rank receives per matrix product (ghosts), the stored
 entries per rank and the peak resident memory per rank. Run it twice and take the second run
@@ -15,6 +22,7 @@ entries per rank and the peak resident memory per rank. Run it twice and take th
 """
 import argparse
 import json
+import os
 import resource
 import time
 
@@ -23,13 +31,60 @@ import numpy as np
 import mortar1d3d as m13
 
 
-def scene(cells, fibres):
+def scene(cells, fibres, steps=None):
+    """The benchmark cube; ``steps``: nonlinear (Saint Venant–Kirchhoff) in that many load steps."""
     beams, solid = m13.generate.fibre_cube(cells, fibres, 10)
-    return m13.Scene(solid={"mesh": solid, "material": {"model": "linear_elastic", "E": 1.0, "nu": 0.3}},
+    model, analysis = "linear_elastic", {"kinematics": "linear"}
+    if steps:
+        model, analysis = "saint_venant_kirchhoff", {"kinematics": "nonlinear", "steps": steps}
+    return m13.Scene(solid={"mesh": solid, "material": {"model": model, "E": 1.0, "nu": 0.3}},
                      beams=[{"mesh": beams, "model": "torsion_free", "section": {"E": 100.0, "radius": 0.005}}],
                      dirichlet=[{"on": "solid:z_min", "value": [0, 0, 0]}],
                      load=[{"type": "traction", "on": "solid:z_max", "value": [0, 0, 0.01]}],
-                     analysis={"kinematics": "linear", "solver": "amg", "rtol": 1e-8, "backend": "petsc"})
+                     analysis={**analysis, "solver": "amg", "rtol": 1e-8, "backend": "petsc"})
+
+
+#: PETSc log events whose messages the benchmark reports apart (they nest: GAMG's set-up runs matrix
+#: products and assemblies of its own, counted in those events too)
+EVENTS = ("MatMult", "MatAssemblyBegin", "PCSetUp")
+
+
+def _stage_messages(path, name="mortar1d3d solve"):
+    """Messages (count over all ranks), their mean length in bytes and the global reductions of
+    the PETSc log stage ``name``, read from the ``Summary of Stages`` of PETSc's log (``path``),
+    and the bytes sent in each of :data:`EVENTS` within the stage (its event table)."""
+    lines = open(path).read().splitlines()
+    out = None
+    for line in lines:
+        if line.strip().split(":")[1:2] and line.split(":")[1].strip() == name:
+            v = line.split(":")[2].split()
+            out = {"messages": float(v[4]), "mean_bytes": float(v[6]), "reductions": float(v[8]), "events": {}}
+            break
+    if out is None:
+        raise ValueError(f"{path}: no stage {name!r} in PETSc's log")
+    inside = False
+    for line in lines:
+        if line.startswith("--- Event Stage"):
+            inside = line.split(":", 1)[1].strip() == name
+        elif inside and line.split() and line.split()[0] in EVENTS:
+            v = line.split()
+            out["events"][v[0]] = float(v[7]) * float(v[8])           # messages × mean length
+    return out
+
+
+class _GatherCounter:
+    """Counts the bytes each rank receives when the replicated iterate and residual are gathered
+    (the distributed system's ``gather_vector``)."""
+
+    def __init__(self):
+        from mortar1d3d.distributed import system
+        self.module, self.original, self.bytes, self.calls = system, system.gather_vector, 0, 0
+        system.gather_vector = self
+
+    def __call__(self, v):
+        self.calls += 1
+        self.bytes += 8 * (v.getSize() - v.getLocalSize())
+        return self.original(v)
 
 
 def partition_quality(cells, fibres, parts=(2, 4, 8)):
@@ -52,20 +107,43 @@ def main():
     parser.add_argument("--cells", type=int, default=12)
     parser.add_argument("--fibres", type=int, default=300)
     parser.add_argument("--partition-only", action="store_true")
+    parser.add_argument("--nonlinear", type=int, default=0, metavar="STEPS",
+                        help="nonlinear in STEPS load steps; measures the communication per Newton iteration")
     args = parser.parse_args()
     if args.partition_only:
         for row in partition_quality(args.cells, args.fibres):
             print(json.dumps(row))
         return
+    import tempfile
     from mortar1d3d.distributed.petsc import petsc
-    comm = petsc().COMM_WORLD
+    PETSc = petsc()
+    comm = PETSc.COMM_WORLD
+    if args.nonlinear:
+        PETSc.Log.begin()
+        gathers = _GatherCounter()
     start = time.perf_counter()
-    result = m13.solve(scene(args.cells, args.fibres))
+    result = m13.solve(scene(args.cells, args.fibres, args.nonlinear))
     wall = time.perf_counter() - start
     memory = comm.tompi4py().gather(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, root=0)
+    traffic = {}
+    if args.nonlinear:
+        log = comm.tompi4py().bcast(tempfile.mktemp(suffix=".log") if comm.getRank() == 0 else None, root=0)
+        PETSc.Log.view(PETSc.Viewer().createASCII(log, comm=comm))
+        received = comm.tompi4py().gather(gathers.bytes, root=0)
+        if result is not None:
+            newton = sum(s.iterations for s in result.steps)
+            # the residual evaluations: one per Newton iteration and one more per step (the converged one)
+            stage = _stage_messages(log)
+            os.remove(log)
+            traffic = {"newton_iterations": newton, "residual_evaluations": newton + len(result.steps),
+                       "petsc_messages_per_iteration": round(stage["messages"] / newton, 1),
+                       "petsc_bytes_per_iteration": round(stage["messages"] * stage["mean_bytes"] / newton),
+                       "reductions_per_iteration": round(stage["reductions"] / newton, 1),
+                       "bytes_per_iteration_by_event": {k: round(v / newton) for k, v in stage["events"].items()},
+                       "gathered_bytes_per_iteration_per_rank": [round(b / newton) for b in received]}
     if result is not None:
         info = result.distributed
-        print(json.dumps({"ranks": info["ranks"], "cells": args.cells, "fibres": args.fibres,
+        print(json.dumps({"ranks": info["ranks"], "cells": args.cells, "fibres": args.fibres, **traffic,
                           "unknowns": info["unknowns"], "iterations": info["iterations"], "wall": round(wall, 3),
                           "timings": {k: round(v, 3) for k, v in info["timings"].items()},
                           "cpu_per_rank": {k: [round(c[k], 3) for c in info["cpu"]] for k in info["cpu"][0]},

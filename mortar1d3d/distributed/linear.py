@@ -23,12 +23,15 @@ class LinearSolver:
     split : dict, optional
         ``schur``: ``displacements``, ``multipliers`` (owned system indices of each field) and
         ``augmentation`` (see :meth:`_schur`).
+    symmetric : bool
+        False (follower loads of a nonlinear analysis): GAMG preconditions GMRES (restarted after
+        200 iterations) instead of CG.
     """
 
     block_size = 3
 
-    def __init__(self, method, near_null_space=None, split=None):
-        self.method, self.modes, self.split = method, near_null_space, split
+    def __init__(self, method, near_null_space=None, split=None, symmetric=True):
+        self.method, self.modes, self.split, self.symmetric = method, near_null_space, split, symmetric
 
     def _null_space(self, comm):
         """The rigid-body modes as an orthonormal PETSc null space (this rank's entries: ``self.modes``)."""
@@ -57,7 +60,11 @@ class LinearSolver:
             ksp.getPC().setFactorSolverType("mumps")
         elif self.method == "gamg":
             A.setNearNullSpace(self._null_space(A.getComm()))
-            ksp.setType(PETSc.KSP.Type.CG)
+            ksp.setType(PETSc.KSP.Type.CG if self.symmetric else PETSc.KSP.Type.GMRES)
+            if not self.symmetric:
+                # GMRES(30) stalls on penalty systems (an end moment on the rebar cantilever: no
+                # convergence in 10,000 iterations; unrestarted, 45): restarted only after 200
+                ksp.setGMRESRestart(200)
             # the true residual, as analysis.rtol means for the serial solvers (not the preconditioned one)
             ksp.setNormType(PETSc.KSP.NormType.UNPRECONDITIONED)
             ksp.getPC().setType(PETSc.PC.Type.GAMG)
@@ -68,10 +75,15 @@ class LinearSolver:
         x.set(0.0)
         ksp.solve(b, x)
         reason = ksp.getConvergedReason()
+        info = {"iterations": ksp.getIterationNumber(), "ksp": ksp.getType(), "pc": ksp.getPC().getType()}
+        # freed now: the KSP and its preconditioner (GAMG's hierarchy, MUMPS' factors) reference the
+        # operators, and petsc4py left them to the garbage collector, which let a Newton run grow by
+        # a hierarchy per iteration (65 MiB per iteration at 8k unknowns)
+        ksp.destroy()
         if reason < 0:
-            raise ConvergenceError(f"PETSc KSP {ksp.getType()} with {ksp.getPC().getType()} did not converge "
-                                   f"(reason {reason}) after {ksp.getIterationNumber()} iterations")
-        return {"iterations": ksp.getIterationNumber(), "ksp": ksp.getType(), "pc": ksp.getPC().getType()}
+            raise ConvergenceError(f"PETSc KSP {info['ksp']} with {info['pc']} did not converge "
+                                   f"(reason {reason}) after {info['iterations']} iterations")
+        return info
 
     def _schur(self, ksp, A, b, rtol):
         """FGMRES with a Schur-complement field split of the augmented saddle point.

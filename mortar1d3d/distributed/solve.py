@@ -97,19 +97,10 @@ def _unsupported(model):
     if sc.coupled and sc.coupling["constraint"] != "mortar":
         return ("coupling.constraint: the PETSc backend couples with the mortar constraint so far (the Gauss-point "
                 "constraint runs with backend = \"serial\")")
-    if not model.linear:
-        for i, item in enumerate(sc.loads):
-            if item["type"] in ("pressure", "moment"):
-                return (f"load[{i}].type: {item['type']!r} is a follower load in a nonlinear analysis, not distributed "
-                        "yet; use backend = \"serial\"")
     if sc.coupled and sc.coupling.get("rotational") is not None:
         return "coupling.rotational: not distributed yet; use backend = \"serial\""
     if any(g.rotations.size for g in model.groups):
         return "beams[..].model: beams with rotations (simo_reissner) are not distributed yet; use backend = \"serial\""
-    if any(d["clamp"] for d in sc.dirichlet):
-        return "dirichlet[..].clamp: clamps (rotated tangent frames) are not distributed yet; use backend = \"serial\""
-    if sc.solid is not None and sc.solid["material"].get("fibres"):
-        return "solid.material.fibres: fibre-reinforced materials are not distributed yet; use backend = \"serial\""
     if sc.solid is None:
         return "solid: the PETSc backend needs a solid"
     return None
@@ -259,7 +250,8 @@ def _linear_solver(model, layout, comm, coupling=None, kappa=None):
     disp = owned < n
     modes = [R[owned[disp], j] for j in range(R.shape[1])]
     if not model.lagrange:
-        return LinearSolver("gamg", near_null_space=modes)
+        # follower loads of a nonlinear analysis make the tangent non-symmetric: GMRES instead of CG
+        return LinearSolver("gamg", near_null_space=modes, symmetric=not (model.pressures or model.moments))
     PETSc = petsc()
     first = int(layout.ranges[rank])
     gamma = model.scene.solid["material"]["E"]
@@ -351,11 +343,32 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     clock("coupling")
     physics = OwnedPhysics(model, part, layout, rank)         # in the numbering of all unknowns
     clock("stiffness")
+    served, dependent = None, None
+    if lagrange:
+        # the serial check of dependent multiplier rows, on rank 0 (same rows, same warning, same
+        # SceneError); the other ranks learn which multipliers are left out
+        served = _served_model(model, ops, numbering, comm)
+        found = None
+        if rank == 0:
+            try:
+                dependent = _dependent_rows(served)
+                found = dependent.rows
+            except SceneError as exc:
+                found = exc
+        found = comm.tompi4py().bcast(found, root=0)
+        if isinstance(found, SceneError):
+            raise SceneError(str(found))
+        dropped = found
     system = DistributedSystem(model, physics, layout, coupling, physics.body_forces(model._body_loads.values),
-                               _linear_solver(model, layout, comm, coupling, kappa_rows), comm)
+                               _linear_solver(model, layout, comm, coupling, kappa_rows), comm,
+                               dropped=dropped if lagrange else ())
     clock("loads_supports")
     callback = _print_step if (progress is True and rank == 0) else None
     z0 = np.zeros(system.n_unknowns)
+    # a PETSc log stage of its own: with PETSc's logging on (-log_view), the messages and bytes the
+    # load steps send are reported apart from the set-up (benchmarks/distributed_scaling.py reads them)
+    stage = PETSc.Log.Stage("mortar1d3d solve")
+    stage.push()
     if model.linear:
         z, record, linear_residual = solve_linear_step(system, z0, started=start)
         records, history = [record], [z.copy()]
@@ -366,24 +379,30 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
         z, records, history = solve_load_steps(system, z0, a["steps"], rtol=a["rtol"], increment_rtol=a["rtol"],
                                                max_iterations=a["max_iterations"], max_cuts=a["max_cuts"],
                                                progress=callback)
+    stage.pop()
     clock("solve")
     if parallel_output is not None:
         from .output import write_pieces
-        states = [(0.0, np.zeros_like(z))] + [(rec.load_factor, h) for rec, h in zip(records, history)]
+        # the pieces show physical components (clamped tangents back from their rotated frames)
+        states = [(0.0, np.zeros_like(z))] + [(rec.load_factor, model.basis.to_physical(h))
+                                              for rec, h in zip(records, history)]
         write_pieces(parallel_output, model, physics, states, comm, samples_per_element)
         clock("output")
     info_solve = system.last_linear_info or {}
-    # collective: every rank sends its part of the operators and points, rank 0 keeps them
-    outputs = [(d.gathered(), _gathered_points(comm, d.local)) for d in ops]
+    if not lagrange:        # (with multipliers made before the solve)
+        served = _served_model(model, ops, numbering, comm)
     info = {"ranks": size, "unknowns": system.n_unknowns, "iterations": info_solve.get("iterations"),
             "ksp": info_solve.get("ksp"), "pc": info_solve.get("pc"), "partition": part.stats,
             "timings": clock.times, "cpu": comm.tompi4py().allgather(clock.cpu),
             "traffic": _traffic(system.last_tangent, comm)}
     if rank != 0:
         return None
-    gathered = [_serial_operators(model, g, out, numbering, k) for k, (g, out) in enumerate(zip(model.groups, outputs))]
-    served = Model(model_built(model))
-    served.prepare(operators=gathered or None)
+    if dependent is not None and len(dependent):
+        # λ of the left-out rows: the least-norm multipliers transferring the same forces, as the
+        # serial saddle-point solver gives them (a linear projection: of the sum as of each increment)
+        n = model.n_displacement_dofs
+        for v in [z] + history:
+            v[n:] = dependent.least_norm(v[n:], kappa_rows)
     # the reactions come from the last residual: of the linear step (r(z0) + K (z - z0), as the serial
     # path keeps it) or of the last Newton iterate
     served.last_residual = linear_residual if model.linear else system.last_residual
@@ -393,6 +412,30 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     result = Result(served, z, records, history, wall_time=time.perf_counter() - start)
     result.distributed = info
     return result
+
+
+def _served_model(model, ops, numbering, comm):
+    """Collective: the serial model prepared with the gathered operators on rank 0 (no serial
+    mortar assembly), which builds the Result; None on the other ranks."""
+    from ..model.model import Model
+    # every rank sends its part of the operators and points, rank 0 keeps them
+    outputs = [(d.gathered(), _gathered_points(comm, d.local)) for d in ops]
+    if comm.getRank() != 0:
+        return None
+    gathered = [_serial_operators(model, g, out, numbering, k) for k, (g, out) in enumerate(zip(model.groups, outputs))]
+    return Model(model_built(model)).prepare(operators=gathered or None)
+
+
+def _dependent_rows(served):
+    """The dependent multiplier rows of the prepared serial model ``served`` as its Lagrange solve
+    finds them (:meth:`~mortar1d3d.model.model.Model._dependent_multipliers`: the constraint rows on
+    the free displacement unknowns, in the unknowns' basis; it warns, or raises SceneError)."""
+    n = served.n_displacement_dofs
+    B = served.constraint_matrix
+    if served.basis:
+        B = B @ served.basis.matrix_T(n)
+    free = served.free[served.free < n]
+    return served._dependent_multipliers(B.tocsr()[:, free], np.flatnonzero(free >= 3 * served.n_solid_nodes))
 
 
 def model_built(model):

@@ -21,6 +21,8 @@ every rank in the serial numbering (each rank reads the unknowns of its elements
 vectors are gathered after each assembly and solve): every rank takes the same decisions on
 identical numbers, and the iterates are the serial run's up to the order of summation.
 """
+import copy
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -51,16 +53,32 @@ class OwnedPhysics:
     def __init__(self, model, part, layout, rank):
         from ..physics.materials import material
         from ..physics.solid import SolidModel
+        from ..physics.surface import Pressure
         self.parts = []          # (physics, serial unknowns of its DOFs, system indices of the same)
         kinematics = "linear" if model.linear else "nonlinear"
         mat = model.scene.solid["material"]
         self.solid_elements = part.owned_solid(rank)
         sub, self.solid_nodes = solid_submesh(model.solid_mesh, self.solid_elements)
-        self.solid = None
+        self.solid, self.pressures, self.moments = None, [], []
         if sub is not None:
-            self.solid = SolidModel(sub, material(mat["model"], mat["E"], mat["nu"]), kinematics=kinematics)
+            # the fibre families of the owned elements: the serial field's sets, each element's own
+            fibres = copy.copy(model._fibre_field(mat.get("fibres", ())))
+            fibres.element_set = np.ascontiguousarray(fibres.element_set[self.solid_elements])
+            self.solid = SolidModel(sub, material(mat["model"], mat["E"], mat["nu"]), kinematics=kinematics,
+                                    fibres=fibres)
             serial = (3 * self.solid_nodes[:, None] + np.arange(3)[None, :]).ravel()
             self.parts.append((self.solid, serial, layout.of_serial[serial]))
+            # follower pressures of a nonlinear analysis on the faces of the owned elements (the
+            # sub-mesh keeps the serial order of its elements)
+            for pressure in model.pressures:
+                faces = pressure.faces[np.isin(pressure.faces["element"], self.solid_elements)].copy()
+                faces["element"] = np.searchsorted(self.solid_elements, faces["element"])
+                if len(faces):
+                    self.pressures.append(Pressure(sub, faces, pressure.p))
+        if rank == 0:
+            # end moments of a nonlinear analysis (a few nodes): rank 0 adds them, PETSc sends them on
+            self.moments = [(dofs, moment, layout.of_serial[dofs]) for dofs, moment in model.moments]
+        self.reference = model.reference()
         self.beams = []          # per group with owned elements: (group, owned elements, their entries, mesh, part)
         for k, g in enumerate(model.groups):
             owned = part.owned_beams(rank, k)
@@ -74,8 +92,9 @@ class OwnedPhysics:
             self.parts.append((physics, serial, layout.of_serial[serial]))
             self.beams.append((k, owned, entries, mesh, self.parts[-1]))
 
-    def evaluate(self, d, tangent=True):
-        """Internal forces and tangent entries at the serial displacements ``d``, in system numbering.
+    def evaluate(self, d, tangent=True, t=1.0):
+        """Internal forces minus the follower loads at load factor ``t``, and their tangent
+        entries, at the serial (physical) displacements ``d``, in system numbering.
 
         Returns
         -------
@@ -83,12 +102,26 @@ class OwnedPhysics:
         tangent : (rows, cols, values) or None
         """
         idx, f_val, rows, cols, vals = [], [], [], [], []
-        for physics, serial, system in self.parts:
-            f, K = physics.evaluate(np.ascontiguousarray(d[serial]), tangent=tangent)
+
+        def add(system, f, K):
             idx.append(system), f_val.append(f)
             if tangent:
-                K = K.tocoo()
+                K = sp.coo_matrix(K)
                 rows.append(system[K.row]), cols.append(system[K.col]), vals.append(K.data)
+
+        for physics, serial, system in self.parts:
+            add(system, *physics.evaluate(np.ascontiguousarray(d[serial]), tangent=tangent))
+        if self.pressures:
+            # as Model.residual: the pressure is an external force, −t f in the residual, −t ∂f/∂u in K
+            serial = self.parts[0][1]
+            for pressure in self.pressures:
+                f, Kp = pressure.evaluate(d[serial], tangent=tangent)
+                add(self.parts[0][2], -t * f, -t * Kp if tangent else None)
+        if self.moments:
+            from ..physics.beam import end_moment
+            for dofs, moment, system in self.moments:
+                f, Km = end_moment(self.reference[dofs] + d[dofs], t * moment)
+                add(system, -f, -Km if tangent else None)
         forces = (_cat(idx, np.int64), _cat(f_val, float))
         return forces, ((_cat(rows, np.int64), _cat(cols, np.int64), _cat(vals, float)) if tangent else None)
 
@@ -121,21 +154,41 @@ class DistributedSystem:
     solver : LinearSolver
         Solves the reduced tangent system (:mod:`.linear`).
     comm : PETSc.Comm
+    dropped : (k,) int array, optional
+        Multipliers (serial index among the multipliers) whose constraint rows depend on the
+        others: held at zero like prescribed unknowns (the solve leaves their rows out, as the
+        serial saddle-point solver does; the least-norm λ is formed from the result afterwards).
+
+    With clamps (``model.basis``, :mod:`mortar1d3d.supports`) the iterate is in the basis of the
+    unknowns, as in the serial model: the physics and the coupling are evaluated on physical
+    components, and the residual and tangent are taken back to the unknowns' basis by PETSc
+    (``Tᵀ r``, ``Tᵀ K T``) with ``T`` a distributed matrix of the rotated triplets.
     """
 
-    def __init__(self, model, physics, layout, coupling, body, solver, comm):
+    def __init__(self, model, physics, layout, coupling, body, solver, comm, dropped=()):
         self.model, self.physics, self.layout, self.coupling = model, physics, layout, coupling
         self.solver, self.comm = solver, comm
         self.rank = comm.getRank()
         self.n = model.n_displacement_dofs
         self.n_unknowns = len(layout.of_serial)
-        self.fixed = model.fixed_dofs
+        self.dropped = self.n + np.asarray(dropped, dtype=np.int64)
+        self.fixed = np.concatenate([model.fixed_dofs, self.dropped])      # multipliers after the displacements
         self.free = np.setdiff1d(np.arange(self.n_unknowns), self.fixed)
         self.owned_serial = layout.owned_serial(self.rank)
         first = int(layout.ranges[self.rank])
         self.sizes = (int(layout.ranges[self.rank + 1]) - first, self.n_unknowns)
+        self.basis = model.basis
+        self.rotation = None
+        if self.basis:
+            T = self.basis.matrix_T(self.n_unknowns).tocoo()
+            rows = layout.of_serial[T.row]
+            mine = (rows >= first) & (rows < first + self.sizes[0])
+            self.rotation = coo_matrix(comm, rows[mine], layout.of_serial[T.col[mine]], T.data[mine], self.sizes,
+                                       self.sizes)
         fixed_system = layout.of_serial[self.fixed]
-        self.fixed_rows = fixed_system[(fixed_system >= first) & (fixed_system < first + self.sizes[0])]
+        mine = (fixed_system >= first) & (fixed_system < first + self.sizes[0])
+        self.fixed_rows = fixed_system[mine]
+        self.dropped_rows = fixed_system[mine & (self.fixed >= self.n)]
         dead = np.zeros(self.n_unknowns)
         dead[:self.n] = model.dead_load
         self.load = summed_vector(comm, *body, self.sizes)
@@ -144,7 +197,7 @@ class DistributedSystem:
         self.last_residual = self.last_tangent = None
 
     def prescribed(self, t):
-        return self.model.prescribed(t)
+        return np.concatenate([self.model.prescribed(t), np.zeros(len(self.dropped))])
 
     def reference(self):
         return self.model.reference()
@@ -163,8 +216,9 @@ class DistributedSystem:
         """``r = f_int(z) + C z − t f_ext`` in the serial numbering (replicated) and its Jacobian (PETSc)."""
         PETSc = petsc()
         failed = None
+        z = np.concatenate([self.basis.to_physical(z[:self.n]), z[self.n:]]) if self.basis else z
         try:
-            (f_idx, f_val), K = self.physics.evaluate(z[:self.n], tangent)
+            (f_idx, f_val), K = self.physics.evaluate(z[:self.n], tangent, t)
         except (FloatingPointError, ValueError, ArithmeticError) as exc:
             failed = str(exc)
         # one rank's failure is every rank's (the Newton loop must take the same branch everywhere)
@@ -177,12 +231,21 @@ class DistributedSystem:
         if self.coupling is not None:
             z_vec = self._vector(z)
             r.axpy(1.0, self.coupling * z_vec)
+        if self.rotation is not None:
+            physical, r = r, r.duplicate()
+            self.rotation.multTranspose(physical, r)
         self.last_residual = self._serial(r)
         if not tangent:
             return self.last_residual, None
         A = coo_matrix(self.comm, *K, self.sizes, self.sizes, block_size=self.solver.block_size)
         if self.coupling is not None:
             A.axpy(1.0, self.coupling, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        if self.rotation is not None:
+            physical, A = A, A.PtAP(self.rotation)
+            physical.destroy()
+        # the Newton loop holds one tangent at a time: the last one is freed now (as the KSP is)
+        if self.last_tangent is not None:
+            self.last_tangent.destroy()
         self.last_tangent = A
         return self.last_residual, A
 
@@ -213,7 +276,18 @@ class DistributedSystem:
         # the right side are zero already (the increment keeps the prescribed values); on a copy, since
         # the caller still needs K (the linear step's residual r0 + K (z - z0), the reactions)
         K = K.duplicate(copy=True)
+        if len(self.dropped):
+            # the left-out multipliers' rows have no diagonal entry (a zero block), which
+            # MatZeroRowsColumns needs: an explicit zero there first
+            PETSc = petsc()
+            K.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+            for row in self.dropped_rows:
+                K.setValue(row, row, 0.0, addv=PETSc.InsertMode.ADD_VALUES)
+            K.assemble()
         K.zeroRowsColumns(self.fixed_rows.astype(petsc().IntType), diag=1.0)
         x = rhs.duplicate()
-        self.last_linear_info = self.solver.solve(K, rhs, x, rtol)
+        try:
+            self.last_linear_info = self.solver.solve(K, rhs, x, rtol)
+        finally:
+            K.destroy()         # the copy (see LinearSolver.solve: freed now, not by the garbage collector)
         return self._serial(x)[self.free]
