@@ -1,13 +1,16 @@
-"""Conformance with 4C: run every 4C input file of the folder and write docs/conformance.md.
+"""Conformance with 4C: run every 4C input file of the input folders and write docs/conformance.md.
 
 ``make conformance`` (or ``python benchmarks/conformance.py [--out FILE] [FILES...]``) runs each
-``*.4C.yaml`` of the folder of 4C's beam-to-solid volume meshtying regression inputs
-(``$MORTAR1D3D_4C_INPUTS``, else ``shared/4c-inputs`` beside the repository's folder) with
-:func:`mortar1d3d.io.fourc.check` and tabulates: whether it runs (or the feature it needs),
-whether every ``RESULT DESCRIPTION`` entry is within 4C's tolerance, the largest deviation, 4C's
-tolerance, and the run time here (wall clock of read + solve, warm kernel cache).
+``*.4C.yaml`` of the folders of 4C's beam-to-solid volume meshtying regression inputs
+(``$MORTAR1D3D_4C_INPUTS``, one folder or several separated by ``os.pathsep``; else
+``shared/4c-inputs`` beside the repository's folder) with :func:`mortar1d3d.io.fourc.check` and
+tabulates: whether it runs (or the feature it needs), whether every ``RESULT DESCRIPTION`` entry is
+within 4C's tolerance, the largest deviation, 4C's tolerance, and the run time here (wall clock of
+read + solve, warm kernel cache). 4C's other volume meshtying files, found in no folder, are listed
+after the table with the feature each needs (:data:`NOT_HERE`), so that the page names every file.
 """
 import argparse
+import os
 import sys
 import time
 import warnings
@@ -18,6 +21,77 @@ sys.path.insert(0, str(ROOT))
 
 PREFIXES = {"beam3eb_static_beam_to_solid_volume_meshtying_": "EB_",
             "beam3r_herm2line3_static_beam_to_solid_volume_meshtying_": "R_"}
+
+
+EB = "beam3eb_static_beam_to_solid_volume_meshtying_"
+R = "beam3r_herm2line3_static_beam_to_solid_volume_meshtying_"
+RESTART = "restart (4C runs `_first`, then `_second` from its restart files)"
+CROSS_SECTION = "cross-section surface points (2D-3D coupling: `gauss_point_cross_section`)"
+
+# 4C's beam-to-solid volume meshtying input files (its tests/list_of_tests.cmake and tests/input_files)
+# that are not among the folder's usual twenty: file stem → what the library lacks to run it, as read
+# from the file's parameter sections (or its name and its test entry where the file was not read);
+# None: nothing known to be missing, the file only has to be given in an input folder. A file
+# found in a folder runs in the table instead, whatever this says.
+NOT_HERE = {
+    EB + "beam_to_beam_contact": "beam-to-beam contact (`BEAM CONTACT`, penalty)",
+    EB + "circ_curved_restart_first": RESTART,
+    EB + "circ_curved_restart_second": RESTART,
+    EB + "circ_restart_first": RESTART,
+    EB + "circ_restart_second": RESTART,
+    EB + "hex27_cross_section_projection_penalty_bending": CROSS_SECTION,
+    EB + "hex27_cross_section_projection_penalty_patch": CROSS_SECTION,
+    R + "2d-3d": CROSS_SECTION,
+    R + "2d-3d_mortar": "cross-section coupling with mortar multipliers (full 2D-3D coupling)",
+    R + "beam_along_solid_boundary_segmentation": None,
+    R + "beam_in_solid_column_segmentation": None,
+    R + "conditions": "several coupling conditions (`COUPLING_ID`: each beam tied to its own solid)",
+    R + "gp_restart_first": RESTART,
+    R + "gp_restart_second": RESTART,
+    R + "mortar_restart_first": RESTART,
+    R + "mortar_restart_second": RESTART,
+    R + "mortar_lagrange_saddlepoint_dual_hermite": "dual Hermite multiplier shape functions "
+                                                    "(`MORTAR_SHAPE_FUNCTION: dual_hermite`)",
+    R + "rotational_coupling_circ": CROSS_SECTION + " with rotational coupling",
+    **{R + f"rotational_coupling_gpts_{t}": f"rotational coupling triad `{t}`"
+       for t in ("deformation_gradient_3d_local_1", "deformation_gradient_3d_local_2",
+                 "deformation_gradient_3d_local_3", "deformation_gradient_average_2d",
+                 "deformation_gradient_y_2d", "deformation_gradient_z_2d", "fix_triad_2d")},
+    R + "rotational_coupling_mortar_line2_line2_deformation_gradient_3d_local_1":
+        "rotational coupling triad `deformation_gradient_3d_local_1`",
+    R + "rotational_coupling_mortar_line4_line3_deformation_gradient_3d_cross_section":
+        "rotational coupling triad `deformation_gradient_3d_general_in_cross_section_plane`",
+    R + "rotational_coupling_mortar_line4_line3_deformation_gradient_3d_local_1":
+        "rotational coupling triad `deformation_gradient_3d_local_1`",
+    R + "rotational_coupling_mortar_line4_line3_deformation_gradient_average_2d":
+        "rotational coupling triad `deformation_gradient_average_2d`",
+}
+
+
+def input_folders(repository_root=ROOT):
+    """The existing folders of ``$MORTAR1D3D_4C_INPUTS`` (``os.pathsep``-separated), else the one
+    of :func:`mortar1d3d.io.fourc.input_folder`; an empty list when there is none."""
+    from mortar1d3d.io.fourc import ENV_VAR, input_folder
+    env = os.environ.get(ENV_VAR)
+    if env:
+        return [Path(f) for f in env.split(os.pathsep) if f and Path(f).is_dir()]
+    folder = input_folder(repository_root)
+    return [folder] if folder is not None else []
+
+
+def input_files(folders):
+    """Every ``*.4C.yaml`` of the folders, by name (a name found twice is taken from the first folder)."""
+    files = {}
+    for folder in folders:
+        for path in sorted(Path(folder).glob("*.4C.yaml")):
+            files.setdefault(path.name, path)
+    return [files[name] for name in sorted(files)]
+
+
+def not_here(files):
+    """The rows of :data:`NOT_HERE` whose file is not among ``files``: (stem, feature or None)."""
+    present = {Path(f).name.removesuffix(".4C.yaml") for f in files}
+    return [(stem, NOT_HERE[stem]) for stem in sorted(NOT_HERE) if stem not in present]
 
 
 def short(name):
@@ -62,10 +136,11 @@ def run_one(path):
     return row
 
 
-def write(rows, out):
+def write(rows, out, missing=(), load=None):
     lines = ["# Conformance with 4C", "",
              "Generated by `make conformance` (`benchmarks/conformance.py`): every beam-to-solid volume meshtying "
-             "input file of 4C in the input folder (see [Running 4C input files](fourc.md)), run with "
+             "input file of 4C in the input folders (the folders named by `MORTAR1D3D_4C_INPUTS`, separated by "
+             "`os.pathsep`; see [Running 4C input files](fourc.md)), run with "
              "`mortar1d3d check`. *deviation*: the largest |computed − 4C| over the file's RESULT DESCRIPTION "
              "values (node displacements); *tolerance*: 4C's own (the smallest of the file's entries); *time*: "
              "read + solve here, wall clock in seconds on the development machine (2 shared cores, warm kernel "
@@ -78,31 +153,46 @@ def write(rows, out):
     passing = sum(r["passes"] == "yes" for r in rows)
     running = sum(r["runs"] == "yes" for r in rows)
     lines += ["", f"{len(rows)} files: {running} run, {passing} pass 4C's tolerances."]
+    if load is not None:
+        # the times depend on what else the shared machine runs: say how busy it was
+        lines += ["", f"Load average (1 min) while the table was made: {load[0]:.1f} at the start, {load[1]:.1f} "
+                      f"at the end, on {os.cpu_count()} cores."]
+    if missing:
+        lines += ["", "## 4C files not run here", "",
+                  f"4C's other beam-to-solid volume meshtying input files ({len(missing)}), in none of the input "
+                  "folders, with the feature the library lacks to run each (from the file's parameter "
+                  "sections, or its name and 4C's test entry). *none known*: the file only has to be given "
+                  "in an input folder.", "",
+                  "| file | needs |", "|---|---|"]
+        lines += [f"| `{short(stem + '.4C.yaml')}` | {feature or 'none known'} |" for stem, feature in missing]
     Path(out).write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
 def main(argv=None):
-    from mortar1d3d.io.fourc import ENV_VAR, input_folder
+    from mortar1d3d.io.fourc import ENV_VAR
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("files", nargs="*", help="input files (default: every *.4C.yaml of the input folder)")
+    parser.add_argument("files", nargs="*", help="input files (default: every *.4C.yaml of the input folders)")
     parser.add_argument("--out", default=str(ROOT / "docs" / "conformance.md"))
     args = parser.parse_args(argv)
     files = [Path(f) for f in args.files]
+    missing = ()
     if not files:
-        folder = input_folder(ROOT)
-        if folder is None:
+        folders = input_folders(ROOT)
+        if not folders:
             print(f"no 4C input folder: set {ENV_VAR} or provide shared/4c-inputs beside the repository's folder; "
                   "nothing regenerated")
             return 0
-        files = sorted(folder.glob("*.4C.yaml"))
+        files = input_files(folders)
+        missing = not_here(files)
     rows = []
+    load_start = os.getloadavg()[0]
     for path in files:
         row = run_one(path)
         print(f"{row['file']}: runs {row['runs']}, passes {row['passes']}, deviation {row['deviation']}, "
               f"time {row['seconds']} s {row['note'][:120]}", flush=True)
         rows.append(row)
-    write(rows, args.out)
-    print(f"wrote {args.out}")
+    write(rows, args.out, missing, (load_start, os.getloadavg()[0]))
+    print(f"wrote {args.out}: {len(rows)} files run, {len(missing)} listed as not run here")
     return 0
 
 

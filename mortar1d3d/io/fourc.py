@@ -49,11 +49,13 @@ ENV_VAR = "MORTAR1D3D_4C_INPUTS"
 
 
 def input_folder(repository_root=None):
-    """The folder of 4C input files: ``$MORTAR1D3D_4C_INPUTS``, else the folder ``shared/4c-inputs``
-    beside the repository's folder (in its parent folder); None when neither exists."""
+    """The folder of 4C input files: ``$MORTAR1D3D_4C_INPUTS`` (the first of its ``os.pathsep``-separated
+    folders), else the folder ``shared/4c-inputs`` beside the repository's folder (in its parent
+    folder); None when neither exists."""
     env = os.environ.get(ENV_VAR)
     if env:
-        return Path(env) if Path(env).is_dir() else None
+        env = env.split(os.pathsep)[0]
+        return Path(env) if env and Path(env).is_dir() else None
     root = Path(repository_root) if repository_root else Path(__file__).resolve().parents[2]
     folder = root.parent / "shared" / "4c-inputs"
     return folder if folder.is_dir() else None
@@ -753,6 +755,11 @@ def scene_from_4c(source):
                     "BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING VOLUME"):
             if not data.get(key):
                 _fail(key, "missing: the beams are not tied to the solid")
+            if isinstance(data[key], list) and len(data[key]) > 1:
+                # 4C ties each line set only to the volume sets of its COUPLING_ID; here every beam is
+                # tied to the whole solid, so several conditions would be read wrongly
+                _fail(key, f"{len(data[key])} conditions (COUPLING_ID per beam/solid pair) are not supported: "
+                           "one condition, tying every beam to the whole solid")
     analysis = {"kinematics": "nonlinear", "steps": steps, "solver": "direct"}
     scene = Scene(solid={"mesh": solid_mesh, "material": material}, beams=beams, coupling=coupling,
                   dirichlet=dirichlet, load=loads, analysis=analysis, base_dir=fc.path.parent,
