@@ -363,6 +363,47 @@ def test_polar_triad_is_4c_polar_decomposition_2d_in_the_y_z_plane():
             assert np.abs(_triad("polar", F, L0) - expected).max() < 1e-14
 
 
+@pytest.mark.parametrize("kind", ["plane_y", "plane_z", "plane_average"])
+def test_plane_triads_turn_the_reference_about_x_by_fs_angle(kind):
+    """4C's deformation_gradient_{y,z,average}_2d: Λ_S = exp(θ e_x) Λ0 with θ the angle by which F
+    turns the y axis (atan2(F_zy, F_yy)), the z axis (atan2(F_zz, F_yz) − π/2) or their mean; their
+    complex-step Jacobian equals central differences of ψ."""
+    rng = np.random.default_rng(5)
+    L0 = Rotation.from_rotvec([0.7, 0.0, 0.0]).as_matrix()
+    for _ in range(4):
+        F = np.zeros((3, 3))
+        F[0, 0], F[1:, 1:] = rng.uniform(0.5, 1.5), np.eye(2) + 0.4 * rng.standard_normal((2, 2))
+        ty = np.arctan2(F[2, 1], F[1, 1])
+        tz = np.arctan2(F[2, 2], F[1, 2]) - np.pi / 2
+        theta = {"plane_y": ty, "plane_z": tz, "plane_average": 0.5 * (ty + tz)}[kind]
+        expected = Rotation.from_rotvec([theta, 0.0, 0.0]).as_matrix() @ L0
+        assert np.abs(_triad(kind, F, L0) - expected).max() < 1e-14
+    # a pure rotation about x is reproduced by all three; a shear in the y-z plane tells them apart
+    Q = Rotation.from_rotvec([0.9, 0.0, 0.0]).as_matrix()
+    assert np.abs(_triad(kind, Q, L0) - Q @ L0).max() < 1e-14
+    shear = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.5], [0.0, 0.0, 1.0]])
+    angle = Rotation.from_matrix(_triad(kind, shear, L0) @ L0.T).as_rotvec()[0]
+    assert angle == pytest.approx({"plane_y": 0.0, "plane_z": np.arctan2(1.0, 0.5) - np.pi / 2,
+                                   "plane_average": 0.5 * (np.arctan2(1.0, 0.5) - np.pi / 2)}[kind], abs=1e-14)
+    # the Jacobian (complex step through the half-angle form) against central differences
+    F = np.eye(3) + 0.2 * rng.standard_normal((3, 3))
+    triads = np.stack([Rotation.from_rotvec(v).as_matrix() for v in ([0.7, 0.05, 0.0], [0.72, 0.0, 0.03],
+                                                                     [0.71, 0.0, 0.0])])
+    lag = np.array([0.2, 0.3, 0.5])
+    psi, J = np.empty(3), np.empty((3, 18))
+    code = kernel.TRIADS[kind]
+    assert kernel.point_jacobian(code, F, L0, triads, lag, psi, J) == kernel.OK
+    h = 1e-6
+    for c in range(9):
+        Fp, Fm = F.copy(), F.copy()
+        Fp[c // 3, c % 3] += h
+        Fm[c // 3, c % 3] -= h
+        pp, pm = np.empty(3), np.empty(3)
+        kernel.point_psi(code, Fp, L0, triads, lag, pp, np.empty((8, 3, 3)))
+        kernel.point_psi(code, Fm, L0, triads, lag, pm, np.empty((8, 3, 3)))
+        assert np.abs((pp - pm) / (2 * h) - J[:, c]).max() < 1e-8
+
+
 @pytest.mark.parametrize("kind, constraint, forces", [
     ("polar", "mortar", "variational"), ("deformation_gradient", "mortar", "variational"),
     ("deformation_gradient_symmetric", "mortar", "variational"), ("polar", "gauss_point", "variational"),

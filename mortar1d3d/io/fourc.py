@@ -748,8 +748,8 @@ def scene_from_4c(source):
         for note in fc.notes:
             warnings.warn(f"{fc.path.name}: {note}", UserWarning, stacklevel=2)
     coupling = _coupling(data.get(_COUPLING), bool(beams)) if beams else None
-    if beams and (data.get(_COUPLING) or {}).get("ROTATION_COUPLING") == "polar_decomposition_2d":
-        _check_plane_rotations(beams)
+    if beams and (data.get(_COUPLING) or {}).get("ROTATION_COUPLING") in _PLANE_TRIADS:
+        _check_plane_rotations(beams, data[_COUPLING]["ROTATION_COUPLING"])
     if beams:
         for key in ("BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING LINE",
                     "BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING VOLUME"):
@@ -769,22 +769,30 @@ def scene_from_4c(source):
     return scene, nodes
 
 
-def _check_plane_rotations(beams):
+def _check_plane_rotations(beams, rotation="polar_decomposition_2d"):
     """4C's ``polar_decomposition_2d`` triad is ``exp((θ_R + |ψ0|) e_x)``: θ_R the angle of the polar
     rotation of F's y-z block, ψ0 the beam's reference rotation vector, which 4C requires to lie
     along x. That is the library's polar triad ``R Λ0`` where the reference triads turn about +x
     by an angle in [0, π) (so that |ψ0| is the angle) and F keeps the y-z plane (4C stops
-    otherwise; the library's polar triad continues as the three-dimensional polar rotation)."""
+    otherwise; the library's polar triad continues as the three-dimensional polar rotation).
+    The same holds for 4C's ``deformation_gradient_{y,z,average}_2d``, ``exp((θ + |ψ0|) e_x)`` with θ
+    the angle of F's turn of the y axis, the z axis or their mean: the library's ``plane_*`` triads
+    ``exp(θ e_x) Λ0``."""
     key = f"{_COUPLING}.ROTATION_COUPLING"
     for i, b in enumerate(beams):
         if "triads" not in b:
-            _fail(key, f"'polar_decomposition_2d' couples cross-section rotations; beam {i} has none "
+            _fail(key, f"{rotation!r} couples cross-section rotations; beam {i} has none "
                        "(a BEAM3EB beam: use BEAM3R)")
         T = np.asarray(b["triads"], dtype=float)
         off = max(np.abs(T[:, 0, 0] - 1.0).max(), np.abs(T[:, 0, 1:]).max(), np.abs(T[:, 1:, 0]).max())
         if off > 1e-10 or np.any(np.arctan2(T[:, 2, 1], T[:, 1, 1]) < -1e-12):
-            _fail(key, f"'polar_decomposition_2d' needs reference triads that turn about +x only (a problem in the "
+            _fail(key, f"{rotation!r} needs reference triads that turn about +x only (a problem in the "
                        f"y-z plane); those of beam {i} do not")
+
+
+#: 4C's plane rotational-coupling triads (rotations about x in the y-z plane) → the library's triads
+_PLANE_TRIADS = {"polar_decomposition_2d": "polar", "deformation_gradient_y_2d": "plane_y",
+                 "deformation_gradient_z_2d": "plane_z", "deformation_gradient_average_2d": "plane_average"}
 
 
 def _coupling(block, has_beams):
@@ -847,8 +855,7 @@ def _coupling(block, has_beams):
     # its polar_decomposition_2d is the polar rotation of F in the y-z plane, the library's polar triad
     # there (the reader checks that the problem is that plane one: _check_plane_rotations)
     triads = {"deformation_gradient_3d_general": "deformation_gradient_symmetric",
-              "deformation_gradient_3d_base_1": "deformation_gradient",
-              "polar_decomposition_2d": "polar"}
+              "deformation_gradient_3d_base_1": "deformation_gradient", **_PLANE_TRIADS}
     if rotation in triads:
         rot = {"triad": triads[rotation], "enforcement": "penalty",
                "penalty": _num(block.get("ROTATION_COUPLING_PENALTY_PARAMETER"),
@@ -865,16 +872,16 @@ def _coupling(block, has_beams):
             # 4C's gauss_point_to_segment pair: the penalty ε/2 |ψ|² at each integration point. Its
             # forces equal the library's variational ones only where the rotations stay in one
             # plane (polar_decomposition_2d); 4C's own point-wise force form is not built
-            if rotation != "polar_decomposition_2d":
+            if rotation not in _PLANE_TRIADS:
                 _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} with CONTACT_DISCRETIZATION gauss_point_to_segment: "
                                                   "4C's point-wise rotational force form is not supported (only "
-                                                  "polar_decomposition_2d, a plane problem, where it equals the "
-                                                  "library's)")
+                                                  f"the plane triads {', '.join(_PLANE_TRIADS)}, where it equals "
+                                                  "the library's)")
             rot["constraint"] = "gauss_point"
         out["rotational"] = rot
     elif rotation != "none":
         _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} is not supported (deformation_gradient_3d_general, "
-                                          "deformation_gradient_3d_base_1, polar_decomposition_2d)")
+                                          f"deformation_gradient_3d_base_1, {', '.join(_PLANE_TRIADS)})")
     if str(block.get("COUPLE_RESTART_STATE", "false")).lower() not in ("false", "no", "0"):
         _fail(f"{key}.COUPLE_RESTART_STATE", f"{block['COUPLE_RESTART_STATE']!r} is not supported")
     if out["constraint"] == "mortar" and out["enforcement"] == "penalty":

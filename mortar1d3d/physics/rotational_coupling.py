@@ -74,7 +74,7 @@ class RotationalCoupling:
         global unknowns ``0 .. 3 n_solid_nodes - 1``).
     n_dofs : int
         Size of the global displacement vector.
-    triad : {"polar", "deformation_gradient", "deformation_gradient_symmetric"}
+    triad : {"polar", "deformation_gradient", "deformation_gradient_symmetric", "plane_y", "plane_z", "plane_average"}
         Solid triad (:mod:`.rotational_coupling_kernel`).
     penalty : float, optional
         ε (force: moment per length per radian); default :data:`DEFAULT_PENALTY_FACTOR` × the

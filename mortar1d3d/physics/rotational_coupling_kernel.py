@@ -30,6 +30,13 @@ parameter ξ) the coupling compares two triads (Steinbrecher, Popp & Meier, Comp
       base vector at acos(1/√3) from d, as a cube's edges from its diagonal): its first vector is
       p1 tilted towards d to that angle, then turned by α about d, the others by α + 2π/3 and
       α + 4π/3. In the reference ``Λ_S = Λ_S0``; a rigid rotation turns it along.
+  ``PLANE_Y``, ``PLANE_Z``, ``PLANE_AVERAGE``
+      Plane problems in the y-z plane (4C's ``deformation_gradient_y_2d``, ``…_z_2d``,
+      ``…_average_2d``): ``Λ_S = exp(θ e_x) Λ_S0`` with θ the angle by which F turns the global
+      y axis, ``θ_y = atan2(F_zy, F_yy)``, the z axis, ``θ_z = atan2(F_zz, F_yz) − π/2``, or their
+      mean. Defined for an F that keeps the y-z plane (the 4C reader checks the reference triads;
+      out of the plane the triad sees only F's y-z block). The angles are evaluated by the
+      half-angle form ``2 atan(y / (√(x² + y²) + x))``, complex-analytic away from ±π.
 
 The constraint measure is the spatial relative rotation vector ``ψ = log(Λ_B Λ_Sᵀ)``: zero in the
 reference configuration (``Λ_S0 = Λ_B0``), turned with any rigid rotation of the whole scene (its
@@ -53,12 +60,13 @@ from ..elements.solid import dispatch as solid_types
 from .rotations import exp, log
 from .simo_reissner_kernel import _matmul, element_setup
 
-__all__ = ["POLAR", "DEFORMATION_GRADIENT", "SYMMETRIC", "TRIADS", "point_psi", "point_jacobian", "point_hessian",
+__all__ = ["POLAR", "DEFORMATION_GRADIENT", "SYMMETRIC", "PLANE_Y", "PLANE_Z", "PLANE_AVERAGE", "TRIADS", "point_psi", "point_jacobian", "point_hessian",
            "reference_gradients", "OK", "NOT_CONVERGED", "STEP", "FD_STEP", "POINT_CHUNK"]
 
-POLAR, DEFORMATION_GRADIENT, SYMMETRIC = 0, 1, 2
+POLAR, DEFORMATION_GRADIENT, SYMMETRIC, PLANE_Y, PLANE_Z, PLANE_AVERAGE = 0, 1, 2, 3, 4, 5
 #: triad names of the scene (``coupling.rotational.triad``) → kernel codes
-TRIADS = {"polar": POLAR, "deformation_gradient": DEFORMATION_GRADIENT, "deformation_gradient_symmetric": SYMMETRIC}
+TRIADS = {"polar": POLAR, "deformation_gradient": DEFORMATION_GRADIENT, "deformation_gradient_symmetric": SYMMETRIC,
+          "plane_y": PLANE_Y, "plane_z": PLANE_Z, "plane_average": PLANE_AVERAGE}
 #: ``SYMMETRIC``: angle between the mean direction of a unit cube's edges and each edge, acos(1/√3)
 _TRIPOD_ANGLE = float(np.arccos(1.0 / np.sqrt(3.0)))
 OK, NOT_CONVERGED = 0, 1
@@ -152,10 +160,33 @@ def polar_rotation(F, R, work):
 
 
 @njit
+def _plane_angle(y, x):
+    """``atan2(y, x)`` as ``2 atan(y / (√(x² + y²) + x))``: complex-analytic (a complex step passes
+    through it) for angles away from ±π."""
+    return 2.0 * np.arctan(y / (np.sqrt(x * x + y * y) + x))
+
+
+@njit
+def _plane_triad(kind, F, L0, L):
+    """``PLANE_*`` triads: ``L = exp(θ e_x) L0`` with θ from F's y-z block (module docstring)."""
+    theta_y = _plane_angle(F[2, 1], F[1, 1])
+    theta_z = _plane_angle(F[2, 2], F[1, 2]) - 0.5 * np.pi
+    theta = theta_y if kind == PLANE_Y else theta_z if kind == PLANE_Z else 0.5 * (theta_y + theta_z)
+    c, s = np.cos(theta), np.sin(theta)
+    for k in range(3):
+        L[0, k] = L0[0, k]
+        L[1, k] = c * L0[1, k] - s * L0[2, k]
+        L[2, k] = s * L0[1, k] + c * L0[2, k]
+
+
+@njit
 def solid_triad(kind, F, L0, L, work):
     """Solid triad ``L`` (3, 3) of type ``kind`` from F and the reference triad ``L0`` (real).
     ``work``: (4, 3, 3) scratch. Returns a status."""
     status = OK
+    if kind >= PLANE_Y:
+        _plane_triad(kind, F, L0, L)
+        return status
     if kind == POLAR:
         status = polar_rotation(F, work[2], work[:2])
         _matmul(work[2], L0.astype(F.dtype), L)
