@@ -53,18 +53,16 @@ NOT_HERE = {
     R + "mortar_lagrange_saddlepoint_dual_hermite": "dual Hermite multiplier shape functions "
                                                     "(`MORTAR_SHAPE_FUNCTION: dual_hermite`)",
     R + "rotational_coupling_circ": CROSS_SECTION + " with rotational coupling",
-    **{R + f"rotational_coupling_gpts_{t}": f"rotational coupling triad `{t}`"
-       for t in ("deformation_gradient_3d_local_1", "deformation_gradient_3d_local_2",
-                 "deformation_gradient_3d_local_3")},
+    **{R + f"rotational_coupling_gpts_deformation_gradient_3d_local_{k}":
+       "4C's point-wise rotational force form in three dimensions (Gauss-point rotational coupling off the "
+       "y-z plane; the triad itself is supported)" for k in (1, 2, 3)},
     R + "rotational_coupling_gpts_fix_triad_2d": "rotational coupling to two solid triads at once (`fix_triad_2d`: "
                                                  "the y and the z one)",
     **{R + f"rotational_coupling_gpts_deformation_gradient_{t}_2d": None for t in ("y", "z", "average")},
-    R + "rotational_coupling_mortar_line2_line2_deformation_gradient_3d_local_1":
-        "rotational coupling triad `deformation_gradient_3d_local_1`",
+    R + "rotational_coupling_mortar_line2_line2_deformation_gradient_3d_local_1": None,
     R + "rotational_coupling_mortar_line4_line3_deformation_gradient_3d_cross_section":
         "rotational coupling triad `deformation_gradient_3d_general_in_cross_section_plane`",
-    R + "rotational_coupling_mortar_line4_line3_deformation_gradient_3d_local_1":
-        "rotational coupling triad `deformation_gradient_3d_local_1`",
+    R + "rotational_coupling_mortar_line4_line3_deformation_gradient_3d_local_1": None,
     R + "rotational_coupling_mortar_line4_line3_deformation_gradient_average_2d": None,
 }
 

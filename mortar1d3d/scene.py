@@ -411,7 +411,8 @@ def _rotational(value):
     _table(value, path, ("triad", "enforcement", "penalty", "lm", "constraint", "forces"))
     out = {"triad": _choice(value.get("triad", "polar"), f"{path}.triad",
                             ("polar", "deformation_gradient", "deformation_gradient_symmetric", "plane_y", "plane_z",
-                             "plane_average")),
+                             "plane_average", "deformation_gradient_local_1", "deformation_gradient_local_2",
+                             "deformation_gradient_local_3")),
            "enforcement": _choice(value.get("enforcement", "penalty"), f"{path}.enforcement", ("penalty", "lagrange")),
            "lm": _choice(value.get("lm", "line3"), f"{path}.lm", ("line2", "line3")),
            "constraint": _choice(value.get("constraint", "mortar"), f"{path}.constraint", ("mortar", "gauss_point")),

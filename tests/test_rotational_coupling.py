@@ -363,6 +363,47 @@ def test_polar_triad_is_4c_polar_decomposition_2d_in_the_y_z_plane():
             assert np.abs(_triad("polar", F, L0) - expected).max() < 1e-14
 
 
+@pytest.mark.parametrize("k", [1, 2, 3])
+def test_local_triads_keep_one_deformed_base_vector(k):
+    """4C's deformation_gradient_3d_local_k: the deformed base vector a_k = F g_k kept, the next one
+    (cyclically) along a_{k-1} × a_k, the third completing the right-handed triad (an independent
+    construction with numpy here); the reference triad at F = I, objective, and a Jacobian equal to
+    central differences."""
+    kind = f"deformation_gradient_local_{k}"
+    rng = np.random.default_rng(20 + k)
+    L0 = Rotation.from_rotvec([0.4, -0.2, 1.1]).as_matrix()
+    Q = Rotation.from_rotvec([-0.7, 0.5, 0.3]).as_matrix()
+    assert np.abs(_triad(kind, np.eye(3), L0) - L0).max() < 1e-15
+    for _ in range(4):
+        F = np.eye(3) + 0.3 * rng.standard_normal((3, 3))
+        a = F @ L0
+        i, j, m = k - 1, k % 3, (k + 1) % 3
+        e = np.empty((3, 3))
+        e[:, i] = a[:, i] / np.linalg.norm(a[:, i])
+        e[:, j] = np.cross(a[:, m], a[:, i])
+        e[:, j] /= np.linalg.norm(e[:, j])
+        e[:, m] = np.cross(e[:, i], e[:, j])
+        L = _triad(kind, F, L0)
+        assert np.abs(L - e).max() < 1e-14 and np.linalg.det(L) > 0
+        assert np.abs(_triad(kind, Q @ F, L0) - Q @ L).max() < 1e-14
+    F = np.eye(3) + 0.2 * rng.standard_normal((3, 3))
+    triads = np.stack([Rotation.from_rotvec(v).as_matrix() for v in ([0.4, -0.2, 1.1], [0.45, -0.2, 1.0],
+                                                                     [0.4, -0.15, 1.1])])
+    lag = np.array([0.2, 0.3, 0.5])
+    psi, J = np.empty(3), np.empty((3, 18))
+    code = kernel.TRIADS[kind]
+    assert kernel.point_jacobian(code, F, L0, triads, lag, psi, J) == kernel.OK
+    h = 1e-6
+    for c in range(9):
+        Fp, Fm = F.copy(), F.copy()
+        Fp[c // 3, c % 3] += h
+        Fm[c // 3, c % 3] -= h
+        pp, pm = np.empty(3), np.empty(3)
+        kernel.point_psi(code, Fp, L0, triads, lag, pp, np.empty((8, 3, 3)))
+        kernel.point_psi(code, Fm, L0, triads, lag, pm, np.empty((8, 3, 3)))
+        assert np.abs((pp - pm) / (2 * h) - J[:, c]).max() < 1e-8
+
+
 @pytest.mark.parametrize("kind", ["plane_y", "plane_z", "plane_average"])
 def test_plane_triads_turn_the_reference_about_x_by_fs_angle(kind):
     """4C's deformation_gradient_{y,z,average}_2d: Λ_S = exp(θ e_x) Λ0 with θ the angle by which F

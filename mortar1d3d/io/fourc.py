@@ -855,7 +855,8 @@ def _coupling(block, has_beams):
     # its polar_decomposition_2d is the polar rotation of F in the y-z plane, the library's polar triad
     # there (the reader checks that the problem is that plane one: _check_plane_rotations)
     triads = {"deformation_gradient_3d_general": "deformation_gradient_symmetric",
-              "deformation_gradient_3d_base_1": "deformation_gradient", **_PLANE_TRIADS}
+              "deformation_gradient_3d_base_1": "deformation_gradient", **_PLANE_TRIADS,
+              **{f"deformation_gradient_3d_local_{k}": f"deformation_gradient_local_{k}" for k in (1, 2, 3)}}
     if rotation in triads:
         rot = {"triad": triads[rotation], "enforcement": "penalty",
                "penalty": _num(block.get("ROTATION_COUPLING_PENALTY_PARAMETER"),
@@ -880,8 +881,7 @@ def _coupling(block, has_beams):
             rot["constraint"] = "gauss_point"
         out["rotational"] = rot
     elif rotation != "none":
-        _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} is not supported (deformation_gradient_3d_general, "
-                                          f"deformation_gradient_3d_base_1, {', '.join(_PLANE_TRIADS)})")
+        _fail(f"{key}.ROTATION_COUPLING", f"{rotation!r} is not supported ({', '.join(triads)})")
     if str(block.get("COUPLE_RESTART_STATE", "false")).lower() not in ("false", "no", "0"):
         _fail(f"{key}.COUPLE_RESTART_STATE", f"{block['COUPLE_RESTART_STATE']!r} is not supported")
     if out["constraint"] == "mortar" and out["enforcement"] == "penalty":

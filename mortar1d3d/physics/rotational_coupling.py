@@ -74,8 +74,10 @@ class RotationalCoupling:
         global unknowns ``0 .. 3 n_solid_nodes - 1``).
     n_dofs : int
         Size of the global displacement vector.
-    triad : {"polar", "deformation_gradient", "deformation_gradient_symmetric", "plane_y", "plane_z", "plane_average"}
-        Solid triad (:mod:`.rotational_coupling_kernel`).
+    triad : str
+        Solid triad, one of :data:`TRIADS`: ``polar``, ``deformation_gradient``,
+        ``deformation_gradient_symmetric``, ``plane_y``, ``plane_z``, ``plane_average``,
+        ``deformation_gradient_local_1`` … ``_3`` (:mod:`.rotational_coupling_kernel`).
     penalty : float, optional
         ε (force: moment per length per radian); default :data:`DEFAULT_PENALTY_FACTOR` × the
         largest ``GI_T`` over the squared mean element length.

@@ -37,6 +37,12 @@ parameter ξ) the coupling compares two triads (Steinbrecher, Popp & Meier, Comp
       mean. Defined for an F that keeps the y-z plane (the 4C reader checks the reference triads;
       out of the plane the triad sees only F's y-z block). The angles are evaluated by the
       half-angle form ``2 atan(y / (√(x² + y²) + x))``, complex-analytic away from ±π.
+  ``LOCAL_1``, ``LOCAL_2``, ``LOCAL_3``
+      One deformed base vector kept (4C's ``deformation_gradient_3d_local_k``): with
+      ``a_i = F g_i0``, ``LOCAL_1`` has ``e1 = a1/|a1|``, ``e2 ∥ a3 × a1``, ``e3 = e1 × e2``;
+      ``LOCAL_2`` keeps a2 (``e2 = a2/|a2|``, ``e3 ∥ a1 × a2``, ``e1 = e2 × e3``) and ``LOCAL_3``
+      keeps a3 (``e3 = a3/|a3|``, ``e1 ∥ a2 × a3``, ``e2 = e3 × e1``). Each is ``Λ_S0`` in the
+      reference and turns with a rigid rotation.
 
 The constraint measure is the spatial relative rotation vector ``ψ = log(Λ_B Λ_Sᵀ)``: zero in the
 reference configuration (``Λ_S0 = Λ_B0``), turned with any rigid rotation of the whole scene (its
@@ -60,13 +66,16 @@ from ..elements.solid import dispatch as solid_types
 from .rotations import exp, log
 from .simo_reissner_kernel import _matmul, element_setup
 
-__all__ = ["POLAR", "DEFORMATION_GRADIENT", "SYMMETRIC", "PLANE_Y", "PLANE_Z", "PLANE_AVERAGE", "TRIADS", "point_psi", "point_jacobian", "point_hessian",
+__all__ = ["POLAR", "DEFORMATION_GRADIENT", "SYMMETRIC", "PLANE_Y", "PLANE_Z", "PLANE_AVERAGE", "LOCAL_1", "LOCAL_2",
+           "LOCAL_3", "TRIADS", "point_psi", "point_jacobian", "point_hessian",
            "reference_gradients", "OK", "NOT_CONVERGED", "STEP", "FD_STEP", "POINT_CHUNK"]
 
-POLAR, DEFORMATION_GRADIENT, SYMMETRIC, PLANE_Y, PLANE_Z, PLANE_AVERAGE = 0, 1, 2, 3, 4, 5
+POLAR, DEFORMATION_GRADIENT, SYMMETRIC, PLANE_Y, PLANE_Z, PLANE_AVERAGE, LOCAL_1, LOCAL_2, LOCAL_3 = range(9)
 #: triad names of the scene (``coupling.rotational.triad``) → kernel codes
 TRIADS = {"polar": POLAR, "deformation_gradient": DEFORMATION_GRADIENT, "deformation_gradient_symmetric": SYMMETRIC,
-          "plane_y": PLANE_Y, "plane_z": PLANE_Z, "plane_average": PLANE_AVERAGE}
+          "plane_y": PLANE_Y, "plane_z": PLANE_Z, "plane_average": PLANE_AVERAGE,
+          "deformation_gradient_local_1": LOCAL_1, "deformation_gradient_local_2": LOCAL_2,
+          "deformation_gradient_local_3": LOCAL_3}
 #: ``SYMMETRIC``: angle between the mean direction of a unit cube's edges and each edge, acos(1/√3)
 _TRIPOD_ANGLE = float(np.arccos(1.0 / np.sqrt(3.0)))
 OK, NOT_CONVERGED = 0, 1
@@ -180,10 +189,45 @@ def _plane_triad(kind, F, L0, L):
 
 
 @njit
+def _local_triad(kind, F, L0, L, work):
+    """``LOCAL_*`` triads (module docstring): the kept deformed base vector k, the next one of the
+    cyclic order normal to it and to base vector k - 1, the third completing the triad."""
+    k = kind - LOCAL_1                          # the kept base vector: 0, 1, 2
+    j = (k + 1) % 3                             # the one built as a cross product
+    m = (k + 2) % 3
+    a = work[0]
+    for i in range(3):
+        for c in range(3):
+            a[i, c] = F[i, 0] * L0[0, c] + F[i, 1] * L0[1, c] + F[i, 2] * L0[2, c]
+    t0 = work[1, 0]
+    t1 = work[1, 1]
+    t2 = work[1, 2]
+    for i in range(3):
+        t0[i] = a[i, k]
+    # t1 = a_m × a_k (4C: the construction vector a_m, crossed with the kept one)
+    t1[0] = a[1, m] * t0[2] - a[2, m] * t0[1]
+    t1[1] = a[2, m] * t0[0] - a[0, m] * t0[2]
+    t1[2] = a[0, m] * t0[1] - a[1, m] * t0[0]
+    t2[0] = t0[1] * t1[2] - t0[2] * t1[1]
+    t2[1] = t0[2] * t1[0] - t0[0] * t1[2]
+    t2[2] = t0[0] * t1[1] - t0[1] * t1[0]
+    _unit(t0)
+    _unit(t1)
+    _unit(t2)
+    for i in range(3):
+        L[i, k] = t0[i]
+        L[i, j] = t1[i]
+        L[i, m] = t2[i]
+
+
+@njit
 def solid_triad(kind, F, L0, L, work):
     """Solid triad ``L`` (3, 3) of type ``kind`` from F and the reference triad ``L0`` (real).
     ``work``: (4, 3, 3) scratch. Returns a status."""
     status = OK
+    if kind >= LOCAL_1:
+        _local_triad(kind, F, L0, L, work)
+        return status
     if kind >= PLANE_Y:
         _plane_triad(kind, F, L0, L)
         return status
