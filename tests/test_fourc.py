@@ -173,8 +173,8 @@ def test_cli_check_exit_codes(tmp_path):
     ("  CONTACT_DISCRETIZATION: mortar\n  CONSTRAINT_STRATEGY: lagrange\n  LAGRANGE_FORMULATION: mixed\n"
      "  MORTAR_SHAPE_FUNCTION: line2\n", "", "LAGRANGE_FORMULATION: 'mixed' is not supported"),
     ("  CONTACT_DISCRETIZATION: mortar\n  CONSTRAINT_STRATEGY: penalty\n  MORTAR_SHAPE_FUNCTION: line2\n"
-     "  PENALTY_PARAMETER: 1\n  ROTATION_COUPLING: deformation_gradient_y_2d\n", "",
-     "ROTATION_COUPLING: 'deformation_gradient_y_2d' is not supported"),
+     "  PENALTY_PARAMETER: 1\n  ROTATION_COUPLING: fix_triad_2d\n", "",
+     "ROTATION_COUPLING: 'fix_triad_2d' is not supported"),
     ("  CONTACT_DISCRETIZATION: mortar\n  CONSTRAINT_STRATEGY: penalty\n  MORTAR_SHAPE_FUNCTION: line2\n"
      "  PENALTY_PARAMETER: 1\n  GEOMETRY_PAIR_STRATEGY: gauss_point_projection_cross_section\n", "",
      "GEOMETRY_PAIR_STRATEGY: 'gauss_point_projection_cross_section'"),
