@@ -143,3 +143,11 @@ def test_generators_take_degrees_per_direction():
     with pytest.raises(ValueError, match="must be >= 2 in direction 1"):
         nurbs.hollow_cylinder(RI, RO, L, degree=(2, 1, 2))
     assert nurbs.brick([0, 0, 0], [1, 1, 1], degree=(1, 3, 2)).patches[0].degrees == (1, 3, 2)
+
+
+@pytest.mark.parametrize("degree", [(2, 2), (2, 2, 2, 2), [[2, 2, 2]], 2.5])
+def test_a_degree_of_the_wrong_shape_is_named(degree):
+    """One degree or three: anything else is a ValueError naming the key (not numpy's broadcasting
+    message)."""
+    with pytest.raises(ValueError, match="degree: expected an integer or three"):
+        nurbs.brick([0, 0, 0], [1, 1, 1], degree=degree)

@@ -28,7 +28,10 @@ def _elevate_to(patch, degree):
 
 def _degrees(degree):
     """Three ints from one degree (every direction) or three."""
-    degrees = np.broadcast_to(np.asarray(degree), (3,))
+    given = np.asarray(degree)
+    if given.ndim > 1 or given.size not in (1, 3):
+        raise ValueError(f"degree: expected an integer or three, got {degree}")
+    degrees = np.broadcast_to(given.ravel() if given.size == 3 else given.reshape(()), (3,))
     if not all(float(q) == int(q) for q in degrees):
         raise ValueError(f"degree: expected an integer or three, got {degree}")
     return tuple(int(q) for q in degrees)
