@@ -108,7 +108,7 @@ DLINE-NODE TOPOLOGY:
   - "NODE 14 DLINE 1"
   - "NODE 15 DLINE 1"
 DVOL-NODE TOPOLOGY:
-  - "NODE 1 DVOL 1"
+{chr(10).join(f'  - "NODE {i + 1} DVOL 1"' for i in range(len(X)))}
 NODE COORDS:
 {chr(10).join(lines)}
 STRUCTURE ELEMENTS:
@@ -672,3 +672,22 @@ def test_negative_kappa_keep_couples_the_multipliers_that_drop_leaves_out():
                      "material": {"model": "linear_elastic", "E": 1.0, "nu": 0.3}},
               beams=[{"mesh": beam, "section": {"E": 1.0, "radius": 0.01}}],
               coupling={"enforcement": "lagrange", "negative_kappa": "keep"})
+
+
+@pytest.mark.parametrize("old, new, key, message", [
+    ('BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING LINE:\n  - E: 1\n',
+     'BEAM INTERACTION/BEAM TO SOLID VOLUME MESHTYING LINE:\n  - E: 2\n', "MESHTYING LINE.E",
+     "design line 2 leaves out 1 beam nodes"),
+    ('  - "NODE 12 DVOL 1"\n', "", "MESHTYING VOLUME.E", "design vol 1 leaves out 1 solid nodes")])
+def test_coupling_sets_must_hold_every_beam_and_solid_node(tmp_path, old, new, key, message):
+    """The library ties every beam to the whole solid, so a coupling condition on part of the beams
+    (design line 2: nodes 13 and 14 of the beam 13-14-15) or of the solid is an error naming the
+    condition (it would be coupled wholly otherwise)."""
+    path = tiny_file(tmp_path)
+    text = path.read_text(encoding="utf-8").replace('  - "NODE 15 DLINE 1"\n',
+                                                    '  - "NODE 15 DLINE 1"\n  - "NODE 13 DLINE 2"\n'
+                                                    '  - "NODE 14 DLINE 2"\n')
+    assert old in text
+    path.write_text(text.replace(old, new), encoding="utf-8")
+    with pytest.raises(FourCError, match=f"{key}: {message}"):
+        fourc.scene_from_4c(path)

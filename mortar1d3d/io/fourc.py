@@ -760,6 +760,15 @@ def scene_from_4c(source):
                 # tied to the whole solid, so several conditions would be read wrongly
                 _fail(key, f"{len(data[key])} conditions (COUPLING_ID per beam/solid pair) are not supported: "
                            "one condition, tying every beam to the whole solid")
+            # the library ties every beam to the whole solid: the condition's design set must hold them all
+            entry = data[key][0] if isinstance(data[key], list) else data[key]
+            kind, rows, what = (("DLINE", beam_rows, "beam") if key.endswith("LINE") else ("DVOL", solid_row, "solid"))
+            ids = set(fc.sets.get((kind, entry.get("E") if isinstance(entry, dict) else None), ()))
+            left = [n for n in rows if n not in ids]
+            if left:
+                _fail(f"{key}.E", f"design {kind[1:].lower()} {entry.get('E') if isinstance(entry, dict) else entry} "
+                                  f"leaves out {len(left)} {what} nodes (e.g. node {left[0]}); only conditions on "
+                                  f"every {what} node are supported (the library ties every beam to the whole solid)")
     analysis = {"kinematics": "nonlinear", "steps": steps, "solver": "direct"}
     scene = Scene(solid={"mesh": solid_mesh, "material": material}, beams=beams, coupling=coupling,
                   dirichlet=dirichlet, load=loads, analysis=analysis, base_dir=fc.path.parent,
