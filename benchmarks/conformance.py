@@ -68,14 +68,10 @@ NOT_HERE = {
 
 
 def input_folders(repository_root=ROOT):
-    """The existing folders of ``$MORTAR1D3D_4C_INPUTS`` (``os.pathsep``-separated), else the one
-    of :func:`mortar1d3d.io.fourc.input_folder`; an empty list when there is none."""
-    from mortar1d3d.io.fourc import ENV_VAR, input_folder
-    env = os.environ.get(ENV_VAR)
-    if env:
-        return [Path(f) for f in env.split(os.pathsep) if f and Path(f).is_dir()]
-    folder = input_folder(repository_root)
-    return [folder] if folder is not None else []
+    """The existing folders of ``$MORTAR1D3D_4C_INPUTS`` (``os.pathsep``-separated), else the shared
+    one beside the repository (:func:`mortar1d3d.io.fourc.input_folders`)."""
+    from mortar1d3d.io.fourc import input_folders as folders
+    return folders(repository_root)
 
 
 def input_files(folders):

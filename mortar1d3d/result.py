@@ -10,6 +10,22 @@ from .elements.multiplier import shape as lm_shape
 from .mortar.assemble import lm_numbering
 
 
+def beam_output_fields(beam_type, sample, s):
+    """The output fields of a beam type from ``physics.sample`` at ``s`` points per element: each
+    (n_elements, s, ...) array flattened to one row per point, a triad also as its three base vectors
+    ``g1``, ``g2``, ``g3`` (vector fields). Serial and parallel output use it alike."""
+    if "triads" in sample:
+        sample = dict(sample)
+        for k in range(3):
+            sample[f"g{k + 1}"] = sample["triads"][..., :, k]
+    out = {}
+    for key in beam_type.output_fields:
+        if key in sample:
+            v = np.asarray(sample[key])
+            out[key] = v.reshape(v.shape[0] * s, *v.shape[2:])
+    return out
+
+
 class Result:
     """What a solve produced.
 
@@ -247,16 +263,9 @@ class Result:
         d = z[g.dofs.slice]
         if g.rotations.size:
             sample = g.physics.sample(d, z[g.rotations.slice].reshape(-1, 3), eta)
-            for k in range(3):          # the triad's base vectors as vector fields
-                sample[f"g{k + 1}"] = sample["triads"][..., :, k]
         else:
             sample = g.physics.sample(d, eta)
-        out = {}
-        for key in g.type.output_fields:
-            if key in sample:
-                v = np.asarray(sample[key])
-                out[key] = v.reshape(g.mesh.n_elements * s, *v.shape[2:])
-        return out
+        return beam_output_fields(g.type, sample, s)
 
     @staticmethod
     def _lm_samples(mesh, lm_name, lam, s):

@@ -256,8 +256,9 @@ def _beam(value, i, base_dir):
             _fail(f"{path}.normal", "must not be zero")
         out["normal"] = normal / np.linalg.norm(normal)
     # options of the simo_reissner element (None: its default)
-    for key, lacks, choices in (("force_rule", "no force (shear) term of its own rule", ("gauss", "lobatto3")),
-                                ("virtual_spins", "no spins", ("exact", "lagrange"))):
+    from .physics.simo_reissner import FORCE_RULES, VIRTUAL_SPINS
+    for key, lacks, choices in (("force_rule", "no force (shear) term of its own rule", FORCE_RULES),
+                                ("virtual_spins", "no spins", VIRTUAL_SPINS)):
         out[key] = None
         if key in value:
             if kind.triads is None:
@@ -409,10 +410,8 @@ def _rotational(value):
     """``coupling.rotational``: cross-sections of beams with rotations tied to a solid triad."""
     path = "coupling.rotational"
     _table(value, path, ("triad", "enforcement", "penalty", "lm", "constraint", "forces"))
-    out = {"triad": _choice(value.get("triad", "polar"), f"{path}.triad",
-                            ("polar", "deformation_gradient", "deformation_gradient_symmetric", "plane_y", "plane_z",
-                             "plane_average", "deformation_gradient_local_1", "deformation_gradient_local_2",
-                             "deformation_gradient_local_3")),
+    from .physics.rotational_coupling_kernel import TRIADS
+    out = {"triad": _choice(value.get("triad", "polar"), f"{path}.triad", tuple(TRIADS)),
            "enforcement": _choice(value.get("enforcement", "penalty"), f"{path}.enforcement", ("penalty", "lagrange")),
            "lm": _choice(value.get("lm", "line3"), f"{path}.lm", ("line2", "line3")),
            "constraint": _choice(value.get("constraint", "mortar"), f"{path}.constraint", ("mortar", "gauss_point")),

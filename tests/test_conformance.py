@@ -44,6 +44,9 @@ def test_input_folders_split_the_variable(tmp_path, monkeypatch):
     monkeypatch.setenv(fourc.ENV_VAR, str(tmp_path / "absent"))
     assert conformance.input_folders(ROOT) == []
     assert fourc.input_folder() is None
+    # a missing first folder does not hide the next one from the reader's tests
+    monkeypatch.setenv(fourc.ENV_VAR, os.pathsep.join([str(tmp_path / "absent"), str(b)]))
+    assert fourc.input_folder() == b and fourc.input_folders() == conformance.input_folders(ROOT) == [b]
 
 
 def test_every_file_of_the_data_table_is_listed(tmp_path):

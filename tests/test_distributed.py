@@ -361,6 +361,12 @@ def _parallel_output_checks(serial_dir, parallel_dir, samples):
                     out["problems"].append(f"{p.name}: {tag} {sorted(held ^ declared[section])}")
         name = pvtu.name.replace(".pvtu", ".vtu")
         ref = meshio.read(serial_dir / name)
+        # the .pvtu declares every array of the serial file (the check above compares the pieces with
+        # a declaration that is read back from them, so it cannot see an array missing everywhere)
+        for section, serial in (("PPointData", ref.point_data), ("PCellData", ref.cell_data)):
+            missing = set(serial) - {n for n, _, _ in declared[section]}
+            if missing:
+                out["problems"].append(f"{pvtu.name}: {section} lacks the serial arrays {sorted(missing)}")
         if name.startswith("solid"):
             nodes = np.concatenate([m.point_data["solid_node"] for m in meshes])
             u = np.concatenate([m.point_data["displacement"] for m in meshes])

@@ -363,6 +363,21 @@ def test_polar_triad_is_4c_polar_decomposition_2d_in_the_y_z_plane():
             assert np.abs(_triad("polar", F, L0) - expected).max() < 1e-14
 
 
+def _assert_jacobian_in_F_matches_differences(kind, F, L0, triads, lag, h=1e-6, bound=1e-8):
+    """The complex-step ∂ψ/∂F of ``point_jacobian`` against central differences of ``point_psi``."""
+    psi, J = np.empty(3), np.empty((3, 18))
+    code = kernel.TRIADS[kind]
+    assert kernel.point_jacobian(code, F, L0, triads, lag, psi, J) == kernel.OK
+    for c in range(9):
+        Fp, Fm = F.copy(), F.copy()
+        Fp[c // 3, c % 3] += h
+        Fm[c // 3, c % 3] -= h
+        pp, pm = np.empty(3), np.empty(3)
+        kernel.point_psi(code, Fp, L0, triads, lag, pp, np.empty((8, 3, 3)))
+        kernel.point_psi(code, Fm, L0, triads, lag, pm, np.empty((8, 3, 3)))
+        assert np.abs((pp - pm) / (2 * h) - J[:, c]).max() < bound
+
+
 @pytest.mark.parametrize("k", [1, 2, 3])
 def test_local_triads_keep_one_deformed_base_vector(k):
     """4C's deformation_gradient_3d_local_k: the deformed base vector a_k = F g_k kept, the next one
@@ -390,18 +405,7 @@ def test_local_triads_keep_one_deformed_base_vector(k):
     triads = np.stack([Rotation.from_rotvec(v).as_matrix() for v in ([0.4, -0.2, 1.1], [0.45, -0.2, 1.0],
                                                                      [0.4, -0.15, 1.1])])
     lag = np.array([0.2, 0.3, 0.5])
-    psi, J = np.empty(3), np.empty((3, 18))
-    code = kernel.TRIADS[kind]
-    assert kernel.point_jacobian(code, F, L0, triads, lag, psi, J) == kernel.OK
-    h = 1e-6
-    for c in range(9):
-        Fp, Fm = F.copy(), F.copy()
-        Fp[c // 3, c % 3] += h
-        Fm[c // 3, c % 3] -= h
-        pp, pm = np.empty(3), np.empty(3)
-        kernel.point_psi(code, Fp, L0, triads, lag, pp, np.empty((8, 3, 3)))
-        kernel.point_psi(code, Fm, L0, triads, lag, pm, np.empty((8, 3, 3)))
-        assert np.abs((pp - pm) / (2 * h) - J[:, c]).max() < 1e-8
+    _assert_jacobian_in_F_matches_differences(kind, F, L0, triads, lag)
 
 
 @pytest.mark.parametrize("kind", ["plane_y", "plane_z", "plane_average"])
@@ -431,18 +435,7 @@ def test_plane_triads_turn_the_reference_about_x_by_fs_angle(kind):
     triads = np.stack([Rotation.from_rotvec(v).as_matrix() for v in ([0.7, 0.05, 0.0], [0.72, 0.0, 0.03],
                                                                      [0.71, 0.0, 0.0])])
     lag = np.array([0.2, 0.3, 0.5])
-    psi, J = np.empty(3), np.empty((3, 18))
-    code = kernel.TRIADS[kind]
-    assert kernel.point_jacobian(code, F, L0, triads, lag, psi, J) == kernel.OK
-    h = 1e-6
-    for c in range(9):
-        Fp, Fm = F.copy(), F.copy()
-        Fp[c // 3, c % 3] += h
-        Fm[c // 3, c % 3] -= h
-        pp, pm = np.empty(3), np.empty(3)
-        kernel.point_psi(code, Fp, L0, triads, lag, pp, np.empty((8, 3, 3)))
-        kernel.point_psi(code, Fm, L0, triads, lag, pm, np.empty((8, 3, 3)))
-        assert np.abs((pp - pm) / (2 * h) - J[:, c]).max() < 1e-8
+    _assert_jacobian_in_F_matches_differences(kind, F, L0, triads, lag)
 
 
 @pytest.mark.parametrize("kind, constraint, forces", [

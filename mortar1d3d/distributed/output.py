@@ -73,14 +73,8 @@ def write_pvtu(path, pieces, declared):
 
 def _beam_fields(model, k, physics, d, s):
     """The beam type's output fields of one rank's elements of group ``k`` (as the serial output samples them)."""
-    g = model.groups[k]
-    sample = physics.sample(d, np.linspace(-1.0, 1.0, s))
-    out = {}
-    for key in g.type.output_fields:
-        if key in sample:
-            v = np.asarray(sample[key])
-            out[key] = v.reshape(v.shape[0] * s, *v.shape[2:])
-    return out
+    from ..result import beam_output_fields
+    return beam_output_fields(model.groups[k].type, physics.sample(d, np.linspace(-1.0, 1.0, s)), s)
 
 
 def write_pieces(directory, model, owned, states, comm, samples_per_element=8, *, compression="zlib"):

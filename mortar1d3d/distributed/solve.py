@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..physics.coupling import coupled_nodes
 from ..scene import SceneError
 from .assemble import assemble_distributed
 from .numbering import Numbering
@@ -165,9 +166,8 @@ def _penalty_matrix(model, ops, numbering, layout, comm):
                    (local_sys, n_sys))
     w = summed_vector(comm, np.concatenate(k_idx), np.concatenate(k_val), (local_rows, n_rows))
     arr = w.getArray()
-    # the serial rule (physics.coupling.PenaltyCoupling): rows with κ_j > 0 coupled with ε/κ_j, or
-    # every row with κ_j != 0 under negative_kappa = "keep"; the others not at all
-    coupled = arr != 0.0 if model.scene.coupling.get("negative_kappa", "drop") == "keep" else arr > 0.0
+    # the serial rule (physics.coupling.coupled_nodes): coupled rows get ε/κ_j, the others nothing
+    coupled = coupled_nodes(arr, model.scene.coupling.get("negative_kappa", "drop"))
     arr = np.where(coupled, model.penalty / np.where(coupled, arr, 1.0), 0.0)
     w.setArray(arr)
     WB = B.copy()
@@ -181,7 +181,7 @@ def _multipliers(model, numbering, kappa):
     rank of every multiplier (its LM node's)."""
     maps, owners, start = [], [], 0
     for num, kap in zip(numbering.lm, kappa):
-        coupled = np.flatnonzero(np.repeat(kap > 0.0, 3))           # serial LM rows
+        coupled = np.flatnonzero(np.repeat(coupled_nodes(kap), 3))   # serial LM rows (multipliers: κ > 0)
         serial_row = np.full(3 * num.n, -1, dtype=np.int64)
         serial_row[coupled] = start + np.arange(len(coupled))
         maps.append(serial_row[num.dofs(np.arange(3 * num.n), 3).argsort()])     # rank-major row -> multiplier
@@ -337,7 +337,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
             maps, owners = _multipliers(model, numbering, kappa)
             layout = layout.with_multipliers(owners)
             coupling = _saddle_matrix(model, ops, numbering, layout, maps, comm)
-            kappa_rows = np.concatenate([np.repeat(k[k > 0.0], 3) for k in kappa])
+            kappa_rows = np.concatenate([np.repeat(k[coupled_nodes(k)], 3) for k in kappa])
         else:
             coupling = _penalty_matrix(model, ops, numbering, layout, comm)
     clock("coupling")

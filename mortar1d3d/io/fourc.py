@@ -48,17 +48,22 @@ __all__ = ["FourCError", "FourCInput", "read_4c", "scene_from_4c", "run", "check
 ENV_VAR = "MORTAR1D3D_4C_INPUTS"
 
 
-def input_folder(repository_root=None):
-    """The folder of 4C input files: ``$MORTAR1D3D_4C_INPUTS`` (the first of its ``os.pathsep``-separated
-    folders), else the folder ``shared/4c-inputs`` beside the repository's folder (in its parent
-    folder); None when neither exists."""
+def input_folders(repository_root=None):
+    """The folders of 4C input files: the existing ones of ``$MORTAR1D3D_4C_INPUTS`` (separated by
+    ``os.pathsep``), else the folder ``shared/4c-inputs`` beside the repository's folder (in its
+    parent folder) if it exists; an empty list when there is none."""
     env = os.environ.get(ENV_VAR)
     if env:
-        env = env.split(os.pathsep)[0]
-        return Path(env) if env and Path(env).is_dir() else None
+        return [Path(f) for f in env.split(os.pathsep) if f and Path(f).is_dir()]
     root = Path(repository_root) if repository_root else Path(__file__).resolve().parents[2]
     folder = root.parent / "shared" / "4c-inputs"
-    return folder if folder.is_dir() else None
+    return [folder] if folder.is_dir() else []
+
+
+def input_folder(repository_root=None):
+    """The first of :func:`input_folders`, or None."""
+    folders = input_folders(repository_root)
+    return folders[0] if folders else None
 
 
 # ----------------------------------------------------------------------------------------------

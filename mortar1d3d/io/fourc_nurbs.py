@@ -182,7 +182,7 @@ def check_elements(solid, mesh, element_ids, fc, points=3):
             if any(U[c + p + 1] <= U[c + p] for U, p, c in zip(patch.knots, patch.degrees, cart)):
                 continue                                                   # an empty span: no element
             rank = [int(np.searchsorted(sp_, c + p)) for sp_, c, p in zip(spans, cart, patch.degrees)]
-            e = in_patch[np.flatnonzero((mesh.element_span[in_patch] == rank).all(axis=1))[0]]
+            e = in_patch[np.ravel_multi_index(rank, patch.element_shape)]   # the mesh numbers a patch's spans so
             # 4C's element: local knots around its span, its listed control points in 4C's order
             local = [U[c + 1: c + 2 * p + 1] for U, p, c in zip(patch.knots, patch.degrees, cart)]
             listed = _net_order(by_id[int(eid)], patch.degrees).ravel()

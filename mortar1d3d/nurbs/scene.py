@@ -34,7 +34,7 @@ import math
 import numpy as np
 
 from ..physics.surface import boundary_faces, face_nodes
-from .generate import MAX_SEGMENT_ANGLE, arc_segments, brick, hollow_cylinder
+from .generate import MAX_SEGMENT_ANGLE, _elevate_to, arc_segments, brick, hollow_cylinder
 from .mesh import BEZIER_TYPES, bezier_mesh, common_degree, element_values
 from .patch import NurbsSolid
 from .solid import patch_face_set
@@ -197,8 +197,7 @@ def patches_mesh(spec, path="solid.mesh.patches"):
     patches = [_generate(kind, entry[kind]) for kind, entry in zip(kinds, spec)]
     # one degree before joining: patches of other degrees share control points only once elevated alike
     p = common_degree([patch.degrees for patch in patches])
-    solid = NurbsSolid([patch.elevate(0, p - patch.degrees[0]).elevate(1, p - patch.degrees[1])
-                        .elevate(2, p - patch.degrees[2]) for patch in patches])
+    solid = NurbsSolid([_elevate_to(patch, p) for patch in patches])
     mesh = bezier_mesh(solid)
     boundary = None                      # one patch: every patch face is on the boundary but a closed pipe's seam
     if len(spec) > 1:
@@ -233,8 +232,9 @@ def _nonconforming(mesh, faces):
     solid = mesh.solid
     d = solid.blocks[0][0]
     centres = np.array([d.faces[f][3] for f in range(d.n_faces)])          # a hexahedron face's centre is ±e_axis
-    points = np.concatenate([element_values(solid, centres[f:f + 1], solid.points)[e, 0][None]
-                             for e, f in zip(faces["element"], faces["face"])]) if len(faces) else np.zeros((0, 3))
+    # every element at every face centre once (n_elements, n_faces, 3), then each boundary face's own
+    points = element_values(solid, centres, solid.points)[faces["element"], faces["face"]] if len(faces) \
+        else np.zeros((0, 3))
     X = solid.points[solid.connectivity]                                   # control points bound each element
     lo, hi = X.min(axis=1), X.max(axis=1)
     tol = 1e-9 * float(np.ptp(solid.points, axis=0).max())

@@ -142,6 +142,16 @@ def _expand3(A):
     return sp.kron(A, sp.identity(3, format="csr"), format="csr")
 
 
+
+def coupled_nodes(kappa, negative_kappa="drop"):
+    """Which multiplier nodes are coupled: κ_j > 0 (``negative_kappa = "drop"``, the default), or
+    κ_j != 0 (``"keep"``, 4C's rule for its mortar penalty). The one rule of the serial and the
+    distributed paths."""
+    if negative_kappa not in ("drop", "keep"):
+        raise ValueError(f"negative_kappa must be 'drop' or 'keep', got {negative_kappa!r}")
+    kappa = np.asarray(kappa)
+    return kappa > 0.0 if negative_kappa == "drop" else kappa != 0.0
+
 class Coupling:
     """Constant coupling operators for one beam mesh tied to one solid.
 
@@ -183,9 +193,7 @@ class Coupling:
         self.n_dofs = n_dofs
         n_S, n_B = 3 * solid.n_nodes, beams.n_centreline_dofs
         self.n_lm = ops.n_lm
-        if negative_kappa not in ("drop", "keep"):
-            raise ValueError(f"negative_kappa must be 'drop' or 'keep', got {negative_kappa!r}")
-        self.coupled = ops.kappa > 0.0 if negative_kappa == "drop" else ops.kappa != 0.0
+        self.coupled = coupled_nodes(ops.kappa, negative_kappa)
         self.coupled_rows = np.flatnonzero(np.repeat(self.coupled, 3))
         kinv = np.zeros(ops.n_lm)
         kinv[self.coupled] = 1.0 / ops.kappa[self.coupled]

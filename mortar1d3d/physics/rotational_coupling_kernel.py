@@ -169,6 +169,15 @@ def polar_rotation(F, R, work):
 
 
 @njit
+def _deformed_basis(F, L0, a):
+    """``a = F L0`` (3, 3): the reference base vectors g_i0 (columns of L0) deformed, ``a_i = F g_i0``."""
+    for i in range(3):
+        for k in range(3):
+            a[i, k] = F[i, 0] * L0[0, k] + F[i, 1] * L0[1, k] + F[i, 2] * L0[2, k]
+    return a
+
+
+@njit
 def _plane_angle(y, x):
     """``atan2(y, x)`` as ``2 atan(y / (√(x² + y²) + x))``: complex-analytic (a complex step passes
     through it) for angles away from ±π."""
@@ -195,10 +204,7 @@ def _local_triad(kind, F, L0, L, work):
     k = kind - LOCAL_1                          # the kept base vector: 0, 1, 2
     j = (k + 1) % 3                             # the one built as a cross product
     m = (k + 2) % 3
-    a = work[0]
-    for i in range(3):
-        for c in range(3):
-            a[i, c] = F[i, 0] * L0[0, c] + F[i, 1] * L0[1, c] + F[i, 2] * L0[2, c]
+    a = _deformed_basis(F, L0, work[0])
     t0 = work[1, 0]
     t1 = work[1, 1]
     t2 = work[1, 2]
@@ -238,10 +244,7 @@ def solid_triad(kind, F, L0, L, work):
     if kind == SYMMETRIC:
         _symmetric_triad(F, L0, L, work)
         return status
-    a = work[0]
-    for i in range(3):
-        for k in range(3):
-            a[i, k] = F[i, 0] * L0[0, k] + F[i, 1] * L0[1, k] + F[i, 2] * L0[2, k]
+    a = _deformed_basis(F, L0, work[0])
     e1 = work[1, 0]
     b2 = work[1, 1]
     b3 = work[1, 2]
@@ -276,10 +279,7 @@ def solid_triad(kind, F, L0, L, work):
 def _symmetric_triad(F, L0, L, work):
     """:data:`SYMMETRIC` triad ``L`` (3, 3) from F and L0; ``work``: (4, 3, 3) scratch (every step
     complex-analytic: no conjugates, ``arccos`` of the complex argument)."""
-    a = work[0]
-    for i in range(3):
-        for k in range(3):
-            a[i, k] = F[i, 0] * L0[0, k] + F[i, 1] * L0[1, k] + F[i, 2] * L0[2, k]
+    a = _deformed_basis(F, L0, work[0])
     d = work[1, 0]
     for i in range(3):
         d[i] = a[i, 0] + a[i, 1] + a[i, 2]
