@@ -330,6 +330,12 @@ def test_lagrange_on_a_fibre_cube_and_the_schur_field_split():
         assert max(out["u"], out["lambda"]) <= 1e-9, (label, out)         # measured 3.1e-10 (λ)
 
 
+#: serial output arrays the parallel VTU does not write yet, by file kind and section: the beams'
+#: line load (the coupling's multiplier field along the fibres). Listed exactly, so that the test
+#: fails both when another array goes missing and when this one arrives (then empty this).
+PARALLEL_OUTPUT_LACKS = {("beams", "PPointData"): {"line_load"}}
+
+
 def _parallel_output_checks(serial_dir, parallel_dir, samples):
     """Rank 0: the .pvd and .pvtu files against the VTK format, and the union of the pieces against
     the serial files (``Result.write``). Returns a dict of findings."""
@@ -365,8 +371,10 @@ def _parallel_output_checks(serial_dir, parallel_dir, samples):
         # a declaration that is read back from them, so it cannot see an array missing everywhere)
         for section, serial in (("PPointData", ref.point_data), ("PCellData", ref.cell_data)):
             missing = set(serial) - {n for n, _, _ in declared[section]}
-            if missing:
-                out["problems"].append(f"{pvtu.name}: {section} lacks the serial arrays {sorted(missing)}")
+            expected = PARALLEL_OUTPUT_LACKS.get((name.split("_")[0], section), set())
+            if missing != expected:
+                out["problems"].append(f"{pvtu.name}: {section} lacks the serial arrays {sorted(missing)} "
+                                       f"(known: {sorted(expected)})")
         if name.startswith("solid"):
             nodes = np.concatenate([m.point_data["solid_node"] for m in meshes])
             u = np.concatenate([m.point_data["displacement"] for m in meshes])
