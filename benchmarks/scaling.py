@@ -62,6 +62,12 @@ def _control():
     return control_times((1,))[1]
 
 
+def _faults():
+    """Minor page faults of this process so far (the kernel's count: unlike seconds, it does not
+    depend on the load)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+
+
 def _morton(points, bits=10):
     """Morton (Z-order) code of points in the unit cube, ``bits`` per axis."""
     q = np.clip((np.asarray(points) * (1 << bits)).astype(np.int64), 0, (1 << bits) - 1)
@@ -101,7 +107,9 @@ def assembly(points, rounds, stages=False, order="generated"):
             times, per_control = [], []
             for _ in range(rounds):
                 c = _control()
+                faults = _faults()
                 t, ops = _timed(lambda: m13.assemble_mortar(beams, solid, integration=integration, n_gauss=N_GAUSS))
+                faults = _faults() - faults
                 times.append(t)
                 per_control.append(t / c)
                 count = ops.n_integration_points
@@ -114,8 +122,8 @@ def assembly(points, rounds, stages=False, order="generated"):
                   flush=True)
             if stages:
                 print("      ns per point by stage (last round): " + ", ".join(
-                    f"{name} {1e9 * seconds / count:.0f}" for name, seconds in timings.items() if name != "total"),
-                    flush=True)
+                    f"{name} {1e9 * seconds / count:.0f}" for name, seconds in timings.items() if name != "total")
+                    + f"; page faults per 1000 points {1e3 * faults / count:.2f}", flush=True)
             del beams, solid
         print(f"{integration:<12}slope of log(time/control) over log(points): {slope(sizes, ratios):.3f}")
 
