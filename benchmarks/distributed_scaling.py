@@ -4,6 +4,7 @@
     mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 12 --fibres 300     # strong scaling
     mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 15 --fibres 600     # weak: ~2x the work
     python benchmarks/distributed_scaling.py --cells 12 --fibres 300 --partition-only  # METIS vs geometric
+    python benchmarks/distributed_scaling.py --cells 24 --fibres 1200 --replicated-only  # input memory per rank
     mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 12 --fibres 300 --nonlinear 2   # Newton on PETSc
 
 With ``--nonlinear STEPS`` the analysis is geometrically nonlinear (Saint Venant–Kirchhoff, STEPS
@@ -74,6 +75,32 @@ def _stage_messages(path, name="mortar1d3d solve"):
     return out
 
 
+def replicated_memory(cells, fibres):
+    """Resident memory (MiB) after each replicated stage of a distributed run, as every rank runs
+    it (the scene built, its dead loads, the partition of the whole model into 2 parts, the
+    numbering): what every rank holds whatever the number of ranks."""
+    from mortar1d3d.distributed import partition
+    from mortar1d3d.distributed.numbering import Numbering
+    from mortar1d3d.distributed.solve import SystemLayout, _BodyLoads, _memory_mib
+    from mortar1d3d.model.build import build
+    from mortar1d3d.model.model import Model
+    out = {"start": _memory_mib()[1]}
+    sc = scene(cells, fibres, 1)
+    out["scene"] = _memory_mib()[1]
+    model = Model(build(sc))
+    model._body_loads = _BodyLoads()
+    model.solid_physics = model._body_loads
+    model._prepare_loads()
+    out["model"] = _memory_mib()[1]
+    part = partition(model.solid_mesh, [g.mesh for g in model.groups], 2, "metis")
+    out["partition"] = _memory_mib()[1]
+    numbering = Numbering.of(part, model.solid_mesh, [g.mesh for g in model.groups], sc.coupling["lm"])
+    SystemLayout.of(numbering, model.dofmap, [g.type.dofs_per_node for g in model.groups])
+    out["numbering"] = _memory_mib()[1]
+    return {"cells": cells, "fibres": fibres, "unknowns": model.n_displacement_dofs, "peak_MiB": _memory_mib()[0],
+            "current_MiB": {k: round(v, 1) for k, v in out.items()}}
+
+
 def partition_quality(cells, fibres, parts=(2, 4, 8)):
     from mortar1d3d.distributed import partition
     beams, solid = m13.generate.fibre_cube(cells, fibres, 10)
@@ -94,9 +121,13 @@ def main():
     parser.add_argument("--cells", type=int, default=12)
     parser.add_argument("--fibres", type=int, default=300)
     parser.add_argument("--partition-only", action="store_true")
+    parser.add_argument("--replicated-only", action="store_true")
     parser.add_argument("--nonlinear", type=int, default=0, metavar="STEPS",
                         help="nonlinear in STEPS load steps; measures the communication per Newton iteration")
     args = parser.parse_args()
+    if args.replicated_only:
+        print(json.dumps(replicated_memory(args.cells, args.fibres)))
+        return
     if args.partition_only:
         for row in partition_quality(args.cells, args.fibres):
             print(json.dumps(row))
