@@ -621,6 +621,30 @@ def test_dependent_multiplier_rows_are_left_out_as_in_the_serial_run(kinematics)
         assert max(out["u"], out["lambda"]) <= 1e-10, (label, out)
 
 
+def test_parallel_vtu_line_load_of_multipliers_with_dependent_rows():
+    """With Lagrange multipliers the pieces' line load is the state's multipliers, after the
+    least-norm λ of the dependent rows (rank 0 forms it and sends each rank its part back): equal
+    to the serial output's for the three partitions."""
+    import tempfile
+    from mortar1d3d.distributed.solve import solve_distributed
+    path = Path(COMM.tompi4py().bcast(tempfile.mkdtemp(prefix="mpi-vtu-lm-") if RANK == 0 else None, root=0))
+    if RANK == 0:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            m13.solve(_coarse_bar()).write(path / "serial", samples_per_element=4)
+    for label, parts in PARTS:
+        directory = path / label.replace(" ", "-").replace(".", "")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            solve_distributed(_coarse_bar(backend="petsc"), comm=COMM, parts=parts, parallel_output=directory,
+                              samples_per_element=4)
+        found = _parallel_output_checks(path / "serial", directory, 4) if RANK == 0 else None
+        found = COMM.tompi4py().bcast(found, root=0)
+        assert found["problems"] == [], (label, found["problems"])
+        assert found["max_difference"] <= 1e-10, (label, found["max_difference"])
+        assert found["line_load_difference"] <= 1e-10, (label, found["line_load_difference"])
+
+
 def test_dependent_rows_contradicted_by_prescribed_values_stop_every_rank():
     from mortar1d3d.scene import SceneError
     with pytest.raises(SceneError, match="dirichlet: the prescribed values contradict the coupling"):

@@ -18,7 +18,8 @@ rank. What grows with the model is distributed:
 
 The iterate ``z``, the residual handed to the Newton loop and the increment are distributed: each
 rank holds the entries it owns, in the order of its range of the system numbering (the local part
-of a PETSc vector; PETSc wraps the same memory when it computes with them). The loop's
+of a PETSc vector, copied into one of the system's layout when PETSc computes with it, without
+communication). The loop's
 elementwise steps run on these parts unchanged, and its norms are global (:meth:`norm`, the same
 number on every rank, so that every rank takes the same decisions). Before each evaluation of the
 physics one ``VecScatter`` brings each rank the unknowns of its owned elements' nodes that other
