@@ -4,13 +4,16 @@
     mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 12 --fibres 300     # strong scaling
     mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 15 --fibres 600     # weak: ~2x the work
     python benchmarks/distributed_scaling.py --cells 12 --fibres 300 --partition-only  # METIS vs geometric
+    python benchmarks/distributed_scaling.py --cells 24 --fibres 1200 --replicated-only  # input memory per rank
     mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 12 --fibres 300 --nonlinear 2   # Newton on PETSc
 
 With ``--nonlinear STEPS`` the analysis is geometrically nonlinear (Saint Venant–Kirchhoff, STEPS
 load steps of the library's Newton loop on PETSc) and the communication per Newton iteration is
 measured: PETSc's own log of the load steps' stage (messages, their bytes, global reductions: what
-the assembly, the matrix products and GAMG send) and, counted separately, the vectors every rank
-gathers because the Newton loop's iterate is replicated (bytes each rank receives).
+the assembly, the matrix products, GAMG and the ghost updates send) and, counted separately, the
+bytes each rank receives in the ghost updates of the iterate (the unknowns of its elements' nodes
+that other ranks own, once per residual evaluation; the iterate, residual and increment are
+distributed, nothing is gathered during the loop).
 
 The scene is the benchmark cube (docs/conventions.md §5) with hexahedra, ``--fibres`` straight fibres
 of 10 Hermite elements as one beam entry, clamped at z = 0 and pulled at z = 1, linear (or nonlinear,
@@ -72,19 +75,30 @@ def _stage_messages(path, name="mortar1d3d solve"):
     return out
 
 
-class _GatherCounter:
-    """Counts the bytes each rank receives when the replicated iterate and residual are gathered
-    (the distributed system's ``gather_vector``)."""
-
-    def __init__(self):
-        from mortar1d3d.distributed import system
-        self.module, self.original, self.bytes, self.calls = system, system.gather_vector, 0, 0
-        system.gather_vector = self
-
-    def __call__(self, v):
-        self.calls += 1
-        self.bytes += 8 * (v.getSize() - v.getLocalSize())
-        return self.original(v)
+def replicated_memory(cells, fibres):
+    """Resident memory (MiB) after each replicated stage of a distributed run, as every rank runs
+    it (the scene built, its dead loads, the partition of the whole model into 2 parts, the
+    numbering): what every rank holds whatever the number of ranks."""
+    from mortar1d3d.distributed import partition
+    from mortar1d3d.distributed.numbering import Numbering
+    from mortar1d3d.distributed.solve import SystemLayout, _BodyLoads, _memory_mib
+    from mortar1d3d.model.build import build
+    from mortar1d3d.model.model import Model
+    out = {"start": _memory_mib()[1]}
+    sc = scene(cells, fibres, 1)
+    out["scene"] = _memory_mib()[1]
+    model = Model(build(sc))
+    model._body_loads = _BodyLoads()
+    model.solid_physics = model._body_loads
+    model._prepare_loads()
+    out["model"] = _memory_mib()[1]
+    part = partition(model.solid_mesh, [g.mesh for g in model.groups], 2, "metis")
+    out["partition"] = _memory_mib()[1]
+    numbering = Numbering.of(part, model.solid_mesh, [g.mesh for g in model.groups], sc.coupling["lm"])
+    SystemLayout.of(numbering, model.dofmap, [g.type.dofs_per_node for g in model.groups])
+    out["numbering"] = _memory_mib()[1]
+    return {"cells": cells, "fibres": fibres, "unknowns": model.n_displacement_dofs, "peak_MiB": _memory_mib()[0],
+            "current_MiB": {k: round(v, 1) for k, v in out.items()}}
 
 
 def partition_quality(cells, fibres, parts=(2, 4, 8)):
@@ -107,9 +121,13 @@ def main():
     parser.add_argument("--cells", type=int, default=12)
     parser.add_argument("--fibres", type=int, default=300)
     parser.add_argument("--partition-only", action="store_true")
+    parser.add_argument("--replicated-only", action="store_true")
     parser.add_argument("--nonlinear", type=int, default=0, metavar="STEPS",
                         help="nonlinear in STEPS load steps; measures the communication per Newton iteration")
     args = parser.parse_args()
+    if args.replicated_only:
+        print(json.dumps(replicated_memory(args.cells, args.fibres)))
+        return
     if args.partition_only:
         for row in partition_quality(args.cells, args.fibres):
             print(json.dumps(row))
@@ -120,7 +138,6 @@ def main():
     comm = PETSc.COMM_WORLD
     if args.nonlinear:
         PETSc.Log.begin()
-        gathers = _GatherCounter()
     start = time.perf_counter()
     result = m13.solve(scene(args.cells, args.fibres, args.nonlinear))
     wall = time.perf_counter() - start
@@ -129,7 +146,6 @@ def main():
     if args.nonlinear:
         log = comm.tompi4py().bcast(tempfile.mktemp(suffix=".log") if comm.getRank() == 0 else None, root=0)
         PETSc.Log.view(PETSc.Viewer().createASCII(log, comm=comm))
-        received = comm.tompi4py().gather(gathers.bytes, root=0)
         if result is not None:
             newton = sum(s.iterations for s in result.steps)
             # the residual evaluations: one per Newton iteration and one more per step (the converged one)
@@ -140,7 +156,9 @@ def main():
                        "petsc_bytes_per_iteration": round(stage["messages"] * stage["mean_bytes"] / newton),
                        "reductions_per_iteration": round(stage["reductions"] / newton, 1),
                        "bytes_per_iteration_by_event": {k: round(v / newton) for k, v in stage["events"].items()},
-                       "gathered_bytes_per_iteration_per_rank": [round(b / newton) for b in received]}
+                       "ghost_bytes_per_iteration_per_rank": [
+                           round(8 * g * result.distributed["traffic"]["ghost_updates"] / newton)
+                           for g in result.distributed["traffic"]["ghost_entries"]]}
     if result is not None:
         info = result.distributed
         print(json.dumps({"ranks": info["ranks"], "cells": args.cells, "fibres": args.fibres, **traffic,
@@ -148,7 +166,10 @@ def main():
                           "timings": {k: round(v, 3) for k, v in info["timings"].items()},
                           "cpu_per_rank": {k: [round(c[k], 3) for c in info["cpu"]] for k in info["cpu"][0]},
                           "ghosts": info["traffic"]["ghosts"], "nnz": info["traffic"]["nnz"],
-                          "peak_MiB": [round(m, 1) for m in memory]}))
+                          "peak_MiB": [round(m, 1) for m in memory],
+                          # per stage and rank: (peak, current) resident MiB at the stage's end
+                          "memory_by_stage": {k: [[round(v, 1) if v is not None else None for v in m[k]]
+                                                  for m in info["memory"]] for k in info["memory"][0]}}))
 
 
 if __name__ == "__main__":

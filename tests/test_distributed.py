@@ -258,13 +258,8 @@ def test_newton_iterates_equal_the_serial_ones():
     residual stalled at its round-off floor (5e-10 relative): the conditioning of the penalty
     system, not the Newton stopping point or the linear solve (benchmarks/distributed_roundoff.py;
     at 100 E 9e-12)."""
-    make = _rebar_data()
-
     def nonlinear(**analysis):
-        scene = make()
-        scene.coupling = {**scene.coupling, "penalty": 3e12}
-        scene.analysis = {**scene.analysis, "kinematics": "nonlinear", "steps": 4, **analysis}
-        return scene
+        return _rebar_nonlinear(4, **analysis)
 
     serial = m13.solve(nonlinear(solver="direct"))
     assert [s.iterations for s in serial.steps] == [4, 4, 4, 4]
@@ -283,6 +278,64 @@ def test_newton_iterates_equal_the_serial_ones():
     out = dict(_compare(serial, lambda: nonlinear(solver="amg", backend="petsc"), check))["metis"]
     assert out["iterations"] == [s.iterations for s in serial.steps]
     assert out["steps"] <= 1e-6, out
+
+
+def _rebar_nonlinear(steps, **analysis):
+    """The rebar cantilever, geometrically nonlinear in ``steps`` load steps, at a penalty of 100 E
+    (why: test_newton_iterates_equal_the_serial_ones)."""
+    scene = _rebar_data()()
+    scene.coupling = {**scene.coupling, "penalty": 3e12}
+    scene.analysis = {**scene.analysis, "kinematics": "nonlinear", "steps": steps, **analysis}
+    return scene
+
+
+def _expected_ghosts(scene, parts):
+    """Per rank: the unknowns of its owned solid and beam elements' nodes that another rank owns
+    (what its ghost update receives), from the partition and the numbering."""
+    built = build(scene)
+    solid, beams = built.solid_mesh, [g.mesh for g in built.groups]
+    if parts is None:
+        part = partition(solid, beams, SIZE, "metis")
+    else:
+        solid_part, beam_part = parts(solid, beams, SIZE)
+        part = partition(solid, beams, SIZE, solid_part=solid_part, beam_part=beam_part)
+    numbering = Numbering.of(part, solid, beams, scene.coupling["lm"])
+    out = []
+    for r in range(SIZE):
+        nodes = np.unique(solid.connectivity[part.owned_solid(r)])
+        count = 3 * int(np.count_nonzero(numbering.solid.owner[nodes] != r))
+        for k, (g, mesh) in enumerate(zip(built.groups, beams)):
+            nodes = np.unique(mesh.elements[part.owned_beams(r, k)])
+            count += g.type.dofs_per_node * int(np.count_nonzero(numbering.beams[k].owner[nodes] != r))
+        out.append(count)
+    return out
+
+
+def test_newton_state_is_distributed_with_ghost_updates():
+    """The Newton loop runs on each rank's part of the state: every residual evaluation (one per
+    Newton iteration and one per load step, the converged one) updates each rank's ghosts, and a
+    rank receives exactly the unknowns of its elements' nodes that other ranks own (none on one
+    rank, none when one rank owns everything); the result equals the serial run."""
+    def nonlinear(**analysis):
+        return _rebar_nonlinear(2, solver="direct", **analysis)
+
+    serial = m13.solve(nonlinear())
+
+    def check(serial, result):
+        return {"ghosts": result.distributed["traffic"]["ghost_entries"],
+                "updates": result.distributed["traffic"]["ghost_updates"],
+                "evaluations": sum(s.iterations for s in result.steps) + len(result.steps),
+                "state": _relative(result.z, serial.z)}
+
+    for (label, parts), (_, out) in zip(PARTS, _compare(serial, lambda: nonlinear(backend="petsc"), check)):
+        expected = _expected_ghosts(nonlinear(), parts)
+        assert out["ghosts"] == expected, (label, out)
+        if SIZE == 1 or label == ALL_ON_RANK_0[0]:
+            assert expected == [0] * SIZE
+        else:
+            assert sum(expected) > 0, (label, expected)        # the ranks share nodes
+        assert out["updates"] == out["evaluations"], (label, out)
+        assert out["state"] <= 1e-10, (label, out)
 
 
 @pytest.mark.parametrize("kinematics", ["linear", "nonlinear"])
@@ -330,10 +383,10 @@ def test_lagrange_on_a_fibre_cube_and_the_schur_field_split():
         assert max(out["u"], out["lambda"]) <= 1e-9, (label, out)         # measured 3.1e-10 (λ)
 
 
-#: serial output arrays the parallel VTU does not write yet, by file kind and section: the beams'
-#: line load (the coupling's multiplier field along the fibres). Listed exactly, so that the test
-#: fails both when another array goes missing and when this one arrives (then empty this).
-PARALLEL_OUTPUT_LACKS = {("beams", "PPointData"): {"line_load"}}
+#: serial output arrays the parallel VTU does not write yet, by file kind and section (none now;
+#: the beams' line_load arrived). Listed exactly, so that the test fails both when another array
+#: goes missing and when a listed one arrives.
+PARALLEL_OUTPUT_LACKS = {}
 
 
 def _parallel_output_checks(serial_dir, parallel_dir, samples):
@@ -341,7 +394,7 @@ def _parallel_output_checks(serial_dir, parallel_dir, samples):
     the serial files (``Result.write``). Returns a dict of findings."""
     import xml.etree.ElementTree as ET
     import meshio
-    out = {"problems": [], "max_difference": 0.0, "pieces": 0}
+    out = {"problems": [], "max_difference": 0.0, "line_load_difference": 0.0, "pieces": 0}
     datasets = ET.parse(parallel_dir / "result.pvd").getroot().find("Collection").findall("DataSet")
     serial_sets = ET.parse(serial_dir / "result.pvd").getroot().find("Collection").findall("DataSet")
     out["timesteps"] = sorted({float(d.get("timestep")) for d in datasets})
@@ -400,6 +453,12 @@ def _parallel_output_checks(serial_dir, parallel_dir, samples):
                 theirs = ref.point_data[field][position]
                 scale = max(np.abs(theirs).max(), 1e-300)
                 out["max_difference"] = max(out["max_difference"], float(np.abs(mine - theirs).max() / scale))
+            # the line load is the penalty times a difference of nearly equal displacements: as
+            # accurate as the solution times ε/E (see test_distributed_solution_equals_the_serial_one)
+            mine = np.concatenate([m.point_data["line_load"] for m in meshes])
+            theirs = ref.point_data["line_load"][position]
+            out["line_load_difference"] = max(out["line_load_difference"], float(
+                np.abs(mine - theirs).max() / max(np.abs(theirs).max(), 1e-300)))
     return out
 
 
@@ -409,13 +468,8 @@ def test_parallel_vtu_pieces_join_to_the_serial_output():
     union of the pieces equals the serial output (solid displacement and stress, the beams' samples)."""
     import tempfile
     from mortar1d3d.distributed.solve import solve_distributed
-    make = _rebar_data()
-
     def nonlinear(**analysis):
-        scene = make()
-        scene.coupling = {**scene.coupling, "penalty": 3e12}
-        scene.analysis = {**scene.analysis, "kinematics": "nonlinear", "steps": 2, "solver": "direct", **analysis}
-        return scene
+        return _rebar_nonlinear(2, solver="direct", **analysis)
 
     path = Path(COMM.tompi4py().bcast(tempfile.mkdtemp(prefix="mpi-vtu-") if RANK == 0 else None, root=0))
     if RANK == 0:           # the serial run's own output
@@ -430,6 +484,7 @@ def test_parallel_vtu_pieces_join_to_the_serial_output():
         assert found["timesteps"] == found["serial_timesteps"] == [0.0, 0.5, 1.0], label
         assert found["pieces"] >= 6, label
         assert found["max_difference"] <= 1e-10, (label, found["max_difference"])
+        assert found["line_load_difference"] <= 1e-6, (label, found["line_load_difference"])
 
 
 def _benchmark_scene():
@@ -564,6 +619,30 @@ def test_dependent_multiplier_rows_are_left_out_as_in_the_serial_run(kinematics)
         assert RANK != 0 or any("LM nodes 1 (x, y, z) are combinations" in m for m in said), (label, said)
         assert out["iterations"] == [s.iterations for s in serial.steps], label
         assert max(out["u"], out["lambda"]) <= 1e-10, (label, out)
+
+
+def test_parallel_vtu_line_load_of_multipliers_with_dependent_rows():
+    """With Lagrange multipliers the pieces' line load is the state's multipliers, after the
+    least-norm λ of the dependent rows (rank 0 forms it and sends each rank its part back): equal
+    to the serial output's for the three partitions."""
+    import tempfile
+    from mortar1d3d.distributed.solve import solve_distributed
+    path = Path(COMM.tompi4py().bcast(tempfile.mkdtemp(prefix="mpi-vtu-lm-") if RANK == 0 else None, root=0))
+    if RANK == 0:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            m13.solve(_coarse_bar()).write(path / "serial", samples_per_element=4)
+    for label, parts in PARTS:
+        directory = path / label.replace(" ", "-").replace(".", "")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            solve_distributed(_coarse_bar(backend="petsc"), comm=COMM, parts=parts, parallel_output=directory,
+                              samples_per_element=4)
+        found = _parallel_output_checks(path / "serial", directory, 4) if RANK == 0 else None
+        found = COMM.tompi4py().bcast(found, root=0)
+        assert found["problems"] == [], (label, found["problems"])
+        assert found["max_difference"] <= 1e-10, (label, found["max_difference"])
+        assert found["line_load_difference"] <= 1e-10, (label, found["line_load_difference"])
 
 
 def test_dependent_rows_contradicted_by_prescribed_values_stop_every_rank():

@@ -15,7 +15,7 @@ input is replicated in this slice); the work that grows with the model is distri
   vectors and ``MPIAIJ`` matrices; the library's own
   :func:`~mortar1d3d.solvers.newton.solve_load_steps` (nonlinear: load steps, Newton iterations,
   its convergence tests) or :func:`~mortar1d3d.solvers.newton.solve_linear_step` (linear) runs on
-  it, on every rank;
+  it, on every rank, with the iterate, residual and increment distributed (each rank its part);
 * each linear solve is a PETSc KSP (:mod:`.linear`): CG + GAMG with the rigid-body modes, MUMPS,
   or for multipliers a Schur-complement field split.
 
@@ -145,11 +145,20 @@ def _constraint_triplets(model, ops, numbering, layout, k):
 
 def _penalty_matrix(model, ops, numbering, layout, comm):
     """ε Bᵀ diag(κ)⁻¹ B, formed by PETSc from the distributed B (rows: per rank, its LM rows of
-    group 0, then of group 1, ...) and the summed κ per row."""
+    group 0, then of group 1, ...) and the summed κ per row.
+
+    Returns
+    -------
+    C : PETSc.Mat
+    WB : PETSc.Mat
+        ε diag(κ)⁻¹ B (zero rows where no LM node is coupled): ``WB x`` is the line load λ.
+    lm_rows : list of (3 n_lm,) int64
+        Per group, the row of ``WB`` of every serial LM row.
+    """
     rank, n_parts = comm.getRank(), comm.getSize()
     counts = np.array([[3 * num.count(r) for num in numbering.lm] for r in range(n_parts)], dtype=np.int64)
     row_ranges = np.concatenate([[0], np.cumsum(counts.sum(axis=1))])
-    rows, cols, vals, k_idx, k_val = [], [], [], [], []
+    rows, cols, vals, k_idx, k_val, lm_rows = [], [], [], [], [], []
     for k, num in enumerate(numbering.lm):
         def row_of(new_rows):
             # the rank that owns a rank-major LM node: the range it falls in
@@ -158,6 +167,7 @@ def _penalty_matrix(model, ops, numbering, layout, comm):
 
         r, c, v = _constraint_triplets(model, ops, numbering, layout, k)
         rows.append(row_of(r)), cols.append(c), vals.append(v)
+        lm_rows.append(row_of(num.dofs(np.arange(3 * num.n), 3)))
         lm_new, kappa = ops[k].local.kappa
         k_idx.append(row_of((3 * lm_new[:, None] + np.arange(3)[None, :]).ravel())), k_val.append(np.repeat(kappa, 3))
     n_rows, local_rows = int(row_ranges[-1]), int(row_ranges[rank + 1] - row_ranges[rank])
@@ -172,7 +182,9 @@ def _penalty_matrix(model, ops, numbering, layout, comm):
     w.setArray(arr)
     WB = B.copy()
     WB.diagonalScale(L=w)
-    return B.transposeMatMult(WB)
+    C = B.transposeMatMult(WB)
+    B.destroy()
+    return C, WB, lm_rows
 
 
 def _multipliers(model, numbering, kappa):
@@ -207,17 +219,31 @@ def _saddle_matrix(model, ops, numbering, layout, maps, comm):
     return coo_matrix(comm, np.concatenate(rows), np.concatenate(cols), np.concatenate(vals), sizes, sizes)
 
 
+def _memory_mib():
+    """This process's peak and current resident memory in MiB (current: None where /proc is missing)."""
+    import resource
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    try:
+        with open("/proc/self/statm") as f:
+            current = int(f.read().split()[1]) * resource.getpagesize() / 2.0 ** 20
+    except OSError:
+        current = None
+    return peak, current
+
+
 class _Clock:
-    """Per stage: the wall time of the slowest rank (a barrier before each reading), and this rank's
-    CPU time up to the barrier (its own work; on a loaded machine the fairer measure of balance)."""
+    """Per stage: the wall time of the slowest rank (a barrier before each reading), this rank's
+    CPU time up to the barrier (its own work; on a loaded machine the fairer measure of balance),
+    and its peak and current resident memory at the stage's end (MiB)."""
 
     def __init__(self, comm):
-        self.comm, self.times, self.cpu = comm, {}, {}
+        self.comm, self.times, self.cpu, self.memory = comm, {}, {}, {}
         self.last, self.last_cpu = time.perf_counter(), time.process_time()
 
     def __call__(self, stage):
         now_cpu = time.process_time()
         self.cpu[stage] = now_cpu - self.last_cpu
+        self.memory[stage] = _memory_mib()
         self.comm.barrier()
         now = time.perf_counter()
         self.times[stage] = now - self.last
@@ -330,7 +356,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     numbering = Numbering.of(part, model.solid_mesh, beam_meshes, scene.coupling["lm"] if scene.coupled else "line2")
     layout = SystemLayout.of(numbering, model.dofmap, [g.type.dofs_per_node for g in model.groups])
     clock("partition")
-    ops, coupling, lagrange, kappa_rows = [], None, model.lagrange, None
+    ops, coupling, lagrange, kappa_rows, weighted, lm_rows = [], None, model.lagrange, None, None, None
     if scene.coupled:
         ops, kappa = _group_operators(model, part, numbering, comm)
         if lagrange:
@@ -338,8 +364,13 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
             layout = layout.with_multipliers(owners)
             coupling = _saddle_matrix(model, ops, numbering, layout, maps, comm)
             kappa_rows = np.concatenate([np.repeat(k[coupled_nodes(k)], 3) for k in kappa])
+            # λ of the output: the multipliers of the state (−1: an LM row without one)
+            n = model.n_displacement_dofs
+            lm_rows = [np.where(m[num.dofs(np.arange(3 * num.n), 3)] >= 0,
+                                layout.of_serial[n + np.maximum(m[num.dofs(np.arange(3 * num.n), 3)], 0)], -1)
+                       for m, num in zip(maps, numbering.lm)]
         else:
-            coupling = _penalty_matrix(model, ops, numbering, layout, comm)
+            coupling, weighted, lm_rows = _penalty_matrix(model, ops, numbering, layout, comm)
     clock("coupling")
     physics = OwnedPhysics(model, part, layout, rank)         # in the numbering of all unknowns
     clock("stiffness")
@@ -364,7 +395,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
                                dropped=dropped if lagrange else ())
     clock("loads_supports")
     callback = _print_step if (progress is True and rank == 0) else None
-    z0 = np.zeros(system.n_unknowns)
+    z0 = np.zeros(system.sizes[0])                           # this rank's part of the iterate
     # a PETSc log stage of its own: with PETSc's logging on (-log_view), the messages and bytes the
     # load steps send are reported apart from the set-up (benchmarks/distributed_scaling.py reads them)
     stage = PETSc.Log.Stage("mortar1d3d solve")
@@ -381,31 +412,50 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
                                                progress=callback)
     stage.pop()
     clock("solve")
+    # the solution, the history and the last residual (the reactions) in the serial numbering, on rank 0
+    history_local = history
+    z, history = system.gather(z), [system.gather(h) for h in history]
+    last_residual = system.gather(linear_residual if model.linear else system.last_residual)
+    relaxed = bool(lagrange and len(dropped))
+    if relaxed:
+        # λ of the left-out rows: the least-norm multipliers transferring the same forces, as the
+        # serial saddle-point solver gives them (a linear projection: of the sum as of each increment)
+        if rank == 0:
+            n = model.n_displacement_dofs
+            for v in [z] + history:
+                v[n:] = dependent.least_norm(v[n:], kappa_rows)
     if parallel_output is not None:
-        from .output import write_pieces
-        # the pieces show physical components (clamped tangents back from their rotated frames)
-        states = [(0.0, np.zeros_like(z))] + [(rec.load_factor, model.basis.to_physical(h))
-                                              for rec, h in zip(records, history)]
-        write_pieces(parallel_output, model, physics, states, comm, samples_per_element)
+        from .output import LineLoads, write_pieces
+        if relaxed:
+            # every rank's part of the states again, with the least-norm λ
+            history_local = [system.scatter_from_root(h) for h in history]
+        lines = LineLoads(model, physics, lm_rows, weighted, system.load) if scene.coupled else None
+        # the pieces show physical components (clamped tangents back from their rotated frames) of
+        # the unknowns each rank's elements read (one ghost update per state), and the line load
+        states = [(0.0, np.zeros(len(physics.needed)), lines and lines.zero())]
+        for rec, h in zip(records, history_local):
+            x = system.physical(h)
+            states.append((rec.load_factor, system.ghosted(x), lines and lines.at(x)))
+            x.destroy()
+        write_pieces(parallel_output, model, physics, states, comm, samples_per_element, lines=lines)
         clock("output")
+    if weighted is not None:
+        weighted.destroy()
     info_solve = system.last_linear_info or {}
     if not lagrange:        # (with multipliers made before the solve)
         served = _served_model(model, ops, numbering, comm)
     info = {"ranks": size, "unknowns": system.n_unknowns, "iterations": info_solve.get("iterations"),
             "ksp": info_solve.get("ksp"), "pc": info_solve.get("pc"), "partition": part.stats,
             "timings": clock.times, "cpu": comm.tompi4py().allgather(clock.cpu),
-            "traffic": _traffic(system.last_tangent, comm)}
+            "memory": comm.tompi4py().allgather(clock.memory),
+            "traffic": {**_traffic(system.last_tangent, comm),
+                        "ghost_entries": comm.tompi4py().allgather(system.ghost_entries),
+                        "ghost_updates": system.ghost_updates}}
     if rank != 0:
         return None
-    if dependent is not None and len(dependent):
-        # λ of the left-out rows: the least-norm multipliers transferring the same forces, as the
-        # serial saddle-point solver gives them (a linear projection: of the sum as of each increment)
-        n = model.n_displacement_dofs
-        for v in [z] + history:
-            v[n:] = dependent.least_norm(v[n:], kappa_rows)
     # the reactions come from the last residual: of the linear step (r(z0) + K (z - z0), as the serial
     # path keeps it) or of the last Newton iterate
-    served.last_residual = linear_residual if model.linear else system.last_residual
+    served.last_residual = last_residual
     note = f"PETSc {info['ksp']} + {info['pc']} on {size} rank(s): {info['iterations']} iterations (last solve)"
     for rec in records:
         rec.notes.append(note)

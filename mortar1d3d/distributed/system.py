@@ -16,18 +16,25 @@ rank. What grows with the model is distributed:
   tangent ``C``;
 * the Newton increment is solved by PETSc KSP (:mod:`.linear`).
 
-The iterate ``z``, the residual handed to the Newton loop and the increment are replicated on
-every rank in the serial numbering (each rank reads the unknowns of its elements from ``z``; the
-vectors are gathered after each assembly and solve): every rank takes the same decisions on
-identical numbers, and the iterates are the serial run's up to the order of summation.
+The iterate ``z``, the residual handed to the Newton loop and the increment are distributed: each
+rank holds the entries it owns, in the order of its range of the system numbering (the local part
+of a PETSc vector, copied into one of the system's layout when PETSc computes with it, without
+communication). The loop's
+elementwise steps run on these parts unchanged, and its norms are global (:meth:`norm`, the same
+number on every rank, so that every rank takes the same decisions). Before each evaluation of the
+physics one ``VecScatter`` brings each rank the unknowns of its owned elements' nodes that other
+ranks own (the ghosts: the nodes its elements share with the neighbours' elements); nothing is
+gathered while the loop runs. The solution is gathered on rank 0 at the end, for the Result.
 """
+import math
+
 import copy
 
 import numpy as np
 import scipy.sparse as sp
 
 from .assemble import beam_submesh, solid_submesh
-from .petsc import coo_matrix, gather_vector, petsc, summed_vector
+from .petsc import coo_matrix, petsc, summed_vector
 
 
 def _entry_of_elements(g):
@@ -54,7 +61,7 @@ class OwnedPhysics:
         from ..physics.materials import material
         from ..physics.solid import SolidModel
         from ..physics.surface import Pressure
-        self.parts = []          # (physics, serial unknowns of its DOFs, system indices of the same)
+        self.parts = []          # (physics, serial unknowns of its DOFs, system indices, their place in `needed`)
         kinematics = "linear" if model.linear else "nonlinear"
         mat = model.scene.solid["material"]
         self.solid_elements = part.owned_solid(rank)
@@ -78,8 +85,8 @@ class OwnedPhysics:
         if rank == 0:
             # end moments of a nonlinear analysis (a few nodes): rank 0 adds them, PETSc sends them on
             self.moments = [(dofs, moment, layout.of_serial[dofs]) for dofs, moment in model.moments]
-        self.reference = model.reference()
-        self.beams = []          # per group with owned elements: (group, owned elements, their entries, mesh, part)
+        reference = model.reference()
+        self.beams = []          # per group with owned elements: (group, owned elements, their entries, mesh, its entry of `parts`)
         for k, g in enumerate(model.groups):
             owned = part.owned_beams(rank, k)
             mesh, nodes = beam_submesh(g.mesh, owned)
@@ -90,11 +97,25 @@ class OwnedPhysics:
             per_node = g.type.dofs_per_node
             serial = (g.dofs.start + per_node * nodes[:, None] + np.arange(per_node)[None, :]).ravel()
             self.parts.append((physics, serial, layout.of_serial[serial]))
-            self.beams.append((k, owned, entries, mesh, self.parts[-1]))
+            self.beams.append((k, owned, entries, mesh, len(self.parts) - 1))
+        #: the serial unknowns this rank's evaluation reads (sorted): the displacements of its owned
+        #: elements' nodes and of the end-moment nodes; `evaluate` takes them in this order
+        self.needed = np.unique(np.concatenate([serial for _, serial, _ in self.parts]
+                                               + [dofs for dofs, _, _ in self.moments] + [np.zeros(0, np.int64)]))
+        self.parts = [(physics, serial, system, np.searchsorted(self.needed, serial))
+                      for physics, serial, system in self.parts]
+        self.moments = [(reference[dofs], moment, system, np.searchsorted(self.needed, dofs))
+                        for dofs, moment, system in self.moments]
+        self.beams = [(k, owned, entries, mesh, self.parts[i]) for k, owned, entries, mesh, i in self.beams]
+
+    def solid_displacement(self, d):
+        """(n_owned_solid_nodes, 3) displacements of the owned solid elements' nodes, from ``d`` (:attr:`needed` order)."""
+        return d[self.parts[0][3]].reshape(-1, 3)
 
     def evaluate(self, d, tangent=True, t=1.0):
         """Internal forces minus the follower loads at load factor ``t``, and their tangent
-        entries, at the serial (physical) displacements ``d``, in system numbering.
+        entries, at the (physical) displacements ``d`` of the unknowns :attr:`needed` (in that
+        order), in system numbering.
 
         Returns
         -------
@@ -109,18 +130,18 @@ class OwnedPhysics:
                 K = sp.coo_matrix(K)
                 rows.append(system[K.row]), cols.append(system[K.col]), vals.append(K.data)
 
-        for physics, serial, system in self.parts:
-            add(system, *physics.evaluate(np.ascontiguousarray(d[serial]), tangent=tangent))
+        for physics, _, system, local in self.parts:
+            add(system, *physics.evaluate(np.ascontiguousarray(d[local]), tangent=tangent))
         if self.pressures:
             # as Model.residual: the pressure is an external force, −t f in the residual, −t ∂f/∂u in K
-            serial = self.parts[0][1]
+            local = self.parts[0][3]
             for pressure in self.pressures:
-                f, Kp = pressure.evaluate(d[serial], tangent=tangent)
+                f, Kp = pressure.evaluate(d[local], tangent=tangent)
                 add(self.parts[0][2], -t * f, -t * Kp if tangent else None)
         if self.moments:
             from ..physics.beam import end_moment
-            for dofs, moment, system in self.moments:
-                f, Km = end_moment(self.reference[dofs] + d[dofs], t * moment)
+            for reference, moment, system, local in self.moments:
+                f, Km = end_moment(reference + d[local], t * moment)
                 add(system, -f, -Km if tangent else None)
         forces = (_cat(idx, np.int64), _cat(f_val, float))
         return forces, ((_cat(rows, np.int64), _cat(cols, np.int64), _cat(vals, float)) if tangent else None)
@@ -166,17 +187,25 @@ class DistributedSystem:
     """
 
     def __init__(self, model, physics, layout, coupling, body, solver, comm, dropped=()):
+        PETSc = petsc()
         self.model, self.physics, self.layout, self.coupling = model, physics, layout, coupling
         self.solver, self.comm = solver, comm
         self.rank = comm.getRank()
         self.n = model.n_displacement_dofs
         self.n_unknowns = len(layout.of_serial)
         self.dropped = self.n + np.asarray(dropped, dtype=np.int64)
-        self.fixed = np.concatenate([model.fixed_dofs, self.dropped])      # multipliers after the displacements
-        self.free = np.setdiff1d(np.arange(self.n_unknowns), self.fixed)
+        # serial: the model's supports, then the left-out multipliers (after the displacements)
+        fixed_serial = np.concatenate([model.fixed_dofs, self.dropped])
         self.owned_serial = layout.owned_serial(self.rank)
         first = int(layout.ranges[self.rank])
         self.sizes = (int(layout.ranges[self.rank + 1]) - first, self.n_unknowns)
+        fixed_system = layout.of_serial[fixed_serial]
+        self._fixed_mine = (fixed_system >= first) & (fixed_system < first + self.sizes[0])
+        # the Newton loop's `fixed` and `free`: places in this rank's part of the vectors
+        self.fixed = fixed_system[self._fixed_mine] - first
+        self.free = np.setdiff1d(np.arange(self.sizes[0]), self.fixed)
+        self.fixed_rows = fixed_system[self._fixed_mine]
+        self.dropped_rows = self.fixed_rows[fixed_serial[self._fixed_mine] >= self.n]
         self.basis = model.basis
         self.rotation = None
         if self.basis:
@@ -185,56 +214,106 @@ class DistributedSystem:
             mine = (rows >= first) & (rows < first + self.sizes[0])
             self.rotation = coo_matrix(comm, rows[mine], layout.of_serial[T.col[mine]], T.data[mine], self.sizes,
                                        self.sizes)
-        fixed_system = layout.of_serial[self.fixed]
-        mine = (fixed_system >= first) & (fixed_system < first + self.sizes[0])
-        self.fixed_rows = fixed_system[mine]
-        self.dropped_rows = fixed_system[mine & (self.fixed >= self.n)]
         dead = np.zeros(self.n_unknowns)
         dead[:self.n] = model.dead_load
         self.load = summed_vector(comm, *body, self.sizes)
         self.load.setArray(self.load.getArray() + dead[self.owned_serial])
+        # the ghost update: the unknowns the owned elements read (physics.needed), from their owners
+        needed = layout.of_serial[physics.needed].astype(PETSc.IntType)
+        self._ghosts = PETSc.Vec().createSeq(len(needed), comm=PETSc.COMM_SELF)
+        index = PETSc.IS().createGeneral(needed, comm=PETSc.COMM_SELF)
+        self._scatter = PETSc.Scatter().create(self.load, index, self._ghosts, None)
+        index.destroy()
+        #: entries this rank receives from other ranks in each ghost update
+        self.ghost_entries = int(np.count_nonzero((needed < first) | (needed >= first + self.sizes[0])))
+        self.ghost_updates = 0
+        reference = model.reference()
+        self._reference = np.zeros(self.sizes[0])
+        leading = self.owned_serial < len(reference)
+        self._reference[leading] = reference[self.owned_serial[leading]]
         self.last_linear_info = None
         self.last_residual = self.last_tangent = None
 
     def prescribed(self, t):
-        return np.concatenate([self.model.prescribed(t), np.zeros(len(self.dropped))])
+        """Values of this rank's fixed unknowns (``fixed``) at load factor ``t``."""
+        return np.concatenate([self.model.prescribed(t), np.zeros(len(self.dropped))])[self._fixed_mine]
 
     def reference(self):
-        return self.model.reference()
+        """The base configuration of this rank's unknowns (zero for the multipliers)."""
+        return self._reference
+
+    def norm(self, v):
+        """The 2-norm of the distributed vector whose part on this rank is ``v``: the ranks' sums
+        of squares added in rank order on every rank (the same number everywhere)."""
+        v = np.asarray(v)
+        return math.sqrt(math.fsum(self.comm.tompi4py().allgather(float(np.dot(v, v)))))
 
     def _vector(self, values):
-        """A PETSc vector holding the owned entries of the serial vector ``values``."""
+        """A PETSc vector holding this rank's part ``values`` (a copy)."""
         v = self.load.duplicate()
-        v.setArray(np.ascontiguousarray(values[self.owned_serial]))
+        v.setArray(np.ascontiguousarray(values))
         return v
 
-    def _serial(self, v):
-        """The distributed vector ``v`` gathered on every rank, in the serial numbering."""
-        return gather_vector(v)[self.layout.of_serial]
+    def physical(self, z):
+        """The PETSc vector of the physical components of the iterate whose part here is ``z``
+        (``T z`` with clamps, :mod:`mortar1d3d.supports`)."""
+        x = self._vector(z)
+        if self.rotation is None:
+            return x
+        y = x.duplicate()
+        self.rotation.mult(x, y)
+        x.destroy()
+        return y
+
+    def ghosted(self, x):
+        """The entries of the PETSc vector ``x`` that this rank's elements read (``physics.needed``),
+        its own and the ghosts (collective)."""
+        self._scatter.scatter(x, self._ghosts, addv=petsc().InsertMode.INSERT_VALUES,
+                              mode=petsc().ScatterMode.FORWARD)
+        self.ghost_updates += 1
+        return self._ghosts.getArray().copy()
+
+    def gather(self, v):
+        """The vector whose part on this rank is ``v``, in the serial numbering on rank 0 (None on
+        the others); for the Result, after the loop."""
+        parts = self.comm.tompi4py().gather(np.asarray(v), root=0)
+        return None if parts is None else np.concatenate(parts)[self.layout.of_serial]
+
+    def scatter_from_root(self, v):
+        """This rank's part of the vector ``v`` that rank 0 holds in the serial numbering (the
+        inverse of :meth:`gather`; ``v`` is ignored on the other ranks)."""
+        mpi = self.comm.tompi4py()
+        parts = None
+        if self.rank == 0:
+            parts = [v[self.layout.owned_serial(r)] for r in range(mpi.Get_size())]
+        return mpi.scatter(parts, root=0)
 
     def residual(self, z, t, tangent=True):
-        """``r = f_int(z) + C z − t f_ext`` in the serial numbering (replicated) and its Jacobian (PETSc)."""
+        """``r = f_int(z) + C z − t f_ext`` (this rank's part) and its Jacobian (PETSc)."""
         PETSc = petsc()
         failed = None
-        z = np.concatenate([self.basis.to_physical(z[:self.n]), z[self.n:]]) if self.basis else z
+        x = self.physical(z)
+        d = self.ghosted(x)
         try:
-            (f_idx, f_val), K = self.physics.evaluate(z[:self.n], tangent, t)
+            (f_idx, f_val), K = self.physics.evaluate(d, tangent, t)
         except (FloatingPointError, ValueError, ArithmeticError) as exc:
             failed = str(exc)
         # one rank's failure is every rank's (the Newton loop must take the same branch everywhere)
         messages = [m for m in self.comm.tompi4py().allgather(failed) if m]
         if messages:
+            x.destroy()
             raise ArithmeticError(messages[0])
         r = summed_vector(self.comm, f_idx, f_val, self.sizes)
         r.axpy(-t, self.load)
-        z_vec = None
         if self.coupling is not None:
-            z_vec = self._vector(z)
-            r.axpy(1.0, self.coupling * z_vec)
+            r.axpy(1.0, self.coupling * x)
+        x.destroy()
         if self.rotation is not None:
             physical, r = r, r.duplicate()
             self.rotation.multTranspose(physical, r)
-        self.last_residual = self._serial(r)
+            physical.destroy()
+        self.last_residual = r.getArray().copy()
+        r.destroy()
         if not tangent:
             return self.last_residual, None
         A = coo_matrix(self.comm, *K, self.sizes, self.sizes, block_size=self.solver.block_size)
@@ -254,22 +333,22 @@ class DistributedSystem:
         return K
 
     def product(self, K, v, absolute=False):
-        """``K v`` (``|K| v`` with ``absolute``) for the serial vector ``v``, in the serial numbering."""
+        """``K v`` (``|K| v`` with ``absolute``), this rank's part of each."""
         x = self._vector(v)
-        if not absolute:
-            return self._serial(K * x)
-        indptr, indices, data = K.getValuesCSR()
-        local = sp.csr_matrix((np.abs(data), indices, indptr), shape=(len(indptr) - 1, self.n_unknowns))
-        full = np.empty(self.n_unknowns)
-        full[self.layout.of_serial] = v
-        y = x.duplicate()
-        y.setArray(local @ full)
-        return self._serial(y)
+        if absolute:
+            # |K|: the same rows with the absolute values (global column indices)
+            indptr, indices, data = K.getValuesCSR()
+            K = petsc().Mat().createAIJ(size=K.getSizes(), csr=(indptr, indices, np.abs(data)), comm=self.comm)
+        y = K * x
+        out = y.getArray().copy()
+        for w in (x, y) + ((K,) if absolute else ()):
+            w.destroy()
+        return out
 
     def solve_linear(self, K, b, x0=None, rtol=None):
-        """The increment on the free unknowns: ``K_ff x = b`` (``b`` on the free unknowns, serial order)."""
+        """The increment on the free unknowns: ``K_ff x = b`` (``b`` on this rank's free unknowns)."""
         rtol = self.model.scene.analysis["rtol"] if rtol is None else rtol
-        full = np.zeros(self.n_unknowns)
+        full = np.zeros(self.sizes[0])
         full[self.free] = b
         rhs = self._vector(full)
         # the supports: rows and columns of the fixed unknowns become the identity, their entries of
@@ -290,4 +369,6 @@ class DistributedSystem:
             self.last_linear_info = self.solver.solve(K, rhs, x, rtol)
         finally:
             K.destroy()         # the copy (see LinearSolver.solve: freed now, not by the garbage collector)
-        return self._serial(x)[self.free]
+        out = x.getArray()[self.free].copy()
+        x.destroy(), rhs.destroy()
+        return out

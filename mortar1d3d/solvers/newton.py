@@ -22,7 +22,12 @@ and optionally
 * ``free_block(K)`` and ``product(K, v, absolute=False)``: the Jacobian on the free unknowns (what
   ``solve_linear`` takes) and ``K v`` (``|K| v``), for a Jacobian that is no scipy matrix (the
   distributed system's PETSc matrix, :mod:`mortar1d3d.distributed.system`); default
-  ``K[free][:, free]`` and ``K @ v``.
+  ``K[free][:, free]`` and ``K @ v``;
+* ``norm(v)``: the 2-norm of a vector of the loop (default ``np.linalg.norm``). A distributed
+  system (:mod:`mortar1d3d.distributed.system`) hands the loop the entries this process owns:
+  ``z``, ``r``, the increment, ``fixed`` and ``free`` are then local, every elementwise step runs
+  on them unchanged, and ``norm`` is the global norm, the same on every process, so that every
+  process takes the same decisions.
 """
 import math
 import time
@@ -102,6 +107,12 @@ def _free_block(system, K):
     return K[system.free][:, system.free] if own is None else own(K)
 
 
+def _norm(system, v):
+    """The 2-norm of ``v`` (the system's own, global one if it has one)."""
+    own = getattr(system, "norm", None)
+    return float(np.linalg.norm(v)) if own is None else own(v)
+
+
 def _product(system, K, v, absolute=False):
     """``K v``, or ``|K| v`` (entrywise absolute values) with ``absolute``."""
     own = getattr(system, "product", None)
@@ -124,7 +135,7 @@ def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence)
             r, K = system.residual(z, t, tangent=True)
         except (FloatingPointError, ValueError, ArithmeticError) as exc:
             raise _StepFailed(f"residual evaluation failed: {exc}") from None
-        rn = float(np.linalg.norm(r[free]))
+        rn = _norm(system, r[free])
         residuals.append(rn)
         if not math.isfinite(rn):
             raise _StepFailed("the residual is not finite (NaN/inf: an element inverted or a "
@@ -151,8 +162,8 @@ def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence)
             # kernels work relative to each element and stay below it).
             # (|K| is a copy of the tangent: formed only once the increments have stopped contracting)
             if len(increments) >= 2 and increments[-1] > 0.5 * increments[-2]:
-                floor = ROUNDOFF_FACTOR * np.finfo(float).eps * float(
-                    np.linalg.norm(_product(system, K, _magnitude(system, z), absolute=True)[free]))
+                floor = ROUNDOFF_FACTOR * np.finfo(float).eps * _norm(
+                    system, _product(system, K, _magnitude(system, z), absolute=True)[free])
                 if rn <= floor:
                     return residuals, increments, notes
             if rn > divergence * r0:
@@ -168,7 +179,7 @@ def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence)
         note = (getattr(system, "last_linear_info", None) or {}).get("note")
         if note and note not in notes:
             notes.append(note)
-        dn = float(np.linalg.norm(dz))
+        dn = _norm(system, dz)
         if not math.isfinite(dn):
             raise _StepFailed("the Newton increment is not finite (singular tangent?)")
         update = getattr(system, "update", None)
@@ -298,7 +309,7 @@ def solve_linear_step(system, z0, *, t=1.0, started=None):
     residual = r0 + _product(system, K0, z - z0)
     note = (getattr(system, "last_linear_info", None) or {}).get("note")
     record = StepRecord(load_factor=t, iterations=1,
-                        residuals=[float(np.linalg.norm(r0[free])), float(np.linalg.norm(residual[free]))],
-                        increments=[float(np.linalg.norm((z - z0)[free]))], time=time.perf_counter() - started,
+                        residuals=[_norm(system, r0[free]), _norm(system, residual[free])],
+                        increments=[_norm(system, (z - z0)[free])], time=time.perf_counter() - started,
                         notes=[note] if note else [])
     return z, record, residual
