@@ -1,19 +1,26 @@
 """Cold start of a checkout's package: a fresh process, an empty kernel cache, one compile.
 
-    .venv/bin/python benchmarks/cold_start.py [--package CHECKOUT] [--what warmup|first] [--kernels 25]
+    .venv/bin/python benchmarks/cold_start.py [--package CHECKOUT] [--what first|element|warmup] [--kernels 25]
 
 ``--what first`` (default): ``import mortar1d3d`` and the first segment- and element-based
 assembly of a tiny hex8 scene (``STARTUP_CODE`` of ``test_startup.py``); ``--what warmup``:
 ``mortar1d3d.warmup()``, every kernel. The child runs with ``NUMBA_CACHE_DIR`` pointing to a new
 empty directory (removed afterwards) and the package of ``CHECKOUT`` (default: this one) first
-on its path; its wall time is printed and it is an error if the package came from elsewhere.
+on its path; its wall time and CPU seconds (user + system) are printed and it is an error if the
+package came from elsewhere.
 
 ``--kernels N`` also prints where the compile time goes: Numba's compile events are recorded in
-the child and the N functions with the largest *own* compile time are listed (the time between
-the start and end of a function's compilation minus that of the compilations nested in it: a
-kernel compiles the functions it calls first), with the number of type signatures each was
-compiled for, and the sum over all functions, which is the time spent compiling. Recording adds
-a little to the wall time.
+the child and the N functions with the largest *own* compile time are listed (the CPU time
+between the start and end of a function's compilation minus that of the compilations nested in
+it: a kernel compiles the functions it calls first; CPU, not wall time, so that the figures hold
+on a loaded machine), the part of it Numba spent holding the LLVM lock (optimisation and machine
+code), the number of type signatures each was compiled for, and the sum over all functions,
+which is the time spent compiling. ``--dump FILE`` writes every compilation (function, own CPU
+and LLVM seconds, argument types) as JSON, e.g. to find functions compiled for several
+signatures. Recording adds a little to the wall time.
+
+``--what element``: ``import mortar1d3d`` and the first element-based assembly of the same scene
+alone (what a user of element-based integration waits for on a first run).
 
 To compare two versions, pair whole runs of this script so that both see the machine of the same
 minutes: alternate the two commands (A B A B ...) and compare their CPU seconds (user + system of
@@ -24,6 +31,7 @@ the whole process, e.g. from ``/usr/bin/time``) run by run::
 """
 import argparse
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -34,6 +42,9 @@ from pathlib import Path
 from test_startup import STARTUP_CODE
 
 WARMUP_CODE = "import mortar1d3d as m; m.warmup()"
+#: the element-based half of STARTUP_CODE alone
+ELEMENT_CODE = STARTUP_CODE.replace("m.assemble_mortar(b,s,integration='segment'); ", "")
+assert ELEMENT_CODE != STARTUP_CODE
 
 #: run in the child before the measured code when ``--kernels`` is given: records Numba's compile
 #: events and prints the functions with the largest own compile time when the child exits
@@ -42,32 +53,58 @@ import atexit, collections, time
 from numba.core import event as _event
 _spans = []
 class _Listener(_event.Listener):
+    # per open compilation: its start (CPU seconds of the process), the CPU seconds of the
+    # compilations nested in it and its own CPU seconds holding the LLVM lock
     def __init__(self):
         self.stack = []
     def on_start(self, ev):
-        self.stack.append([time.perf_counter(), 0.0])
+        self.stack.append([time.process_time(), 0.0, 0.0])
     def on_end(self, ev):
-        start, nested = self.stack.pop()
-        total = time.perf_counter() - start
+        start, nested, llvm = self.stack.pop()
+        total = time.process_time() - start
         if self.stack:
             self.stack[-1][1] += total
         d = ev.data.get("dispatcher")
         name = getattr(getattr(d, "py_func", None), "__qualname__", str(d))
         module = getattr(getattr(d, "py_func", None), "__module__", "?")
-        _spans.append((module + "." + name, total - nested))
-_event.register("numba:compile", _Listener())
+        _spans.append((module + "." + name, total - nested, llvm, str(ev.data.get("args"))))
+_compiles = _Listener()
+class _LLVMListener(_event.Listener):
+    # the outermost holds of the LLVM lock (optimisation, machine code), given to the innermost
+    # open compilation: the one whose library is being finalised
+    def __init__(self):
+        self.depth = 0
+    def on_start(self, ev):
+        self.depth += 1
+        if self.depth == 1:
+            self.start = time.process_time()
+    def on_end(self, ev):
+        self.depth -= 1
+        if self.depth == 0 and _compiles.stack:
+            _compiles.stack[-1][2] += time.process_time() - self.start
+_event.register("numba:llvm_lock", _LLVMListener())
+_event.register("numba:compile", _compiles)
 def _report():
     own = collections.defaultdict(float)
+    own_llvm = collections.defaultdict(float)
     count = collections.Counter()
-    for name, t in _spans:
+    for name, t, llvm, _args in _spans:
         own[name] += t
+        own_llvm[name] += llvm
         count[name] += 1
+    if DUMP:
+        import json
+        with open(DUMP, "w") as f:
+            json.dump([{"function": n, "own_cpu_seconds": t, "own_llvm_seconds": l, "args": a}
+                       for n, t, l, a in _spans], f, indent=0)
     top = sorted(own.items(), key=lambda kv: -kv[1])[:KERNELS]
     total = sum(own.values())
-    print(f"compiling: {total:.1f} s in {len(_spans)} compilations of {len(own)} functions; "
-          f"the {len(top)} largest (own time, signatures):", flush=True)
+    print(f"compiling: {total:.1f} CPU s ({sum(own_llvm.values()):.1f} s of it in LLVM) in {len(_spans)} "
+          f"compilations of {len(own)} functions; the {len(top)} largest (own CPU time, LLVM part, signatures):",
+          flush=True)
     for name, t in top:
-        print(f"  {t:7.2f} s  {100 * t / total:5.1f} %  x{count[name]}  {name}", flush=True)
+        print(f"  {t:7.2f} s  {100 * t / total:5.1f} %  LLVM {own_llvm[name]:6.2f} s  x{count[name]}  {name}",
+              flush=True)
 atexit.register(_report)
 """
 
@@ -76,25 +113,32 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--package", default=str(Path(__file__).resolve().parents[1]), metavar="CHECKOUT",
                         help="directory holding the mortar1d3d package to start (default: this checkout)")
-    parser.add_argument("--what", choices=("first", "warmup"), default="first")
+    parser.add_argument("--what", choices=("first", "element", "warmup"), default="first")
     parser.add_argument("--kernels", type=int, default=0, metavar="N",
                         help="list the N functions with the largest own compile time")
+    parser.add_argument("--dump", metavar="JSON",
+                        help="with --kernels: write every compilation (function, own time, argument types) to JSON")
     args = parser.parse_args(argv)
     root = Path(args.package).resolve()
     if not (root / "mortar1d3d" / "__init__.py").is_file():
         parser.error(f"--package: no mortar1d3d package in {root}")
-    code = (STARTUP_CODE if args.what == "first" else WARMUP_CODE)
+    code = {"first": STARTUP_CODE, "element": ELEMENT_CODE, "warmup": WARMUP_CODE}[args.what]
     if args.kernels > 0:
-        code = RECORDER_CODE.replace("KERNELS", str(args.kernels)) + "\n" + code
+        dump = repr(str(Path(args.dump).resolve())) if args.dump else "None"
+        code = RECORDER_CODE.replace("KERNELS", str(args.kernels)).replace("DUMP", dump) + "\n" + code
     check = f"; import mortar1d3d as _m; assert _m.__file__.startswith({str(root)!r}), _m.__file__"
     cache = tempfile.mkdtemp(prefix="m13-cold-")
     try:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache,
                    PYTHONPATH=os.pathsep.join([str(root)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
         t0 = time.perf_counter()
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
         subprocess.run([sys.executable, "-c", code + check], env=env, cwd=root, check=True,
                        stdout=None if args.kernels > 0 else subprocess.DEVNULL)
-        print(f"{args.what} from an empty cache, package {root}: {time.perf_counter() - t0:.1f} s")
+        wall = time.perf_counter() - t0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        print(f"{args.what} from an empty cache, package {root}: {wall:.1f} s wall, {cpu:.1f} CPU s")
     finally:
         shutil.rmtree(cache, ignore_errors=True)
 

@@ -14,19 +14,25 @@ chain calling each kernel directly (no function pointers), and one compiled kern
 type, which Numba's on-disk cache can store. Adding a type to a registry adds its branch.
 """
 from numba import types
-from numba.extending import overload
+from numba.extending import intrinsic
 
 
 def kernel_selector(registry):
-    """A stand-in ``select(k, name)`` for use in njit code: the kernel ``name`` of ``registry[k]``."""
+    """A stand-in ``select(k, name)`` for use in njit code: the kernel ``name`` of ``registry[k]``.
 
-    def select(k, name):
-        raise TypeError("kernel_selector stand-ins are for njit code only")
+    An intrinsic, not an ``@overload``: its value is the kernel itself (a dispatcher, which has no
+    run-time data), typed when the caller is typed and emitted as nothing. An overload would compile
+    an implementation function per (k, name) pair, one more compilation each (37 on a first run).
+    """
 
-    @overload(select)
-    def _select(k, name):
+    @intrinsic
+    def select(typingctx, k, name):
         if isinstance(k, types.IntegerLiteral) and isinstance(name, types.StringLiteral):
             kernel = getattr(registry[k.literal_value], name.literal_value)
-            return lambda k, name: kernel
+
+            def codegen(context, builder, signature, args):
+                return context.get_dummy_value()
+
+            return types.Dispatcher(kernel)(k, name), codegen
 
     return select

@@ -20,6 +20,10 @@ CONVERGED = 0
 FAILED = 1
 #: outcome of locating a point in an element, as stored per integration point
 INSIDE, OUTSIDE, NOT_CONVERGED = 0, 1, 2
+#: ``only`` of :func:`first_containing` that tests every candidate: an int64, not the literal -1, so that
+#: the calls with and without a given element share one compiled version (a literal argument is
+#: a signature of its own: a second compilation of the function and of every caller's copy of it)
+ANY_CANDIDATE = np.int64(-1)
 
 _MAX_PARAMETER = 1e3      # |ξ| beyond this: the point is far outside; stop early
 _BACKTRACKS = 8

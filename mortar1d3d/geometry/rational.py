@@ -77,7 +77,8 @@ def rational_curvature_bound(code, a, m0, m1, m2, r):
     y1 = m1 - solid.CENTRE[code, 1]
     y2 = m2 - solid.CENTRE[code, 2]
     radius = max(abs(y0), abs(y1), abs(y2)) + r
-    w0, w1, w2, wc, wm = _bounds(code, a, 3, radius, y0, y1, y2)
+    # column 3 as an int64 like the loop's i below: a literal 3 would compile _bounds a second time
+    w0, w1, w2, wc, wm = _bounds(code, a, np.int64(3), radius, y0, y1, y2)
     w_min = max(wc - w0, wm - r * w1)
     if not w_min > 0.0:
         return np.inf

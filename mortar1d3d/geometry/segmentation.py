@@ -35,8 +35,9 @@ from ..elements.solid import dispatch as solid
 from .beam import beam_point, beams_affine
 from .intersection import face_coordinates, intersect_face
 from .linalg import norm3, solve3
-from .projection import (CONVERGED, NOT_CONVERGED, certified_outside, first_containing, is_affine, jacobian,
-                         linear_parameters, load_element, locate_point, point_buffers, project_point, search_buffers)
+from .projection import (ANY_CANDIDATE, CONVERGED, NOT_CONVERGED, certified_outside, first_containing, is_affine,
+                         jacobian, linear_parameters, load_element, locate_point, point_buffers, project_point,
+                         search_buffers)
 
 _NEAR_FACE = 0.1     # min |g| of the cubic model below this fraction of its variation: try a touch there
 _SCAN = 8            # points per sample interval at which the cubic model of g is scanned
@@ -267,7 +268,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
                         solid.centre(code, xi)
                 faces = solid.faces(code)
                 line = affine and straight[e]
-                count = 0
+                count = np.int64(0)     # not the literal 0: _record would compile for it as well
                 for f in range(faces.shape[0]):
                     if not reach[f]:
                         continue
@@ -469,7 +470,7 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count,
                     touch = np.empty(2 * (m + 2), dtype=np.bool_)
                     owners = np.empty(2 * (m + 2), dtype=np.int64)
                 # breakpoints: -1, the crossings (sorted; physically coincident ones merged), +1
-                m = 0
+                m = np.int64(0)     # not the literal 0: _insertion_sort would compile for it as well
                 for p in range(p0, p1):
                     for q in range(crossing_count[p]):
                         cuts[1 + m] = crossing_eta[p, q]
@@ -519,7 +520,7 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count,
                     while first < p1:
                         owner = first_containing(r0, r1, r2, e, pair_solid, first, p1, beam_origin, solid_boxes, codes,
                                                  conn, points, solid_origin, solid_h, linear, owner_tol, X, xi, trial,
-                                                 N, dN, a, stack, -1)
+                                                 N, dN, a, stack, ANY_CANDIDATE)
                         if owner < 0:
                             break
                         p = first
@@ -629,7 +630,7 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
                             r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
                             if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes,
                                                 conn, points, solid_origin, solid_h, linear, -loose, X, xi, trial, N,
-                                                dN, a_buf, stack, -1) >= 0:
+                                                dN, a_buf, stack, ANY_CANDIDATE) >= 0:
                                 failed = True
                     if last or failed:
                         break
@@ -656,7 +657,7 @@ def _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_
     centreline crosses a face, so the bisected cuts land on the faces)."""
     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
     return first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
-                            solid_origin, solid_h, linear, _SHARP, X, xi, trial, N, dN, a, stack, -1)
+                            solid_origin, solid_h, linear, _SHARP, X, xi, trial, N, dN, a, stack, ANY_CANDIDATE)
 
 
 _SHARP = TOUCH_TOL

@@ -196,7 +196,9 @@ def relative_residual(D, q, M, x):
     Not ``np.linalg.norm`` of scipy products: its BLAS call wakes OpenBLAS's thread pool, which
     then competes with Numba's threads for the cores (two threads ran slower than one).
     """
-    partial = np.empty((n_chunks(D.shape[0], CHUNK), 2))
+    # the Python function: calling the kernel from here would compile it for (int64, int64) besides the
+    # kernels' (int64, literal CHUNK)
+    partial = np.empty((n_chunks.py_func(D.shape[0], CHUNK), 2))
     _residual_squares(D.indptr, D.indices, D.data, np.ascontiguousarray(q, dtype=np.float64), M.indptr, M.indices,
                       M.data, np.ascontiguousarray(x, dtype=np.float64), partial, workers())
     diff, ref = partial.sum(axis=0) if len(partial) else (0.0, 0.0)
