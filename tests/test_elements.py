@@ -374,7 +374,7 @@ def test_registry_codes_and_sizes():
     codes = sorted(d.code for d in dispatch.SOLID_ELEMENTS.values())
     assert codes == list(range(len(dispatch.SOLID_ELEMENTS)))
     assert set(dispatch.BY_CODE) == set(codes)
-    assert dispatch.MAX_NODES == max(d.n_nodes for d in dispatch.SOLID_ELEMENTS.values()) == 64
+    assert dispatch.MAX_NODES == max(d.n_nodes for d in dispatch.SOLID_ELEMENTS.values()) == 125
     assert set(NAMES) == {"hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10", "wedge"}
     for name, d in dispatch.SOLID_ELEMENTS.items():
         assert d.name == name
@@ -387,7 +387,7 @@ def test_registry_codes_and_sizes():
         assert d.dim == 3
     expected = {"hexahedron": (8, 1, "hex"), "hexahedron20": (20, 2, "hex"), "hexahedron27": (27, 2, "hex"),
                 "tetra": (4, 1, "tet"), "tetra10": (10, 2, "tet"), "wedge": (6, 1, "wedge"), "nurbs27": (27, 2, "hex"),
-                "nurbs64": (64, 3, "hex")}
+                "nurbs64": (64, 3, "hex"), "nurbs125": (125, 4, "hex")}
     assert {n: (d.n_nodes, d.degree, d.family) for n, d in dispatch.SOLID_ELEMENTS.items()} == expected
 
 
