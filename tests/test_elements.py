@@ -374,7 +374,7 @@ def test_registry_codes_and_sizes():
     codes = sorted(d.code for d in dispatch.SOLID_ELEMENTS.values())
     assert codes == list(range(len(dispatch.SOLID_ELEMENTS)))
     assert set(dispatch.BY_CODE) == set(codes)
-    assert dispatch.MAX_NODES == max(d.n_nodes for d in dispatch.SOLID_ELEMENTS.values()) == 64
+    assert dispatch.MAX_NODES == max(d.n_nodes for d in dispatch.SOLID_ELEMENTS.values()) == 125
     assert set(NAMES) == {"hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10", "wedge"}
     for name, d in dispatch.SOLID_ELEMENTS.items():
         assert d.name == name
@@ -387,7 +387,7 @@ def test_registry_codes_and_sizes():
         assert d.dim == 3
     expected = {"hexahedron": (8, 1, "hex"), "hexahedron20": (20, 2, "hex"), "hexahedron27": (27, 2, "hex"),
                 "tetra": (4, 1, "tet"), "tetra10": (10, 2, "tet"), "wedge": (6, 1, "wedge"), "nurbs27": (27, 2, "hex"),
-                "nurbs64": (64, 3, "hex")}
+                "nurbs64": (64, 3, "hex"), "nurbs125": (125, 4, "hex")}
     assert {n: (d.n_nodes, d.degree, d.family) for n, d in dispatch.SOLID_ELEMENTS.items()} == expected
 
 
@@ -784,3 +784,21 @@ def test_beam_coefficients_and_control_points(name):
         r = H[: et.n_functions] @ Q[: et.n_functions]
         weights, residual = nnls(A, np.append(r, 1.0))
         assert residual < 1e-12, (eta, residual)
+
+
+def test_dispatch_tables_stay_cachable():
+    """Numba freezes a global array into compiled code only below 1 MB (10**6 bytes); a kernel that reads
+    a larger one is compiled again in every process ("Cannot cache ... dynamic globals"). Every table of
+    the registry must stay below that as types grow (padded to 125 nodes, the monomial matrices alone
+    would take 1.1 MB)."""
+    tables = {k: v for k, v in vars(dispatch).items() if isinstance(v, np.ndarray)}
+    assert {"TO_MONOMIAL", "CONTROL_MATRIX", "REFERENCE_NODES", "MONOMIALS"} <= set(tables)
+    assert {k: v.nbytes for k, v in tables.items() if v.nbytes >= 10 ** 6} == {}
+    # the flat monomial matrices: each type's block where MONOMIAL_START says
+    for d in dispatch.SOLID_ELEMENTS.values():
+        n, start = d.n_nodes, dispatch.MONOMIAL_START[d.code]
+        block = dispatch.TO_MONOMIAL[start: start + n * n].reshape(n, n)
+        y = d.reference_nodes - d.centre
+        vandermonde = np.prod(y[:, None, :] ** d.monomials[None, :, :], axis=2)
+        values = dispatch.SOLID_MODULES[d.name].NODE_VALUES if d.rational else np.eye(n)
+        assert np.abs(vandermonde @ block - values).max() < 1e-9 * max(1.0, np.abs(block).max())

@@ -11,7 +11,7 @@ import pytest
 
 import mortar1d3d as m13
 from mortar1d3d import generate
-from mortar1d3d.elements.solid.dispatch import (CONTROL_MATRIX, FACE_CONTROL, N_FACE_CONTROL, SOLID_ELEMENTS,
+from mortar1d3d.elements.solid.dispatch import (MAX_CONTROL, FACE_CONTROL, N_FACE_CONTROL, SOLID_ELEMENTS,
                                                 SOLID_MODULES, control_points)
 from mortar1d3d._schedule import workers
 from mortar1d3d.geometry.projection import linear_maps
@@ -141,7 +141,7 @@ def test_face_control_points_contain_the_face(element):
     module = SOLID_MODULES[element]
     u = np.linspace(0.0, 1.0, 9)
     shapes = descriptor.family_type.face_shapes
-    C = np.empty((CONTROL_MATRIX.shape[1], 3))
+    C = np.empty((MAX_CONTROL, 3))
     N = np.empty(n)
     checked = 0
     for s in range(solid.n_elements):

@@ -1,6 +1,6 @@
-"""Patches of any degree 1 … 3 per direction (issue 19 item 1): exact degree elevation to the common
-degree of the element registry (2: nurbs27, 3: nurbs64), per direction and across patches; the
-geometry (points and weights) is unchanged; a degree above 3 is an error saying what is supported."""
+"""Patches of any degree 1 … 4 per direction (issue 19 item 1): exact degree elevation to the common
+degree of the element registry (2: nurbs27, 3: nurbs64, 4: nurbs125), per direction and across patches;
+the geometry (points and weights) is unchanged; a degree above 4 is an error saying what is supported."""
 import numpy as np
 import pytest
 
@@ -41,7 +41,8 @@ def wavy_patch(degrees, seed=0):
 
 @pytest.mark.parametrize("degrees, element", [((1, 1, 1), "nurbs27"), ((1, 2, 1), "nurbs27"),
                                               ((2, 1, 2), "nurbs27"), ((1, 3, 2), "nurbs64"),
-                                              ((3, 1, 1), "nurbs64"), ((3, 3, 3), "nurbs64")])
+                                              ((3, 1, 1), "nurbs64"), ((3, 3, 3), "nurbs64"),
+                                              ((4, 1, 2), "nurbs125"), ((2, 4, 3), "nurbs125")])
 def test_mixed_degrees_keep_the_geometry(degrees, element):
     patch = wavy_patch(degrees)
     mesh = nurbs.bezier_mesh(NurbsSolid([patch]))
@@ -124,11 +125,12 @@ def test_joining_control_nets_of_other_degrees_is_an_error():
 
 def test_a_degree_above_the_registry_names_the_patch_and_what_is_supported():
     patch = wavy_patch((2, 2, 2))
-    with pytest.raises(ValueError, match=r"patches\[1\]: degree 4 in direction 2; supported are degrees 1 to 3 per "
+    with pytest.raises(ValueError, match=r"patches\[1\]: degree 5 in direction 2; supported are degrees 1 to 4 per "
                                          r"direction, elevated exactly to the element types nurbs27 \(degree 2\), "
-                                         r"nurbs64 \(degree 3\)"):
-        nurbs.bezier_mesh(NurbsSolid([patch, patch.elevate(2, 2)]))
+                                         r"nurbs64 \(degree 3\), nurbs125 \(degree 4\)"):
+        nurbs.bezier_mesh(NurbsSolid([patch, patch.elevate(2, 3)]))
     assert common_degree([(1, 1, 1), (1, 2, 1)]) == 2 and common_degree((1, 1, 3)) == 3
+    assert common_degree([(1, 1, 1), (4, 2, 1)]) == 4
 
 
 def test_generators_take_degrees_per_direction():

@@ -34,14 +34,15 @@ def jittered(seed):
     return nurbs.bezier_mesh(nurbs.NurbsSolid([nurbs.NurbsPatch(control, weights, patch.knots, patch.degrees)]))
 
 
-@pytest.mark.parametrize("mesh", ["sector90", "pipe120", "jittered", "pipe120_cubic"])
+@pytest.mark.parametrize("mesh", ["sector90", "pipe120", "jittered", "pipe120_cubic", "pipe120_quartic"])
 def test_points_are_found_where_they_are(mesh):
     """The trust property on NURBS spans: x(ξ) for random ξ inside is INSIDE at ξ to 1e-10, and
     x(ξ) just beyond a face (1e-6 in ξ) is never INSIDE (OUTSIDE at that ξ, or no solution found:
     NOT_CONVERGED, after the search proved that none lies inside)."""
     bm = {"sector90": lambda: sector(), "pipe120": lambda: sector(360.0, (1, 3, 1), r=(0.2, 0.3), height=1.0),
           "jittered": lambda: jittered(3),
-          "pipe120_cubic": lambda: sector(360.0, (1, 3, 1), r=(0.2, 0.3), height=1.0, degree=3)}[mesh]()
+          "pipe120_cubic": lambda: sector(360.0, (1, 3, 1), r=(0.2, 0.3), height=1.0, degree=3),
+          "pipe120_quartic": lambda: sector(360.0, (1, 3, 1), r=(0.2, 0.3), height=1.0, degree=4)}[mesh]()
     rng = np.random.default_rng(11)
     patch = bm.nurbs.patches[0]
     xi = rng.uniform(-1, 1, (60, 3))
@@ -72,7 +73,7 @@ def _crossing_beam(points):
     return m13.BeamMesh.from_curve(f, df, 0.0, 1.0, 1)
 
 
-@pytest.mark.parametrize("degree", [2, 3])
+@pytest.mark.parametrize("degree", [2, 3, 4])
 def test_curved_beam_crossing_the_inner_face_twice_has_two_pieces(degree):
     """A curved Hermite line through the 90° hollow-cylinder element (radii 0.1 / 0.2, height 0.3; one
     quadratic or, degree-elevated, cubic span): it enters through θ = 0, dips into the hole (the
@@ -94,7 +95,7 @@ def test_curved_beam_crossing_the_inner_face_twice_has_two_pieces(degree):
     assert abs(ops.embedded_length - length) < 1e-9 * length     # 6 Gauss points on |r'| (not a polynomial)
 
 
-@pytest.mark.parametrize("degree", [2, 3])
+@pytest.mark.parametrize("degree", [2, 3, 4])
 @pytest.mark.parametrize("integration", ["segment", "element", "auto"])
 def test_operators_on_a_closed_pipe(integration, degree):
     """Curved beams through a closed pipe of 2 × 6 × 2 elements (quadratic, or cubic spans): the

@@ -82,8 +82,9 @@ def test_named_sets_of_a_pipe_section():
     ({"r_outer": 0.05}, r"solid\.mesh\.pipe\.r_outer: must be greater than r_inner"),
     ({"elements": [1, 2, 1]}, r"solid\.mesh\.pipe\.elements\[1\]: 2 element\(s\) cannot cover 360"),
     ({"angle": 400.0}, r"solid\.mesh\.pipe\.angle"),
-    ({"degree": 4}, r"solid\.mesh\.pipe\.degree: degree 4 is above what the element registry has; supported are "
-                    r"degrees 1 to 3 per direction, elevated exactly to nurbs27 \(degree 2\), nurbs64 \(degree 3\)"),
+    ({"degree": 5}, r"solid\.mesh\.pipe\.degree: degree 5 is above what the element registry has; supported are "
+                    r"degrees 1 to 4 per direction, elevated exactly to nurbs27 \(degree 2\), nurbs64 \(degree 3\), "
+                    r"nurbs125 \(degree 4\)"),
     ({"degree": [2, 1, 2]}, r"solid\.mesh\.pipe\.degree\[1\]: degree 1 in direction 1: must be at least 2"),
     ({"order": 3}, r"solid\.mesh\.pipe\.order: unknown key"),
 ])

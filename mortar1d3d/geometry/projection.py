@@ -134,10 +134,11 @@ def load_element(points, conn, element, code, origin, X):
 def monomial_coefficients(code, X, a):
     """Coefficients ``a[k]`` (3,) of the map x(ξ) = Σ_k a_k y^{α_k}, y = ξ - ξ_c, of local nodes ``X``."""
     n = solid.n_nodes(code)
+    start = solid.MONOMIAL_START[code]
     for k in range(n):
         a0 = a1 = a2 = 0.0
         for b in range(n):
-            w = solid.TO_MONOMIAL[code, k, b]
+            w = solid.TO_MONOMIAL[start + k * n + b]
             if w != 0.0:
                 a0 += w * X[b, 0]
                 a1 += w * X[b, 1]

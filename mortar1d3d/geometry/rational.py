@@ -28,10 +28,11 @@ def rational_coefficients(code, X, a):
     """Monomial coefficients about ξ_c of X̃ (``a[k, :3]``) and W (``a[k, 3]``) of a rational element with
     local control points ``X[:, :3]`` and weights ``X[:, 3]``."""
     n = solid.n_nodes(code)
+    start = solid.MONOMIAL_START[code]
     for k in range(n):
         a0 = a1 = a2 = a3 = 0.0
         for b in range(n):
-            t = solid.TO_MONOMIAL[code, k, b]
+            t = solid.TO_MONOMIAL[start + k * n + b]
             if t != 0.0:
                 w = t * X[b, 3]
                 a0 += w * X[b, 0]

@@ -14,9 +14,8 @@ from .._memory import carve
 from .._schedule import claim, new_claims, workers
 from ..elements import beam as beam_functions
 from ..elements.beam import CODES as _BEAM_CODES, select as _beam_kernel
-from ..elements.solid.dispatch import CONTROL_MATRIX, MAX_NODES, N_NODES, control_points
+from ..elements.solid.dispatch import MAX_CONTROL, MAX_NODES, N_NODES, control_points
 
-MAX_CONTROL = CONTROL_MATRIX.shape[1]
 
 
 def solid_bounding_boxes(solid, padding=PARAMETER_TOL):

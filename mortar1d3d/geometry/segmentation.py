@@ -201,7 +201,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
     S = search_points
     claims = new_claims(n_pairs, workers)
     for worker in prange(workers):
-        C = np.empty((solid.CONTROL_MATRIX.shape[1], 3))
+        C = np.empty((solid.MAX_CONTROL, 3))
         reach = np.empty(solid.MAX_FACES, dtype=np.bool_)
         X, N, dN, H, dH, xi, trial = point_buffers()
         a, stack = search_buffers()

@@ -295,9 +295,9 @@ def write_solid(path, solid, point_data=None, cell_data=None, *, compression="zl
     pathlib.Path
         The file written. Cell data ``solid_element`` (int64, the global element number used by
         :attr:`MortarOperators.segments`) is always written, unless ``cell_data`` overrides it.
-        Rational elements (``nurbs27``, ``nurbs64``) are written as ``hexahedron27`` cells through their
-        exact points at the lattice parameters (one cell per ``nurbs27`` span, 2 × 2 × 2 cells per
-        ``nurbs64`` span, each with its span's cell data), the point data interpolated there
+        Rational elements (``nurbs27``, ``nurbs64``, ``nurbs125``) are written as ``hexahedron27`` cells through their
+        exact points at the lattice parameters ((p − 1)³ cells per span of degree p: one per
+        ``nurbs27``, 8 per ``nurbs64``, 27 per ``nurbs125`` span, each with its span's cell data), the point data interpolated there
         (:func:`mortar1d3d.nurbs.mesh.sampled_cells`).
     """
     import meshio

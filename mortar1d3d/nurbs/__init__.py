@@ -1,9 +1,9 @@
 """NURBS volumes: patches, Bézier extraction, rational basis kernels, exact generators, refinement,
 the engine's mesh of rational Bézier elements and the solid model on control points.
 
-A patch enters the engine as ``nurbs27`` (``nurbs64``) elements (one per non-empty knot span, its Bézier
-control points and weights as nodes; degrees 1 … 3 per direction are elevated exactly to 2, or to 3
-where any is 3): :func:`bezier_mesh` gives the :class:`~mortar1d3d.SolidMesh`
+A patch enters the engine as ``nurbs27``, ``nurbs64`` or ``nurbs125`` elements (one per non-empty knot
+span, its Bézier control points and weights as nodes; degrees 1 … 4 per direction are elevated exactly
+to 2, 3 or 4, the highest degree of any direction): :func:`bezier_mesh` gives the :class:`~mortar1d3d.SolidMesh`
 that :func:`mortar1d3d.assemble_mortar` and :func:`mortar1d3d.project_points` take, and the sparse
 map ``T`` from control points to its nodes (``M_control = M (T ⊗ I₃)``).
 

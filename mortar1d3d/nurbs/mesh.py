@@ -1,9 +1,9 @@
 """From NURBS patches to the engine: a mesh of rational Bézier elements and the map to control points.
 
 Every NURBS element becomes the rational Bézier element type of the solid's common degree p
-(``nurbs27`` for p = 2, ``nurbs64`` for p = 3: :mod:`mortar1d3d.elements.solid.bezier_hex`): its
+(``nurbs27`` for p = 2, ``nurbs64`` for p = 3, ``nurbs125`` for p = 4: :mod:`mortar1d3d.elements.solid.bezier_hex`): its
 (p+1)³ Bézier control points and weights from Bézier extraction, in the type's node order. A patch
-of lower degree in some direction (1 … 3 per direction, mixed across directions and patches) is
+of lower degree in some direction (1 … 4 per direction, mixed across directions and patches) is
 degree-elevated span by span to p (:func:`~mortar1d3d.nurbs.knots.bernstein_elevation`): exact, the
 same rational functions and geometry in a larger Bernstein basis; p is the smallest registered
 degree that is at least every patch's highest (:func:`common_degree`). Bézier
@@ -41,7 +41,7 @@ def bezier_type(degrees, what="patches"):
 
 def common_degree(degrees, what="patches"):
     """The degree of the elements a solid's patches become: the smallest registered rational Bézier
-    degree (2: ``nurbs27``, 3: ``nurbs64``) that is at least every given degree.
+    degree (2: ``nurbs27``, 3: ``nurbs64``, 4: ``nurbs125``) that is at least every given degree.
 
     Parameters
     ----------
@@ -66,13 +66,13 @@ def common_degree(degrees, what="patches"):
 
 
 class BezierMesh:
-    """The engine's view of a :class:`~mortar1d3d.nurbs.NurbsSolid` (patches of degree 1 … 3 per direction,
+    """The engine's view of a :class:`~mortar1d3d.nurbs.NurbsSolid` (patches of degree 1 … 4 per direction,
     elements of their common degree p = 2 or 3, module docstring).
 
     Attributes
     ----------
     solid : SolidMesh
-        ``nurbs27`` or ``nurbs64`` elements (patch by patch, each patch's elements with the last parameter
+        ``nurbs27``, ``nurbs64`` or ``nurbs125`` elements (patch by patch, each patch's elements with the last parameter
         direction fastest), nodes = Bézier control points, with weights.
     T : scipy.sparse.csr_matrix (n_nodes, n_control)
         Mesh node values from control-point values (module docstring).
@@ -218,7 +218,7 @@ class _single_block:
 
 
 def bezier_mesh(nurbs, tol=1e-10):
-    """The engine's mesh of a :class:`~mortar1d3d.nurbs.NurbsSolid` (degrees 1 … 3 per direction): a :class:`BezierMesh`."""
+    """The engine's mesh of a :class:`~mortar1d3d.nurbs.NurbsSolid` (degrees 1 … 4 per direction): a :class:`BezierMesh`."""
     return BezierMesh(nurbs, tol)
 
 

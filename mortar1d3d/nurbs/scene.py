@@ -6,7 +6,7 @@ The pipe is :func:`~mortar1d3d.nurbs.hollow_cylinder` (about the z axis, from z 
 default, ``degree`` one integer or three per direction, at least [1, 2, 1]: the exact geometry
 degree-elevated, which leaves it unchanged), and the scene runs on its Bézier mesh
 (:func:`~mortar1d3d.nurbs.bezier_mesh`): the solid's unknowns are the displacements of the ``nurbs27``
-(``nurbs64``) nodes (Bézier control points), i.e. the C⁰ space of the rational Bézier elements on the
+(``nurbs64``, ``nurbs125``) nodes (Bézier control points), i.e. the C⁰ space of the rational Bézier elements on the
 exact geometry. It contains the smoother NURBS space of the patch
 (``T`` maps one into the other) and is what every path of the model evaluates (the solid, the
 mortar coupling, surface loads and output take rational elements).
@@ -18,12 +18,12 @@ start + angle). Each is the set of the nodes of the element faces on that surfac
 it acts on exactly that surface and a support on it holds exactly that surface.
 
 The brick is :func:`~mortar1d3d.nurbs.brick` (the box ``lower <= x <= upper``, all weights 1, degree 1 to
-3, one or per direction, ``elements`` equal spans per direction: h-refinement by knot insertion), with the named sets of
+4, one or per direction, ``elements`` equal spans per direction: h-refinement by knot insertion), with the named sets of
 a generated box: ``x_min``, ``x_max``, ``y_min``, ``y_max``, ``z_min``, ``z_max`` (its faces).
 
-Degrees 1 to 3 are taken (per direction, mixed across patches); the elements are of the smallest
-registered degree that is at least every patch's highest (2: ``nurbs27``, 3: ``nurbs64``), every patch
-degree-elevated to it exactly; a degree above 3 is a SceneError saying so.
+Degrees 1 to 4 are taken (per direction, mixed across patches); the elements are of the smallest
+registered degree that is at least every patch's highest (2: ``nurbs27``, 3: ``nurbs64``, 4: ``nurbs125``),
+every patch degree-elevated to it exactly; a degree above 4 is a SceneError saying so.
 
 Several patches (:func:`patches_mesh`): a patch that meets another one without
 shared control points is a SceneError naming it; each set name is the union over the patches of its
@@ -57,7 +57,7 @@ PIPE_FACES = {"inner": "u0_min", "outer": "u0_max", "cut_start": "u1_min", "cut_
 def validate_pipe(value, path="solid.mesh.pipe"):
     """The checked ``pipe`` table: radii, length, angle (degrees, default 360), start angle (default 0),
     ``elements = [radial, circumferential, axial]`` and ``degree`` (default 2; one integer or three, at least
-    [1, 2, 1], at most 3). SceneError naming the key otherwise."""
+    [1, 2, 1], at most 4). SceneError naming the key otherwise."""
     from ..scene import _fail, _number, _table
 
     _table(value, path, PIPE_KEYS, required=("r_inner", "r_outer", "length", "elements"))
@@ -112,7 +112,7 @@ def _elements(value, path):
 
 def validate_brick(value, path="solid.mesh.brick"):
     """The checked ``brick`` table: corners ``lower`` < ``upper``, ``elements = [nx, ny, nz]`` and ``degree``
-    (default 2; one integer or three, 1 to 3). SceneError naming the key otherwise."""
+    (default 2; one integer or three, 1 to 4). SceneError naming the key otherwise."""
     from ..scene import _fail, _list, _number, _table
 
     _table(value, path, BRICK_KEYS, required=("lower", "upper", "elements"))
@@ -148,7 +148,7 @@ def _face_sets(mesh, patch, faces, boundary=None):
 
 
 def pipe_mesh(spec):
-    """The :class:`~mortar1d3d.SolidMesh` (``nurbs27`` or ``nurbs64``, with the named sets of the module docstring) of a
+    """The :class:`~mortar1d3d.SolidMesh` (``nurbs27``, ``nurbs64`` or ``nurbs125``, with the named sets of the module docstring) of a
     validated ``pipe`` table, and its :class:`~mortar1d3d.nurbs.BezierMesh`."""
     return patches_mesh([{"pipe": spec}])
 
@@ -165,7 +165,7 @@ def _generate(kind, spec):
 
 def validate_patches(value, path="solid.mesh.patches"):
     """The checked ``patches`` list: one or more ``{ pipe = {...} }`` or ``{ brick = {...} }`` tables (of any
-    degrees 1 to 3); SceneError naming the key otherwise."""
+    degrees 1 to 4); SceneError naming the key otherwise."""
     from ..scene import _describe, _fail, _list
 
     items = _list(value, path)

@@ -1,7 +1,7 @@
 """The solid model on NURBS patches, with control-point DOFs.
 
 :class:`NurbsSolidModel` runs :class:`~mortar1d3d.physics.solid.SolidModel` (total Lagrangian, every
-material, or linear kinematics) on the ``nurbs27`` or ``nurbs64`` mesh of the patches (any degree 1 … 3
+material, or linear kinematics) on the ``nurbs27``, ``nurbs64`` or ``nurbs125`` mesh of the patches (any degree 1 … 4
 per direction, elevated to the common degree there: :func:`~mortar1d3d.nurbs.bezier_mesh`) and maps everything to the global control points with
 T (mesh node values = T · control values): internal forces Tᵀ f, stiffness Tᵀ K T, since the NURBS
 space is the image of T. Surface loads act on patch faces: follower pressure on the current
@@ -20,7 +20,7 @@ from .mesh import bezier_mesh, element_values
 
 
 class NurbsSolidModel:
-    """Internal forces and stiffness of a :class:`~mortar1d3d.nurbs.NurbsSolid` (degrees 1 … 3 per direction) on its
+    """Internal forces and stiffness of a :class:`~mortar1d3d.nurbs.NurbsSolid` (degrees 1 … 4 per direction) on its
     control points.
 
     Parameters

@@ -24,7 +24,7 @@ from numba import prange
 
 from .._config import CHUNK, njit, njit_inline, njit_parallel
 from .._schedule import n_chunks
-from ..elements.solid.dispatch import MAX_NODES, N_NODES
+from ..elements.solid.dispatch import N_NODES
 from .fibre_material import add_fibres
 from .kinematics import det3, green_lagrange, small_strain
 from .materials import VOIGT_INDEX, hooke, hooke_stress, stress_tangent
@@ -223,18 +223,21 @@ def assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_ptr
     hooke(lam, mu, C0)
     n_el = codes.shape[0]
     mapped = data_map.shape[0] > 0
+    # buffers as wide as the mesh's largest element (its connectivity's width), not the registry's:
+    # a hex8 mesh's element matrix buffer stays 4.6 KB whatever types the registry holds
+    w = connectivity.shape[1]
     for colour in range(colour_ptr.shape[0] - 1):
         for c in prange(colour_ptr[colour], colour_ptr[colour + 1]):
-            ue = np.empty((MAX_NODES, 3))
-            fe = np.empty((MAX_NODES, 3))
-            Ke = np.empty((9 * MAX_NODES, MAX_NODES))
+            ue = np.empty((w, 3))
+            fe = np.empty((w, 3))
+            Ke = np.empty((9 * w, w))
             F = np.empty((3, 3))
             S = np.empty((3, 3))
             Cv = np.empty((6, 6))
             P = np.empty((3, 3))
             A = np.empty(81 + 54)
-            G = np.empty((27, MAX_NODES))
-            D = np.empty((3, MAX_NODES))
+            G = np.empty((27, w))
+            D = np.empty((3, w))
             k = colour_blocks[c]
             for e in range(k * block, min(n_el, (k + 1) * block)):
                 energy, st = _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam, mu,

@@ -439,7 +439,7 @@ class Pressure:
     rational_points : int, optional
         Gauss points per direction on faces of rational (NURBS) elements; default: the rule of the
         face's degree (:func:`~mortar1d3d.physics.rational_surface.rational_face_points`, 4 on
-        quadratic and 6 on cubic faces). Polynomial faces use their exact rule.
+        quadratic, 6 on cubic and 7 on quartic faces). Polynomial faces use their exact rule.
 
     Attributes
     ----------

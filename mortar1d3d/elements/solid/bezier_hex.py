@@ -1,5 +1,5 @@
 """Rational Bernstein (Bézier) hexahedra of any degree p: what the element types ``nurbs27`` (p = 2) and
-``nurbs64`` (p = 3) share, so that a type of another degree is its module (a node order, two thin
+``nurbs64`` (p = 3) and ``nurbs125`` (p = 4) share, so that a type of another degree is its module (a node order, two thin
 kernels and :func:`rational_descriptor`) plus its registry line.
 
 A degree-p element has (p+1)³ nodes, the Bézier control points of one span of a NURBS volume after

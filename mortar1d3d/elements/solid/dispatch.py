@@ -78,6 +78,10 @@ for _c, _d in BY_CODE.items():
     REFERENCE_NODES[_c, : _d.n_nodes] = _d.reference_nodes
 
 
+def _is_identity(d):
+    return d.bounding_matrix.shape == (d.n_nodes, d.n_nodes) and np.array_equal(d.bounding_matrix, np.eye(d.n_nodes))
+
+
 def _control_tables():
     """Per code: the bounding matrix (control points from nodes) and the control points of each face.
 
@@ -88,14 +92,18 @@ def _control_tables():
     """
     n_codes = len(BY_CODE)
     n_ctrl = np.array([BY_CODE[c].bounding_matrix.shape[0] for c in range(n_codes)], dtype=np.int64)
-    matrix = np.zeros((n_codes, n_ctrl.max(), MAX_NODES))
-    identity = np.zeros(n_codes, dtype=np.bool_)
+    identity = np.array([_is_identity(BY_CODE[c]) for c in range(n_codes)], dtype=np.bool_)
+    # only the types whose control points are not their nodes read the matrix: it is as large as
+    # theirs (Numba freezes a global array into the compiled code only below 1 MB; a larger one
+    # would make every kernel that reads it uncachable)
+    other = [BY_CODE[c] for c in range(n_codes) if not identity[c]] or [BY_CODE[0]]
+    matrix = np.zeros((n_codes, max(d.bounding_matrix.shape[0] for d in other), max(d.n_nodes for d in other)))
     face_ctrl = np.zeros((n_codes, MAX_FACES, n_ctrl.max()), dtype=np.int64)
     face_count = np.zeros((n_codes, MAX_FACES), dtype=np.int64)
     for c, d in BY_CODE.items():
         T = d.bounding_matrix
-        matrix[c, : T.shape[0], : d.n_nodes] = T
-        identity[c] = T.shape == (d.n_nodes, d.n_nodes) and np.array_equal(T, np.eye(d.n_nodes))
+        if not identity[c]:
+            matrix[c, : T.shape[0], : d.n_nodes] = T
         for f, (origin, _a, _b, normal) in enumerate(d.faces):
             on_face = (d.reference_nodes - origin) @ normal == 0.0
             rows = [k for k in range(T.shape[0]) if np.all(on_face[T[k] != 0.0])]
@@ -104,9 +112,12 @@ def _control_tables():
     return n_ctrl, matrix, identity, face_ctrl, face_count
 
 
-#: per code: number of control points, bounding matrix, whether it is the identity (linear
-#: elements: the control points are the nodes), control points of each face and their number
+#: per code: number of control points, bounding matrix (filled for the types whose control points are
+#: not their nodes only), whether it is the identity (linear and rational Bézier elements: the control
+#: points are the nodes), control points of each face and their number
 N_CONTROL, CONTROL_MATRIX, CONTROL_IS_NODES, FACE_CONTROL, N_FACE_CONTROL = _control_tables()
+#: the most control points of any type (the size of a buffer for :func:`control_points`)
+MAX_CONTROL = int(N_CONTROL.max())
 
 
 def _monomial_tables():
@@ -121,7 +132,11 @@ def _monomial_tables():
     """
     n_codes = len(BY_CODE)
     exps = np.zeros((n_codes, MAX_NODES, 3), dtype=np.int64)
-    to_monomial = np.zeros((n_codes, MAX_NODES, MAX_NODES))
+    # one n × n block per type, flat (a (codes, MAX_NODES, MAX_NODES) table would pass the 1 MB below
+    # which Numba freezes a global array into cachable code)
+    offset = np.zeros(n_codes + 1, dtype=np.int64)
+    offset[1:] = np.cumsum([BY_CODE[c].n_nodes ** 2 for c in range(n_codes)])
+    to_monomial = np.zeros(offset[-1])
     centre = np.zeros((n_codes, 3))
     box = np.zeros((n_codes, 2, 3))
     radius = np.zeros(n_codes)
@@ -129,18 +144,20 @@ def _monomial_tables():
         y = d.reference_nodes - d.centre
         vandermonde = np.prod(y[:, None, :] ** d.monomials[None, :, :], axis=2)     # [node, monomial]
         exps[c, : d.n_nodes] = d.monomials
-        to_monomial[c, : d.n_nodes, : d.n_nodes] = np.linalg.inv(vandermonde)
+        block = np.linalg.inv(vandermonde)
         if d.rational:
-            to_monomial[c, : d.n_nodes, : d.n_nodes] = np.linalg.inv(vandermonde) @ SOLID_MODULES[d.name].NODE_VALUES
+            block = block @ SOLID_MODULES[d.name].NODE_VALUES
+        to_monomial[offset[c]: offset[c + 1]] = block.ravel()
         centre[c] = d.centre
         box[c] = d.parameter_box
         radius[c] = np.abs(y).max()
-    return exps, to_monomial, centre, box, radius
+    return exps, to_monomial, offset[:-1].copy(), centre, box, radius
 
 
-#: per code: monomial exponents, nodes → monomial coefficients about the centre, the centre, the
-#: parameter box (lower, upper corner) and the max-norm radius of the element about its centre
-MONOMIALS, TO_MONOMIAL, CENTRE, PARAMETER_BOX, RADIUS = _monomial_tables()
+#: per code: monomial exponents, nodes → monomial coefficients about the centre (code c's n × n matrix,
+#: row-major, at ``TO_MONOMIAL[MONOMIAL_START[c]:]``: entry (k, b) is ``TO_MONOMIAL[MONOMIAL_START[c] + k n + b]``),
+#: the centre, the parameter box (lower, upper corner) and the max-norm radius of the element about its centre
+MONOMIALS, TO_MONOMIAL, MONOMIAL_START, CENTRE, PARAMETER_BOX, RADIUS = _monomial_tables()
 
 
 def solid_element(name):

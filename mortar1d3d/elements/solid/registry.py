@@ -7,10 +7,10 @@ derivatives and a ``DESCRIPTOR``) plus one line below; a new family is its modul
 derives every table and the kernels' dispatch from here, and ``tests/test_elements.py`` checks
 that codes are the positions in these lists.
 """
-from . import hex8, hex20, hex27, nurbs27, nurbs64, tet4, tet10, wedge6
+from . import hex8, hex20, hex27, nurbs27, nurbs64, nurbs125, tet4, tet10, wedge6
 from .hex_family import HEXAHEDRON
 from .tet_family import TETRAHEDRON
 from .wedge_family import WEDGE
 
 FAMILIES = (HEXAHEDRON, TETRAHEDRON, WEDGE)
-SOLID_TYPES = (hex8, hex20, hex27, tet4, tet10, wedge6, nurbs27, nurbs64)
+SOLID_TYPES = (hex8, hex20, hex27, tet4, tet10, wedge6, nurbs27, nurbs64, nurbs125)
