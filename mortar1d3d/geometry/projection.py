@@ -73,16 +73,20 @@ def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
     """Newton iteration for x(ξ) = p with a backtracking line search on |x(ξ) - p|.
 
     ``xi`` (3,) holds the start value on entry and the result on exit; ``trial`` (3,) is
-    scratch. Converged when |x(ξ) - p| <= 1e-12 h. Returns CONVERGED or FAILED (singular
-    Jacobian, no decrease, parameters running away, or 20 iterations).
+    scratch, and on CONVERGED it holds the residual p - x(ξ) of the result (for
+    :func:`polish_residual`, which then needs no evaluation of the map). Converged when
+    |x(ξ) - p| <= 1e-12 h. Returns CONVERGED or FAILED (singular Jacobian, no decrease,
+    parameters running away, or 20 iterations).
     """
     tol = NEWTON_RESIDUAL_TOL * h
     x0, x1, x2 = map_point(code, X, xi, N)
     r0, r1, r2 = p0 - x0, p1 - x1, p2 - x2
     rn = norm3(r0, r1, r2)
+    status = FAILED
     for _ in range(NEWTON_MAX_ITERATIONS):
         if rn <= tol:
-            return CONVERGED
+            status = CONVERGED
+            break
         j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, N, dN)
         det, d0, d1, d2 = solve3(j00, j01, j02, j10, j11, j12, j20, j21, j22, r0, r1, r2)
         if det == 0.0:
@@ -103,13 +107,20 @@ def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
             step *= 0.5
         if not accepted:
             # no decrease along the Newton direction: at round-off level this is convergence
-            return CONVERGED if rn <= 1e3 * tol else FAILED
+            if not rn <= 1e3 * tol:
+                return FAILED
+            status = CONVERGED
+            break
         xi[0], xi[1], xi[2] = trial[0], trial[1], trial[2]
         r0, r1, r2 = t0, t1, t2
         rn = rt
         if abs(xi[0]) > _MAX_PARAMETER or abs(xi[1]) > _MAX_PARAMETER or abs(xi[2]) > _MAX_PARAMETER:
             return FAILED
-    return CONVERGED if rn <= tol else FAILED
+    else:
+        if rn <= tol:
+            status = CONVERGED
+    trial[0], trial[1], trial[2] = r0, r1, r2
+    return status
 
 
 @njit
@@ -377,8 +388,9 @@ def locate_point(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, sta
     final; one outside is final when the element's one-to-one certificate covers it
     (:func:`certified_outside`). Otherwise p may still have a preimage inside (a curved element
     folds beyond its faces, and Newton found another branch): :func:`search_inside` decides.
-    On INSIDE or OUTSIDE ``xi`` holds a solution of x(ξ) = p; NOT_CONVERGED: no solution known
-    (and none inside the element unless the search was undecided).
+    On INSIDE or OUTSIDE ``xi`` holds a solution of x(ξ) = p and ``trial`` its residual p - x(ξ)
+    (for :func:`polish_residual`); NOT_CONVERGED: no solution known (and none inside the element
+    unless the search was undecided).
 
     This function holds only the common case (Newton converges from the linearised estimate, away
     from the element's faces) and is inlined into the loops that call it, which saves the reference
@@ -400,7 +412,16 @@ def locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stac
     """:func:`locate_point` from where its common case stops: Newton did not converge from the
     linearised estimate (``converged`` False; restart from the centre), or its solution lies
     within ``_NEAR_BOUNDARY`` of a face (polished before the inside test), or outside the
-    certified box (the subdivision search decides)."""
+    certified box (the subdivision search decides). On INSIDE or OUTSIDE ``trial`` holds the
+    residual p - x(ξ), as after the common case (one evaluation of the map, on this rare path only)."""
+    status = _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged)
+    if status != NOT_CONVERGED:
+        store_residual(code, X, p0, p1, p2, xi, trial, N)
+    return status
+
+
+@njit
+def _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged):
     if not converged:
         solid.centre(code, xi)
         converged = project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) == CONVERGED
@@ -434,8 +455,22 @@ def polish(code, X, p0, p1, p2, h, xi, trial, N, dN):
     this extra step so that ξ is exact to round-off (quadratic convergence), which is what the
     certificate ‖D q_B - M X_S‖ measures.
     """
+    store_residual(code, X, p0, p1, p2, xi, trial, N)
+    polish_residual(code, X, p0, p1, p2, h, xi, trial, N, dN)
+
+
+@njit
+def store_residual(code, X, p0, p1, p2, xi, trial, N):
+    """Write the residual p - x(ξ) into ``trial`` (the form :func:`polish_residual` takes it in)."""
     x0, x1, x2 = map_point(code, X, xi, N)
-    r0, r1, r2 = p0 - x0, p1 - x1, p2 - x2
+    trial[0], trial[1], trial[2] = p0 - x0, p1 - x1, p2 - x2
+
+
+@njit
+def polish_residual(code, X, p0, p1, p2, h, xi, trial, N, dN):
+    """:func:`polish` with the residual p - x(ξ) already in ``trial`` (as :func:`project_point` and
+    :func:`locate_point` leave it): the same step, one evaluation of the map fewer."""
+    r0, r1, r2 = trial[0], trial[1], trial[2]
     if norm3(r0, r1, r2) <= _ROUND_OFF * h:
         return      # already at round-off (affine elements after one Newton step): nothing to gain
     j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, N, dN)
@@ -642,7 +677,7 @@ def _project_points_kernel(points, conn, codes, solid_origin, solid_h, linear, x
                 if status[i] == NOT_CONVERGED:
                     xi[i, 0] = xi[i, 1] = xi[i, 2] = np.nan
                 else:
-                    polish(code, X, x0, x1, x2, solid_h[s], xi[i], trial, N, dN)
+                    polish_residual(code, X, x0, x1, x2, solid_h[s], xi[i], trial, N, dN)
             begin, stop = claim(claims, n, worker)
 
 
