@@ -12,6 +12,7 @@ from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL,
 from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
+from ..elements.solid import hex8
 from .linalg import inverse3, norm3, solve3
 from .rational import (centre_point, normalise_coefficients, rational_coefficients, rational_curvature_bound,
                        uniform_weights)
@@ -27,17 +28,17 @@ _BACKTRACKS = 8
 _ROUND_OFF = 4 * 2.220446049250313e-16
 
 
-@njit
-def map_point(code, X, xi, N):
-    """x(ξ) = Σ_a N_a(ξ) X_a for element type ``code`` with local nodes ``X``; returns (x0, x1, x2).
+#: the code of the trilinear hexahedron, whose map and Jacobian skip the registry's dispatch (the
+#: distorted hex8 is the Newton path's common case): the same shape functions, sums over a fixed
+#: node count, the same bits
+_HEX8 = hex8.DESCRIPTOR.code
 
-    Rational types take their node weights from ``X[:, 3]`` (``N`` then holds R_a)."""
-    if solid.RATIONAL[code]:
-        solid.rational_shape(code, xi, X, N)
-    else:
-        solid.shape(code, xi, N)
+
+@njit_inline
+def _node_sum(X, N, n):
+    """Σ_a N_a X_a over the first ``n`` nodes (inlined: a constant ``n`` gives a fixed loop)."""
     x0 = x1 = x2 = 0.0
-    for a in range(solid.n_nodes(code)):
+    for a in range(n):
         x0 += N[a] * X[a, 0]
         x1 += N[a] * X[a, 1]
         x2 += N[a] * X[a, 2]
@@ -45,15 +46,25 @@ def map_point(code, X, xi, N):
 
 
 @njit
-def jacobian(code, X, xi, N, dN):
-    """J[i, k] = ∂x_i/∂ξ_k as a 9-tuple, row by row. ``N`` is scratch: a rational type leaves R_a(ξ)
-    there (polynomial types do not touch it)."""
+def map_point(code, X, xi, N):
+    """x(ξ) = Σ_a N_a(ξ) X_a for element type ``code`` with local nodes ``X``; returns (x0, x1, x2).
+
+    Rational types take their node weights from ``X[:, 3]`` (``N`` then holds R_a)."""
+    if code == _HEX8:
+        hex8.shape(xi, N)
+        return _node_sum(X, N, 8)
     if solid.RATIONAL[code]:
-        solid.rational_deriv(code, xi, X, N, dN)
+        solid.rational_shape(code, xi, X, N)
     else:
-        solid.deriv(code, xi, dN)
+        solid.shape(code, xi, N)
+    return _node_sum(X, N, solid.n_nodes(code))
+
+
+@njit_inline
+def _gradient_sum(X, dN, n):
+    """Σ_a X_a ⊗ ∇N_a over the first ``n`` nodes as a 9-tuple, row by row (inlined as :func:`_node_sum`)."""
     j00 = j01 = j02 = j10 = j11 = j12 = j20 = j21 = j22 = 0.0
-    for a in range(solid.n_nodes(code)):
+    for a in range(n):
         x0, x1, x2 = X[a, 0], X[a, 1], X[a, 2]
         d0, d1, d2 = dN[a, 0], dN[a, 1], dN[a, 2]
         j00 += x0 * d0
@@ -66,6 +77,20 @@ def jacobian(code, X, xi, N, dN):
         j21 += x2 * d1
         j22 += x2 * d2
     return j00, j01, j02, j10, j11, j12, j20, j21, j22
+
+
+@njit
+def jacobian(code, X, xi, N, dN):
+    """J[i, k] = ∂x_i/∂ξ_k as a 9-tuple, row by row. ``N`` is scratch: a rational type leaves R_a(ξ)
+    there (polynomial types do not touch it)."""
+    if code == _HEX8:
+        hex8.deriv(xi, dN)
+        return _gradient_sum(X, dN, 8)
+    if solid.RATIONAL[code]:
+        solid.rational_deriv(code, xi, X, N, dN)
+    else:
+        solid.deriv(code, xi, dN)
+    return _gradient_sum(X, dN, solid.n_nodes(code))
 
 
 @njit
