@@ -12,6 +12,7 @@ from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL,
 from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
+from ..elements.solid import hex8
 from .linalg import inverse3, norm3, solve3
 from .rational import (centre_point, normalise_coefficients, rational_coefficients, rational_curvature_bound,
                        uniform_weights)
@@ -31,17 +32,17 @@ _BACKTRACKS = 8
 _ROUND_OFF = 4 * 2.220446049250313e-16
 
 
-@njit
-def map_point(code, X, xi, N):
-    """x(ξ) = Σ_a N_a(ξ) X_a for element type ``code`` with local nodes ``X``; returns (x0, x1, x2).
+#: the code of the trilinear hexahedron, whose map and Jacobian skip the registry's dispatch (the
+#: distorted hex8 is the Newton path's common case): the same shape functions, sums over a fixed
+#: node count, the same bits
+_HEX8 = hex8.DESCRIPTOR.code
 
-    Rational types take their node weights from ``X[:, 3]`` (``N`` then holds R_a)."""
-    if solid.RATIONAL[code]:
-        solid.rational_shape(code, xi, X, N)
-    else:
-        solid.shape(code, xi, N)
+
+@njit_inline
+def _node_sum(X, N, n):
+    """Σ_a N_a X_a over the first ``n`` nodes (inlined: a constant ``n`` gives a fixed loop)."""
     x0 = x1 = x2 = 0.0
-    for a in range(solid.n_nodes(code)):
+    for a in range(n):
         x0 += N[a] * X[a, 0]
         x1 += N[a] * X[a, 1]
         x2 += N[a] * X[a, 2]
@@ -49,15 +50,25 @@ def map_point(code, X, xi, N):
 
 
 @njit
-def jacobian(code, X, xi, N, dN):
-    """J[i, k] = ∂x_i/∂ξ_k as a 9-tuple, row by row. ``N`` is scratch: a rational type leaves R_a(ξ)
-    there (polynomial types do not touch it)."""
+def map_point(code, X, xi, N):
+    """x(ξ) = Σ_a N_a(ξ) X_a for element type ``code`` with local nodes ``X``; returns (x0, x1, x2).
+
+    Rational types take their node weights from ``X[:, 3]`` (``N`` then holds R_a)."""
+    if code == _HEX8:
+        hex8.shape(xi, N)
+        return _node_sum(X, N, 8)
     if solid.RATIONAL[code]:
-        solid.rational_deriv(code, xi, X, N, dN)
+        solid.rational_shape(code, xi, X, N)
     else:
-        solid.deriv(code, xi, dN)
+        solid.shape(code, xi, N)
+    return _node_sum(X, N, solid.n_nodes(code))
+
+
+@njit_inline
+def _gradient_sum(X, dN, n):
+    """Σ_a X_a ⊗ ∇N_a over the first ``n`` nodes as a 9-tuple, row by row (inlined as :func:`_node_sum`)."""
     j00 = j01 = j02 = j10 = j11 = j12 = j20 = j21 = j22 = 0.0
-    for a in range(solid.n_nodes(code)):
+    for a in range(n):
         x0, x1, x2 = X[a, 0], X[a, 1], X[a, 2]
         d0, d1, d2 = dN[a, 0], dN[a, 1], dN[a, 2]
         j00 += x0 * d0
@@ -73,20 +84,38 @@ def jacobian(code, X, xi, N, dN):
 
 
 @njit
+def jacobian(code, X, xi, N, dN):
+    """J[i, k] = ∂x_i/∂ξ_k as a 9-tuple, row by row. ``N`` is scratch: a rational type leaves R_a(ξ)
+    there (polynomial types do not touch it)."""
+    if code == _HEX8:
+        hex8.deriv(xi, dN)
+        return _gradient_sum(X, dN, 8)
+    if solid.RATIONAL[code]:
+        solid.rational_deriv(code, xi, X, N, dN)
+    else:
+        solid.deriv(code, xi, dN)
+    return _gradient_sum(X, dN, solid.n_nodes(code))
+
+
+@njit
 def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
     """Newton iteration for x(ξ) = p with a backtracking line search on |x(ξ) - p|.
 
     ``xi`` (3,) holds the start value on entry and the result on exit; ``trial`` (3,) is
-    scratch. Converged when |x(ξ) - p| <= 1e-12 h. Returns CONVERGED or FAILED (singular
-    Jacobian, no decrease, parameters running away, or 20 iterations).
+    scratch, and on CONVERGED it holds the residual p - x(ξ) of the result (for
+    :func:`polish_residual`, which then needs no evaluation of the map). Converged when
+    |x(ξ) - p| <= 1e-12 h. Returns CONVERGED or FAILED (singular Jacobian, no decrease,
+    parameters running away, or 20 iterations).
     """
     tol = NEWTON_RESIDUAL_TOL * h
     x0, x1, x2 = map_point(code, X, xi, N)
     r0, r1, r2 = p0 - x0, p1 - x1, p2 - x2
     rn = norm3(r0, r1, r2)
+    status = FAILED
     for _ in range(NEWTON_MAX_ITERATIONS):
         if rn <= tol:
-            return CONVERGED
+            status = CONVERGED
+            break
         j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, N, dN)
         det, d0, d1, d2 = solve3(j00, j01, j02, j10, j11, j12, j20, j21, j22, r0, r1, r2)
         if det == 0.0:
@@ -107,13 +136,20 @@ def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
             step *= 0.5
         if not accepted:
             # no decrease along the Newton direction: at round-off level this is convergence
-            return CONVERGED if rn <= 1e3 * tol else FAILED
+            if not rn <= 1e3 * tol:
+                return FAILED
+            status = CONVERGED
+            break
         xi[0], xi[1], xi[2] = trial[0], trial[1], trial[2]
         r0, r1, r2 = t0, t1, t2
         rn = rt
         if abs(xi[0]) > _MAX_PARAMETER or abs(xi[1]) > _MAX_PARAMETER or abs(xi[2]) > _MAX_PARAMETER:
             return FAILED
-    return CONVERGED if rn <= tol else FAILED
+    else:
+        if rn <= tol:
+            status = CONVERGED
+    trial[0], trial[1], trial[2] = r0, r1, r2
+    return status
 
 
 @njit
@@ -382,8 +418,9 @@ def locate_point(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, sta
     final; one outside is final when the element's one-to-one certificate covers it
     (:func:`certified_outside`). Otherwise p may still have a preimage inside (a curved element
     folds beyond its faces, and Newton found another branch): :func:`search_inside` decides.
-    On INSIDE or OUTSIDE ``xi`` holds a solution of x(ξ) = p; NOT_CONVERGED: no solution known
-    (and none inside the element unless the search was undecided).
+    On INSIDE or OUTSIDE ``xi`` holds a solution of x(ξ) = p and ``trial`` its residual p - x(ξ)
+    (for :func:`polish_residual`); NOT_CONVERGED: no solution known (and none inside the element
+    unless the search was undecided).
 
     This function holds only the common case (Newton converges from the linearised estimate, away
     from the element's faces) and is inlined into the loops that call it, which saves the reference
@@ -405,7 +442,16 @@ def locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stac
     """:func:`locate_point` from where its common case stops: Newton did not converge from the
     linearised estimate (``converged`` False; restart from the centre), or its solution lies
     within ``_NEAR_BOUNDARY`` of a face (polished before the inside test), or outside the
-    certified box (the subdivision search decides)."""
+    certified box (the subdivision search decides). On INSIDE or OUTSIDE ``trial`` holds the
+    residual p - x(ξ), as after the common case (one evaluation of the map, on this rare path only)."""
+    status = _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged)
+    if status != NOT_CONVERGED:
+        store_residual(code, X, p0, p1, p2, xi, trial, N)
+    return status
+
+
+@njit
+def _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged):
     if not converged:
         solid.centre(code, xi)
         converged = project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) == CONVERGED
@@ -439,8 +485,22 @@ def polish(code, X, p0, p1, p2, h, xi, trial, N, dN):
     this extra step so that ξ is exact to round-off (quadratic convergence), which is what the
     certificate ‖D q_B - M X_S‖ measures.
     """
+    store_residual(code, X, p0, p1, p2, xi, trial, N)
+    polish_residual(code, X, p0, p1, p2, h, xi, trial, N, dN)
+
+
+@njit
+def store_residual(code, X, p0, p1, p2, xi, trial, N):
+    """Write the residual p - x(ξ) into ``trial`` (the form :func:`polish_residual` takes it in)."""
     x0, x1, x2 = map_point(code, X, xi, N)
-    r0, r1, r2 = p0 - x0, p1 - x1, p2 - x2
+    trial[0], trial[1], trial[2] = p0 - x0, p1 - x1, p2 - x2
+
+
+@njit
+def polish_residual(code, X, p0, p1, p2, h, xi, trial, N, dN):
+    """:func:`polish` with the residual p - x(ξ) already in ``trial`` (as :func:`project_point` and
+    :func:`locate_point` leave it): the same step, one evaluation of the map fewer."""
+    r0, r1, r2 = trial[0], trial[1], trial[2]
     if norm3(r0, r1, r2) <= _ROUND_OFF * h:
         return      # already at round-off (affine elements after one Newton step): nothing to gain
     j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, N, dN)
@@ -647,7 +707,7 @@ def _project_points_kernel(points, conn, codes, solid_origin, solid_h, linear, x
                 if status[i] == NOT_CONVERGED:
                     xi[i, 0] = xi[i, 1] = xi[i, 2] = np.nan
                 else:
-                    polish(code, X, x0, x1, x2, solid_h[s], xi[i], trial, N, dN)
+                    polish_residual(code, X, x0, x1, x2, solid_h[s], xi[i], trial, N, dN)
             begin, stop = claim(claims, n, worker)
 
 

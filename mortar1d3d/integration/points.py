@@ -29,7 +29,7 @@ from ..geometry.beam import beam_point_of
 from ..geometry.linalg import norm3
 from ..geometry.projection import (ANY_CANDIDATE, CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse,
                                    first_containing, is_affine, linear_parameters, load_element, locate_point,
-                                   point_buffers, polish, project_point, search_buffers)
+                                   point_buffers, polish_residual, project_point, search_buffers)
 from ..geometry.segmentation import resegment, segment
 from ..quadrature import gauss_legendre, gauss_tables
 
@@ -103,7 +103,8 @@ def _segment_points_chunk(beam_code, begin, stop, seg_beam, seg_solid, seg_start
                             solid.centre(code, x)
                             xi[k] = x
                             continue
-                    polish(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN)
+                    # the residual of x is in trial (project_point or locate_point left it there)
+                    polish_residual(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN)
                     xi[k] = x
                     # a segment lies in its element: a point clearly outside means a missed
                     # crossing; it is reported, not hidden
@@ -154,8 +155,9 @@ def _element_points_chunk(beam_code, begin, stop, pair_offsets, pair_solid, gx, 
                                          trial, N, dN, a, stack, ANY_CANDIDATE)
                     if s >= 0:
                         if not is_affine(linear, s):
-                            # X still holds the owner's nodes (it was the last element tested)
-                            polish(codes[s], X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
+                            # X still holds the owner's nodes (it was the last element tested) and
+                            # trial the residual of x (see locate_point)
+                            polish_residual(codes[s], X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
                                    r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
                                    r2 + (beam_origin[e, 2] - solid_origin[s, 2]), solid_h[s], x, trial, N, dN)
                         owner[k] = s

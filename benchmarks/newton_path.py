@@ -1,0 +1,337 @@
+"""Where a call on a curved or distorted solid spends its time: the Newton path profiled (issue 22, item 1).
+
+    .venv/bin/python benchmarks/newton_path.py [--scene hex8|hex27|tet10|nurbs27] [--n 20] [--fibres 1000]
+                                               [--distort 0.1] [--repeats 5] [--package CHECKOUT]
+
+Scenes (n_gauss 4, search_points 6, 1 thread, as ``make bench``): ``hex8`` is the distorted benchmark
+cube (``fibre_cube(n, fibres, 20)``, interior nodes moved by up to ``--distort`` cells,
+``generate.distort`` seed 1); ``hex27`` and ``tet10`` the same cube of n³ cells as quadratic
+elements, moved the same way (curved edges: no element is affine); ``nurbs27`` the NURBS pipe of
+``nurbs_throughput.py`` with its helices (another geometry: compare its points per second, not its
+counts).
+
+Printed:
+
+1. **Times** per stage (median of ``--repeats`` calls of ``ops.timings``) and integration points per
+   second, element- and segment-based, and the segmentation's parts timed alone on the same context
+   (median of the repeats): the crossing search (``pair_crossings``), the tiling (``tile``), its check
+   (``check_tiling``) and the points of the segments (``segment_points``).
+2. **Counts**, from a counting copy of the kernels' decisions (this script's kernels, built from the
+   library's own Newton step, inside tests and locators; the library's kernels hold no counters):
+   candidate pairs per beam element, element-based candidates tested per point (box test passed),
+   Newton projections and iterations, points that needed the rare path (restart from the centre,
+   face polish, subdivision search); for the segments: Newton iterations of the warm-started
+   integration points and their fallbacks; for the crossing search: pairs searched, sample
+   projections per searched pair and their iterations, face-Newton starts and crossings found.
+
+An iteration is one Newton step (Jacobian, solve, residual at the new point), counted as full steps
+from the kernel's start value (see :func:`newton_counted`); a projection that starts at the answer
+has 0 iterations and one residual evaluation.
+"""
+import argparse
+import sys
+import time
+
+import numpy as np
+
+from throughput import _package_root
+
+# the package must be imported from the chosen checkout before anything imports it
+sys.path.insert(0, str(_package_root(None)))
+
+import numba  # noqa: E402
+
+import mortar1d3d as m13  # noqa: E402
+from mortar1d3d._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit  # noqa: E402
+from mortar1d3d.elements.solid import dispatch as solid  # noqa: E402
+from mortar1d3d.geometry import projection as pr  # noqa: E402
+from mortar1d3d.geometry.beam import beam_point  # noqa: E402
+from mortar1d3d.geometry.context import KernelInput  # noqa: E402
+from mortar1d3d.geometry.linalg import norm3, solve3  # noqa: E402
+from mortar1d3d.geometry import segmentation as sg  # noqa: E402
+from mortar1d3d.integration.points import segment_points  # noqa: E402
+from mortar1d3d.quadrature import gauss_legendre  # noqa: E402
+
+N_GAUSS = 4
+SEARCH_POINTS = 6
+
+
+def scene(name, n, fibres, amplitude):
+    """(beams, solid) of the named scene (see the module docstring)."""
+    if name == "nurbs27":
+        sys.path.insert(0, str(_package_root(None) / "benchmarks"))
+        from nurbs_throughput import helices, meshes
+        return helices(40), meshes((2, 24, 8))[0]
+    beams, cube = m13.generate.fibre_cube(n, fibres, 20)
+    element = {"hex8": "hexahedron", "hex27": "hexahedron27", "tet10": "tetra10"}[name]
+    if element != "hexahedron":
+        cube = m13.generate.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (n, n, n), element=element)
+    return beams, m13.generate.distort(cube, amplitude, seed=1) if amplitude else cube
+
+
+@njit
+def newton_counted(code, X, p0, p1, p2, h, xi, trial, N, dN):
+    """(converged, iterations) of the library's Newton projection (:func:`projection.project_point`) of p
+    from the start ``xi``, which receives its result. The iterations are counted on a copy by
+    repeating the library's full Newton step (:func:`projection.polish_residual`) from the same start
+    until the residual is at the tolerance (1e-12 h), at most 20 steps: project_point's count
+    whenever its line search takes full steps."""
+    start = xi.copy()
+    converged = pr.project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) == pr.CONVERGED
+    tol = NEWTON_RESIDUAL_TOL * h
+    pr.store_residual(code, X, p0, p1, p2, start, trial, N)
+    iterations = 0
+    while norm3(trial[0], trial[1], trial[2]) > tol and iterations < NEWTON_MAX_ITERATIONS:
+        before = start.copy()
+        pr.polish_residual(code, X, p0, p1, p2, h, start, trial, N, dN)
+        iterations += 1
+        if start[0] == before[0] and start[1] == before[1] and start[2] == before[2]:
+            break           # a full step that does not lower the residual: project_point would cut it
+        pr.store_residual(code, X, p0, p1, p2, start, trial, N)
+    return converged, iterations
+
+
+@njit
+def element_counts(ctx_pairs, pair_solid, gx, codes, conn, points, solid_origin, solid_h, solid_boxes, linear,
+                   beam_code, Q, lengths, beam_origin, out):
+    """Element-based location, counted: out = [points, box tests passed, Newton projections, Newton
+    iterations, rare paths, owners found, affine locations]."""
+    X, N, dN, H, dH, xi, trial = pr.point_buffers()
+    a, stack = pr.search_buffers()
+    for e in range(ctx_pairs.shape[0] - 1):
+        for q in range(gx.shape[0]):
+            out[0] += 1
+            r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, gx[q], H, dH)
+            for p in range(ctx_pairs[e], ctx_pairs[e + 1]):
+                s = pair_solid[p]
+                if not pr.in_box(solid_boxes[s], r0 + beam_origin[e, 0], r1 + beam_origin[e, 1],
+                                 r2 + beam_origin[e, 2]):
+                    continue
+                out[1] += 1
+                code = codes[s]
+                x0 = r0 + (beam_origin[e, 0] - solid_origin[s, 0])
+                x1 = r1 + (beam_origin[e, 1] - solid_origin[s, 1])
+                x2 = r2 + (beam_origin[e, 2] - solid_origin[s, 2])
+                if pr.is_affine(linear, s):
+                    out[6] += 1
+                    pr.linear_parameters(code, linear, s, x0, x1, x2, xi)
+                    if solid.is_inside(code, xi, PARAMETER_TOL):
+                        out[5] += 1
+                        break
+                    continue
+                pr.load_element(points, conn, s, code, solid_origin, X)
+                out[2] += 1
+                converged = False
+                if pr.linear_parameters(code, linear, s, x0, x1, x2, xi):
+                    converged, its = newton_counted(code, X, x0, x1, x2, solid_h[s], xi, trial, N, dN)
+                    out[3] += its
+                if converged and not abs(solid.outside_distance(code, xi)) <= 1e-6:
+                    if solid.is_inside(code, xi, PARAMETER_TOL):
+                        out[5] += 1
+                        break
+                    if pr.certified_outside(code, linear, s, xi):
+                        continue
+                out[4] += 1
+                if pr.locate_rare(code, X, x0, x1, x2, solid_h[s], PARAMETER_TOL, linear, s, xi, trial, N, dN, a,
+                                  stack, converged) == pr.INSIDE:
+                    out[5] += 1
+                    break
+
+
+@njit
+def segment_point_counts(seg_beam, seg_solid, seg_start, seg_end, gx, codes, conn, points, solid_origin, solid_h,
+                         linear, beam_code, Q, lengths, beam_origin, out):
+    """The segments' integration points, counted: out = [points, Newton iterations (warm start),
+    fallbacks to the locator, affine points]."""
+    X, N, dN, H, dH, xi, trial = pr.point_buffers()
+    a, stack = pr.search_buffers()
+    loose = 1e3 * PARAMETER_TOL
+    for g in range(seg_beam.shape[0]):
+        e, s = seg_beam[g], seg_solid[g]
+        code = codes[s]
+        affine = pr.is_affine(linear, s)
+        pr.load_element(points, conn, s, code, solid_origin, X)
+        s0, s1, s2 = (beam_origin[e, 0] - solid_origin[s, 0], beam_origin[e, 1] - solid_origin[s, 1],
+                      beam_origin[e, 2] - solid_origin[s, 2])
+        half, mid = 0.5 * (seg_end[g] - seg_start[g]), 0.5 * (seg_end[g] + seg_start[g])
+        solid.centre(code, xi)
+        for q in range(gx.shape[0]):
+            out[0] += 1
+            if affine:
+                out[3] += 1
+                continue
+            r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], s0, s1, s2, mid + half * gx[q], H, dH)
+            if q == 0:
+                pr.linear_parameters(code, linear, s, r0, r1, r2, xi)
+            converged, its = newton_counted(code, X, r0, r1, r2, solid_h[s], xi, trial, N, dN)
+            out[1] += its
+            if not (converged and solid.is_inside(code, xi, loose)):
+                out[2] += 1
+                if pr.locate_point(code, X, r0, r1, r2, solid_h[s], loose, linear, s, xi, trial, N, dN, a,
+                                   stack) == pr.NOT_CONVERGED:
+                    solid.centre(code, xi)
+
+
+@njit
+def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, linear, beam_code, Q,
+                    lengths, beam_origin, beam_boxes, S, out):
+    """The crossing search's samples, counted: out = [pairs, pairs searched (a face in reach), sample
+    projections, their Newton iterations, sample fallbacks, face-Newton starts at sign changes of the
+    cubic model, touch starts]. Starts from the deflated cubic (a sample exactly on a face) and the
+    mirror start after a touch are not counted (both rare)."""
+    C = np.empty((solid.CONTROL_MATRIX.shape[1], 3))
+    reach = np.empty(solid.MAX_FACES, dtype=np.bool_)
+    X, N, dN, H, dH, xi, trial = pr.point_buffers()
+    a, stack = pr.search_buffers()
+    eta_s = np.empty(S)
+    xi_s = np.empty((S, 3))
+    dxi_s = np.empty((S, 3))
+    for e in range(pair_offsets.shape[0] - 1):
+        for p in range(pair_offsets[e], pair_offsets[e + 1]):
+            out[0] += 1
+            s = pair_solid[p]
+            code = codes[s]
+            h = solid_h[s]
+            pr.load_element(points, conn, s, code, solid_origin, X)
+            if not sg._faces_in_reach(code, X, h, beam_boxes[e], solid_origin[s], C, reach):
+                continue
+            out[1] += 1
+            s0, s1, s2 = (beam_origin[e, 0] - solid_origin[s, 0], beam_origin[e, 1] - solid_origin[s, 1],
+                          beam_origin[e, 2] - solid_origin[s, 2])
+            solid.centre(code, xi)
+            for k in range(S):
+                eta_s[k] = -1.0 + 2.0 * k / (S - 1)
+                r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q[e], lengths[e], s0, s1, s2, eta_s[k], H, dH)
+                if pr.is_affine(linear, s):
+                    pr.linear_parameters(code, linear, s, r0, r1, r2, xi_s[k])
+                    for i in range(3):
+                        dxi_s[k, i] = linear[s, i, 0] * d0 + linear[s, i, 1] * d1 + linear[s, i, 2] * d2
+                    continue
+                if k == 0:
+                    pr.linear_parameters(code, linear, s, r0, r1, r2, xi)
+                out[2] += 1
+                converged, its = newton_counted(code, X, r0, r1, r2, h, xi, trial, N, dN)
+                out[3] += its
+                if not (converged and (solid.is_inside(code, xi, PARAMETER_TOL)
+                                       or pr.certified_outside(code, linear, s, xi))):
+                    out[4] += 1
+                    pr.locate_point(code, X, r0, r1, r2, h, PARAMETER_TOL, linear, s, xi, trial, N, dN, a, stack)
+                xi_s[k] = xi
+                j00, j01, j02, j10, j11, j12, j20, j21, j22 = pr.jacobian(code, X, xi, N, dN)
+                _, dxi_s[k, 0], dxi_s[k, 1], dxi_s[k, 2] = solve3(j00, j01, j02, j10, j11, j12, j20, j21, j22,
+                                                                  d0, d1, d2)
+            faces = solid.faces(code)
+            for f in range(faces.shape[0]):
+                if not reach[f]:
+                    continue
+                face = faces[f]
+                for k in range(S - 1):
+                    step = eta_s[k + 1] - eta_s[k]
+                    g0 = sg._face_side(face, xi_s[k])
+                    g1 = sg._face_side(face, xi_s[k + 1])
+                    dg0 = (face[3, 0] * dxi_s[k, 0] + face[3, 1] * dxi_s[k, 1] + face[3, 2] * dxi_s[k, 2]) * step
+                    dg1 = (face[3, 0] * dxi_s[k + 1, 0] + face[3, 1] * dxi_s[k + 1, 1]
+                           + face[3, 2] * dxi_s[k + 1, 2]) * step
+                    if min(g0, g1) > 0.5 * (abs(dg0) + abs(dg1)) or max(g0, g1) < -0.5 * (abs(dg0) + abs(dg1)):
+                        continue
+                    prev = g0
+                    best = abs(g0)
+                    for i in range(1, sg._SCAN + 1):
+                        cur = sg._hermite_g(g0, g1, dg0, dg1, i / sg._SCAN)
+                        if prev * cur <= 0.0 and not (prev == 0.0 and i > 1):
+                            out[5] += 1
+                        best = min(best, abs(cur))
+                        prev = cur
+                    if best < sg._NEAR_FACE * (abs(dg0) + abs(dg1) + abs(g1 - g0)) and g0 * g1 > 0.0:
+                        out[6] += 1
+
+
+def _median_timings(calls):
+    keys = calls[0].keys()
+    return {k: float(np.median([c[k] for c in calls])) for k in keys}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scene", default="hex8", choices=("hex8", "hex27", "tet10", "nurbs27"))
+    parser.add_argument("--n", type=int, default=20)
+    parser.add_argument("--fibres", type=int, default=1000)
+    parser.add_argument("--distort", type=float, default=0.1, metavar="A")
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--package", help="checkout whose package is measured (default: this one)")
+    parser.add_argument("--no-counts", action="store_true", help="times only")
+    args = parser.parse_args(argv)
+    numba.set_num_threads(1)
+    beams, solid_mesh = scene(args.scene, args.n, args.fibres, args.distort)
+    print(f"package {m13.__file__.rsplit('/', 2)[0]}; scene {args.scene}: {solid_mesh.n_elements} solid elements, "
+          f"{beams.n_elements} beam elements, n_gauss {N_GAUSS}, 1 thread, median of {args.repeats} calls")
+
+    rates = {}
+    for integration in ("element", "segment"):
+        m13.assemble_mortar(beams, solid_mesh, integration=integration, n_gauss=N_GAUSS)      # compile, warm
+        calls = []
+        for _ in range(args.repeats):
+            ops = m13.assemble_mortar(beams, solid_mesh, integration=integration, n_gauss=N_GAUSS)
+            calls.append(ops.timings)
+        t = _median_timings(calls)
+        rates[integration] = ops.n_integration_points / t["total"]
+        stages = "  ".join(f"{k} {1e3 * v:.1f}" for k, v in t.items())
+        print(f"{integration}-based: {ops.n_integration_points} points, {rates[integration]:.3g} points/s; "
+              f"stages [ms]: {stages}")
+        print(f"  diagnostics: {ops.diagnostics}")
+
+    ctx = KernelInput(beams, solid_mesh)
+    crossing = sg.pair_crossings(ctx, ctx.pair_beam(), ctx.pair_solid, SEARCH_POINTS)
+    reaching = np.concatenate([[0], np.cumsum(~crossing[3])])
+    certain = reaching[ctx.pair_offsets[1:]] == reaching[ctx.pair_offsets[:-1]]
+    tiled = sg.tile(ctx, *crossing[:3])
+    parts = {
+        "pair_crossings": lambda: sg.pair_crossings(ctx, ctx.pair_beam(), ctx.pair_solid, SEARCH_POINTS),
+        "tile": lambda: sg.tile(ctx, *crossing[:3]),
+        "check_tiling": lambda: sg.check_tiling(ctx, *tiled[1:4], tiled[4], certain),
+        "segment_points": lambda: segment_points(ctx, *tiled[:4], N_GAUSS),
+    }
+    times = {}
+    for name, call in parts.items():
+        call()
+        runs = []
+        for _ in range(args.repeats):
+            t0 = time.perf_counter()
+            call()
+            runs.append(time.perf_counter() - t0)
+        times[name] = np.median(runs)
+    print("segmentation's parts alone [ms]: " + "  ".join(f"{k} {1e3 * v:.1f}" for k, v in times.items()))
+    if args.no_counts:
+        return rates
+
+    pairs = np.diff(ctx.pair_offsets)
+    print(f"candidate pairs per beam element: mean {pairs.mean():.2f}, max {pairs.max()}")
+    gx, _ = gauss_legendre(N_GAUSS)
+    args_ctx = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h)
+    out = np.zeros(7, dtype=np.int64)
+    element_counts(ctx.pair_offsets, ctx.pair_solid, gx, *args_ctx, ctx.solid_boxes, ctx.linear, ctx.beam_code,
+                   ctx.Q, ctx.lengths, ctx.beam_origin, out)
+    n = out[0]
+    print(f"element-based, per point: box tests passed {out[1] / n:.3f}, Newton projections {out[2] / n:.3f}, "
+          f"affine locations {out[6] / n:.3f}; Newton iterations per projection {out[3] / max(out[2], 1):.3f}; "
+          f"rare path (restart, face polish, subdivision) {out[4]} of {out[2]} projections; owned {out[5]} of {n}")
+    out = np.zeros(4, dtype=np.int64)
+    segment_point_counts(*tiled[:4], gx, *args_ctx, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin,
+                         out)
+    print(f"segment-based points: {out[0]} ({len(tiled[0])} segments, {len(tiled[0]) / len(pairs):.2f} per beam "
+          f"element); Newton iterations per point {out[1] / max(out[0] - out[3], 1):.3f} (warm start), fallbacks "
+          f"{out[2]}, affine {out[3]}")
+    out = np.zeros(7, dtype=np.int64)
+    crossing_counts(ctx.pair_offsets, ctx.pair_solid, *args_ctx, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths,
+                    ctx.beam_origin, ctx.beam_boxes, SEARCH_POINTS, out)
+    found = int(crossing[2].sum())
+    print(f"crossing search: {out[0]} pairs, {out[1]} searched ({out[1] / len(pairs):.2f} per beam element); "
+          f"per searched pair: {out[2] / max(out[1], 1):.2f} sample projections "
+          f"({out[3] / max(out[2], 1):.3f} Newton iterations each, {out[4]} fallbacks in all), face-Newton starts "
+          f"{out[5] / max(out[1], 1):.3f} at sign changes + {out[6] / max(out[1], 1):.3f} at touches, crossings found "
+          f"{found / max(out[1], 1):.3f}")
+    return rates
+
+
+if __name__ == "__main__":
+    main()
