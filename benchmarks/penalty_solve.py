@@ -1,6 +1,6 @@
 """Linear solve of the penalty system of ``fibre_cube(n, 1000, 20)`` against the solid it sits in.
 
-    python benchmarks/penalty_solve.py --n 20 40 [--direct 20] [--plain 10] [--penalty-factor 1e3] [--profile]
+    python benchmarks/penalty_solve.py --n 20 40 [--direct 20] [--plain 10] [--schur 20 40] [--penalty-factor 1e3] [--profile]
                                        [--repeat 3]
 
 The system is the linearised model (solid: linear elastic E = 1e9, ν = 0.3, clamped at x = 0,
@@ -16,7 +16,8 @@ CPU time and iterations to the solid alone (measured in the same run), and the p
 memory of the process so far. Solvers: ``solid`` (the solid alone), ``aux`` (CG + auxiliary-space
 preconditioner, what ``solver = "amg"``/``"auto"`` runs for penalty-coupled beams), ``amg`` (CG +
 smoothed aggregation on the whole matrix, the path before the auxiliary space; ``--plain``, slow
-at large ε) and ``direct`` (SuperLU, ``--direct``). ``--profile`` adds where the auxiliary-space
+at large ε), ``schur`` (CG on the solid's Schur complement with the auxiliary space's V-cycle,
+``--schur``) and ``direct`` (SuperLU, ``--direct``). ``--profile`` adds where the auxiliary-space
 set-up and its applications spent their time (:attr:`AuxiliarySpacePreconditioner.timings`).
 The 1-minute load average is printed with every row: wall times on a shared machine are only
 comparable at the same load; ``--repeat k`` keeps the fastest of k solves of each system.
@@ -89,6 +90,8 @@ def main(argv=None):
     parser.add_argument("--n", type=int, nargs="+", default=[20, 40])
     parser.add_argument("--direct", type=int, nargs="*", default=[], help="sizes n to also solve directly")
     parser.add_argument("--plain", type=int, nargs="*", default=[], help="sizes n to also solve with plain AMG")
+    parser.add_argument("--schur", type=int, nargs="*", default=[],
+                        help="sizes n to also solve by CG on the solid's Schur complement (method 'schur')")
     parser.add_argument("--penalty-factor", type=float, default=1e3)
     parser.add_argument("--rtol", type=float, default=1e-8)
     parser.add_argument("--profile", action="store_true", help="print where the auxiliary space spends its time")
@@ -110,6 +113,8 @@ def main(argv=None):
         split = model._follow_split()
         sizes = f"{n:3d} {len(split['solid']):7d} {len(split['beam']):7d} {t_asm:6.1f}"
         runs.append(("aux", sizes, A, b, dict(method="aux", near_nullspace=R, block_size=3, **split)))
+        if n in args.schur:
+            runs.append(("schur", sizes, A, b, dict(method="schur", near_nullspace=R, block_size=3, **split)))
         if n in args.plain:
             runs.append(("amg", sizes, A, b, dict(method="amg", near_nullspace=R, block_size=3)))
         if n in args.direct:

@@ -94,3 +94,52 @@ def test_auxiliary_space_on_fibres_uses_the_banded_beam_factor_and_agrees_with_d
     # the parts of an application are timed inside it (a bookkeeping check, not a speed claim)
     t = pre.timings
     assert t["applications"] > 0 and t["amg cycles"] + t["beam solves"] <= t["applications"]
+
+
+def test_schur_complement_is_the_solid_block_of_the_balanced_beams_and_spd(fibre_system):
+    """``S x`` is the solid part of ``A`` applied to ``[x; A_BB⁻¹(−A_BS x)]`` (whose beam part is
+    zero), and S is symmetric positive definite to round-off."""
+    from mortar1d3d.solvers.linear import AuxiliarySpacePreconditioner
+    from mortar1d3d.solvers.schur import SchurComplement
+    A, b, R, split = fibre_system
+    solid = split["solid"]
+    pre = AuxiliarySpacePreconditioner(A, solid, split["beam"], split["prolongation"], R[solid], block_size=3)
+    S = SchurComplement(pre)
+    rng = np.random.default_rng(11)
+    x, y = rng.standard_normal((2, len(solid)))
+    whole = S.whole(x, np.zeros(A.shape[0]))
+    Aw = A @ whole
+    scale = np.abs(A).max() * np.abs(whole).max()
+    assert np.abs(Aw[len(solid):]).max() <= 1e-9 * scale                  # the beams are balanced
+    assert np.array_equal(S.matvec(x), (S.rows @ whole))
+    assert np.abs(Aw[:len(solid)] - S.matvec(x)).max() <= 1e-9 * scale
+    assert abs(y @ S.matvec(x) - x @ S.matvec(y)) <= 1e-10 * abs(x @ S.matvec(x))
+    assert x @ S.matvec(x) > 0 and y @ S.matvec(y) > 0
+    # the reduced right-hand side: the solid residual of x = 0 with the beams balanced (a load on
+    # the beams too: the scene loads the solid only)
+    f = rng.standard_normal(A.shape[0]) * np.abs(b).max()
+    zero = S.whole(np.zeros(len(solid)), f)
+    assert np.abs((A @ zero - f)[len(solid):]).max() <= 1e-9 * np.abs(A).max() * np.abs(zero).max()
+    assert np.abs(S.rhs(f) - (f - A @ zero)[:len(solid)]).max() <= 1e-9 * np.abs(f).max()
+    assert np.abs(S.rhs(f) - f[:len(solid)]).max() > 1e-3 * np.abs(f).max()
+
+
+def test_schur_cg_reaches_rtol_with_the_auxiliary_space_iterations(fibre_system):
+    """``method="schur"``: the whole system's residual below rtol, the direct solution, and no more
+    iterations than the auxiliary-space sweep on the whole system (both measured 16)."""
+    from mortar1d3d.solvers.linear import AuxiliarySpacePreconditioner, solve_linear
+    A, b, R, split = fibre_system
+    solid = split["solid"]
+    x, info = solve_linear(A, b, "schur", near_nullspace=R, block_size=3, rtol=1e-8, **split)
+    assert info["method"] == "schur" and info["converged"] and info["residual"] <= 1e-8
+    assert np.linalg.norm(b - A @ x) <= 1e-8 * np.linalg.norm(b)
+    assert "fallback" not in info
+    x_direct, _ = solve_linear(A, b, "direct")
+    assert np.linalg.norm(x - x_direct) <= 1e-7 * np.linalg.norm(x_direct)
+    pre = info["preconditioner"]
+    assert isinstance(pre, AuxiliarySpacePreconditioner)
+    _, aux = solve_linear(A, b, preconditioner=pre, rtol=1e-8)
+    assert aux["method"] == "aux" and info["iterations"] <= aux["iterations"] <= 20
+    # a reused preconditioner keeps the Schur path when asked for it
+    _, again = solve_linear(A, b, "schur", preconditioner=pre, rtol=1e-8)
+    assert again["method"] == "schur" and again["iterations"] == info["iterations"]

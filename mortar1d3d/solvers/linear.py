@@ -44,6 +44,7 @@ from .direct import (BANDED_MAX_BANDWIDTH, DIRECT_MAX_DOFS, BandedCholesky, band
 from .krylov import cg_with_fallback, raise_not_converged, roundoff_level
 from .preconditioners import AuxiliarySpacePreconditioner
 from .rigid import rigid_body_modes
+from .schur import schur_cg
 from .saddle import (AUGMENTATION_FACTOR, AUXILIARY_AUGMENTATION_FACTOR, SADDLE_DIRECT_MAX_DOFS,
                      SaddlePreconditioner, solve_saddle)
 
@@ -64,13 +65,16 @@ def solve_linear(A, b, method="auto", *, near_nullspace=None, rtol=1e-10, maxite
     ----------
     A : (n, n) scipy.sparse matrix, symmetric positive definite
     b : (n,) array_like of float
-    method : {"auto", "direct", "amg", "aux"}
+    method : {"auto", "direct", "amg", "aux", "schur"}
         ``"direct"``: SuperLU (:func:`scipy.sparse.linalg.splu`) with a symmetric minimum-degree
         ordering and diagonal pivoting (see Notes). ``"amg"``: conjugate gradients
         preconditioned by one V-cycle of smoothed-aggregation AMG (:func:`build_amg`).
         ``"aux"``: conjugate gradients preconditioned by :class:`AuxiliarySpacePreconditioner`
         (needs ``solid``, ``beam``, ``prolongation``): for beams penalty-coupled to a solid,
-        where plain AMG degrades as ε grows. ``"auto"``: direct up to :data:`DIRECT_MAX_DOFS`
+        where plain AMG degrades as ε grows. ``"schur"``: the beam DOFs eliminated exactly
+        (banded factor) and CG on the solid's Schur complement with the auxiliary space's V-cycle
+        (:func:`~mortar1d3d.solvers.schur.schur_cg`; same needs as ``"aux"``, the same iterations
+        on the fibre cube, cheaper ones). ``"auto"``: direct up to :data:`DIRECT_MAX_DOFS`
         unknowns, above it ``"aux"`` when ``prolongation`` is given, else ``"amg"``.
     near_nullspace : (n, k) array_like, optional
         For AMG: rigid-body modes of the free DOFs (:func:`rigid_body_modes`). Without them AMG
@@ -84,8 +88,8 @@ def solve_linear(A, b, method="auto", *, near_nullspace=None, rtol=1e-10, maxite
         Start vector of CG (e.g. the previous Newton correction). Ignored by ``"direct"``.
     preconditioner : pyamg MultilevelSolver or AuxiliarySpacePreconditioner, optional
         A hierarchy from :func:`build_amg` (implies ``method="amg"``) or an auxiliary-space
-        preconditioner (implies ``method="aux"``) to reuse; it may have been built for an
-        earlier, similar ``A``.
+        preconditioner (implies ``method="aux"`` unless ``method="schur"``) to reuse; it may
+        have been built for an earlier, similar ``A``.
     block_size : {None, 1, 3}
         AMG aggregation by DOF triplets, see :func:`build_amg`.
     solid, beam : (n_s,), (n_b,) array_like of int, optional
@@ -97,7 +101,7 @@ def solve_linear(A, b, method="auto", *, near_nullspace=None, rtol=1e-10, maxite
     -------
     x : (n,) ndarray of float64
     info : dict
-        ``method`` ("direct", "amg" or "aux"), ``iterations`` (0 for direct), ``residual`` (true
+        ``method`` ("direct", "amg", "aux" or "schur"), ``iterations`` (0 for direct), ``residual`` (true
         relative residual ``‖b - A x‖/‖b‖``), ``setup_time`` and ``solve_time`` (seconds:
         factorisation / AMG setup, then substitution / CG), ``converged``, ``rtol``, ``maxiter``;
         iterative methods add ``status`` (``"converged"``, or ``"roundoff"``: the residual
@@ -129,13 +133,15 @@ def solve_linear(A, b, method="auto", *, near_nullspace=None, rtol=1e-10, maxite
     n = A.shape[0]
     b = check_vector(b, n, "b")
     if preconditioner is not None:
-        method = "aux" if isinstance(preconditioner, AuxiliarySpacePreconditioner) else "amg"
+        aux = isinstance(preconditioner, AuxiliarySpacePreconditioner)
+        method = ("schur" if method == "schur" else "aux") if aux else "amg"
     if method == "auto":
         method = "direct" if n <= DIRECT_MAX_DOFS else ("amg" if prolongation is None else "aux")
-    if method not in ("direct", "amg", "aux"):
-        raise ValueError(f"method must be 'auto', 'direct', 'amg' or 'aux', got {method!r}")
-    if method == "aux" and preconditioner is None and (prolongation is None or solid is None or beam is None):
-        raise ValueError("method 'aux' needs solid, beam and prolongation (see AuxiliarySpacePreconditioner)")
+    if method not in ("direct", "amg", "aux", "schur"):
+        raise ValueError(f"method must be 'auto', 'direct', 'amg', 'aux' or 'schur', got {method!r}")
+    missing = prolongation is None or solid is None or beam is None
+    if method in ("aux", "schur") and preconditioner is None and missing:
+        raise ValueError(f"method {method!r} needs solid, beam and prolongation (see AuxiliarySpacePreconditioner)")
     bnorm = np.linalg.norm(b)
     info = dict(method=method, iterations=0, residual=0.0, setup_time=0.0, solve_time=0.0,
                 converged=True, rtol=rtol, maxiter=maxiter)
@@ -156,7 +162,7 @@ def solve_linear(A, b, method="auto", *, near_nullspace=None, rtol=1e-10, maxite
         return x, info
 
     t = time.perf_counter()
-    if method == "aux":
+    if method in ("aux", "schur"):
         if preconditioner is None:
             solid, beam = split_dofs(n, solid, beam)
             null = None
@@ -182,8 +188,19 @@ def solve_linear(A, b, method="auto", *, near_nullspace=None, rtol=1e-10, maxite
     def floor(y):
         return roundoff_level(A, y, b)
 
-    name = "auxiliary-space-preconditioned CG" if method == "aux" else "AMG-preconditioned CG"
-    x, outcome = cg_with_fallback(A, b, x, M.matvec, rtol, maxiter, residual, floor, name)
+    name = {"aux": "auxiliary-space-preconditioned CG", "schur": "Schur-complement CG"}.get(method,
+                                                                                          "AMG-preconditioned CG")
+    if method == "schur":
+        x, outcome = schur_cg(A, b, M, x, rtol, maxiter)
+        if outcome["status"] not in ("converged", "roundoff"):
+            # CG on S broke down or stalled: the auxiliary-space sweep on the whole system (with
+            # its MINRES and LU fallbacks) from zero, its iterations added
+            before = outcome["iterations"]
+            x, outcome = cg_with_fallback(A, b, np.zeros(n), M.matvec, rtol, maxiter, residual, floor, name)
+            outcome["iterations"] += before
+            outcome["fallback"] = outcome.get("fallback", "aux")
+    else:
+        x, outcome = cg_with_fallback(A, b, x, M.matvec, rtol, maxiter, residual, floor, name)
     info.update(outcome)
     info["solve_time"] = time.perf_counter() - t
     info["converged"] = info["status"] in ("converged", "roundoff")
