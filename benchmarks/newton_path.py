@@ -179,7 +179,7 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
     projections, their Newton iterations, sample fallbacks, face-Newton starts at sign changes of the
     cubic model, touch starts]. Starts from the deflated cubic (a sample exactly on a face) and the
     mirror start after a touch are not counted (both rare)."""
-    C = np.empty((solid.CONTROL_MATRIX.shape[1], 3))
+    C = np.empty((solid.MAX_CONTROL, 3))
     reach = np.empty(solid.MAX_FACES, dtype=np.bool_)
     X, N, dN, H, dH, xi, trial = pr.point_buffers()
     a, stack = pr.search_buffers()

@@ -76,7 +76,7 @@ def _crossing_beam(points):
 @pytest.mark.parametrize("degree", [2, 3, 4])
 def test_curved_beam_crossing_the_inner_face_twice_has_two_pieces(degree):
     """A curved Hermite line through the 90° hollow-cylinder element (radii 0.1 / 0.2, height 0.3; one
-    quadratic or, degree-elevated, cubic span): it enters through θ = 0, dips into the hole (the
+    quadratic or, degree-elevated, cubic or quartic span): it enters through θ = 0, dips into the hole (the
     curved inner face, twice) and leaves through θ = 90°. Two pieces, at the crossings found by
     bisection of the exact sector."""
     bm = sector(degree=degree)
@@ -98,7 +98,7 @@ def test_curved_beam_crossing_the_inner_face_twice_has_two_pieces(degree):
 @pytest.mark.parametrize("degree", [2, 3, 4])
 @pytest.mark.parametrize("integration", ["segment", "element", "auto"])
 def test_operators_on_a_closed_pipe(integration, degree):
-    """Curved beams through a closed pipe of 2 × 6 × 2 elements (quadratic, or cubic spans): the
+    """Curved beams through a closed pipe of 2 × 6 × 2 elements (quadratic, cubic or quartic spans): the
     certificates hold, the segments tile the beam inside the pipe (coupled length = the length
     inside, by bisection), and M on the control points equals Σ w Φ_j R_i with R_i by Cox–de Boor."""
     bm = nurbs.bezier_mesh(nurbs.hollow_cylinder(0.2, 0.3, 1.0, angle=360.0, elements=(2, 6, 2), degree=degree))

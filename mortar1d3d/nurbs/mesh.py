@@ -67,7 +67,7 @@ def common_degree(degrees, what="patches"):
 
 class BezierMesh:
     """The engine's view of a :class:`~mortar1d3d.nurbs.NurbsSolid` (patches of degree 1 … 4 per direction,
-    elements of their common degree p = 2 or 3, module docstring).
+    elements of their common degree p = 2, 3 or 4, module docstring).
 
     Attributes
     ----------

@@ -18,7 +18,7 @@ face's degree p (:func:`rational_face_points`): with unit weights the pressure i
 ``N_a (x_,u × x_,v)`` is a polynomial of degree 3p − 1 per direction (N_a: p; a tangent component:
 p − 1 in its own direction and p in the other, so the cross product: 2p − 1), which ⌈3p/2⌉ Gauss
 points integrate exactly; one point more per direction for the rational weight W in the
-functions and the geometry. That is 4 × 4 points on quadratic faces and 6 × 6 on cubic ones; the
+functions and the geometry. That is 4 × 4 points on quadratic faces, 6 × 6 on cubic and 7 × 7 on quartic ones; the
 error falls quickly with ``n`` (tests/test_nurbs_pressure.py).
 """
 import numpy as np

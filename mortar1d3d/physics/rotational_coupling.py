@@ -139,7 +139,7 @@ class RotationalCoupling:
         kernel.reference_gradients(solid.element_codes, solid.connectivity, X, solid_element, xi, self.G, self.nodes,
                                    self.n_local)
         # only as many node slots as the largest element has: the local Hessian's chain to the nodes
-        # costs (3 slots)² per point, 11x more with hex8 in MAX_NODES (27) slots than in 8
+        # costs (3 slots)² per point, 11x more with hex8 in 27 slots than in 8 (MAX_NODES is larger still)
         used = max(int(self.n_local.max(initial=0)), 1)
         self.G, self.nodes = np.ascontiguousarray(self.G[:, :used]), np.ascontiguousarray(self.nodes[:, :used])
         self.lag = _lagrange_tables(self.eta)[0]

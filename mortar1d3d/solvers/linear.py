@@ -190,15 +190,27 @@ def solve_linear(A, b, method="auto", *, near_nullspace=None, rtol=1e-10, maxite
 
     name = {"aux": "auxiliary-space-preconditioned CG", "schur": "Schur-complement CG"}.get(method,
                                                                                           "AMG-preconditioned CG")
-    if method == "schur":
+    if method == "schur" and M.A is not A:
+        # a preconditioner kept from another matrix (Newton with reuse): its beam factor is of that
+        # matrix's beam block, and the Schur complement eliminates the beams exactly, so it would
+        # solve the other system; the auxiliary-space sweep takes the kept preconditioner as it is
+        aux_name = "auxiliary-space-preconditioned CG"
+        x, outcome = cg_with_fallback(A, b, x, M.matvec, rtol, maxiter, residual, floor, aux_name)
+        outcome["note"] = ("Schur-complement CG needs the beam factor of this matrix; with the preconditioner "
+                           f"kept from an earlier one the {aux_name} ran instead. " + outcome.get("note", "")).strip()
+    elif method == "schur":
         x, outcome = schur_cg(A, b, M, x, rtol, maxiter)
         if outcome["status"] not in ("converged", "roundoff"):
             # CG on S broke down or stalled: the auxiliary-space sweep on the whole system (with
-            # its MINRES and LU fallbacks) from zero, its iterations added
-            before = outcome["iterations"]
-            x, outcome = cg_with_fallback(A, b, np.zeros(n), M.matvec, rtol, maxiter, residual, floor, name)
+            # its MINRES and LU fallbacks) from zero, with the iterations left
+            before, status = outcome["iterations"], outcome["status"]
+            aux_name = "auxiliary-space-preconditioned CG"
+            x, outcome = cg_with_fallback(A, b, np.zeros(n), M.matvec, rtol, max(1, maxiter - before), residual,
+                                          floor, aux_name)
             outcome["iterations"] += before
             outcome["fallback"] = outcome.get("fallback", "aux")
+            outcome["note"] = (f"Schur-complement CG ended '{status}' after {before} iterations; the {aux_name} "
+                               "took over from zero. " + outcome.get("note", "")).strip()
     else:
         x, outcome = cg_with_fallback(A, b, x, M.matvec, rtol, maxiter, residual, floor, name)
     info.update(outcome)

@@ -69,8 +69,9 @@ def schur_cg(A, b, preconditioner, x, rtol, maxiter):
     b, x : (n,) ndarray of float
         Right-hand side and start vector (its solid part is CG's start).
     preconditioner : AuxiliarySpacePreconditioner
-        Built for ``A`` (or a similar earlier ``A``: only its V-cycle then is approximate, the
-        beam factor must be of this ``A``).
+        Built for this ``A``: the complement takes ``A``'s rows and beam factor from it
+        (:func:`~mortar1d3d.solvers.linear.solve_linear` runs the auxiliary-space sweep instead when
+        the preconditioner was kept from another matrix).
     rtol : float
         Relative residual ``‖b − A x‖ / ‖b‖`` of the whole system to reach.
     maxiter : int

@@ -124,7 +124,8 @@ def _monomial_tables():
     """Per code: monomial exponents α, the matrix from nodes to the coefficients of x(ξ) = Σ_α a_α y^α
     with y = ξ - ξ_c (the element centre), and the parameter box and its max-norm radius about ξ_c.
 
-    ``a = TO_MONOMIAL[code] @ X`` (nodes X, one row per node) inverts the Vandermonde matrix of the
+    ``a = T @ X`` (nodes X, one row per node; T the code's n × n block of the flat ``TO_MONOMIAL``
+    at ``MONOMIAL_START[code]``) inverts the Vandermonde matrix of the
     shape functions' space at the reference nodes; the geometry kernels bound derivatives of the
     map with these coefficients (:func:`mortar1d3d.geometry.projection.derivative_bounds`). For a
     rational type the matrix takes the Bernstein coefficients (w_a X_a, and w_a) of the homogeneous
