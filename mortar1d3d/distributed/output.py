@@ -27,7 +27,7 @@ import numpy as np
 from ..elements.multiplier import multiplier as multiplier_type
 from ..io.vtu import _write_text, beam_fibres, sample_beams, write_beams, write_pvd, write_solid
 from ..mortar.assemble import lm_numbering
-from .petsc import petsc
+from .petsc import Entries, petsc
 
 
 def _declared(path):
@@ -99,7 +99,6 @@ class LineLoads:
     """
 
     def __init__(self, model, owned, rows, weighted, template):
-        PETSc = petsc()
         lm = multiplier_type(model.scene.coupling["lm"])
         self.weighted, self.meshes, places = weighted, {}, {}
         for k, elements, _, mesh, _ in owned.beams:
@@ -114,22 +113,18 @@ class LineLoads:
         wanted = wanted[wanted >= 0]
         # λ = 0 where no multiplier acts: the entry after the received ones
         self.places = {k: np.where(p >= 0, np.searchsorted(wanted, p), len(wanted)) for k, p in places.items()}
-        source = template if weighted is None else weighted.createVecLeft()
-        self._received = PETSc.Vec().createSeq(len(wanted), comm=PETSc.COMM_SELF)
-        index = PETSc.IS().createGeneral(wanted.astype(PETSc.IntType), comm=PETSc.COMM_SELF)
-        self._scatter = PETSc.Scatter().create(source, index, self._received, None)
-        index.destroy()
+        layout = template if weighted is None else weighted.createVecLeft()
+        self._received = Entries(layout, wanted)
+        if layout is not template:
+            layout.destroy()
         self.lm_name = model.scene.coupling["lm"]
 
     def at(self, x):
         """λ, (n_lm of the rank's mesh, 3) per group, of the physical state ``x`` (PETSc vector; collective)."""
-        PETSc = petsc()
         source = x if self.weighted is None else self.weighted * x
-        self._scatter.scatter(source, self._received, addv=PETSc.InsertMode.INSERT_VALUES,
-                              mode=PETSc.ScatterMode.FORWARD)
+        values = np.append(self._received(source), 0.0)
         if source is not x:
             source.destroy()
-        values = np.append(self._received.getArray(), 0.0)
         return {k: values[p].reshape(-1, 3) for k, p in self.places.items()}
 
     def zero(self):

@@ -110,3 +110,29 @@ def gather_matrix(A):
 def gather_vector(v):
     """The distributed vector ``v`` as an array on every rank."""
     return np.concatenate(_allgather(v.getComm(), np.asarray(v.getArray()).copy()))
+
+
+class Entries:
+    """Given global entries of distributed vectors of one layout, received on this rank: one
+    ``VecScatter`` into a sequential vector, made once and used for every vector of that layout.
+
+    Parameters
+    ----------
+    layout : PETSc.Vec
+        Any vector of the layout (only its layout is used).
+    indices : (k,) int array_like
+        Global indices, in the order the entries are wanted.
+    """
+
+    def __init__(self, layout, indices):
+        PETSc = petsc()
+        self.values = PETSc.Vec().createSeq(len(indices), comm=PETSc.COMM_SELF)
+        index = PETSc.IS().createGeneral(np.asarray(indices).astype(PETSc.IntType), comm=PETSc.COMM_SELF)
+        self.scatter = PETSc.Scatter().create(layout, index, self.values, None)
+        index.destroy()
+
+    def __call__(self, x):
+        """The entries of ``x`` (collective); a view of this object's buffer, valid until the next call."""
+        PETSc = petsc()
+        self.scatter.scatter(x, self.values, addv=PETSc.InsertMode.INSERT_VALUES, mode=PETSc.ScatterMode.FORWARD)
+        return self.values.getArray()

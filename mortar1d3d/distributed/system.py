@@ -34,7 +34,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .assemble import beam_submesh, solid_submesh
-from .petsc import coo_matrix, petsc, summed_vector
+from .petsc import Entries, coo_matrix, petsc, summed_vector
 
 
 def _entry_of_elements(g):
@@ -219,11 +219,8 @@ class DistributedSystem:
         self.load = summed_vector(comm, *body, self.sizes)
         self.load.setArray(self.load.getArray() + dead[self.owned_serial])
         # the ghost update: the unknowns the owned elements read (physics.needed), from their owners
-        needed = layout.of_serial[physics.needed].astype(PETSc.IntType)
-        self._ghosts = PETSc.Vec().createSeq(len(needed), comm=PETSc.COMM_SELF)
-        index = PETSc.IS().createGeneral(needed, comm=PETSc.COMM_SELF)
-        self._scatter = PETSc.Scatter().create(self.load, index, self._ghosts, None)
-        index.destroy()
+        needed = layout.of_serial[physics.needed]
+        self._ghosts = Entries(self.load, needed)
         #: entries this rank receives from other ranks in each ghost update
         self.ghost_entries = int(np.count_nonzero((needed < first) | (needed >= first + self.sizes[0])))
         self.ghost_updates = 0
@@ -268,10 +265,9 @@ class DistributedSystem:
     def ghosted(self, x):
         """The entries of the PETSc vector ``x`` that this rank's elements read (``physics.needed``),
         its own and the ghosts (collective)."""
-        self._scatter.scatter(x, self._ghosts, addv=petsc().InsertMode.INSERT_VALUES,
-                              mode=petsc().ScatterMode.FORWARD)
+        values = self._ghosts(x).copy()
         self.ghost_updates += 1
-        return self._ghosts.getArray().copy()
+        return values
 
     def gather(self, v):
         """The vector whose part on this rank is ``v``, in the serial numbering on rank 0 (None on
