@@ -353,18 +353,25 @@ def test_scene_errors_of_rotations_and_triads():
         m13.plan(m13.Scene(beams=[sr_beam(normal=[1, 0, 0])], dirichlet=clamp))
 
 
+def _per_beam_option(key, default, value, wrong, what):
+    """The simo_reissner beam key ``key``: an error on a torsion_free beam (which has no ``what``) and for
+    the unknown name ``wrong``; ``value`` on the second of two clamped cantilevers reaches that beam's
+    elements only (the first keeps ``default``)."""
+    tf = {"curve": {"line": [[0, 0, 0], [1, 0, 0]]}, "elements": 2, "section": {"EA": 1.0, "EI": 1.0}}
+    with pytest.raises(SceneError, match=rf"^beams\[0\]\.{key}: a torsion_free beam has no {what}"):
+        m13.Scene(beams=[dict(tf, **{key: value})])
+    with pytest.raises(SceneError, match=rf"^beams\[0\]\.{key}: .*'{wrong}'"):
+        m13.Scene(beams=[sr_beam(**{key: wrong})])
+    other = sr_beam(curve={"line": [[0, 1, 0], [1, 1, 0]]}, **{key: value})
+    model = Model(m13.Scene(beams=[sr_beam(), other], dirichlet=[{"on": "beam:0:start", "clamp": True},
+                                                                 {"on": "beam:1:start", "clamp": True}]))
+    model.prepare()
+    assert getattr(model.groups[0].physics, key).tolist() == [default, default, value, value]
+
+
 def test_force_rule_of_a_simo_reissner_beam():
     """``force_rule = "lobatto3"`` reaches the physics per beam; other models and names are errors."""
-    tf = {"curve": {"line": [[0, 0, 0], [1, 0, 0]]}, "elements": 2, "section": {"EA": 1.0, "EI": 1.0}}
-    with pytest.raises(SceneError, match=r"^beams\[0\]\.force_rule: a torsion_free beam has no force"):
-        m13.Scene(beams=[dict(tf, force_rule="lobatto3")])
-    with pytest.raises(SceneError, match=r"^beams\[0\]\.force_rule: .*'lobatto'"):
-        m13.Scene(beams=[sr_beam(force_rule="lobatto")])
-    second = sr_beam(curve={"line": [[0, 1, 0], [1, 1, 0]]}, force_rule="lobatto3")
-    model = Model(m13.Scene(beams=[sr_beam(), second], dirichlet=[{"on": "beam:0:start", "clamp": True},
-                                                                  {"on": "beam:1:start", "clamp": True}]))
-    model.prepare()
-    assert model.groups[0].physics.force_rule.tolist() == ["gauss", "gauss", "lobatto3", "lobatto3"]
+    _per_beam_option("force_rule", "gauss", "lobatto3", "lobatto", "force")
     # a tip load on a 2-element cantilever: the rules differ by the discretisation error (measured tip
     # deflection 0.2752 with the Gauss force rule, 0.2722 with Lobatto)
     load = [{"type": "point", "on": "beam:0:end", "value": [0, 0, -0.05]}]
@@ -465,16 +472,7 @@ def test_virtual_spins_of_a_simo_reissner_beam():
     """``virtual_spins = "lagrange"`` reaches the physics per beam; other models and names are errors.
     A 3D end moment on a cantilever (bending and twist): the two forms differ by the discretisation
     error and converge to one solution as the beam is refined."""
-    tf = {"curve": {"line": [[0, 0, 0], [1, 0, 0]]}, "elements": 2, "section": {"EA": 1.0, "EI": 1.0}}
-    with pytest.raises(SceneError, match=r"^beams\[0\]\.virtual_spins: a torsion_free beam has no spins"):
-        m13.Scene(beams=[dict(tf, virtual_spins="lagrange")])
-    with pytest.raises(SceneError, match=r"^beams\[0\]\.virtual_spins: .*'variational'"):
-        m13.Scene(beams=[sr_beam(virtual_spins="variational")])
-    second = sr_beam(curve={"line": [[0, 1, 0], [1, 1, 0]]}, virtual_spins="lagrange")
-    model = Model(m13.Scene(beams=[sr_beam(), second], dirichlet=[{"on": "beam:0:start", "clamp": True},
-                                                                  {"on": "beam:1:start", "clamp": True}]))
-    model.prepare()
-    assert model.groups[0].physics.virtual_spins.tolist() == ["exact", "exact", "lagrange", "lagrange"]
+    _per_beam_option("virtual_spins", "exact", "lagrange", "variational", "spins")
 
     def tip(elements, spins):
         scene = cantilever(elements, [{"type": "moment", "on": "beam:0:end", "value": [0.4, 0.3, 0.5]}], steps=2)

@@ -366,9 +366,8 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
             kappa_rows = np.concatenate([np.repeat(k[coupled_nodes(k)], 3) for k in kappa])
             # λ of the output: the multipliers of the state (−1: an LM row without one)
             n = model.n_displacement_dofs
-            lm_rows = [np.where(m[num.dofs(np.arange(3 * num.n), 3)] >= 0,
-                                layout.of_serial[n + np.maximum(m[num.dofs(np.arange(3 * num.n), 3)], 0)], -1)
-                       for m, num in zip(maps, numbering.lm)]
+            serial = [m[num.dofs(np.arange(3 * num.n), 3)] for m, num in zip(maps, numbering.lm)]
+            lm_rows = [np.where(s >= 0, layout.of_serial[n + np.maximum(s, 0)], -1) for s in serial]
         else:
             coupling, weighted, lm_rows = _penalty_matrix(model, ops, numbering, layout, comm)
     clock("coupling")

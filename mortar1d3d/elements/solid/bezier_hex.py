@@ -132,6 +132,14 @@ def homogeneous_determinants(p, lattice, X, weights, xi):
     return np.linalg.det(H)
 
 
+def lattice_tables(p):
+    """The tables of a degree-p type in the node order of :func:`bezier_nodes`: reference nodes
+    ((p+1)³, 3), lattice index (0 … p) per direction of every node, and B_a at the reference nodes
+    (:func:`node_values`)."""
+    nodes = bezier_nodes(p)
+    return nodes, lattice_indices(nodes, p), node_values(p, nodes)
+
+
 def node_values(p, nodes):
     """B_a at the reference nodes ((n, n): row = node), the map from Bernstein coefficients to nodal values."""
     return bernstein_values(p, lattice_indices(nodes, p), nodes)[0]

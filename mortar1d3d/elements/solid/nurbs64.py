@@ -15,11 +15,9 @@ from . import bezier_hex
 from .bezier_hex import rational_descriptor, tensor_bernstein, tensor_bernstein_gradients
 
 DEGREE = 3
-REFERENCE_NODES = bezier_hex.bezier_nodes(DEGREE)
-#: lattice index (0 … 3) per direction of every node
-LATTICE = bezier_hex.lattice_indices(REFERENCE_NODES, DEGREE)
-#: B_a at the reference nodes (64, 64): row = node; maps Bernstein coefficients to nodal values
-NODE_VALUES = bezier_hex.node_values(DEGREE, REFERENCE_NODES)
+#: reference nodes, lattice index (0 … 3) per direction of every node, and B_a at the reference nodes
+#: (64, 64; row = node: maps Bernstein coefficients to nodal values)
+REFERENCE_NODES, LATTICE, NODE_VALUES = bezier_hex.lattice_tables(DEGREE)
 
 
 @njit
