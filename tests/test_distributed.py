@@ -208,11 +208,13 @@ def test_solve_and_command_line_with_the_petsc_backend():
 
 
 def test_unsupported_features_name_their_key():
+    import tomllib
     from mortar1d3d.scene import SceneError
-    scene = _with(SOLVE_SCENES["rebar"](), backend="petsc")
-    scene.coupling = {**scene.coupling, "constraint": "gauss_point"}
-    with pytest.raises(SceneError, match="coupling.constraint: the PETSc backend couples with the mortar constraint"):
-        m13.solve(scene)
+    data = tomllib.loads((ROOT / "examples" / "scenes" / "rebar_cantilever.toml").read_text())
+    data["beams"][0].update(model="simo_reissner", section={"E": 200e9, "nu": 0.3, "radius": 0.01})
+    data["analysis"]["backend"] = "petsc"
+    with pytest.raises(SceneError, match=r"beams\[\.\.\]\.model: beams with rotations \(simo_reissner\) are not distributed"):
+        m13.solve(m13.Scene.from_dict(data))
 
 
 # --------------------------------------------------------------------------------------------
@@ -649,3 +651,61 @@ def test_dependent_rows_contradicted_by_prescribed_values_stop_every_rank():
     from mortar1d3d.scene import SceneError
     with pytest.raises(SceneError, match="dirichlet: the prescribed values contradict the coupling"):
         m13.solve(_coarse_bar(start=[0, 0, 1e-3], backend="petsc"))
+
+
+# --------------------------------------------------------------------------------------------
+# The Gauss-point constraint (point-wise penalty) on PETSc
+# --------------------------------------------------------------------------------------------
+def _gauss_point_rebar(kinematics):
+    """The rebar cantilever with the point-wise penalty ε Σ_g w_g G_gᵀ G_g instead of the mortar one
+    (nonlinear: 2 load steps at a penalty of 100 E, why: test_newton_iterates_equal_the_serial_ones)."""
+    def scene(constraint="gauss_point", **analysis):
+        s = _rebar_nonlinear(2) if kinematics == "nonlinear" else _rebar_data()()
+        s.coupling = {**s.coupling, "constraint": constraint}
+        s.analysis = {**s.analysis, "solver": "direct", **analysis}
+        return s
+    return scene
+
+
+@pytest.mark.parametrize("kinematics", ["linear", "nonlinear"])
+def test_gauss_point_penalty_equals_the_serial_run(kinematics):
+    """Each rank adds ε w_g G_gᵀ G_g of its own beam elements' integration points: the states, the
+    Newton iterations and the reactions equal the serial run's for the three partitions, and the
+    constraint acts (the mortar penalty gives another solution)."""
+    make = _gauss_point_rebar(kinematics)
+    serial = m13.solve(make())
+    mortar = m13.solve(make(constraint="mortar"))
+    assert _relative(serial.z, mortar.z) > 1e-4
+
+    def check(serial, result):
+        return {"steps": max(_relative(h, h0) for h, h0 in zip(result.history, serial.history)),
+                "iterations": [s.iterations for s in result.steps], "ranks": result.distributed["ranks"],
+                "reactions": _relative(np.array(result.reactions), np.array(serial.reactions))}
+
+    for label, out in _compare(serial, lambda: make(backend="petsc"), check):
+        assert out["ranks"] == SIZE
+        assert out["iterations"] == [s.iterations for s in serial.steps], (kinematics, label)
+        assert out["steps"] <= 1e-10, (kinematics, label, out)
+        assert out["reactions"] <= 1e-8, (kinematics, label, out)
+
+
+def test_parallel_vtu_line_load_of_the_gauss_point_penalty():
+    """The pieces' line load of the point-wise penalty, ε κ⁻¹ Π G d (the point values ε (u_B − u_S)
+    projected to the LM nodes, summed from the ranks' points by PETSc), equals the serial output's
+    for the three partitions."""
+    import tempfile
+    from mortar1d3d.distributed.solve import solve_distributed
+    make = _gauss_point_rebar("linear")
+    path = Path(COMM.tompi4py().bcast(tempfile.mkdtemp(prefix="mpi-vtu-gp-") if RANK == 0 else None, root=0))
+    if RANK == 0:
+        m13.solve(make()).write(path / "serial", samples_per_element=4)
+    for label, parts in PARTS:
+        directory = path / label.replace(" ", "-").replace(".", "")
+        solve_distributed(make(backend="petsc"), comm=COMM, parts=parts, parallel_output=directory,
+                          samples_per_element=4)
+        found = _parallel_output_checks(path / "serial", directory, 4) if RANK == 0 else None
+        found = COMM.tompi4py().bcast(found, root=0)
+        assert found["problems"] == [], (label, found["problems"])
+        assert found["max_difference"] <= 1e-10, (label, found["max_difference"])
+        # λ = ε (u_B − u_S) at the points: differences of nearly equal displacements times ε / E = 1e3
+        assert found["line_load_difference"] <= 1e-6, (label, found["line_load_difference"])

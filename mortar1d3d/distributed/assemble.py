@@ -80,6 +80,10 @@ class LocalOperators:
         Serial ids of the owned beam elements.
     solid_elements : (n_local,) int64
         Serial ids of the solid elements they reach (the local solid mesh's elements).
+    beams, solid : BeamMesh, SolidMesh or None
+        The local meshes ``ops`` was assembled on (None with ``ops``).
+    beam_nodes, solid_nodes : int64 arrays
+        Serial ids of the local meshes' nodes.
     """
 
     D: tuple
@@ -88,6 +92,10 @@ class LocalOperators:
     ops: object
     beam_elements: np.ndarray
     solid_elements: np.ndarray
+    beams: object = None
+    solid: object = None
+    beam_nodes: np.ndarray = None
+    solid_nodes: np.ndarray = None
 
     def serial_points(self):
         """The local integration points and segments with serial element ids: (point_fields, segments)."""
@@ -141,7 +149,7 @@ def local_operators(solid, beams, partition, numbering, rank, group=0, integrati
          + c % per_node, v)
     r, c, v = _triplets(ops.M)
     M = (3 * lm_new[r // 3] + r % 3, 3 * numbering.solid.new_of_old[solid_nodes[c // 3]] + c % 3, v)
-    return LocalOperators(D, M, (lm_new, ops.kappa), ops, owned, reach)
+    return LocalOperators(D, M, (lm_new, ops.kappa), ops, owned, reach, sub_beams, sub_solid, beam_nodes, solid_nodes)
 
 
 @dataclass

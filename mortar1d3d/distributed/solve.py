@@ -26,8 +26,9 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
-from ..physics.coupling import coupled_nodes
+from ..physics.coupling import expand3, coupled_nodes, point_projection, point_triplets
 from ..scene import SceneError
 from .assemble import assemble_distributed
 from .numbering import Numbering
@@ -95,9 +96,6 @@ class SystemLayout:
 def _unsupported(model):
     """SceneError naming the key of the first feature this slice does not distribute."""
     sc = model.scene
-    if sc.coupled and sc.coupling["constraint"] != "mortar":
-        return ("coupling.constraint: the PETSc backend couples with the mortar constraint so far (the Gauss-point "
-                "constraint runs with backend = \"serial\")")
     if sc.coupled and sc.coupling.get("rotational") is not None:
         return "coupling.rotational: not distributed yet; use backend = \"serial\""
     if any(g.rotations.size for g in model.groups):
@@ -143,29 +141,64 @@ def _constraint_triplets(model, ops, numbering, layout, k):
             np.concatenate([vd, -vm]))
 
 
+def _gauss_point_triplets(model, ops, layout, k):
+    """Group ``k``'s Gauss-point penalty on this rank's integration points (those of its owned beam
+    elements, each point on one rank only): ``ε Gᵀ diag(w) G`` as system triplets, and ``Π G`` (the
+    line load before ε κ⁻¹, :meth:`~mortar1d3d.physics.coupling.Coupling.line_load`) as (rank-major
+    LM rows, system columns, values). G and Π are the serial ones (:func:`.point_triplets`,
+    :func:`.point_projection`) of the rank's local meshes, their columns mapped to the system."""
+    g, loc = model.groups[k], ops[k].local
+    empty = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0))
+    if loc.ops is None:
+        return empty, empty
+    rows, cols, vals = point_triplets(loc.ops, loc.beams, loc.solid)
+    n_solid, n_beam = loc.solid.n_nodes, loc.beams.n_centreline_dofs
+    per_node = g.type.dofs_per_node
+    # G's local scalar columns: the local solid nodes' DOFs, then the local beam mesh's centreline DOFs
+    beam = np.arange(n_beam)
+    serial = np.concatenate([(3 * loc.solid_nodes[:, None] + np.arange(3)[None, :]).ravel(),
+                             g.dofs.start + per_node * loc.beam_nodes[beam // per_node] + beam % per_node])
+    system = layout.of_serial[serial]
+    G = expand3(sp.csr_matrix((vals, (rows, cols)), shape=(loc.ops.n_integration_points, n_solid + n_beam // 3)))
+    K = (model.penalty * (G.T @ sp.diags(np.repeat(loc.ops.point_fields["weight"], 3)) @ G)).tocoo()
+    L = (expand3(point_projection(loc.ops, loc.beams)) @ G).tocoo()
+    lm_new = loc.kappa[0]
+    return ((system[K.row], system[K.col], K.data),
+            (3 * lm_new[L.row // 3] + L.row % 3, system[L.col], L.data))
+
+
 def _penalty_matrix(model, ops, numbering, layout, comm):
-    """ε Bᵀ diag(κ)⁻¹ B, formed by PETSc from the distributed B (rows: per rank, its LM rows of
-    group 0, then of group 1, ...) and the summed κ per row.
+    """The penalty stiffness and the line-load operator, formed by PETSc from the ranks' parts.
+
+    Mortar constraint: ε Bᵀ diag(κ)⁻¹ B from the distributed B (rows: per rank, its LM rows of group 0,
+    then of group 1, ...) and the summed κ per row. Gauss-point constraint: ε Σ_g w_g G_gᵀ G_g summed
+    from the ranks' points (:func:`_gauss_point_triplets`), and Π G in the place of B.
 
     Returns
     -------
     C : PETSc.Mat
     WB : PETSc.Mat
-        ε diag(κ)⁻¹ B (zero rows where no LM node is coupled): ``WB x`` is the line load λ.
+        ε diag(κ)⁻¹ B, or ε diag(κ)⁻¹ Π G (zero rows where no LM node is coupled): ``WB x`` is the
+        line load λ.
     lm_rows : list of (3 n_lm,) int64
         Per group, the row of ``WB`` of every serial LM row.
     """
     rank, n_parts = comm.getRank(), comm.getSize()
     counts = np.array([[3 * num.count(r) for num in numbering.lm] for r in range(n_parts)], dtype=np.int64)
     row_ranges = np.concatenate([[0], np.cumsum(counts.sum(axis=1))])
-    rows, cols, vals, k_idx, k_val, lm_rows = [], [], [], [], [], []
+    gauss_point = model.scene.coupling["constraint"] == "gauss_point"
+    rows, cols, vals, k_idx, k_val, lm_rows, stiffness = [], [], [], [], [], [], []
     for k, num in enumerate(numbering.lm):
         def row_of(new_rows):
             # the rank that owns a rank-major LM node: the range it falls in
             lm_rank = np.searchsorted(num.ranges, new_rows // 3, side="right") - 1
             return row_ranges[lm_rank] + counts[lm_rank, :k].sum(axis=1) + new_rows - 3 * num.ranges[lm_rank]
 
-        r, c, v = _constraint_triplets(model, ops, numbering, layout, k)
+        if gauss_point:
+            K, (r, c, v) = _gauss_point_triplets(model, ops, layout, k)
+            stiffness.append(K)
+        else:
+            r, c, v = _constraint_triplets(model, ops, numbering, layout, k)
         rows.append(row_of(r)), cols.append(c), vals.append(v)
         lm_rows.append(row_of(num.dofs(np.arange(3 * num.n), 3)))
         lm_new, kappa = ops[k].local.kappa
@@ -182,7 +215,11 @@ def _penalty_matrix(model, ops, numbering, layout, comm):
     w.setArray(arr)
     WB = B.copy()
     WB.diagonalScale(L=w)
-    C = B.transposeMatMult(WB)
+    if gauss_point:
+        sizes = (local_sys, n_sys)
+        C = coo_matrix(comm, *(np.concatenate(part) for part in zip(*stiffness)), sizes, sizes)
+    else:
+        C = B.transposeMatMult(WB)
     B.destroy()
     return C, WB, lm_rows
 

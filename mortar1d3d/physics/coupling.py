@@ -120,7 +120,7 @@ def follow_operator(ops, beams):
     M = ops.M.tocsr()[0:3 * n_nodes:3, 0::3]                 # scalar rows/columns (3×3 identity blocks)
     positions = (sp.diags(scale) @ M).tocsr()
     if not beams.element_type.has_tangents:
-        return _expand3(positions)
+        return expand3(positions)
     X = beams.positions
     a, b = beams.elements[:, 0], beams.elements[:, 1]
     inverse_length = 1.0 / np.linalg.norm(X[b] - X[a], axis=1)
@@ -134,10 +134,39 @@ def follow_operator(ops, beams):
     order = np.empty(2 * n_nodes, dtype=np.int64)
     order[0::2] = np.arange(n_nodes)
     order[1::2] = n_nodes + np.arange(n_nodes)
-    return _expand3(sp.vstack([positions, tangents], format="csr")[order])
+    return expand3(sp.vstack([positions, tangents], format="csr")[order])
 
 
-def _expand3(A):
+def point_triplets(ops, beams, solid):
+    """The scalar entries (rows, cols, vals) of the Gauss-point constraint operator G of ``ops``'s
+    integration points: row g holds H_k(η_g) at beam columns and −N_l(ξ_g) at solid ones, one column per
+    node triplet: solid node l at column l, the beam mesh's centreline DOF triplet c (DOFs 3c … 3c+2) at
+    ``solid.n_nodes + c``. Serial (:class:`Coupling`) and per rank (:mod:`mortar1d3d.distributed.solve`)."""
+    p = ops.point_fields
+    nnz = ops.n_integration_points * (MAX_FUNCTIONS + solid.connectivity.shape[1])
+    rows, cols, vals = np.empty(nnz, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
+    k = _point_operator(np.ascontiguousarray(p["beam_element"]), np.ascontiguousarray(p["solid_element"]),
+                        np.ascontiguousarray(p["eta"]), np.ascontiguousarray(p["xi"]),
+                        beams.element_type.code, beams.lengths, beams.function_columns(),
+                        solid.element_codes, solid.connectivity, solid.n_nodes, rows, cols, vals)
+    return rows[:k], cols[:k], vals[:k]
+
+
+def point_projection(ops, beams):
+    """Π (n_lm, n_points) scipy CSR: the entries Φ_j(η_g) w_g of the lumped projection from
+    ``ops``'s integration points to the LM nodes of ``beams`` (``lm_numbering``); the Gauss-point
+    penalty's line load is ``λ_j = κ_j⁻¹ Σ_g Π_jg λ_g``."""
+    lm = multiplier_type(ops.lm)
+    lm_index, n_lm = lm_numbering(beams, lm)
+    p = ops.point_fields
+    n = ops.n_integration_points * lm.n_functions
+    rows, cols, vals = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
+    _lm_projection(np.ascontiguousarray(p["beam_element"]), np.ascontiguousarray(p["eta"]),
+                   np.ascontiguousarray(p["weight"]), lm_index, lm.n_functions, rows, cols, vals)
+    return sp.csr_matrix((vals, (rows, cols)), shape=(n_lm, ops.n_integration_points))
+
+
+def expand3(A):
     """Scalar operator → 3×3 identity blocks (scalar row/column c becomes 3c..3c+2)."""
     return sp.kron(A, sp.identity(3, format="csr"), format="csr")
 
@@ -205,7 +234,7 @@ class Coupling:
         self.B = sp.hstack(blocks, format="csr")
         if constraint == "gauss_point":
             self.G, self.point_weights = self._gauss_point_operator(ops, beams, solid, beam_offset, n_dofs)
-            self._lm_from_points = self._projection(ops, beams)
+            self._lm_from_points = point_projection(ops, beams)
         if enforcement == "penalty":
             if constraint == "mortar":
                 K = self.B.T @ sp.diags(self.kappa_inverse) @ self.B
@@ -217,31 +246,12 @@ class Coupling:
     # -- operators ----------------------------------------------------------------------------
     @staticmethod
     def _gauss_point_operator(ops, beams, solid, beam_offset, n_dofs):
-        p = ops.point_fields
-        n_pts = ops.n_integration_points
-        nnz = n_pts * (MAX_FUNCTIONS + solid.connectivity.shape[1])
-        rows, cols, vals = np.empty(nnz, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
-        k = _point_operator(np.ascontiguousarray(p["beam_element"]), np.ascontiguousarray(p["solid_element"]),
-                            np.ascontiguousarray(p["eta"]), np.ascontiguousarray(p["xi"]),
-                            beams.element_type.code, beams.lengths, beams.function_columns(),
-                            solid.element_codes, solid.connectivity, solid.n_nodes, rows, cols, vals)
+        rows, cols, vals = point_triplets(ops, beams, solid)
         # solid node columns stay; beam columns c → global DOF triplet (beam_offset / 3 + c)
-        cols = cols[:k]
         beam = cols >= solid.n_nodes
         cols[beam] += beam_offset // 3 - solid.n_nodes
-        G = sp.csr_matrix((vals[:k], (rows[:k], cols)), shape=(n_pts, n_dofs // 3))
-        return _expand3(G), np.ascontiguousarray(p["weight"])
-
-    @staticmethod
-    def _projection(ops, beams):
-        lm = multiplier_type(ops.lm)
-        lm_index, n_lm = lm_numbering(beams, lm)
-        p = ops.point_fields
-        n = ops.n_integration_points * lm.n_functions
-        rows, cols, vals = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
-        _lm_projection(np.ascontiguousarray(p["beam_element"]), np.ascontiguousarray(p["eta"]),
-                       np.ascontiguousarray(p["weight"]), lm_index, lm.n_functions, rows, cols, vals)
-        return sp.csr_matrix((vals, (rows, cols)), shape=(n_lm, ops.n_integration_points))
+        G = sp.csr_matrix((vals, (rows, cols)), shape=(ops.n_integration_points, n_dofs // 3))
+        return expand3(G), np.ascontiguousarray(ops.point_fields["weight"])
 
     # -- evaluation ---------------------------------------------------------------------------
     @property
