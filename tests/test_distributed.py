@@ -464,24 +464,30 @@ def _parallel_output_checks(serial_dir, parallel_dir, samples):
     return out
 
 
+def _parallel_outputs(prefix, serial, distributed):
+    """Rank 0 writes the output of the serial run ``serial()``; for every partition of PARTS the ranks
+    write the pieces of ``distributed()`` (4 samples per beam element). Yields (label, what
+    :func:`_parallel_output_checks` found), the same on every rank (decided together)."""
+    import tempfile
+    from mortar1d3d.distributed.solve import solve_distributed
+    path = Path(COMM.tompi4py().bcast(tempfile.mkdtemp(prefix=prefix) if RANK == 0 else None, root=0))
+    if RANK == 0:
+        m13.solve(serial()).write(path / "serial", samples_per_element=4)
+    for label, parts in PARTS:
+        directory = path / label.replace(" ", "-").replace(".", "")
+        solve_distributed(distributed(), comm=COMM, parts=parts, parallel_output=directory, samples_per_element=4)
+        found = _parallel_output_checks(path / "serial", directory, 4) if RANK == 0 else None
+        yield label, COMM.tompi4py().bcast(found, root=0)
+
+
 def test_parallel_vtu_pieces_join_to_the_serial_output():
     """Every rank writes its elements as .vtu, rank 0 a .pvtu per state and the .pvd series: the
     files follow the VTK format (pieces exist, the arrays they hold are those declared), and the
     union of the pieces equals the serial output (solid displacement and stress, the beams' samples)."""
-    import tempfile
-    from mortar1d3d.distributed.solve import solve_distributed
     def nonlinear(**analysis):
         return _rebar_nonlinear(2, solver="direct", **analysis)
 
-    path = Path(COMM.tompi4py().bcast(tempfile.mkdtemp(prefix="mpi-vtu-") if RANK == 0 else None, root=0))
-    if RANK == 0:           # the serial run's own output
-        m13.solve(nonlinear()).write(path / "serial", samples_per_element=4)
-    for label, parts in PARTS:
-        directory = path / label.replace(" ", "-").replace(".", "")
-        solve_distributed(nonlinear(backend="petsc"), comm=COMM, parts=parts, parallel_output=directory,
-                          samples_per_element=4)
-        found = _parallel_output_checks(path / "serial", directory, 4) if RANK == 0 else None
-        found = COMM.tompi4py().bcast(found, root=0)
+    for label, found in _parallel_outputs("mpi-vtu-", nonlinear, lambda: nonlinear(backend="petsc")):
         assert found["problems"] == [], (label, found["problems"])
         assert found["timesteps"] == found["serial_timesteps"] == [0.0, 0.5, 1.0], label
         assert found["pieces"] >= 6, label
@@ -627,24 +633,12 @@ def test_parallel_vtu_line_load_of_multipliers_with_dependent_rows():
     """With Lagrange multipliers the pieces' line load is the state's multipliers, after the
     least-norm λ of the dependent rows (rank 0 forms it and sends each rank its part back): equal
     to the serial output's for the three partitions."""
-    import tempfile
-    from mortar1d3d.distributed.solve import solve_distributed
-    path = Path(COMM.tompi4py().bcast(tempfile.mkdtemp(prefix="mpi-vtu-lm-") if RANK == 0 else None, root=0))
-    if RANK == 0:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            m13.solve(_coarse_bar()).write(path / "serial", samples_per_element=4)
-    for label, parts in PARTS:
-        directory = path / label.replace(" ", "-").replace(".", "")
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            solve_distributed(_coarse_bar(backend="petsc"), comm=COMM, parts=parts, parallel_output=directory,
-                              samples_per_element=4)
-        found = _parallel_output_checks(path / "serial", directory, 4) if RANK == 0 else None
-        found = COMM.tompi4py().bcast(found, root=0)
-        assert found["problems"] == [], (label, found["problems"])
-        assert found["max_difference"] <= 1e-10, (label, found["max_difference"])
-        assert found["line_load_difference"] <= 1e-10, (label, found["line_load_difference"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for label, found in _parallel_outputs("mpi-vtu-lm-", _coarse_bar, lambda: _coarse_bar(backend="petsc")):
+            assert found["problems"] == [], (label, found["problems"])
+            assert found["max_difference"] <= 1e-10, (label, found["max_difference"])
+            assert found["line_load_difference"] <= 1e-10, (label, found["line_load_difference"])
 
 
 def test_dependent_rows_contradicted_by_prescribed_values_stop_every_rank():
@@ -693,18 +687,8 @@ def test_parallel_vtu_line_load_of_the_gauss_point_penalty():
     """The pieces' line load of the point-wise penalty, ε κ⁻¹ Π G d (the point values ε (u_B − u_S)
     projected to the LM nodes, summed from the ranks' points by PETSc), equals the serial output's
     for the three partitions."""
-    import tempfile
-    from mortar1d3d.distributed.solve import solve_distributed
     make = _gauss_point_rebar("linear")
-    path = Path(COMM.tompi4py().bcast(tempfile.mkdtemp(prefix="mpi-vtu-gp-") if RANK == 0 else None, root=0))
-    if RANK == 0:
-        m13.solve(make()).write(path / "serial", samples_per_element=4)
-    for label, parts in PARTS:
-        directory = path / label.replace(" ", "-").replace(".", "")
-        solve_distributed(make(backend="petsc"), comm=COMM, parts=parts, parallel_output=directory,
-                          samples_per_element=4)
-        found = _parallel_output_checks(path / "serial", directory, 4) if RANK == 0 else None
-        found = COMM.tompi4py().bcast(found, root=0)
+    for label, found in _parallel_outputs("mpi-vtu-gp-", make, lambda: make(backend="petsc")):
         assert found["problems"] == [], (label, found["problems"])
         assert found["max_difference"] <= 1e-10, (label, found["max_difference"])
         # λ = ε (u_B − u_S) at the points: differences of nearly equal displacements times ε / E = 1e3
