@@ -124,6 +124,9 @@ def main():
     parser.add_argument("--replicated-only", action="store_true")
     parser.add_argument("--nonlinear", type=int, default=0, metavar="STEPS",
                         help="nonlinear in STEPS load steps; measures the communication per Newton iteration")
+    parser.add_argument("--petsc-options", default="", metavar="OPTIONS",
+                        help="PETSc options for the solve, e.g. \"-mortar_penalty_pc gamg -pc_gamg_threshold 0.02\" "
+                             "(docs/distributed.md: the penalty preconditioners)")
     args = parser.parse_args()
     if args.replicated_only:
         print(json.dumps(replicated_memory(args.cells, args.fibres)))
@@ -136,6 +139,8 @@ def main():
     from mortar1d3d.distributed.petsc import petsc
     PETSc = petsc()
     comm = PETSc.COMM_WORLD
+    if args.petsc_options:
+        PETSc.Options().insertString(args.petsc_options)
     if args.nonlinear:
         PETSc.Log.begin()
     start = time.perf_counter()
@@ -163,6 +168,9 @@ def main():
         info = result.distributed
         print(json.dumps({"ranks": info["ranks"], "cells": args.cells, "fibres": args.fibres, **traffic,
                           "unknowns": info["unknowns"], "iterations": info["iterations"], "wall": round(wall, 3),
+                          "ksp": info["ksp"], "pc": info["pc"], "petsc_options": args.petsc_options,
+                          # over all solves (Newton: every iteration): KSP iterations, set-up and solve seconds (rank 0)
+                          "linear_solves": {k: round(v, 3) for k, v in info["linear_solves"].items()},
                           "timings": {k: round(v, 3) for k, v in info["timings"].items()},
                           "cpu_per_rank": {k: [round(c[k], 3) for c in info["cpu"]] for k in info["cpu"][0]},
                           "ghosts": info["traffic"]["ghosts"], "nnz": info["traffic"]["nnz"],
