@@ -26,7 +26,7 @@ import numpy as np
 from .petsc import coo_matrix, petsc
 
 
-def follow_matrix(model, ops, kappa, numbering, layout, part, comm):
+def follow_matrix(model, ops, kappa, numbering, layout, part, comm, rotation=None):
     """``E = [I; P]`` as a distributed matrix: rows the system unknowns, columns the solid field
     (the rank-major solid DOFs: each rank's first ``3 n_solid_owned`` system rows).
 
@@ -36,8 +36,8 @@ def follow_matrix(model, ops, kappa, numbering, layout, part, comm):
     Each rank contributes its owned beam elements' rows of M and chords; PETSc sums entries of rows
     another rank owns. Supports: columns of fixed solid unknowns do not carry the beams (a fixed
     solid unknown maps to itself only), rows of fixed beam unknowns are zero, as the serial ``P``
-    restricted to the free unknowns. (Rows of clamped tangents are taken to their frames by the
-    caller, with the system's rotation.)
+    restricted to the free unknowns. With clamps (``rotation``: the system's ``T``, the identity
+    on the solid) the beam rows are taken to the unknowns' basis, ``Tᵀ E``, as the serial ``P``.
 
     Parameters
     ----------
@@ -45,12 +45,11 @@ def follow_matrix(model, ops, kappa, numbering, layout, part, comm):
         Per beam group, this rank's M triplets (rank-major) and the distributed κ.
     kappa : list of (n_lm,) arrays
         Per beam group, κ in the serial LM order (every rank).
+    rotation : PETSc.Mat, optional
 
     Returns
     -------
     E : PETSc.Mat
-    fixed_beam_rows : (k,) int64
-        System rows of this rank's fixed beam unknowns (to be zeroed after the rotation).
     """
     PETSc = petsc()
     rank = comm.getRank()
@@ -81,7 +80,8 @@ def follow_matrix(model, ops, kappa, numbering, layout, part, comm):
         kap = kappa[k][lm]
         solid_dof = 3 * solid_serial_of_new[cm // 3] + cm % 3
         beam_dof = g.dofs.start + per_node * lm + comp
-        keep = (kap > 0) & ~fixed[solid_dof] & ~fixed[beam_dof]
+        # fixed beam rows are zeroed at the end: a tangent's chord reads the positions of fixed nodes too
+        keep = (kap > 0) & ~fixed[solid_dof]
         rows.append(layout.of_serial[beam_dof[keep]])
         cols.append(cm[keep])                        # the solid field is the rank-major solid numbering
         vals.append(vm[keep] / kap[keep])
@@ -106,10 +106,13 @@ def follow_matrix(model, ops, kappa, numbering, layout, part, comm):
         tangents = chord.matMult(E)                  # the chord of the solid rows is zero: tangent rows only
         E.axpy(1.0, tangents, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
         chord.destroy(), tangents.destroy()
-    owned_serial = layout.owned_serial(rank)
-    mine = owned_serial[own_solid:]
-    fixed_beam_rows = first + own_solid + np.flatnonzero((mine < n) & fixed[np.minimum(mine, n - 1)])
-    return E, fixed_beam_rows
+    if rotation is not None:
+        physical, E = E, rotation.transposeMatMult(E)
+        physical.destroy()
+    beam_serial = layout.owned_serial(rank)[own_solid:]
+    fixed_beam_rows = first + own_solid + np.flatnonzero((beam_serial < n) & fixed[np.minimum(beam_serial, n - 1)])
+    E.zeroRows(fixed_beam_rows.astype(PETSc.IntType), diag=0.0)
+    return E
 
 
 class AuxiliarySweep:

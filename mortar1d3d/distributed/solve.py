@@ -425,13 +425,8 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
                                dropped=dropped if lagrange else ())
     if system.solver.method == "aux":
         from .auxiliary import follow_matrix
-        E, fixed_beam_rows = follow_matrix(model, ops, kappa, numbering, layout, part, comm)
-        if system.rotation is not None:
-            # the beam rows in the unknowns' basis (clamped tangents in their frames), T = I on the solid
-            physical, E = E, system.rotation.transposeMatMult(E)
-            physical.destroy()
-        E.zeroRows(fixed_beam_rows.astype(PETSc.IntType), diag=0.0)
-        system.solver.auxiliary["follow"] = E
+        system.solver.auxiliary["follow"] = follow_matrix(model, ops, kappa, numbering, layout, part, comm,
+                                                          rotation=system.rotation)
     clock("loads_supports")
     callback = _print_step if (progress is True and rank == 0) else None
     z0 = np.zeros(system.sizes[0])                           # this rank's part of the iterate
