@@ -746,3 +746,30 @@ def test_auxiliary_space_needs_few_iterations_where_gamg_needs_many():
     assert out["aux"][0] <= 30, out
     assert out["gamg"][0] > 5 * out["aux"][0], out
     assert max(out["aux"][1], out["gamg"][1]) <= 1e-6, out
+
+
+@pytest.mark.parametrize("preconditioner", ["aux", "gamg"])
+@pytest.mark.parametrize("reuse", ["1", "0"])
+def test_newton_reuses_the_preconditioner_with_the_same_iterations(preconditioner, reuse):
+    """The rebar cantilever, nonlinear in 4 load steps (penalty 100 E): with the preconditioner
+    kept across the Newton solves (-mortar_reuse_pc 1, the serial reuse policy) the same Newton
+    iterations per step as the serial run and every step's state to the Newton tolerance; fewer
+    set-ups than solves, the others reuse one. Without (-mortar_reuse_pc 0) one set-up per solve."""
+    serial = m13.solve(_rebar_nonlinear(4, solver="direct"))
+
+    def check(serial, result):
+        return {"iterations": [s.iterations for s in result.steps],
+                "steps": max(_relative(h, h0) for h, h0 in zip(result.history, serial.history)),
+                "linear": result.distributed["linear_solves"]}
+
+    with _petsc_options(mortar_penalty_pc=preconditioner, mortar_reuse_pc=reuse):
+        out = dict(_compare(serial, lambda: _rebar_nonlinear(4, solver="amg", backend="petsc"), check))["metis"]
+    assert out["iterations"] == [s.iterations for s in serial.steps], out
+    assert out["steps"] <= 1e-6, out
+    linear = out["linear"]
+    assert linear["solves"] == sum(s.iterations for s in serial.steps), out
+    assert linear["builds"] + linear["reuses"] >= linear["solves"], out
+    if reuse == "1":
+        assert linear["reuses"] > 0 and linear["builds"] < linear["solves"], out
+    else:
+        assert linear["reuses"] == 0 and linear["builds"] == linear["solves"], out

@@ -82,7 +82,7 @@ class LinearSolver:
         if self._kept is not None:
             ksp, self._kept = self._kept, None
             ksp.setOperators(A)
-            ksp.setReusePreconditioner(True)
+            ksp.getPC().setReusePreconditioner(True)
             ksp.setTolerances(rtol=rtol, atol=0.0, max_it=10000)
             info, reason = self._run(ksp, A, b, x, rtol)
             if reason >= 0:
