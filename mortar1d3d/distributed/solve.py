@@ -275,13 +275,14 @@ def penalty_preconditioner():
 
 
 #: the PETSc option that keeps the preconditioner of penalty systems across a Newton loop's solves
-#: (:class:`.linear.LinearSolver`, ``reuse``): ``-mortar_reuse_pc 0`` sets one up for every solve
+#: (:class:`.linear.LinearSolver`, ``reuse``; the default): ``-mortar_reuse_pc 0`` sets one up for
+#: every solve
 REUSE_PC_OPTION = "mortar_reuse_pc"
 
 
 def reuse_preconditioner():
-    """The PETSc option ``-mortar_reuse_pc`` (default: false)."""
-    return petsc().Options().getBool(REUSE_PC_OPTION, False)
+    """The PETSc option ``-mortar_reuse_pc`` (default: true)."""
+    return petsc().Options().getBool(REUSE_PC_OPTION, True)
 
 
 def _linear_solver(model, layout, comm, coupling=None, kappa=None):
