@@ -132,48 +132,30 @@ class AuxiliarySweep:
     def __init__(self, follow, beam_rows, solid_modes):
         self.E, self.beam_rows, self.modes = follow, np.asarray(beam_rows), solid_modes
         self.amg = self.beam = self.A = None
-        self.timings = {}
 
     def setUp(self, pc):
-        import time
         from .linear import null_space
         PETSc = petsc()
         self.destroy(pc)
         _, A = pc.getOperators()
         comm = A.getComm()
         self.A = A
-        start = time.perf_counter()
         aux = A.ptap(self.E)
         aux.setBlockSize(3)
         aux.setNearNullSpace(null_space(self.modes, comm))
-        self.amg = PETSc.KSP().create(comm=comm)
-        self.amg.setOptionsPrefix("mortar_aux_")
-        self.amg.setType(PETSc.KSP.Type.PREONLY)
-        self.amg.getPC().setType(PETSc.PC.Type.GAMG)
-        self.amg.setOperators(aux)
-        self.amg.setFromOptions()
-        self.amg.setUp()
-        aux.destroy()                                   # the KSP keeps its reference
-        t = time.perf_counter()
+        self.amg = _preonly(aux, "mortar_aux_", PETSc.PC.Type.GAMG)
         index = PETSc.IS().createGeneral(self.beam_rows.astype(PETSc.IntType), comm=comm)
         beam = A.createSubMatrix(index, index)
         options = PETSc.Options()
         if not options.hasName("mortar_beam_sub_pc_type"):
-            options.setValue("mortar_beam_sub_pc_type", "lu")
-        self.beam = PETSc.KSP().create(comm=comm)
-        self.beam.setOptionsPrefix("mortar_beam_")
-        self.beam.setType(PETSc.KSP.Type.PREONLY)
-        self.beam.getPC().setType(PETSc.PC.Type.BJACOBI)
-        self.beam.setOperators(beam)
-        self.beam.setFromOptions()
-        self.beam.setUp()
-        beam.destroy()
-        self._rb, self._xb = self.beam.getOperators()[0].createVecs()
+            options.setValue("mortar_beam_sub_pc_type", "lu")      # each rank's beam block: exact
+        self.beam = _preonly(beam, "mortar_beam_", PETSc.PC.Type.BJACOBI)
+        self._rb, self._xb = beam.createVecs()
+        aux.destroy(), beam.destroy()                   # the KSPs keep their references
         self._r = A.createVecLeft()
         self._s, self._z = self.E.createVecRight(), self.E.createVecRight()
         self._scatter = PETSc.Scatter().create(self._r, index, self._rb, None)
         index.destroy()
-        self.timings = {"auxiliary": t - start, "beam": time.perf_counter() - t}
 
     def _beam_solve(self, r, y):
         """``y += A_bb⁻¹ r_b`` (the beam rows of ``r``; block Jacobi over the ranks)."""
@@ -202,3 +184,16 @@ class AuxiliarySweep:
                 obj.destroy()
             setattr(self, name, None)
         self.A = None
+
+
+def _preonly(A, prefix, pc_type):
+    """A set-up KSP that applies the preconditioner ``pc_type`` of ``A`` once (PETSc options: ``prefix``)."""
+    PETSc = petsc()
+    ksp = PETSc.KSP().create(comm=A.getComm())
+    ksp.setOptionsPrefix(prefix)
+    ksp.setType(PETSc.KSP.Type.PREONLY)
+    ksp.getPC().setType(pc_type)
+    ksp.setOperators(A)
+    ksp.setFromOptions()
+    ksp.setUp()
+    return ksp
