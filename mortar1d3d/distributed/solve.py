@@ -286,8 +286,9 @@ def reuse_preconditioner():
 
 
 def _linear_solver(model, layout, comm, coupling=None, kappa=None):
-    """The KSP configuration of ``analysis.solver`` (:mod:`.linear`): penalty systems CG + GAMG, or
-    MUMPS for ``"direct"``; Lagrange multipliers MUMPS for ``"direct"`` and ``"auto"`` (the fallback
+    """The KSP configuration of ``analysis.solver`` (:mod:`.linear`): penalty systems CG with the
+    auxiliary-space sweep (:mod:`.auxiliary`; GAMG on the whole system with ``-mortar_penalty_pc
+    gamg`` or without a solid carrying beams), or MUMPS for ``"direct"``; Lagrange multipliers MUMPS for ``"direct"`` and ``"auto"`` (the fallback
     for small cases), the Schur field split for ``"block"`` (``coupling``: the saddle block,
     ``kappa``: κ of every multiplier's LM node, serial order)."""
     from .linear import LinearSolver
