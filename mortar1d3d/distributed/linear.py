@@ -1,8 +1,10 @@
 """The linear solves of the distributed system: PETSc KSP with the preconditioner ``analysis.solver`` asks for.
 
-* penalty coupling (a symmetric positive definite system): CG on the true residual with PETSc's
-  algebraic multigrid GAMG, given the model's rigid-body modes as near-null space (``"auto"``,
-  ``"amg"``), or MUMPS' parallel LU (``"direct"``);
+* penalty coupling (a symmetric positive definite system): CG on the true residual (``"auto"``,
+  ``"amg"``) with the auxiliary-space sweep (:mod:`.auxiliary`), or with PETSc's algebraic
+  multigrid GAMG on the whole system, given the model's rigid-body modes as near-null space
+  (``-mortar_penalty_pc gamg``), the preconditioner kept over a Newton loop's solves while they
+  converge nearly as fast; or MUMPS' parallel LU (``"direct"``);
 * Lagrange multipliers (a saddle point ``[[K, Bᵀ], [B, 0]]``): MUMPS on the whole system
   (``"direct"``, and ``"auto"``: the fallback for small cases), or (``"block"``) FGMRES with a
   Schur-complement field split (:class:`LinearSolver`, ``split``).
