@@ -11,7 +11,8 @@
 ``--petsc-options`` inserts PETSc options before the solve: ``-mortar_penalty_pc gamg`` takes GAMG on
 the whole penalty system instead of the auxiliary-space sweep (the default), ``-mortar_reuse_pc 0``
 sets a preconditioner up for every Newton solve; the sweep's GAMG and beam solver take options with
-the prefixes ``mortar_aux_`` and ``mortar_beam_`` (docs/distributed.md). ``linear_solves`` in the
+the prefixes ``mortar_aux_`` and ``mortar_beam_`` (docs/distributed.md). One option alone starts with
+a dash: give it as ``--petsc-options=-mortar_aux_ksp_view``. ``linear_solves`` in the
 output: over all solves, their count, CG iterations, set-ups and reuses, and rank 0's set-up and CG
 seconds.
 
