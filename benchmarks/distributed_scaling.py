@@ -6,6 +6,15 @@
     python benchmarks/distributed_scaling.py --cells 12 --fibres 300 --partition-only  # METIS vs geometric
     python benchmarks/distributed_scaling.py --cells 24 --fibres 1200 --replicated-only  # input memory per rank
     mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 12 --fibres 300 --nonlinear 2   # Newton on PETSc
+    mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 24 --fibres 1200 --petsc-options "-mortar_penalty_pc gamg"
+
+``--petsc-options`` inserts PETSc options before the solve: ``-mortar_penalty_pc gamg`` takes GAMG on
+the whole penalty system instead of the auxiliary-space sweep (the default), ``-mortar_reuse_pc 0``
+sets a preconditioner up for every Newton solve; the sweep's GAMG and beam solver take options with
+the prefixes ``mortar_aux_`` and ``mortar_beam_`` (docs/distributed.md). One option alone starts with
+a dash: give it as ``--petsc-options=-mortar_aux_ksp_view``. ``linear_solves`` in the
+output: over all solves, their count, CG iterations, set-ups and reuses, and rank 0's set-up and CG
+seconds.
 
 With ``--nonlinear STEPS`` the analysis is geometrically nonlinear (Saint Venant–Kirchhoff, STEPS
 load steps of the library's Newton loop on PETSc) and the communication per Newton iteration is
@@ -17,7 +26,7 @@ distributed, nothing is gathered during the loop).
 
 The scene is the benchmark cube (docs/conventions.md §5) with hexahedra, ``--fibres`` straight fibres
 of 10 Hermite elements as one beam entry, clamped at z = 0 and pulled at z = 1, linear (or nonlinear,
-above), mortar penalty, CG + GAMG to rtol 1e-8. Rank 0 prints the stage times (slowest rank, after a barrier),
+above), mortar penalty, CG with the penalty preconditioner to rtol 1e-8. Rank 0 prints the stage times (slowest rank, after a barrier),
 each rank's CPU time per stage up to the barrier (its own work: on a loaded machine the fairer
 measure of balance), the CG iterations, the vector entries each rank receives per matrix product (ghosts), the stored
 entries per rank and the peak resident memory per rank. Run it twice and take the second run
@@ -124,6 +133,9 @@ def main():
     parser.add_argument("--replicated-only", action="store_true")
     parser.add_argument("--nonlinear", type=int, default=0, metavar="STEPS",
                         help="nonlinear in STEPS load steps; measures the communication per Newton iteration")
+    parser.add_argument("--petsc-options", default="", metavar="OPTIONS",
+                        help="PETSc options for the solve, e.g. \"-mortar_penalty_pc gamg -pc_gamg_threshold 0.02\" "
+                             "(docs/distributed.md: the penalty preconditioners)")
     args = parser.parse_args()
     if args.replicated_only:
         print(json.dumps(replicated_memory(args.cells, args.fibres)))
@@ -136,6 +148,8 @@ def main():
     from mortar1d3d.distributed.petsc import petsc
     PETSc = petsc()
     comm = PETSc.COMM_WORLD
+    if args.petsc_options:
+        PETSc.Options().insertString(args.petsc_options)
     if args.nonlinear:
         PETSc.Log.begin()
     start = time.perf_counter()
@@ -163,6 +177,9 @@ def main():
         info = result.distributed
         print(json.dumps({"ranks": info["ranks"], "cells": args.cells, "fibres": args.fibres, **traffic,
                           "unknowns": info["unknowns"], "iterations": info["iterations"], "wall": round(wall, 3),
+                          "ksp": info["ksp"], "pc": info["pc"], "petsc_options": args.petsc_options,
+                          # over all solves (Newton: every iteration): KSP iterations, set-up and solve seconds (rank 0)
+                          "linear_solves": {k: round(v, 3) for k, v in info["linear_solves"].items()},
                           "timings": {k: round(v, 3) for k, v in info["timings"].items()},
                           "cpu_per_rank": {k: [round(c[k], 3) for c in info["cpu"]] for k in info["cpu"][0]},
                           "ghosts": info["traffic"]["ghosts"], "nnz": info["traffic"]["nnz"],

@@ -1,15 +1,35 @@
 """The linear solves of the distributed system: PETSc KSP with the preconditioner ``analysis.solver`` asks for.
 
-* penalty coupling (a symmetric positive definite system): CG on the true residual with PETSc's
-  algebraic multigrid GAMG, given the model's rigid-body modes as near-null space (``"auto"``,
-  ``"amg"``), or MUMPS' parallel LU (``"direct"``);
+* penalty coupling (a symmetric positive definite system): CG on the true residual (``"auto"``,
+  ``"amg"``) with the auxiliary-space sweep (:mod:`.auxiliary`), or with PETSc's algebraic
+  multigrid GAMG on the whole system, given the model's rigid-body modes as near-null space
+  (``-mortar_penalty_pc gamg``), the preconditioner kept over a Newton loop's solves while they
+  converge nearly as fast; or MUMPS' parallel LU (``"direct"``);
 * Lagrange multipliers (a saddle point ``[[K, Bᵀ], [B, 0]]``): MUMPS on the whole system
   (``"direct"``, and ``"auto"``: the fallback for small cases), or (``"block"``) FGMRES with a
   Schur-complement field split (:class:`LinearSolver`, ``split``).
 """
+import time
+
 import numpy as np
 
 from .petsc import petsc
+
+
+def null_space(modes, comm):
+    """The rigid-body modes as an orthonormal PETSc null space (this rank's entries: ``modes``)."""
+    PETSc = petsc()
+    vecs = []
+    for mode in modes:
+        v = PETSc.Vec().createMPI((len(mode), PETSc.DECIDE), comm=comm)
+        v.setArray(np.ascontiguousarray(mode))
+        vecs.append(v)
+    # PETSc wants an orthonormal basis
+    for j, v in enumerate(vecs):
+        for u in vecs[:j]:
+            v.axpy(-v.dot(u), u)
+        v.normalize()
+    return PETSc.NullSpace().create(vectors=vecs, comm=comm)
 
 
 class LinearSolver:
@@ -17,7 +37,8 @@ class LinearSolver:
 
     Parameters
     ----------
-    method : {"gamg", "mumps", "schur"}
+    method : {"gamg", "aux", "mumps", "schur"}
+        ``aux``: the auxiliary-space sweep of the penalty system (:mod:`.auxiliary`).
     near_null_space : list of (n_owned,) arrays, optional
         Owned entries of the rigid-body modes (GAMG).
     split : dict, optional
@@ -26,31 +47,73 @@ class LinearSolver:
     symmetric : bool
         False (follower loads of a nonlinear analysis): GAMG preconditions GMRES (restarted after
         200 iterations) instead of CG.
+    auxiliary : dict, optional
+        ``aux``: the arguments of :class:`~.auxiliary.AuxiliarySweep`.
+    reuse : bool
+        ``gamg`` and ``aux``: keep the KSP and its preconditioner for the next solves (a Newton
+        loop's next tangents) while they converge nearly as fast as the solve that built it, the
+        serial policy (:mod:`mortar1d3d.solvers.reuse`): a solve that needs more than
+        ``REBUILD_GROWTH`` times its iterations plus ``REBUILD_SLACK`` drops it, one that does
+        not converge with it is repeated with a new one.
+
+    Attributes
+    ----------
+    builds, reuses : int
+        Solves that set a preconditioner up, and solves that used a kept one.
     """
 
     block_size = 3
 
-    def __init__(self, method, near_null_space=None, split=None, symmetric=True):
+    def __init__(self, method, near_null_space=None, split=None, symmetric=True, auxiliary=None, reuse=False):
         self.method, self.modes, self.split, self.symmetric = method, near_null_space, split, symmetric
+        self.auxiliary = auxiliary
+        self.reuse = bool(reuse) and method in ("gamg", "aux")
+        self._kept, self._built_iterations = None, 0
+        self.builds = self.reuses = 0
 
-    def _null_space(self, comm):
-        """The rigid-body modes as an orthonormal PETSc null space (this rank's entries: ``self.modes``)."""
-        PETSc = petsc()
-        vecs = []
-        for mode in self.modes:
-            v = PETSc.Vec().createMPI((len(mode), PETSc.DECIDE), comm=comm)
-            v.setArray(np.ascontiguousarray(mode))
-            vecs.append(v)
-        # PETSc wants an orthonormal basis
-        for j, v in enumerate(vecs):
-            for u in vecs[:j]:
-                v.axpy(-v.dot(u), u)
-            v.normalize()
-        return PETSc.NullSpace().create(vectors=vecs, comm=comm)
+    def close(self):
+        """Free the kept KSP (its preconditioner references an earlier tangent)."""
+        if self._kept is not None:
+            self._kept.destroy()
+            self._kept = None
 
     def solve(self, A, b, x, rtol):
         """Solve ``A x = b`` to the relative true residual ``rtol`` (iterative methods); returns the info dict."""
         from ..errors import ConvergenceError
+        from ..solvers.reuse import REBUILD_GROWTH, REBUILD_SLACK
+        if self._kept is not None:
+            ksp, self._kept = self._kept, None
+            ksp.setOperators(A)
+            ksp.getPC().setReusePreconditioner(True)
+            ksp.setTolerances(rtol=rtol, atol=0.0, max_it=10000)
+            info, reason = self._run(ksp, A, b, x, rtol)
+            if reason >= 0:
+                self.reuses += 1
+                info["reused"] = True
+                if info["iterations"] <= REBUILD_GROWTH * self._built_iterations + REBUILD_SLACK:
+                    self._kept = ksp
+                else:
+                    ksp.destroy()
+                return info
+            ksp.destroy()           # not converged with the kept preconditioner: a new one
+        ksp, A, b = self._configure(A, b, rtol)
+        info, reason = self._run(ksp, A, b, x, rtol)
+        self.builds += 1
+        info["reused"] = False
+        if self.reuse and reason >= 0:
+            self._kept, self._built_iterations = ksp, info["iterations"]
+        else:
+            # freed now: the KSP and its preconditioner (GAMG's hierarchy, MUMPS' factors) reference the
+            # operators, and petsc4py left them to the garbage collector, which let a Newton run grow by
+            # a hierarchy per iteration (65 MiB per iteration at 8k unknowns)
+            ksp.destroy()
+        if reason < 0:
+            raise ConvergenceError(f"PETSc KSP {info['ksp']} with {info['pc']} did not converge "
+                                   f"(reason {reason}) after {info['iterations']} iterations")
+        return info
+
+    def _configure(self, A, b, rtol):
+        """A new KSP for ``A`` (the Schur split: for the augmented system it returns with its right side)."""
         PETSc = petsc()
         ksp = PETSc.KSP().create(comm=A.getComm())
         ksp.setOperators(A)
@@ -58,8 +121,7 @@ class LinearSolver:
             ksp.setType(PETSc.KSP.Type.PREONLY)
             ksp.getPC().setType(PETSc.PC.Type.LU)
             ksp.getPC().setFactorSolverType("mumps")
-        elif self.method == "gamg":
-            A.setNearNullSpace(self._null_space(A.getComm()))
+        elif self.method in ("gamg", "aux"):
             ksp.setType(PETSc.KSP.Type.CG if self.symmetric else PETSc.KSP.Type.GMRES)
             if not self.symmetric:
                 # GMRES(30) stalls on penalty systems (an end moment on the rebar cantilever: no
@@ -67,23 +129,29 @@ class LinearSolver:
                 ksp.setGMRESRestart(200)
             # the true residual, as analysis.rtol means for the serial solvers (not the preconditioned one)
             ksp.setNormType(PETSc.KSP.NormType.UNPRECONDITIONED)
-            ksp.getPC().setType(PETSc.PC.Type.GAMG)
+            if self.method == "gamg":
+                A.setNearNullSpace(null_space(self.modes, A.getComm()))
+                ksp.getPC().setType(PETSc.PC.Type.GAMG)
+            else:
+                from .auxiliary import AuxiliarySweep
+                ksp.getPC().setType(PETSc.PC.Type.PYTHON)
+                ksp.getPC().setPythonContext(AuxiliarySweep(**self.auxiliary))
             ksp.setTolerances(rtol=rtol, atol=0.0, max_it=10000)
         else:
             A, b = self._schur(ksp, A, b, rtol)
         ksp.setFromOptions()
+        return ksp, A, b
+
+    def _run(self, ksp, A, b, x, rtol):
+        """One solve with ``ksp`` (set up first, if it is not): the info dict and PETSc's converged reason."""
         x.set(0.0)
+        start = time.perf_counter()
+        ksp.setUp()
+        set_up = time.perf_counter()
         ksp.solve(b, x)
-        reason = ksp.getConvergedReason()
-        info = {"iterations": ksp.getIterationNumber(), "ksp": ksp.getType(), "pc": ksp.getPC().getType()}
-        # freed now: the KSP and its preconditioner (GAMG's hierarchy, MUMPS' factors) reference the
-        # operators, and petsc4py left them to the garbage collector, which let a Newton run grow by
-        # a hierarchy per iteration (65 MiB per iteration at 8k unknowns)
-        ksp.destroy()
-        if reason < 0:
-            raise ConvergenceError(f"PETSc KSP {info['ksp']} with {info['pc']} did not converge "
-                                   f"(reason {reason}) after {info['iterations']} iterations")
-        return info
+        info = {"iterations": ksp.getIterationNumber(), "ksp": ksp.getType(), "pc": ksp.getPC().getType(),
+                "setup_seconds": set_up - start, "solve_seconds": time.perf_counter() - set_up}
+        return info, ksp.getConvergedReason()
 
     def _schur(self, ksp, A, b, rtol):
         """FGMRES with a Schur-complement field split of the augmented saddle point.
@@ -111,7 +179,7 @@ class LinearSolver:
         is_u = PETSc.IS().createGeneral(split["displacements"].astype(PETSc.IntType), comm=A.getComm())
         is_u.setBlockSize(3)
         is_l = PETSc.IS().createGeneral(split["multipliers"].astype(PETSc.IntType), comm=A.getComm())
-        is_u.compose("nearnullspace", self._null_space(A.getComm()))
+        is_u.compose("nearnullspace", null_space(self.modes, A.getComm()))
         ksp.setOperators(A)
         ksp.setType(PETSc.KSP.Type.FGMRES)
         ksp.setTolerances(rtol=rtol, atol=0.0, max_it=2000)

@@ -297,9 +297,35 @@ def _traffic(A, comm):
     return {"ghosts": comm.tompi4py().allgather(int(len(off))), "nnz": comm.tompi4py().allgather(int(len(indices)))}
 
 
+#: the PETSc option that selects the preconditioner of penalty systems with beams coupled to a
+#: solid: ``aux`` (default: the auxiliary-space sweep, :mod:`.auxiliary`) or ``gamg`` (GAMG on the
+#: whole system, the path before it)
+PENALTY_PC_OPTION = "mortar_penalty_pc"
+
+
+def penalty_preconditioner():
+    """``aux`` or ``gamg``, from the PETSc option ``-mortar_penalty_pc`` (default ``aux``)."""
+    value = petsc().Options().getString(PENALTY_PC_OPTION, "aux")
+    if value not in ("aux", "gamg"):
+        raise ValueError(f"-{PENALTY_PC_OPTION}: expected aux or gamg, got {value!r}")
+    return value
+
+
+#: the PETSc option that keeps the preconditioner of penalty systems across a Newton loop's solves
+#: (:class:`.linear.LinearSolver`, ``reuse``; the default): ``-mortar_reuse_pc 0`` sets one up for
+#: every solve
+REUSE_PC_OPTION = "mortar_reuse_pc"
+
+
+def reuse_preconditioner():
+    """The PETSc option ``-mortar_reuse_pc`` (default: true)."""
+    return petsc().Options().getBool(REUSE_PC_OPTION, True)
+
+
 def _linear_solver(model, layout, comm, coupling=None, kappa=None):
-    """The KSP configuration of ``analysis.solver`` (:mod:`.linear`): penalty systems CG + GAMG, or
-    MUMPS for ``"direct"``; Lagrange multipliers MUMPS for ``"direct"`` and ``"auto"`` (the fallback
+    """The KSP configuration of ``analysis.solver`` (:mod:`.linear`): penalty systems CG with the
+    auxiliary-space sweep (:mod:`.auxiliary`; GAMG on the whole system with ``-mortar_penalty_pc
+    gamg`` or without a solid carrying beams), or MUMPS for ``"direct"``; Lagrange multipliers MUMPS for ``"direct"`` and ``"auto"`` (the fallback
     for small cases), the Schur field split for ``"block"`` (``coupling``: the saddle block,
     ``kappa``: κ of every multiplier's LM node, serial order)."""
     from .linear import LinearSolver
@@ -314,7 +340,14 @@ def _linear_solver(model, layout, comm, coupling=None, kappa=None):
     modes = [R[owned[disp], j] for j in range(R.shape[1])]
     if not model.lagrange:
         # follower loads of a nonlinear analysis make the tangent non-symmetric: GMRES instead of CG
-        return LinearSolver("gamg", near_null_space=modes, symmetric=not (model.pressures or model.moments))
+        symmetric = not (model.pressures or model.moments)
+        if penalty_preconditioner() == "aux" and model.scene.coupled and model.groups and model.solid_mesh is not None:
+            # the beams' unknowns follow each rank's solid ones in its range
+            own_solid = int(np.count_nonzero(owned < 3 * model.n_solid_nodes))
+            return LinearSolver("aux", symmetric=symmetric, reuse=reuse_preconditioner(), auxiliary={
+                "beam_rows": int(layout.ranges[rank]) + np.arange(own_solid, len(owned)),
+                "solid_modes": [m[:own_solid] for m in modes], "follow": None})
+        return LinearSolver("gamg", near_null_space=modes, symmetric=symmetric, reuse=reuse_preconditioner())
     PETSc = petsc()
     first = int(layout.ranges[rank])
     gamma = model.scene.solid["material"]["E"]
@@ -429,6 +462,10 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     system = DistributedSystem(model, physics, layout, coupling, physics.body_forces(model._body_loads.values),
                                _linear_solver(model, layout, comm, coupling, kappa_rows), comm,
                                dropped=dropped if lagrange else ())
+    if system.solver.method == "aux":
+        from .auxiliary import follow_matrix
+        system.solver.auxiliary["follow"] = follow_matrix(model, ops, kappa, numbering, layout, part, comm,
+                                                          rotation=system.rotation)
     clock("loads_supports")
     callback = _print_step if (progress is True and rank == 0) else None
     z0 = np.zeros(system.sizes[0])                           # this rank's part of the iterate
@@ -447,6 +484,9 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
                                                max_iterations=a["max_iterations"], max_cuts=a["max_cuts"],
                                                progress=callback)
     stage.pop()
+    system.solver.close()
+    if system.solver.auxiliary:
+        system.solver.auxiliary["follow"].destroy()
     clock("solve")
     # the solution, the history and the last residual (the reactions) in the serial numbering, on rank 0
     history_local = history
@@ -482,6 +522,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
         served = _served_model(model, ops, numbering, comm)
     info = {"ranks": size, "unknowns": system.n_unknowns, "iterations": info_solve.get("iterations"),
             "ksp": info_solve.get("ksp"), "pc": info_solve.get("pc"), "partition": part.stats,
+            "linear_solves": {**system.linear_totals, "builds": system.solver.builds, "reuses": system.solver.reuses},
             "timings": clock.times, "cpu": comm.tompi4py().allgather(clock.cpu),
             "memory": comm.tompi4py().allgather(clock.memory),
             "traffic": {**_traffic(system.last_tangent, comm),

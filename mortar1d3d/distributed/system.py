@@ -229,6 +229,9 @@ class DistributedSystem:
         leading = self.owned_serial < len(reference)
         self._reference[leading] = reference[self.owned_serial[leading]]
         self.last_linear_info = None
+        #: over all linear solves so far: their count, KSP iterations, preconditioner set-up and
+        #: solve wall seconds (this rank's clock; the set-up is collective)
+        self.linear_totals = {"solves": 0, "iterations": 0, "setup_seconds": 0.0, "solve_seconds": 0.0}
         self.last_residual = self.last_tangent = None
 
     def prescribed(self, t):
@@ -362,7 +365,11 @@ class DistributedSystem:
         K.zeroRowsColumns(self.fixed_rows.astype(petsc().IntType), diag=1.0)
         x = rhs.duplicate()
         try:
-            self.last_linear_info = self.solver.solve(K, rhs, x, rtol)
+            self.last_linear_info = info = self.solver.solve(K, rhs, x, rtol)
+            totals = self.linear_totals
+            totals["solves"] += 1
+            for key in ("iterations", "setup_seconds", "solve_seconds"):
+                totals[key] += info.get(key, 0)
         finally:
             K.destroy()         # the copy (see LinearSolver.solve: freed now, not by the garbage collector)
         out = x.getArray()[self.free].copy()

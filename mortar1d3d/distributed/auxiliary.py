@@ -1,0 +1,199 @@
+"""The auxiliary-space preconditioner of the penalty system on PETSc (the distributed form of
+:class:`mortar1d3d.solvers.preconditioners.AuxiliarySpacePreconditioner`).
+
+GAMG on the penalty system ``A = K + ε Bᵀ κ⁻¹ B`` cannot represent the low-energy motions where the
+beams follow the solid (aggregates of nearby unknowns, rigid-body modes as near null space): it
+needs hundreds of CG iterations, and its first Galerkin product fills in along the fibres that
+the penalty ties together. As in the serial library, the space is split into
+
+- the *auxiliary space* ``range(E)``, ``E = [I; P]``: solid motions with the beams following
+  (``P``: :func:`~mortar1d3d.physics.coupling.follow_operator`, formed here from the distributed
+  M and κ). Its matrix ``A_aux = Eᵀ A E`` (``MatPtAP``) is the solid stiffened by the beams it
+  carries, an elasticity matrix on the solid nodes, preconditioned by one GAMG V-cycle with the
+  solid's rigid-body modes;
+- the *beam space*: ``A_bb`` (the beam rows and columns of ``A``), block-diagonal per beam, solved
+  by block Jacobi over the ranks with a sparse LU of each rank's block (exact when no beam is cut
+  by the partition; a cut beam's coupling across ranks is what block Jacobi leaves out).
+
+One application is the symmetric multiplicative sweep beam → auxiliary → beam (symmetric, so CG
+applies). PETSc options: prefix ``mortar_aux_`` for the KSP/GAMG of ``A_aux`` (e.g.
+``-mortar_aux_pc_gamg_threshold``) and ``mortar_beam_`` for the beam block (e.g.
+``-mortar_beam_pc_type lu -mortar_beam_pc_factor_mat_solver_type mumps`` for an exact solve of
+cut beams).
+"""
+import numpy as np
+
+from .petsc import coo_matrix, petsc
+
+
+def follow_matrix(model, ops, kappa, numbering, layout, part, comm, rotation=None):
+    """``E = [I; P]`` as a distributed matrix: rows the system unknowns, columns the solid field
+    (the rank-major solid DOFs: each rank's first ``3 n_solid_owned`` system rows).
+
+    ``P`` is the serial follow operator (:func:`~mortar1d3d.physics.coupling.follow_operator`):
+    a beam node's position is ``κ⁻¹ (M d_S)`` of its LM node, a Hermite tangent the mean over the
+    node's elements of the chord derivative of the positions (``Chord P_pos``, one more product).
+    Each rank contributes its owned beam elements' rows of M and chords; PETSc sums entries of rows
+    another rank owns. Supports: columns of fixed solid unknowns do not carry the beams (a fixed
+    solid unknown maps to itself only), rows of fixed beam unknowns are zero, as the serial ``P``
+    restricted to the free unknowns. With clamps (``rotation``: the system's ``T``, the identity
+    on the solid) the beam rows are taken to the unknowns' basis, ``Tᵀ E``, as the serial ``P``.
+
+    Parameters
+    ----------
+    ops : list of DistributedOperators
+        Per beam group, this rank's M triplets (rank-major) and the distributed κ.
+    kappa : list of (n_lm,) arrays
+        Per beam group, κ in the serial LM order (every rank).
+    rotation : PETSc.Mat, optional
+
+    Returns
+    -------
+    E : PETSc.Mat
+    """
+    PETSc = petsc()
+    rank = comm.getRank()
+    n = model.n_displacement_dofs
+    n_solid = 3 * model.n_solid_nodes
+    first = int(layout.ranges[rank])
+    n_own = int(layout.ranges[rank + 1]) - first
+    own_solid = 3 * numbering.solid.count(rank)
+    sizes_rows = (n_own, int(layout.ranges[-1]))
+    sizes_cols = (own_solid, n_solid)
+    fixed = np.zeros(n, dtype=bool)
+    fixed[model.fixed_dofs[model.fixed_dofs < n]] = True
+    solid_serial_of_new = np.argsort(numbering.solid.new_of_old)
+    # the solid injection: this rank's solid rows map to themselves in the solid field
+    rows = [first + np.arange(own_solid)]
+    cols = [3 * int(numbering.solid.ranges[rank]) + np.arange(own_solid)]
+    vals = [np.ones(own_solid)]
+    chord_rows, chord_cols, chord_vals = [], [], []
+    for k, g in enumerate(model.groups):
+        per_node = g.type.dofs_per_node
+        mesh = g.mesh
+        lm_serial_of_new = np.argsort(numbering.lm[k].new_of_old)
+        rm, cm, vm = ops[k].local.M
+        lm = lm_serial_of_new[rm // 3]
+        # LM nodes 0..n_nodes-1 are the beam nodes; the others (interior) have no beam node to move
+        keep = lm < mesh.n_nodes
+        lm, comp, cm, vm = lm[keep], (rm % 3)[keep], cm[keep], vm[keep]
+        kap = kappa[k][lm]
+        solid_dof = 3 * solid_serial_of_new[cm // 3] + cm % 3
+        beam_dof = g.dofs.start + per_node * lm + comp
+        # fixed beam rows are zeroed at the end: a tangent's chord reads the positions of fixed nodes too
+        keep = (kap > 0) & ~fixed[solid_dof]
+        rows.append(layout.of_serial[beam_dof[keep]])
+        cols.append(cm[keep])                        # the solid field is the rank-major solid numbering
+        vals.append(vm[keep] / kap[keep])
+        if mesh.element_type.has_tangents:
+            elements = np.flatnonzero(part.beam_part[k] == rank)
+            a, b = mesh.elements[elements, 0], mesh.elements[elements, 1]
+            inverse_length = 1.0 / np.linalg.norm(mesh.positions[b] - mesh.positions[a], axis=1)
+            adjacent = np.bincount(mesh.elements.ravel(), minlength=mesh.n_nodes).astype(np.float64)
+            r = np.concatenate([a, a, b, b])
+            c = np.concatenate([b, a, b, a])
+            v = np.concatenate([inverse_length, -inverse_length, inverse_length, -inverse_length]) / adjacent[r]
+            for i in range(3):
+                chord_rows.append(layout.of_serial[g.dofs.start + per_node * r + 3 + i])
+                chord_cols.append(layout.of_serial[g.dofs.start + per_node * c + i])
+                chord_vals.append(v)
+    E = coo_matrix(comm, np.concatenate(rows), np.concatenate(cols), np.concatenate(vals), sizes_rows, sizes_cols,
+                   block_size=3)
+    if comm.tompi4py().allreduce(sum(len(r) for r in chord_rows)):
+        cat = (lambda parts: np.concatenate(parts) if parts else np.zeros(0))
+        chord = coo_matrix(comm, cat(chord_rows).astype(np.int64), cat(chord_cols).astype(np.int64), cat(chord_vals),
+                           sizes_rows, sizes_rows)
+        tangents = chord.matMult(E)                  # the chord of the solid rows is zero: tangent rows only
+        E.axpy(1.0, tangents, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        chord.destroy(), tangents.destroy()
+    if rotation is not None:
+        physical, E = E, rotation.transposeMatMult(E)
+        physical.destroy()
+    beam_serial = layout.owned_serial(rank)[own_solid:]
+    fixed_beam_rows = first + own_solid + np.flatnonzero((beam_serial < n) & fixed[np.minimum(beam_serial, n - 1)])
+    E.zeroRows(fixed_beam_rows.astype(PETSc.IntType), diag=0.0)
+    return E
+
+
+class AuxiliarySweep:
+    """The python context of a ``PCPYTHON``: the symmetric sweep beam → auxiliary space → beam
+    (module docstring), set up from the preconditioner's matrix.
+
+    Parameters
+    ----------
+    follow : PETSc.Mat
+        ``E`` (system rows × solid field), in the unknowns' basis.
+    beam_rows : (k,) int
+        System rows of this rank's beam unknowns.
+    solid_modes : list of (3 n_solid_owned,) arrays
+        This rank's entries of the solid's rigid-body modes (near null space of ``A_aux``).
+    """
+
+    def __init__(self, follow, beam_rows, solid_modes):
+        self.E, self.beam_rows, self.modes = follow, np.asarray(beam_rows), solid_modes
+        self.amg = self.beam = self.A = None
+
+    def setUp(self, pc):
+        from .linear import null_space
+        PETSc = petsc()
+        self.destroy(pc)
+        _, A = pc.getOperators()
+        comm = A.getComm()
+        self.A = A
+        aux = A.ptap(self.E)
+        aux.setBlockSize(3)
+        aux.setNearNullSpace(null_space(self.modes, comm))
+        self.amg = _preonly(aux, "mortar_aux_", PETSc.PC.Type.GAMG)
+        index = PETSc.IS().createGeneral(self.beam_rows.astype(PETSc.IntType), comm=comm)
+        beam = A.createSubMatrix(index, index)
+        options = PETSc.Options()
+        if not options.hasName("mortar_beam_sub_pc_type"):
+            options.setValue("mortar_beam_sub_pc_type", "lu")      # each rank's beam block: exact
+        self.beam = _preonly(beam, "mortar_beam_", PETSc.PC.Type.BJACOBI)
+        self._rb, self._xb = beam.createVecs()
+        aux.destroy(), beam.destroy()                   # the KSPs keep their references
+        self._r = A.createVecLeft()
+        self._s, self._z = self.E.createVecRight(), self.E.createVecRight()
+        self._scatter = PETSc.Scatter().create(self._r, index, self._rb, None)
+        index.destroy()
+
+    def _beam_solve(self, r, y):
+        """``y += A_bb⁻¹ r_b`` (the beam rows of ``r``; block Jacobi over the ranks)."""
+        PETSc = petsc()
+        self._scatter.scatter(r, self._rb, addv=PETSc.InsertMode.INSERT_VALUES, mode=PETSc.ScatterMode.FORWARD)
+        self.beam.solve(self._rb, self._xb)
+        self._scatter.scatter(self._xb, y, addv=PETSc.InsertMode.ADD_VALUES, mode=PETSc.ScatterMode.REVERSE)
+
+    def apply(self, pc, r, y):
+        y.set(0.0)
+        self._beam_solve(r, y)
+        res = self._r
+        self.A.mult(y, res)
+        res.aypx(-1.0, r)                               # r − A y
+        self.E.multTranspose(res, self._s)
+        self.amg.solve(self._s, self._z)
+        self.E.multAdd(self._z, y, y)
+        self.A.mult(y, res)
+        res.aypx(-1.0, r)
+        self._beam_solve(res, y)
+
+    def destroy(self, pc=None):
+        for name in ("amg", "beam", "_rb", "_xb", "_r", "_s", "_z", "_scatter"):
+            obj = getattr(self, name, None)
+            if obj is not None:
+                obj.destroy()
+            setattr(self, name, None)
+        self.A = None
+
+
+def _preonly(A, prefix, pc_type):
+    """A set-up KSP that applies the preconditioner ``pc_type`` of ``A`` once (PETSc options: ``prefix``)."""
+    PETSc = petsc()
+    ksp = PETSc.KSP().create(comm=A.getComm())
+    ksp.setOptionsPrefix(prefix)
+    ksp.setType(PETSc.KSP.Type.PREONLY)
+    ksp.getPC().setType(pc_type)
+    ksp.setOperators(A)
+    ksp.setFromOptions()
+    ksp.setUp()
+    return ksp
