@@ -14,6 +14,7 @@ from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from ..elements.solid import hex8
 from .linalg import inverse3, norm3, solve3
+from .search import in_hull
 from .rational import (centre_point, normalise_coefficients, rational_coefficients, rational_curvature_bound,
                        uniform_weights)
 
@@ -514,12 +515,15 @@ def polish_residual(code, X, p0, p1, p2, h, xi, trial, N, dN):
 
 
 @njit
-def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points, solid_origin,
-                     solid_h, linear, tol, X, xi, trial, N, dN, a, stack, only):
+def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes, conn, points,
+                     solid_origin, solid_h, linear, tol, X, xi, trial, N, dN, a, stack, only):
     """Lowest-index candidate of beam element ``e`` containing the point r (beam-local frame).
 
     Candidates are ``pair_solid[p0:p1]`` (ascending); returns -1 if none contains the point.
     With ``only`` >= 0, tests just that element. On success ``xi`` holds the point's ξ.
+    Before a non-affine element's Newton projection the point must lie in its box and in its
+    ``hull`` (:func:`.search.in_hull`): points outside either are farther from the element than
+    any inside test accepts, so these tests change no result, only how many projections run.
     This is the ownership rule of both integrations (docs/conventions.md §1-§2): a point on a face,
     edge or node shared by several elements belongs to the lowest-index one. Affine elements
     are located with their inverse map (``linear``, :func:`linear_maps`), the others by
@@ -541,7 +545,7 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
             linear_parameters(code, linear, s, x0, x1, x2, xi)
             if solid.is_inside(code, xi, tol):
                 return s
-        else:
+        elif in_hull(hull, s, x0, x1, x2):
             load_element(points, conn, s, code, solid_origin, X)
             if locate_point(code, X, x0, x1, x2, solid_h[s], tol, linear, s, xi, trial, N, dN, a, stack) == INSIDE:
                 return s
