@@ -12,7 +12,7 @@ from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL,
 from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
-from ..elements.solid import hex8
+from ..elements.solid import hex8, hex27, tet10
 from .linalg import inverse3, norm3, solve3
 from .search import in_hull
 from .rational import (centre_point, normalise_coefficients, rational_coefficients, rational_curvature_bound,
@@ -33,10 +33,12 @@ _BACKTRACKS = 8
 _ROUND_OFF = 4 * 2.220446049250313e-16
 
 
-#: the code of the trilinear hexahedron, whose map and Jacobian skip the registry's dispatch (the
-#: distorted hex8 is the Newton path's common case): the same shape functions, sums over a fixed
-#: node count, the same bits
+#: the codes of the trilinear hexahedron and of the quadratic hexahedron and tetrahedron, whose map
+#: and Jacobian skip the registry's dispatch (the common cases of the Newton path): the same shape
+#: functions, sums over a fixed node count, the same bits
 _HEX8 = hex8.DESCRIPTOR.code
+_HEX27 = hex27.DESCRIPTOR.code
+_TET10 = tet10.DESCRIPTOR.code
 
 
 @njit_inline
@@ -58,6 +60,12 @@ def map_point(code, X, xi, N):
     if code == _HEX8:
         hex8.shape(xi, N)
         return _node_sum(X, N, 8)
+    if code == _HEX27:
+        hex27.shape(xi, N)
+        return _node_sum(X, N, 27)
+    if code == _TET10:
+        tet10.shape(xi, N)
+        return _node_sum(X, N, 10)
     if solid.RATIONAL[code]:
         solid.rational_shape(code, xi, X, N)
     else:
@@ -91,6 +99,12 @@ def jacobian(code, X, xi, N, dN):
     if code == _HEX8:
         hex8.deriv(xi, dN)
         return _gradient_sum(X, dN, 8)
+    if code == _HEX27:
+        hex27.deriv(xi, dN)
+        return _gradient_sum(X, dN, 27)
+    if code == _TET10:
+        tet10.deriv(xi, dN)
+        return _gradient_sum(X, dN, 10)
     if solid.RATIONAL[code]:
         solid.rational_deriv(code, xi, X, N, dN)
     else:
