@@ -18,8 +18,8 @@ Printed:
    (``check_tiling``) and the points of the segments (``segment_points``).
 2. **Counts**, from a counting copy of the kernels' decisions (this script's kernels, built from the
    library's own Newton step, inside tests and locators; the library's kernels hold no counters):
-   candidate pairs per beam element, element-based candidates tested per point (box test passed),
-   Newton projections and iterations, points that needed the rare path (restart from the centre,
+   candidate pairs per beam element, element-based candidates tested per point (box test passed,
+   and how many of those a hull plane rejects before Newton), Newton projections and iterations, points that needed the rare path (restart from the centre,
    face polish, subdivision search); for the segments: Newton iterations of the warm-started
    integration points and their fallbacks; for the crossing search: pairs searched, sample
    projections per searched pair and their iterations, face-Newton starts and crossings found.
