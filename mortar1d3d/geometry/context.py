@@ -10,6 +10,7 @@ Kernels take its arrays one by one (Numba compiles for arrays, not for this clas
 import numpy as np
 
 from .._schedule import workers
+from ..elements.solid.dispatch import HULL_TEST
 from .projection import linear_maps
 from .search import beam_frames, find_candidate_pairs, hull_pairs, solid_frames, solid_hulls
 
@@ -40,7 +41,8 @@ class KernelInput:
     hull : (n, MAX_FACES, 4) float64
         Half-spaces n·x <= c (unit normal, offset; local frame) containing each solid element with a
         margin, one along each face (:func:`~.search.solid_hulls`): a tighter bound than the box for
-        elements oblique to the axes, tested per pair and per point before a Newton projection.
+        elements oblique to the axes, tested per pair and per point before a Newton projection
+        (zero rows, no bound, for the types whose descriptor sets ``hull_test`` False: hex8).
     linear : (n, 5, 3) float64
         Each element's map linearised at its centre and inverted (exact for affine elements):
         the table of :func:`~mortar1d3d.geometry.projection.linear_maps`.
@@ -83,9 +85,11 @@ class KernelInput:
         self.lengths = beams.lengths
         self.beam_code = beams.element_type.code
         self.hull = solid_hulls(self.points, self.conn, self.codes, self.solid_origin, self.solid_h)
-        self.pair_offsets, self.pair_solid = hull_pairs(*find_candidate_pairs(self.beam_boxes, self.solid_boxes),
-                                                        self.hull, self.solid_origin, self.beam_code, self.Q,
-                                                        self.lengths, self.beam_origin, self.beam_boxes)
+        self.pair_offsets, self.pair_solid = find_candidate_pairs(self.beam_boxes, self.solid_boxes)
+        if HULL_TEST[np.unique(self.codes)].any():
+            self.pair_offsets, self.pair_solid = hull_pairs(self.pair_offsets, self.pair_solid, self.hull,
+                                                            self.solid_origin, self.beam_code, self.Q, self.lengths,
+                                                            self.beam_origin, self.beam_boxes)
         self.beam_ids = np.arange(beams.n_elements)
 
     @property

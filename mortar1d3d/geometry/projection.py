@@ -559,7 +559,7 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
             linear_parameters(code, linear, s, x0, x1, x2, xi)
             if solid.is_inside(code, xi, tol):
                 return s
-        elif in_hull(hull, s, x0, x1, x2):
+        elif not solid.HULL_TEST[code] or in_hull(hull, s, x0, x1, x2):
             load_element(points, conn, s, code, solid_origin, X)
             if locate_point(code, X, x0, x1, x2, solid_h[s], tol, linear, s, xi, trial, N, dN, a, stack) == INSIDE:
                 return s

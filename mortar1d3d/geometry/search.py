@@ -19,8 +19,8 @@ from .._memory import carve
 from .._schedule import claim, new_claims, workers
 from ..elements import beam as beam_functions
 from ..elements.beam import CODES as _BEAM_CODES, select as _beam_kernel
-from ..elements.solid.dispatch import (FACE_CORNERS, MAX_CONTROL, MAX_FACES, MAX_NODES, N_CORNERS, N_FACE_CORNERS,
-                                       N_FACES, N_NODES, RATIONAL, control_points)
+from ..elements.solid.dispatch import (FACE_CORNERS, HULL_TEST, MAX_CONTROL, MAX_FACES, MAX_NODES, N_CORNERS,
+                                       N_FACE_CORNERS, N_FACES, N_NODES, RATIONAL, control_points)
 
 
 
@@ -412,6 +412,11 @@ def _solid_hulls(points, conn, codes, solid_origin, solid_h, margin, hull, worke
         while begin < stop:
             for s in range(begin, stop):
                 code = codes[s]
+                if not HULL_TEST[code]:
+                    for f in range(hull.shape[1]):
+                        for i in range(4):
+                            hull[s, f, i] = 0.0     # no bound
+                    continue
                 spread = 1.0
                 if RATIONAL[code] and points.shape[1] > 3:
                     lo = hi = points[conn[s, 0], 3]

@@ -38,6 +38,8 @@ N_FACES = np.array([BY_CODE[c].n_faces for c in range(_N_CODES)], dtype=np.int64
 LINE_DEGREE = np.array([BY_CODE[c].line_degree for c in range(_N_CODES)], dtype=np.int64)
 #: per code: whether the type is rational (nodes carry weights; :func:`rational_shape`)
 RATIONAL = np.array([BY_CODE[c].rational for c in range(_N_CODES)], dtype=np.bool_)
+#: per code: whether its elements get hull planes (``SolidElementType.hull_test``)
+HULL_TEST = np.array([BY_CODE[c].hull_test for c in range(_N_CODES)], dtype=np.bool_)
 
 
 def _face_tables():
