@@ -3,7 +3,8 @@
 ``python benchmarks/fingerprint.py --write before.npz`` (on the commit before a change), then
 ``python benchmarks/fingerprint.py --check before.npz`` (after it): the mortar operators (D, M, κ,
 segments, integration points) of the benchmark scene in its straight, curved and distorted variants
-for every integration, of every solid element type with curved beams and every multiplier type, and
+for every integration, of a smaller cube of distorted tetra10 and hexahedron27 elements (the scenes of
+``newton_path.py``) for every integration, of every solid element type with curved beams and every multiplier type, and
 the solutions of the example scene and of a penalty, a Lagrange and a nonlinear solve. ``--check``
 lists every array that differs in any bit (and by how much) and exits 1 if one does.
 """
@@ -48,6 +49,12 @@ def collect():
     for name, b, s in (("straight", beams, solid), ("curved", curved, solid), ("distorted", beams, distorted)):
         for integration in ("element", "segment", "auto"):
             _operators(out, f"cube-{name}-{integration}", b, s, integration=integration, n_gauss=4)
+    # the quadratic scenes of newton_path.py (smaller): straight fibres through curved tet10 and hex27
+    fibres, _ = m13.generate.fibre_cube(8, 100, 8)
+    for element in ("tetra10", "hexahedron27"):
+        box = m13.generate.distort(m13.generate.box((0, 0, 0), (1, 1, 1), (8, 8, 8), element), 0.1, seed=1)
+        for integration in ("element", "segment", "auto"):
+            _operators(out, f"cube8-{element}-{integration}", fibres, box, integration=integration, n_gauss=4)
     few = m13.generate.random_curved_beams(6, 5, seed=3)
     for element in ("hexahedron", "hexahedron20", "hexahedron27", "tetra", "tetra10"):
         box = m13.generate.distort(m13.generate.box((0, 0, 0), (1, 1, 1), (3, 3, 3), element), 0.1, seed=2)

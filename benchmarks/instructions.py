@@ -3,6 +3,7 @@
     .venv/bin/python benchmarks/instructions.py [--package CHECKOUT ...] [--integration segment]
                                                 [--stage call|search|points] [--distort 0.1]
                                                 [--n 10] [--fibres 200] [--calls 3]
+                                                [--element hexahedron|hexahedron27|tetra10]
 
 On a shared, noisy machine seconds move by ±10 % from one run to the next; the number of executed
 instructions does not (callgrind counts them on a simulated CPU, whatever else the machine does).
@@ -71,6 +72,9 @@ def _child(args):
         raise SystemExit(f"imported {m13.__file__}, not the package of {args.package}")
     numba.set_num_threads(1)
     beams, solid = m13.generate.fibre_cube(args.n, args.fibres, args.n)
+    if args.element != "hexahedron":
+        # the same cube as quadratic elements (as newton_path.py's hex27 and tet10 scenes)
+        solid = m13.generate.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (args.n,) * 3, element=args.element)
     if args.distort:
         solid = m13.generate.distort(solid, args.distort, seed=1)
     m13.assemble_mortar(beams, solid, integration=args.integration, n_gauss=4)
@@ -122,7 +126,7 @@ def _count(package, args, calls):
         cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
                sys.executable, str(HERE), "--child", "--package", str(package), "--integration",
                args.integration, "--distort", str(args.distort), "--n", str(args.n), "--fibres",
-               str(args.fibres), "--stage", args.stage, "--child-calls", str(calls)]
+               str(args.fibres), "--element", args.element, "--stage", args.stage, "--child-calls", str(calls)]
         done = subprocess.run(cmd, env=_environment(package, args), capture_output=True, text=True)
         if done.returncode != 0:
             raise SystemExit(f"child failed ({package}, {calls} calls):\n{done.stderr[-2000:]}")
@@ -137,6 +141,8 @@ def main(argv=None):
     parser.add_argument("--distort", type=float, default=0.1, metavar="A",
                         help="move interior solid nodes by up to A times the element size (0: regular)")
     parser.add_argument("--n", type=int, default=10, help="solid elements per edge (default 10)")
+    parser.add_argument("--element", default="hexahedron", choices=("hexahedron", "hexahedron27", "tetra10"),
+                        help="solid element type of the cube (default hexahedron: fibre_cube's own mesh)")
     parser.add_argument("--fibres", type=int, default=200)
     parser.add_argument("--stage", default="call", choices=("call", "search", "points"),
                         help="count whole assemble_mortar calls (default) or one stage of element-based "
@@ -156,7 +162,7 @@ def main(argv=None):
         # fill the kernel cache without valgrind
         subprocess.run([sys.executable, str(HERE), "--child", "--package", str(package), "--integration",
                         args.integration, "--distort", str(args.distort), "--n", str(args.n), "--fibres",
-                        str(args.fibres)], check=True, env=_environment(package, args))
+                        str(args.fibres), "--element", args.element], check=True, env=_environment(package, args))
         base = _count(package, args, 0)
         more = _count(package, args, args.calls)
         if any(more[k] < base[k] for k in ("kernels",)) or sum(more.values()) < sum(base.values()):
@@ -171,7 +177,8 @@ def main(argv=None):
         counts.append(per_call)
         what = f"{args.integration} call" if args.stage == "call" else f"'{args.stage}' stage"
         print(f"{package}: {sum(per_call.values()):.4e} instructions per {what} "
-              f"(fibre_cube({args.n}, {args.fibres}, {args.n}), distort {args.distort}, n_gauss 4, 1 thread): "
+              f"(fibre_cube({args.n}, {args.fibres}, {args.n}), {args.element}, distort {args.distort}, n_gauss 4, "
+              f"1 thread): "
               + ", ".join(f"{k} {v:.4e}" for k, v in per_call.items()), flush=True)
     for package, c in zip(packages[1:], counts[1:]):
         print(f"{package.name} / {packages[0].name}: total {sum(c.values()) / sum(counts[0].values()):.4f}, "

@@ -18,8 +18,8 @@ Printed:
    (``check_tiling``) and the points of the segments (``segment_points``).
 2. **Counts**, from a counting copy of the kernels' decisions (this script's kernels, built from the
    library's own Newton step, inside tests and locators; the library's kernels hold no counters):
-   candidate pairs per beam element, element-based candidates tested per point (box test passed),
-   Newton projections and iterations, points that needed the rare path (restart from the centre,
+   candidate pairs per beam element, element-based candidates tested per point (box test passed,
+   and how many of those a hull plane rejects before Newton), Newton projections and iterations, points that needed the rare path (restart from the centre,
    face polish, subdivision search); for the segments: Newton iterations of the warm-started
    integration points and their fallbacks; for the crossing search: pairs searched, sample
    projections per searched pair and their iterations, face-Newton starts and crossings found.
@@ -92,10 +92,20 @@ def newton_counted(code, X, p0, p1, p2, h, xi, trial, N, dN):
 
 
 @njit
-def element_counts(ctx_pairs, pair_solid, gx, codes, conn, points, solid_origin, solid_h, solid_boxes, linear,
+def in_hull(hull, s, x0, x1, x2):
+    """The library's hull test (:func:`mortar1d3d.geometry.search.in_hull`), here so that a checkout
+    without it can be counted (its context has no planes: the counts then see none)."""
+    for f in range(hull.shape[1]):
+        if hull[s, f, 0] * x0 + hull[s, f, 1] * x1 + hull[s, f, 2] * x2 > hull[s, f, 3]:
+            return False
+    return True
+
+
+@njit
+def element_counts(ctx_pairs, pair_solid, gx, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear,
                    beam_code, Q, lengths, beam_origin, out):
     """Element-based location, counted: out = [points, box tests passed, Newton projections, Newton
-    iterations, rare paths, owners found, affine locations]."""
+    iterations, rare paths, owners found, affine locations, hull tests failed]."""
     X, N, dN, H, dH, xi, trial = pr.point_buffers()
     a, stack = pr.search_buffers()
     for e in range(ctx_pairs.shape[0] - 1):
@@ -118,6 +128,9 @@ def element_counts(ctx_pairs, pair_solid, gx, codes, conn, points, solid_origin,
                     if solid.is_inside(code, xi, PARAMETER_TOL):
                         out[5] += 1
                         break
+                    continue
+                if not in_hull(hull, s, x0, x1, x2):
+                    out[7] += 1
                     continue
                 pr.load_element(points, conn, s, code, solid_origin, X)
                 out[2] += 1
@@ -308,11 +321,13 @@ def main(argv=None):
     print(f"candidate pairs per beam element: mean {pairs.mean():.2f}, max {pairs.max()}")
     gx, _ = gauss_legendre(N_GAUSS)
     args_ctx = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h)
-    out = np.zeros(7, dtype=np.int64)
-    element_counts(ctx.pair_offsets, ctx.pair_solid, gx, *args_ctx, ctx.solid_boxes, ctx.linear, ctx.beam_code,
+    out = np.zeros(8, dtype=np.int64)
+    hull = getattr(ctx, "hull", np.zeros((len(ctx.codes), 1, 4)))       # a checkout without planes: none
+    element_counts(ctx.pair_offsets, ctx.pair_solid, gx, *args_ctx, ctx.solid_boxes, hull, ctx.linear, ctx.beam_code,
                    ctx.Q, ctx.lengths, ctx.beam_origin, out)
     n = out[0]
-    print(f"element-based, per point: box tests passed {out[1] / n:.3f}, Newton projections {out[2] / n:.3f}, "
+    print(f"element-based, per point: box tests passed {out[1] / n:.3f}, hull tests failed {out[7] / n:.3f}, "
+          f"Newton projections {out[2] / n:.3f}, "
           f"affine locations {out[6] / n:.3f}; Newton iterations per projection {out[3] / max(out[2], 1):.3f}; "
           f"rare path (restart, face polish, subdivision) {out[4]} of {out[2]} projections; owned {out[5]} of {n}")
     out = np.zeros(4, dtype=np.int64)

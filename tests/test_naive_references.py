@@ -3,7 +3,8 @@
 - element functions: the solid shape functions of the dispatch against monomial bases fitted to
   the reference nodes, the beam functions against the formulas of docs/conventions.md §2;
 - broad phase: the candidate pairs of ``geometry.search`` contain every pair whose boxes from
-  dense sampling overlap (brute force over all pairs) and every pair the beam really enters;
+  dense sampling overlap (brute force over all pairs) and every pair the beam really enters, and
+  so do the pairs left after the hull planes;
 - segmentation: the segments of ``assemble_mortar(..., integration="segment")`` against the owner
   of densely sampled centreline points, each located in every solid element by lattice search
   and ``scipy.optimize.root``;
@@ -21,6 +22,7 @@ import mortar1d3d as m13
 from mortar1d3d import generate
 from mortar1d3d.elements import beam as beam_types
 from mortar1d3d.elements.solid import dispatch
+from mortar1d3d.geometry.context import KernelInput
 from mortar1d3d.geometry.search import beam_bounding_boxes, find_candidate_pairs, solid_bounding_boxes
 
 import naive
@@ -115,6 +117,25 @@ def test_candidate_pairs_contain_every_overlap_and_every_entered_element(element
     loose = naive.brute_force_pairs(padded(naive.sampled_beam_boxes(beams), 0.25),
                                     padded(naive.sampled_solid_boxes(solid), 0.25))
     assert not (found & ~loose).any(), np.argwhere(found & ~loose)
+
+
+@pytest.mark.parametrize("element, kind", SCENES)
+def test_hull_pairs_keep_every_entered_element(element, kind):
+    """The pairs of the kernel context (the box overlaps less those a solid element's hull planes
+    separate, ``search.hull_pairs``) still hold every pair the beam enters, and the planes drop
+    pairs where boxes of oblique elements overlap."""
+    solid = scene_solid(element, seed=3)
+    beams = scene_beams(kind, seed=4, upper=1.4)
+    ctx = KernelInput(beams, solid)
+    kept = np.zeros((beams.n_elements, solid.n_elements), dtype=bool)
+    for e in range(beams.n_elements):
+        kept[e, ctx.pair_solid[ctx.pair_offsets[e]:ctx.pair_offsets[e + 1]]] = True
+    boxes = candidate_matrix(beams, solid)
+    entered = naive.entered_pairs(beams, solid)
+    assert not (entered & ~kept).any(), np.argwhere(entered & ~kept)
+    assert not (kept & ~boxes).any()
+    if element.startswith("tetra"):
+        assert np.count_nonzero(kept) < 0.8 * np.count_nonzero(boxes), (np.count_nonzero(kept), np.count_nonzero(boxes))
 
 
 # -- segmentation ------------------------------------------------------------------------------------

@@ -10,8 +10,9 @@ Kernels take its arrays one by one (Numba compiles for arrays, not for this clas
 import numpy as np
 
 from .._schedule import workers
+from ..elements.solid.dispatch import HULL_TEST
 from .projection import linear_maps
-from .search import beam_frames, find_candidate_pairs, solid_frames
+from .search import beam_frames, find_candidate_pairs, hull_pairs, solid_frames, solid_hulls
 
 
 class KernelInput:
@@ -37,6 +38,11 @@ class KernelInput:
         Element size h (box diagonal before padding): the unit of every relative tolerance.
     solid_origin : (n, 3) float64
         Each solid element's first node: the origin of its local frame.
+    hull : (n, MAX_FACES, 4) float64
+        Half-spaces n·x <= c (unit normal, offset; local frame) containing each solid element with a
+        margin, one along each face (:func:`~.search.solid_hulls`): a tighter bound than the box for
+        elements oblique to the axes, tested per pair and per point before a Newton projection
+        (zero rows, no bound, for the types whose descriptor sets ``hull_test`` False: hex8).
     linear : (n, 5, 3) float64
         Each element's map linearised at its centre and inverted (exact for affine elements):
         the table of :func:`~mortar1d3d.geometry.projection.linear_maps`.
@@ -53,7 +59,8 @@ class KernelInput:
         Beam element code (one type per mesh).
     pair_offsets : (m + 1,) int64
         Candidate pairs as CSR over the beam elements: the solid elements whose boxes overlap
-        beam element e's are ``pair_solid[pair_offsets[e]:pair_offsets[e + 1]]``...
+        beam element e's and whose hull no plane separates from its control points
+        (:func:`~.search.hull_pairs`) are ``pair_solid[pair_offsets[e]:pair_offsets[e + 1]]``...
     pair_solid : (n_pairs,) int64
         ...ascending within each beam element (the lowest-index ownership rule relies on it).
     beam_ids : (m,) int64
@@ -63,7 +70,8 @@ class KernelInput:
     -----
     Built in this order: solid frames (boxes, sizes, origins; :func:`~.search.solid_frames`),
     linear maps (:func:`~.projection.linear_maps`), beam frames (:func:`~.search.beam_frames`),
-    candidate pairs from the boxes (:func:`~.search.find_candidate_pairs`).
+    candidate pairs from the boxes (:func:`~.search.find_candidate_pairs`), less those the solid
+    hulls separate (:func:`~.search.solid_hulls`, :func:`~.search.hull_pairs`).
     """
 
     def __init__(self, beams, solid):
@@ -76,7 +84,12 @@ class KernelInput:
         self.Q, self.beam_origin, self.beam_boxes, _ = beam_frames(beams)
         self.lengths = beams.lengths
         self.beam_code = beams.element_type.code
+        self.hull = solid_hulls(self.points, self.conn, self.codes, self.solid_origin, self.solid_h)
         self.pair_offsets, self.pair_solid = find_candidate_pairs(self.beam_boxes, self.solid_boxes)
+        if HULL_TEST[np.unique(self.codes)].any():
+            self.pair_offsets, self.pair_solid = hull_pairs(self.pair_offsets, self.pair_solid, self.hull,
+                                                            self.solid_origin, self.beam_code, self.Q, self.lengths,
+                                                            self.beam_origin, self.beam_boxes)
         self.beam_ids = np.arange(beams.n_elements)
 
     @property

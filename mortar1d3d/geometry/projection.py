@@ -12,8 +12,9 @@ from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL,
 from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
-from ..elements.solid import hex8
+from ..elements.solid import hex8, hex27, tet10
 from .linalg import inverse3, norm3, solve3
+from .search import in_hull
 from .rational import (centre_point, normalise_coefficients, rational_coefficients, rational_curvature_bound,
                        uniform_weights)
 
@@ -32,10 +33,12 @@ _BACKTRACKS = 8
 _ROUND_OFF = 4 * 2.220446049250313e-16
 
 
-#: the code of the trilinear hexahedron, whose map and Jacobian skip the registry's dispatch (the
-#: distorted hex8 is the Newton path's common case): the same shape functions, sums over a fixed
-#: node count, the same bits
+#: the codes of the trilinear hexahedron and of the quadratic hexahedron and tetrahedron, whose map
+#: and Jacobian skip the registry's dispatch (the common cases of the Newton path): the same shape
+#: functions, sums over a fixed node count, the same bits
 _HEX8 = hex8.DESCRIPTOR.code
+_HEX27 = hex27.DESCRIPTOR.code
+_TET10 = tet10.DESCRIPTOR.code
 
 
 @njit_inline
@@ -57,6 +60,12 @@ def map_point(code, X, xi, N):
     if code == _HEX8:
         hex8.shape(xi, N)
         return _node_sum(X, N, 8)
+    if code == _HEX27:
+        hex27.shape(xi, N)
+        return _node_sum(X, N, 27)
+    if code == _TET10:
+        tet10.shape(xi, N)
+        return _node_sum(X, N, 10)
     if solid.RATIONAL[code]:
         solid.rational_shape(code, xi, X, N)
     else:
@@ -90,6 +99,12 @@ def jacobian(code, X, xi, N, dN):
     if code == _HEX8:
         hex8.deriv(xi, dN)
         return _gradient_sum(X, dN, 8)
+    if code == _HEX27:
+        hex27.deriv(xi, dN)
+        return _gradient_sum(X, dN, 27)
+    if code == _TET10:
+        tet10.deriv(xi, dN)
+        return _gradient_sum(X, dN, 10)
     if solid.RATIONAL[code]:
         solid.rational_deriv(code, xi, X, N, dN)
     else:
@@ -514,12 +529,15 @@ def polish_residual(code, X, p0, p1, p2, h, xi, trial, N, dN):
 
 
 @njit
-def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points, solid_origin,
-                     solid_h, linear, tol, X, xi, trial, N, dN, a, stack, only):
+def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes, conn, points,
+                     solid_origin, solid_h, linear, tol, X, xi, trial, N, dN, a, stack, only):
     """Lowest-index candidate of beam element ``e`` containing the point r (beam-local frame).
 
     Candidates are ``pair_solid[p0:p1]`` (ascending); returns -1 if none contains the point.
     With ``only`` >= 0, tests just that element. On success ``xi`` holds the point's ξ.
+    Before a non-affine element's Newton projection the point must lie in its box and in its
+    ``hull`` (:func:`.search.in_hull`): points outside either are farther from the element than
+    any inside test accepts, so these tests change no result, only how many projections run.
     This is the ownership rule of both integrations (docs/conventions.md §1-§2): a point on a face,
     edge or node shared by several elements belongs to the lowest-index one. Affine elements
     are located with their inverse map (``linear``, :func:`linear_maps`), the others by
@@ -541,7 +559,7 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
             linear_parameters(code, linear, s, x0, x1, x2, xi)
             if solid.is_inside(code, xi, tol):
                 return s
-        else:
+        elif not solid.HULL_TEST[code] or in_hull(hull, s, x0, x1, x2):
             load_element(points, conn, s, code, solid_origin, X)
             if locate_point(code, X, x0, x1, x2, solid_h[s], tol, linear, s, xi, trial, N, dN, a, stack) == INSIDE:
                 return s

@@ -5,6 +5,11 @@ element (Hermite: r1, r1 + L/3 t1, r2 - L/3 t2, r2) and of the Bernstein control
 solid element (``descriptor.bounding_matrix``) contains the element. Solid boxes are binned in
 a uniform grid; each beam box visits only the grid cells it covers, so the cost is
 O(n_beam + n_solid) for meshes of comparable element sizes, not O(n_beam · n_solid).
+
+Boxes are loose for elements whose faces are oblique to the axes (the six tetrahedra of a
+cube's Kuhn split share one box): :func:`solid_hulls` bounds each element by planes along its
+faces as well, and :func:`hull_pairs` drops the pairs those planes separate, the same test
+:func:`in_hull` makes per point.
 """
 import numpy as np
 from numba import literal_unroll, prange
@@ -14,7 +19,8 @@ from .._memory import carve
 from .._schedule import claim, new_claims, workers
 from ..elements import beam as beam_functions
 from ..elements.beam import CODES as _BEAM_CODES, select as _beam_kernel
-from ..elements.solid.dispatch import MAX_CONTROL, MAX_NODES, N_NODES, control_points
+from ..elements.solid.dispatch import (FACE_CORNERS, HULL_TEST, MAX_CONTROL, MAX_FACES, MAX_NODES, N_CORNERS,
+                                       N_FACE_CORNERS, N_FACES, N_NODES, RATIONAL, control_points)
 
 
 
@@ -327,3 +333,181 @@ def find_candidate_pairs(beam_boxes, solid_boxes):
     # one part per thread, at most 4 (each part holds a count per grid cell)
     offsets_c, ids = _bin_solids(solid_boxes, lower, 1.0 / cell, dims, min(4, workers()))
     return _find_pairs(beam_boxes, solid_boxes, offsets_c, ids, lower, 1.0 / cell, dims, workers())
+
+
+#: the planes of :func:`hull_planes` lie this far (relative to the element size h) outside the
+#: element's control points. A point accepted by an inside test at tolerance τ (parameter units;
+#: the loosest in the library is 1e-6, the integration points' check) lies within |∂x/∂ξ| τ of the
+#: element, and |∂x/∂ξ| is a few h for a polynomial element (degree × the spread of its control
+#: points per parameter unit): the margin is about 1e2-1e3 times that. Rational elements get it
+#: times (w_max / w_min)², which bounds how much their weights can stretch the derivatives.
+HULL_MARGIN = 1e-3
+#: beam elements: parameters up to this far (relative, η units) outside [-1, 1] count (crossings
+#: are accepted at η within 1e-9 of the element's ends), so their points lie within this fraction
+#: of the beam box's diagonal outside the hull of its control points
+BEAM_HULL_MARGIN = 1e-6
+
+
+@njit
+def hull_planes(code, X, C, pad, planes):
+    """Half-spaces containing an element (local nodes ``X``, column 3 ignored): ``planes`` (MAX_FACES, 4).
+
+    Row f: a unit normal n_f of face f (from the face's corners: the cross product of the
+    diagonals of a quadrilateral, of two edges of a triangle, turned away from the corners'
+    centroid) and the offset max_k n_f·C_k + ``pad`` over the element's control points C_k
+    (``C``: scratch, MAX_CONTROL rows). The element lies in the hull of its control points, so
+    in every half-space n_f·x <= offset, whatever the normal: the corners only choose directions
+    along which the bound is tight. Rows beyond the element's faces (and faces with a degenerate
+    normal) are 0, 0, 0, 0: no bound.
+    """
+    n_ctrl = control_points(code, X, C)
+    m = N_CORNERS[code]
+    c0 = c1 = c2 = 0.0
+    for a in range(m):
+        c0 += X[a, 0]
+        c1 += X[a, 1]
+        c2 += X[a, 2]
+    c0, c1, c2 = c0 / m, c1 / m, c2 / m
+    for f in range(MAX_FACES):
+        for i in range(4):
+            planes[f, i] = 0.0
+        k = N_FACE_CORNERS[code, f]
+        if f >= N_FACES[code] or k < 3:
+            continue
+        a, b, c = FACE_CORNERS[code, f, 0], FACE_CORNERS[code, f, 1], FACE_CORNERS[code, f, 2]
+        if k == 4:
+            d = FACE_CORNERS[code, f, 3]
+            u0, u1, u2 = X[c, 0] - X[a, 0], X[c, 1] - X[a, 1], X[c, 2] - X[a, 2]
+            v0, v1, v2 = X[d, 0] - X[b, 0], X[d, 1] - X[b, 1], X[d, 2] - X[b, 2]
+        else:
+            u0, u1, u2 = X[b, 0] - X[a, 0], X[b, 1] - X[a, 1], X[b, 2] - X[a, 2]
+            v0, v1, v2 = X[c, 0] - X[a, 0], X[c, 1] - X[a, 1], X[c, 2] - X[a, 2]
+        n0, n1, n2 = u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0
+        length = (n0 * n0 + n1 * n1 + n2 * n2) ** 0.5
+        if not length > 0.0:
+            continue
+        f0 = f1 = f2 = 0.0
+        for j in range(k):
+            q = FACE_CORNERS[code, f, j]
+            f0 += X[q, 0]
+            f1 += X[q, 1]
+            f2 += X[q, 2]
+        if n0 * (f0 / k - c0) + n1 * (f1 / k - c1) + n2 * (f2 / k - c2) < 0.0:
+            length = -length
+        n0, n1, n2 = n0 / length, n1 / length, n2 / length
+        top = -np.inf
+        for q in range(n_ctrl):
+            top = max(top, n0 * C[q, 0] + n1 * C[q, 1] + n2 * C[q, 2])
+        planes[f, 0], planes[f, 1], planes[f, 2], planes[f, 3] = n0, n1, n2, top + pad
+
+
+@njit_parallel
+def _solid_hulls(points, conn, codes, solid_origin, solid_h, margin, hull, workers):
+    n = conn.shape[0]
+    claims = new_claims(n, workers)
+    for worker in prange(workers):
+        X = np.empty((MAX_NODES, 3))
+        C = np.empty((MAX_CONTROL, 3))
+        begin, stop = claim(claims, n, worker)
+        while begin < stop:
+            for s in range(begin, stop):
+                code = codes[s]
+                if not HULL_TEST[code]:
+                    for f in range(hull.shape[1]):
+                        for i in range(4):
+                            hull[s, f, i] = 0.0     # no bound
+                    continue
+                spread = 1.0
+                if RATIONAL[code] and points.shape[1] > 3:
+                    lo = hi = points[conn[s, 0], 3]
+                    for a in range(1, N_NODES[code]):
+                        lo = min(lo, points[conn[s, a], 3])
+                        hi = max(hi, points[conn[s, a], 3])
+                    spread = (hi / lo) ** 2
+                big = 0.0
+                for a in range(N_NODES[code]):
+                    for i in range(3):
+                        X[a, i] = points[conn[s, a], i] - solid_origin[s, i]
+                        big = max(big, abs(points[conn[s, a], i]))
+                # round-off of the coordinates far from the origin (the kernels shift points between frames)
+                hull_planes(code, X, C, margin * solid_h[s] * spread + 16 * 2.220446049250313e-16 * big, hull[s])
+            begin, stop = claim(claims, n, worker)
+
+
+def solid_hulls(points, conn, codes, solid_origin, solid_h, margin=HULL_MARGIN):
+    """(n_elements, MAX_FACES, 4): the half-spaces of :func:`hull_planes` of every solid element, local to
+    its origin, ``margin`` · h outside its control points (``points``: the mesh's ``kernel_points``)."""
+    hull = np.empty((conn.shape[0], MAX_FACES, 4))
+    _solid_hulls(points, conn, codes, solid_origin, solid_h, margin, hull, workers())
+    return hull
+
+
+@njit_inline
+def in_hull(hull, s, x0, x1, x2):
+    """Whether the point x (local to element s's origin) lies in all half-spaces of ``hull[s]``.
+
+    False proves that x is farther than the hull's margin from the element: no inside test
+    of the library accepts it (see ``HULL_MARGIN``)."""
+    for f in range(hull.shape[1]):
+        if hull[s, f, 0] * x0 + hull[s, f, 1] * x1 + hull[s, f, 2] * x2 > hull[s, f, 3]:
+            return False
+    return True
+
+
+@njit
+def _separated(hull, s, ctrl, n_ctrl, t0, t1, t2, pad):
+    """Whether a plane of ``hull[s]`` has all of ``ctrl[:n_ctrl]`` + t beyond it by more than ``pad``."""
+    for f in range(hull.shape[1]):
+        n0, n1, n2 = hull[s, f, 0], hull[s, f, 1], hull[s, f, 2]
+        if n0 == 0.0 and n1 == 0.0 and n2 == 0.0:
+            continue
+        low = np.inf
+        for k in range(n_ctrl):
+            low = min(low, n0 * (ctrl[k, 0] + t0) + n1 * (ctrl[k, 1] + t1) + n2 * (ctrl[k, 2] + t2))
+        if low > hull[s, f, 3] + pad:
+            return True
+    return False
+
+
+@njit_parallel
+def _hull_pair_counts(pair_offsets, pair_solid, hull, solid_origin, beam_code, Q, lengths, beam_origin, beam_boxes,
+                      margin, keep, counts, workers):
+    n_beam = pair_offsets.shape[0] - 1
+    claims = new_claims(n_beam, workers)
+    for worker in prange(workers):
+        ctrl = np.empty((beam_functions.MAX_FUNCTIONS, 3))
+        begin, stop = claim(claims, n_beam, worker)
+        while begin < stop:
+            for e in range(begin, stop):
+                n_ctrl = beam_functions.control_points(beam_code, Q[e], lengths[e], ctrl)
+                size = 0.0
+                for i in range(3):
+                    size += (beam_boxes[e, 1, i] - beam_boxes[e, 0, i]) ** 2
+                big = max(abs(beam_origin[e, 0]), abs(beam_origin[e, 1]), abs(beam_origin[e, 2]))
+                pad = margin * size ** 0.5 + 16 * 2.220446049250313e-16 * big
+                n = 0
+                for p in range(pair_offsets[e], pair_offsets[e + 1]):
+                    s = pair_solid[p]
+                    keep[p] = not _separated(hull, s, ctrl, n_ctrl, beam_origin[e, 0] - solid_origin[s, 0],
+                                             beam_origin[e, 1] - solid_origin[s, 1],
+                                             beam_origin[e, 2] - solid_origin[s, 2], pad)
+                    if keep[p]:
+                        n += 1
+                counts[e + 1] = n
+            begin, stop = claim(claims, n_beam, worker)
+
+
+def hull_pairs(pair_offsets, pair_solid, hull, solid_origin, beam_code, Q, lengths, beam_origin, beam_boxes,
+               margin=BEAM_HULL_MARGIN):
+    """The candidate pairs (CSR, as :func:`find_candidate_pairs`) without those a plane of the solid
+    element's ``hull`` (:func:`solid_hulls`) separates from the beam element's control points.
+
+    A dropped pair has no point of the beam element (η within ``margin`` of [-1, 1], relative to
+    the beam box) within the hull's margin of the solid element: no integration point, segment
+    or face crossing. Order within each beam element is kept (ascending)."""
+    n_beam = len(pair_offsets) - 1
+    keep = np.empty(len(pair_solid), dtype=np.bool_)
+    counts = np.zeros(n_beam + 1, dtype=np.int64)
+    _hull_pair_counts(pair_offsets, pair_solid, hull, solid_origin, beam_code, Q, lengths, beam_origin, beam_boxes,
+                      margin, keep, counts, workers())
+    return np.cumsum(counts), pair_solid[keep]

@@ -437,7 +437,7 @@ def _merge_distance(beam_code, Qe, length, eta, h, H, dH):
 
 @njit_parallel
 def _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes, conn, points, solid_origin,
-          solid_h, solid_boxes, linear, beam_code, Q, lengths, beam_origin, seg_offsets, seg_solid,
+          solid_h, solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, seg_offsets, seg_solid,
           seg_start, seg_end, seg_count, workers):
     n_beam = pair_offsets.shape[0] - 1
     claims = new_claims(n_beam, workers)
@@ -518,9 +518,9 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count,
                     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
                     first = p0
                     while first < p1:
-                        owner = first_containing(r0, r1, r2, e, pair_solid, first, p1, beam_origin, solid_boxes, codes,
-                                                 conn, points, solid_origin, solid_h, linear, owner_tol, X, xi, trial,
-                                                 N, dN, a, stack, ANY_CANDIDATE)
+                        owner = first_containing(r0, r1, r2, e, pair_solid, first, p1, beam_origin, solid_boxes, hull,
+                                                 codes, conn, points, solid_origin, solid_h, linear, owner_tol, X, xi,
+                                                 trial, N, dN, a, stack, ANY_CANDIDATE)
                         if owner < 0:
                             break
                         p = first
@@ -558,8 +558,8 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count,
                         r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
                         for neighbour in (before, after):
                             if neighbour >= 0 and first_containing(
-                                    r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
-                                    solid_origin, solid_h, linear, owner_tol, X, xi, trial, N, dN, a, stack,
+                                    r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes, conn,
+                                    points, solid_origin, solid_h, linear, owner_tol, X, xi, trial, N, dN, a, stack,
                                     neighbour) == neighbour:
                                 owners[k] = neighbour
                                 break
@@ -589,7 +589,7 @@ _GAP_PROBES = 7
 
 @njit_parallel
 def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, pair_solid, codes, conn,
-                  points, solid_origin, solid_h, solid_boxes, linear, beam_code, Q, lengths, beam_origin, certain,
+                  points, solid_origin, solid_h, solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, certain,
                   bad, workers):
     """Flag beam elements whose pieces do not tile their embedded part.
 
@@ -628,9 +628,9 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
                         for k in range(1, _GAP_PROBES + 1):
                             eta = gap_start + k * (a - gap_start) / (_GAP_PROBES + 1)
                             r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
-                            if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes,
-                                                conn, points, solid_origin, solid_h, linear, -loose, X, xi, trial, N,
-                                                dN, a_buf, stack, ANY_CANDIDATE) >= 0:
+                            if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull,
+                                                codes, conn, points, solid_origin, solid_h, linear, -loose, X, xi,
+                                                trial, N, dN, a_buf, stack, ANY_CANDIDATE) >= 0:
                                 failed = True
                     if last or failed:
                         break
@@ -639,8 +639,8 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
                     for k in (1, 3):
                         eta = a + 0.25 * k * (b - a)
                         r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
-                        if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn,
-                                            points, solid_origin, solid_h, linear, loose, X, xi, trial, N, dN,
+                        if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes,
+                                            conn, points, solid_origin, solid_h, linear, loose, X, xi, trial, N, dN,
                                             a_buf, stack, owner) != owner:
                             failed = True
                     if failed:
@@ -651,12 +651,12 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
 
 
 @njit
-def _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, linear, beam_code, Q,
-           lengths, beam_origin, X, xi, trial, N, dN, H, dH, a, stack):
+def _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear,
+           beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH, a, stack):
     """Lowest-index candidate containing r(η) to ``_SHARP`` (round-off: the owner changes where the
     centreline crosses a face, so the bisected cuts land on the faces)."""
     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
-    return first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, codes, conn, points,
+    return first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes, conn, points,
                             solid_origin, solid_h, linear, _SHARP, X, xi, trial, N, dN, a, stack, ANY_CANDIDATE)
 
 
@@ -664,7 +664,7 @@ _SHARP = TOUCH_TOL
 
 
 @njit_parallel
-def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, linear,
+def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear,
                     beam_code, Q, lengths, beam_origin, n_samples, out_eta, out_count, workers):
     """Cuts of each beam element where the owner (lowest-index element containing r(η)) changes.
 
@@ -691,7 +691,8 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                 for k in range(n_samples):
                     eta = -1.0 + 2.0 * k / (n_samples - 1)
                     owner = _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
-                                   linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH, a, stack)
+                                   hull, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH, a,
+                                   stack)
                     lo = eta_previous
                     current = previous
                     while k > 0 and current != owner and count < cap:
@@ -699,16 +700,16 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                         while hi - lo > 1e-13:
                             mid = 0.5 * (lo + hi)
                             if _owner(mid, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
-                                      solid_boxes, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H,
-                                      dH, a, stack) == current:
+                                      solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N,
+                                      dN, H, dH, a, stack) == current:
                                 lo = mid
                             else:
                                 hi = mid
                         out_eta[e, count] = 0.5 * (lo + hi)
                         count += 1
                         current = _owner(hi, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
-                                         solid_boxes, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN,
-                                         H, dH, a, stack)
+                                         solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, X, xi, trial,
+                                         N, dN, H, dH, a, stack)
                         lo = hi
                     previous = owner
                     eta_previous = eta
@@ -760,7 +761,7 @@ def tile(ctx, crossing_eta, crossing_face, crossing_count):
     seg_end = np.empty(total)
     seg_count = np.zeros(ctx.n_beam, dtype=np.int64)
     _tile(pair_offsets, ctx.pair_solid, crossing_eta, crossing_face, crossing_count, ctx.codes, ctx.conn, ctx.points,
-          ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths,
+          ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.hull, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths,
           ctx.beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count, workers())
     keep = _compact_index(seg_offsets, seg_count)
     return np.repeat(ctx.beam_ids, seg_count), seg_solid[keep], seg_start[keep], seg_end[keep], seg_count
@@ -775,8 +776,8 @@ def check_tiling(ctx, seg_solid, seg_start, seg_end, seg_count, certain):
     seg_offsets = np.concatenate([[0], np.cumsum(seg_count)]).astype(np.int64)
     bad = np.zeros(ctx.n_beam, dtype=np.bool_)
     _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, ctx.pair_offsets, ctx.pair_solid, ctx.codes,
-                  ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code,
-                  ctx.Q, ctx.lengths, ctx.beam_origin, certain, bad, workers())
+                  ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.hull, ctx.linear,
+                  ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, certain, bad, workers())
     return bad
 
 
@@ -790,7 +791,7 @@ def _bisected(ctx):
     cuts = np.empty((n, cap))
     count = np.zeros(n, dtype=np.int64)
     _bisection_cuts(ctx.pair_offsets, ctx.pair_solid, ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h,
-                    ctx.solid_boxes, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin,
+                    ctx.solid_boxes, ctx.hull, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin,
                     _BISECTION_SAMPLES, cuts, count, workers())
     crossing_eta = np.zeros((len(ctx.pair_solid), cap))
     crossing_face = np.full((len(ctx.pair_solid), cap), -1, dtype=np.int64)     # not a face crossing

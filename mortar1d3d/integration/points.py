@@ -113,7 +113,7 @@ def _segment_points_chunk(beam_code, begin, stop, seg_beam, seg_solid, seg_start
 
 @njit_parallel
 def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid_origin, solid_h,
-                    solid_boxes, linear, beam_code, Q, lengths, beam_origin,
+                    solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin,
                     beam, owner, eta, xi, weight, position, status, workers):
     n_beam = pair_offsets.shape[0] - 1
     claims = new_claims(n_beam, workers)
@@ -123,14 +123,14 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             _element_points_chunk(beam_code, begin, stop, pair_offsets, pair_solid, gx, gw, codes, conn, points,
-                                  solid_origin, solid_h, solid_boxes, linear, Q, lengths, beam_origin, beam, owner,
-                                  eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack)
+                                  solid_origin, solid_h, solid_boxes, hull, linear, Q, lengths, beam_origin, beam,
+                                  owner, eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack)
             begin, stop = claim(claims, n_beam, worker)
 
 
 @njit
 def _element_points_chunk(beam_code, begin, stop, pair_offsets, pair_solid, gx, gw, codes, conn, points,
-                          solid_origin, solid_h, solid_boxes, linear, Q, lengths, beam_origin, beam, owner,
+                          solid_origin, solid_h, solid_boxes, hull, linear, Q, lengths, beam_origin, beam, owner,
                           eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack):
     # beam elements begin..stop; the beam type is chosen once here (see search._beam_frames_chunk)
     n_gauss = gx.shape[0]
@@ -151,8 +151,8 @@ def _element_points_chunk(beam_code, begin, stop, pair_offsets, pair_solid, gx, 
                     status[k] = POINT_UNCOUPLED
                     # the lowest-index candidate element containing the point owns it
                     s = first_containing(r0, r1, r2, e, pair_solid, pair_offsets[e], pair_offsets[e + 1], beam_origin,
-                                         solid_boxes, codes, conn, points, solid_origin, solid_h, linear, tol, X, x,
-                                         trial, N, dN, a, stack, ANY_CANDIDATE)
+                                         solid_boxes, hull, codes, conn, points, solid_origin, solid_h, linear, tol,
+                                         X, x, trial, N, dN, a, stack, ANY_CANDIDATE)
                     if s >= 0:
                         if not is_affine(linear, s):
                             # X still holds the owner's nodes (it was the last element tested) and
@@ -247,8 +247,8 @@ def _points_on_elements(ctx, gx, gw):
         (n, np.int64))
     xi[:] = 0.0                 # points no element owns keep ξ = 0
     _element_points(ctx.pair_offsets, ctx.pair_solid, gx, gw, ctx.codes, ctx.conn, ctx.points,
-                    ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths,
-                    ctx.beam_origin, beam, owner, eta, xi, weight, position, status, workers())
+                    ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.hull, ctx.linear, ctx.beam_code, ctx.Q,
+                    ctx.lengths, ctx.beam_origin, beam, owner, eta, xi, weight, position, status, workers())
     return beam, owner, eta, xi, weight, position, status
 
 

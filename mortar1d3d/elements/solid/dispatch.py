@@ -38,6 +38,8 @@ N_FACES = np.array([BY_CODE[c].n_faces for c in range(_N_CODES)], dtype=np.int64
 LINE_DEGREE = np.array([BY_CODE[c].line_degree for c in range(_N_CODES)], dtype=np.int64)
 #: per code: whether the type is rational (nodes carry weights; :func:`rational_shape`)
 RATIONAL = np.array([BY_CODE[c].rational for c in range(_N_CODES)], dtype=np.bool_)
+#: per code: whether its elements get hull planes (``SolidElementType.hull_test``)
+HULL_TEST = np.array([BY_CODE[c].hull_test for c in range(_N_CODES)], dtype=np.bool_)
 
 
 def _face_tables():
@@ -52,6 +54,25 @@ def _face_tables():
 
 #: per code: faces (origin, a, b, outward normal; padded) and their centroids (Newton starts)
 FACES, FACE_CENTROIDS = _face_tables()
+
+
+def _corner_tables():
+    """Per code: the corner nodes of every face (padded with 0) and their number (0 for padding faces),
+    and the number of corners of the element (its first nodes, in the family's VTK order)."""
+    nodes = np.zeros((_N_CODES, MAX_FACES, 4), dtype=np.int64)
+    count = np.zeros((_N_CODES, MAX_FACES), dtype=np.int64)
+    corners = np.zeros(_N_CODES, dtype=np.int64)
+    for c, d in BY_CODE.items():
+        corners[c] = len(d.family_type.corners)
+        for f, face in enumerate(d.family_type.face_nodes):
+            nodes[c, f, : len(face)] = face
+            count[c, f] = len(face)
+    return nodes, count, corners
+
+
+#: per code: corner nodes of every face (the family's ``face_nodes``, padded), their number, and the
+#: element's number of corners (:func:`mortar1d3d.geometry.search.hull_planes` takes its planes from them)
+FACE_CORNERS, N_FACE_CORNERS, N_CORNERS = _corner_tables()
 
 
 def _axis_tables():

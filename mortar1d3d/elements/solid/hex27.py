@@ -4,45 +4,45 @@ Nodes 0-19 as in ``hex20``; face centres 20-25 on the faces ξ=-1, ξ=+1, η=-1,
 ζ=-1, ζ=+1; node 26 at the centre. N_a is a tensor product of 1D quadratic Lagrange
 polynomials through -1, 0, +1.
 """
-import numpy as np
 
-from ..._config import njit
+from ..._config import njit, njit_inline
 from ...quadrature import hexahedron_rule
 from ..descriptor import SolidElementType
-from .hex_family import (HEXAHEDRON, QUADRATIC_LATTICE, QUADRATIC_NODES, lattice_gradients, lattice_values,
-                         triquadratic_bernstein_matrix)
+from .hex_family import HEXAHEDRON, QUADRATIC_LATTICE, QUADRATIC_NODES, triquadratic_bernstein_matrix
 
 REFERENCE_NODES = QUADRATIC_NODES
 
 
-@njit
-def _line3(x, v, dv):
-    v[0] = 0.5 * x * (x - 1.0)
-    v[1] = 1.0 - x * x
-    v[2] = 0.5 * x * (x + 1.0)
-    dv[0] = x - 0.5
-    dv[1] = -2.0 * x
-    dv[2] = x + 0.5
+@njit_inline
+def _line3(x):
+    """The 1D quadratic Lagrange polynomials through -1, 0, +1 at ``x`` and their derivatives (two 3-tuples)."""
+    return (0.5 * x * (x - 1.0), 1.0 - x * x, 0.5 * x * (x + 1.0)), (x - 0.5, -2.0 * x, x + 0.5)
 
 
+# The tensor products below keep the 1D values in tuples (registers), not in arrays: an array here
+# would be a heap allocation per call, and these two kernels run in every Newton step on a hex27.
+# The products are those of hex_family.lattice_values / lattice_gradients, in the same order.
 @njit
 def shape(xi, N):
     """Write the 27 shape function values at ``xi`` (3,) into ``N`` (27,)."""
-    v = np.empty((3, 3))
-    dv = np.empty((3, 3))
-    for i in range(3):
-        _line3(xi[i], v[i], dv[i])
-    lattice_values(QUADRATIC_LATTICE, v, N)
+    u, _ = _line3(xi[0])
+    v, _ = _line3(xi[1])
+    w, _ = _line3(xi[2])
+    for a in range(27):
+        N[a] = u[QUADRATIC_LATTICE[a, 0]] * v[QUADRATIC_LATTICE[a, 1]] * w[QUADRATIC_LATTICE[a, 2]]
 
 
 @njit
 def deriv(xi, dN):
     """Write ∂N_a/∂ξ_i at ``xi`` into ``dN`` (27, 3)."""
-    v = np.empty((3, 3))
-    dv = np.empty((3, 3))
-    for i in range(3):
-        _line3(xi[i], v[i], dv[i])
-    lattice_gradients(QUADRATIC_LATTICE, v, dv, dN)
+    u, du = _line3(xi[0])
+    v, dv = _line3(xi[1])
+    w, dw = _line3(xi[2])
+    for a in range(27):
+        l0, l1, l2 = QUADRATIC_LATTICE[a, 0], QUADRATIC_LATTICE[a, 1], QUADRATIC_LATTICE[a, 2]
+        dN[a, 0] = du[l0] * v[l1] * w[l2]
+        dN[a, 1] = u[l0] * dv[l1] * w[l2]
+        dN[a, 2] = u[l0] * v[l1] * dw[l2]
 
 
 DESCRIPTOR = SolidElementType(

@@ -5,7 +5,7 @@ With barycentric L = (1 - Σξ, ξ1, ξ2, ξ3): corners L_i (2 L_i - 1), edges 4
 """
 import numpy as np
 
-from ..._config import njit
+from ..._config import njit, njit_inline
 from ...quadrature import tetrahedron_rule
 from ..descriptor import SolidElementType
 from .tet_family import CORNERS as _CORNERS, TETRAHEDRON
@@ -16,12 +16,16 @@ REFERENCE_NODES = np.vstack([_CORNERS, 0.5 * (_CORNERS[EDGES[:, 0]] + _CORNERS[E
 _DL = np.array([[-1, -1, -1], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
 
 
+@njit_inline
+def _barycentric(xi):
+    """L = (1 - Σξ, ξ1, ξ2, ξ3) as a 4-tuple (registers: no array allocated per call)."""
+    return 1.0 - xi[0] - xi[1] - xi[2], xi[0], xi[1], xi[2]
+
+
 @njit
 def shape(xi, N):
     """Write the 10 shape function values at ``xi`` (3,) into ``N`` (10,)."""
-    L = np.empty(4)
-    L[0] = 1.0 - xi[0] - xi[1] - xi[2]
-    L[1], L[2], L[3] = xi[0], xi[1], xi[2]
+    L = _barycentric(xi)
     for a in range(4):
         N[a] = L[a] * (2.0 * L[a] - 1.0)
     for e in range(6):
@@ -31,9 +35,7 @@ def shape(xi, N):
 @njit
 def deriv(xi, dN):
     """Write ∂N_a/∂ξ_i at ``xi`` into ``dN`` (10, 3)."""
-    L = np.empty(4)
-    L[0] = 1.0 - xi[0] - xi[1] - xi[2]
-    L[1], L[2], L[3] = xi[0], xi[1], xi[2]
+    L = _barycentric(xi)
     for k in range(3):
         for a in range(4):
             dN[a, k] = (4.0 * L[a] - 1.0) * _DL[a, k]

@@ -1,0 +1,152 @@
+"""The hull planes of the candidate test (``geometry.search``: :func:`solid_hulls`, :func:`in_hull`,
+:func:`hull_pairs`): one half-space per face of every solid element, which pairs and points must lie
+in before a Newton projection.
+
+The planes may only reject what no inside test accepts. Checked here: points x(ξ) made with the
+monomial reference of tests/naive.py (no shape function of the library) for ξ inside every element
+type, on its boundary and up to 1e-6 outside (the loosest inside tolerance) all pass; on undistorted
+tetrahedra the planes are the faces' own planes (closed form); NURBS spans with unequal weights
+pass likewise; and ``assemble_mortar`` gives the same bits with the planes as with planes that bound
+nothing. tests/test_naive_references.py checks the pairs against the pairs a beam really enters.
+"""
+import numpy as np
+import pytest
+
+import mortar1d3d as m13
+from mortar1d3d import generate, nurbs
+from mortar1d3d.elements.solid.dispatch import BY_CODE, MAX_FACES, NODAL_ELEMENTS
+from mortar1d3d.geometry import context
+from mortar1d3d.geometry.search import HULL_MARGIN, in_hull, solid_frames, solid_hulls
+
+import naive
+
+
+def hulls(solid):
+    """The planes of every element of ``solid``, the element sizes and origins."""
+    _, h, origin = solid_frames(solid)
+    return solid_hulls(solid.kernel_points, solid.connectivity, solid.element_codes, origin, h), h, origin
+
+
+def passes(hull, s, x_local):
+    """in_hull for every row of ``x_local`` (points in element s's frame)."""
+    return np.array([in_hull(hull, s, *x) for x in x_local])
+
+
+def mapped(solid, s, xi):
+    """x(ξ) (m, 3) of element s by the monomial reference (tests/naive.py)."""
+    d = BY_CODE[int(solid.element_codes[s])]
+    N, _ = naive.shape_values(d.name, xi)
+    return N @ solid.points[solid.connectivity[s, : d.n_nodes]]
+
+
+def band(family, rng, n, width):
+    """n parameter points up to ``width`` beyond a face plane of the reference element (random inside
+    points moved onto a random face along its normal, then out by up to ``width``)."""
+    faces = naive.family(family).faces
+    xi = naive.random_parameters(family, rng, n)
+    f = rng.integers(0, len(faces), n)
+    origin, normal = faces[f, 0], faces[f, 3]
+    scale = (np.einsum("ni,ni->n", normal, xi - origin) - width * rng.uniform(0.0, 1.0, n)) / (normal ** 2).sum(axis=1)
+    return xi - scale[:, None] * normal
+
+
+@pytest.mark.parametrize("element", list(NODAL_ELEMENTS))
+def test_planes_keep_every_point_an_inside_test_accepts(element):
+    solid = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (2, 2, 2), element), 0.15, seed=1)
+    descriptor = BY_CODE[int(solid.element_codes[0])]
+    family = descriptor.family
+    hull, h, origin = hulls(solid)
+    if not descriptor.hull_test:
+        # a type without planes (its descriptor's hull_test: hex8): zero rows, no bound
+        assert not hull.any()
+        return
+    rng = np.random.default_rng(7)
+    rejected = 0
+    for s in range(solid.n_elements):
+        inside = np.vstack([naive.random_parameters(family, rng, 100), naive.reference_samples(family, 5),
+                            band(family, rng, 100, 1e-6)])
+        assert naive.outside_distance(family, inside).max() > 0.5e-6
+        assert passes(hull, s, mapped(solid, s, inside) - origin[s]).all(), (element, s)
+        # well outside (0.3 to 0.5 beyond a face plane in parameter units): mostly rejected, so the
+        # planes are not vacuous
+        far = naive.random_parameters(family, rng, 100, low=0.3, high=0.5, grow=0.5)
+        rejected += np.count_nonzero(~passes(hull, s, mapped(solid, s, far) - origin[s]))
+    assert rejected > 0.5 * 100 * solid.n_elements, rejected
+
+
+@pytest.mark.parametrize("element", ["tetra", "tetra10"])
+def test_planes_of_straight_tetrahedra_are_their_faces(element):
+    solid = generate.box((0, 0, 0), (1, 2, 3), (1, 1, 1), element)          # the six Kuhn tetrahedra
+    hull, h, origin = hulls(solid)
+    faces = BY_CODE[int(solid.element_codes[0])].family_type.face_nodes
+    for s in range(solid.n_elements):
+        corners = solid.points[solid.connectivity[s, :4]] - origin[s]
+        for f, nodes in enumerate(faces):
+            a, b, c = corners[list(nodes)]
+            normal = np.cross(b - a, c - a)
+            normal /= np.linalg.norm(normal)
+            opposite = corners[[k for k in range(4) if k not in nodes][0]]
+            normal *= np.sign(normal @ (a - opposite))                     # away from the fourth corner
+            np.testing.assert_allclose(hull[s, f, :3], normal, rtol=0, atol=1e-15)
+            # the margin, and 16 ulps of the coordinates for the round-off of shifting frames
+            pad = HULL_MARGIN * h[s] + 16 * np.finfo(float).eps * np.abs(corners + origin[s]).max()
+            assert abs(hull[s, f, 3] - (normal @ a + pad)) <= 1e-15 * h[s]
+        np.testing.assert_array_equal(hull[s, 4:], 0.0)                     # a tetrahedron has 4 faces
+    assert hull.shape[1] == MAX_FACES
+
+
+def test_planes_of_rational_spans_keep_their_points():
+    """NURBS spans with weights 0.8…1.25 of the pipe's (as tests/test_nurbs_engine.py's ``jittered``)."""
+    rng = np.random.default_rng(3)
+    patch = nurbs.hollow_cylinder(0.1, 0.2, 0.3, angle=360.0, elements=(2, 4, 2)).patches[0]
+    control = patch.control + rng.uniform(-0.002, 0.002, patch.control.shape)
+    control[:, -1] = control[:, 0]
+    weights = patch.weights * rng.uniform(0.8, 1.25, patch.weights.shape)
+    weights[:, -1] = weights[:, 0]
+    bm = nurbs.bezier_mesh(nurbs.NurbsSolid([nurbs.NurbsPatch(control, weights, patch.knots, patch.degrees)]))
+    span = bm.nurbs.patches[0]
+    hull, h, origin = hulls(bm.solid)
+    xi = np.vstack([rng.uniform(-1, 1, (60, 3)), naive.reference_samples("hex", 3)])
+    edge = rng.uniform(-1, 1, (60, 3))
+    edge[np.arange(60), rng.integers(0, 3, 60)] = np.where(rng.uniform(size=60) < 0.5, -1.0, 1.0) * (1 + 1e-6)
+    x = span.evaluate_elements(np.vstack([xi, edge]))                      # (elements, points, 3)
+    far = rng.uniform(-1, 1, (60, 3))
+    far[np.arange(60), rng.integers(0, 3, 60)] = np.where(rng.uniform(size=60) < 0.5, -1.0, 1.0) * 1.5
+    y = span.evaluate_elements(far)
+    assert len(x) == bm.solid.n_elements
+    rejected = 0
+    for s in range(bm.solid.n_elements):
+        assert passes(hull, s, x[s] - origin[s]).all(), s
+        rejected += np.count_nonzero(~passes(hull, s, y[s] - origin[s]))
+    assert rejected > 0.5 * 60 * bm.solid.n_elements, rejected
+
+
+def no_planes(points, conn, codes, solid_origin, solid_h, margin=None):
+    """Planes that bound nothing (normal 0, offset 0): every pair and point goes to Newton, as before them."""
+    return np.zeros((conn.shape[0], MAX_FACES, 4))
+
+
+@pytest.mark.parametrize("element", ["tetra10", "hexahedron27"])
+def test_operators_are_the_same_bits_without_the_planes(element, monkeypatch):
+    beams, _ = generate.fibre_cube(4, 30, 4)
+    solid = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (4, 4, 4), element), 0.1, seed=1)
+    results = {}
+    for planes in ("hull", "none"):
+        if planes == "none":
+            monkeypatch.setattr(context, "solid_hulls", no_planes)
+        for integration in ("element", "segment"):
+            ops = m13.assemble_mortar(beams, solid, integration=integration, n_gauss=4)
+            results[planes, integration] = ops
+    for integration in ("element", "segment"):
+        a, b = results["hull", integration], results["none", integration]
+        # the planes drop pairs (tetrahedra: most of the boxes' overlaps), and nothing else changes
+        assert a.diagnostics["candidate_pairs"] < b.diagnostics["candidate_pairs"]
+        for name in ("D", "M"):
+            x, y = getattr(a, name).tocsr(), getattr(b, name).tocsr()
+            np.testing.assert_array_equal(x.indptr, y.indptr)
+            np.testing.assert_array_equal(x.indices, y.indices)
+            assert x.data.tobytes() == y.data.tobytes(), (integration, name)
+        assert a.kappa.tobytes() == b.kappa.tobytes()
+        assert a.segments.tobytes() == b.segments.tobytes()
+        for field, values in a.point_fields.items():
+            assert np.asarray(values).tobytes() == np.asarray(b.point_fields[field]).tobytes(), field
