@@ -4,12 +4,13 @@ import time
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from ._common import check_square, split_dofs
 from .amg import build_amg
 from .direct import factorize_spd_block
 
-__all__ = ["AuxiliarySpacePreconditioner"]
+__all__ = ["AuxiliarySpacePreconditioner", "smooth_prolongation"]
 
 
 class AuxiliarySpacePreconditioner:
@@ -80,7 +81,12 @@ class AuxiliarySpacePreconditioner:
     plain AMG needs 103 and 319).
     """
 
-    def __init__(self, A, solid, beam, prolongation, near_nullspace=None, *, block_size=None):
+    #: the settings before session 9 (the lumped follow operator as it is, AMG with θ = 0): pass as
+    #: ``AuxiliarySpacePreconditioner(..., **AuxiliarySpacePreconditioner.LUMPED)``
+    LUMPED = dict(smoothing=0, theta=0.0, drop=0.0, filter_entries=False)
+
+    def __init__(self, A, solid, beam, prolongation, near_nullspace=None, *, block_size=None, smoothing=1,
+                 theta=0.02, drop=1e-3, filter_entries=True):
         start = time.perf_counter()
         A = check_square(A, "A")
         n = A.shape[0]
@@ -97,24 +103,31 @@ class AuxiliarySpacePreconditioner:
             raise ValueError(f"near_nullspace must have one row per solid DOF ({n_s}), got {null.shape}")
         # the model orders the free DOFs solid first, beams after: slices are views, no gathers
         self._s, self._b = _contiguous(self.solid), _contiguous(self.beam)
-        P = prolongation.tocsr()
+        if smoothing not in (0, 1, 2):
+            raise ValueError(f"smoothing must be 0, 1 or 2 (Jacobi steps on the prolongation), got {smoothing!r}")
         self.A = A
         self.shape = A.shape
         self.A_beam_rows = A[self._b].tocsr()                   # rows of the beam DOFs
         self.A_beam_cols = self.A_beam_rows.T.tocsr()            # A is symmetric
         A_bb = self.A_beam_rows[:, self._b]
         A_sb = self.A_beam_cols[self._s]
+        t = time.perf_counter()
+        P = smooth_prolongation(A_bb, self.A_beam_rows[:, self._s], prolongation.tocsr(), smoothing, drop)
+        smoothing_time = time.perf_counter() - t
+        self.smoothing = smoothing
         # Eᵀ A E with E = [I; P], without forming E
         cross = (A_sb @ P).tocsr()
         self.auxiliary = (A[self._s][:, self._s] + cross + cross.T + P.T @ (A_bb @ P)).tocsr()
         self.prolongation = P
         self._restriction = P.T.tocsr()
-        self.timings = {"auxiliary matrix": time.perf_counter() - start}
+        self.timings = {"prolongation smoothing": smoothing_time,
+                        "auxiliary matrix": time.perf_counter() - start - smoothing_time}
         t = time.perf_counter()
         # "local" weighting: the spectral-radius estimate of the default took up to a third of the AMG
         # setup of fibre_cube(40) (CPU 14-18 s against 12.4 s, loaded machine), same 33 CG iterations
         self.amg = build_amg(self.auxiliary, null, block_size=block_size, weighting="local",
-                             improve_candidates=False)
+                             improve_candidates=False, theta=theta,
+                             filter_entries=filter_entries)
         self._cycle = self.amg.aspreconditioner(cycle="V")
         self.timings["amg set-up"] = time.perf_counter() - t
         t = time.perf_counter()
@@ -147,6 +160,51 @@ class AuxiliarySpacePreconditioner:
         self.timings["beam solves"] += (t1 - start) + (end - t3)
         self.timings["applications"] += end - start
         return x
+
+
+def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
+    """``P`` moved ``steps`` damped Jacobi steps towards the harmonic extension ``−A_BB⁻¹ A_BS``.
+
+    Parameters
+    ----------
+    A_bb, A_bs : scipy.sparse matrices, (n_b, n_b) SPD and (n_b, n_s)
+        Beam block and beam-solid block of the penalty system.
+    P : (n_b, n_s) scipy.sparse.csr_matrix
+        The follow operator to start from.
+    steps : int
+        Number of steps (0 returns ``P``).
+
+    Returns
+    -------
+    P : (n_b, n_s) scipy.sparse.csr_matrix
+        ``P ← P + ω D⁻¹ (−A_BS − A_BB P)``, ``D = diag(A_BB)``, ``ω = 1 / λ_max(D⁻¹ A_BB)``.
+
+    Notes
+    -----
+    The best ``P`` for the auxiliary space is the beams' response to a solid motion,
+    ``−A_BB⁻¹ A_BS``: with it ``A_aux = Eᵀ A E`` *is* the solid's Schur complement ``S``
+    (``A_aux − S = (P + A_BB⁻¹ A_BS)ᵀ A_BB (P + A_BB⁻¹ A_BS)``), but it is dense along each beam.
+    Every step here widens each row of ``P`` by one band of ``A_BB`` (one beam node's
+    neighbours), as smoothed aggregation smooths its tentative prolongator. ``λ_max`` is
+    estimated by Lanczos (ARPACK, tolerance 1e-2) from the vector of ones, so the result is
+    deterministic.
+    """
+    if steps == 0:
+        return P
+    d = A_bb.diagonal()
+    scale = sp.diags(1.0 / np.sqrt(d))
+    scaled = (scale @ A_bb @ scale).tocsr()
+    rho = spla.eigsh(scaled, k=1, which="LA", v0=np.ones(len(d)), tol=1e-2, return_eigenvectors=False)[0]
+    jacobi = sp.diags(1.0 / (rho * d))
+    for _ in range(steps):
+        P = (P - jacobi @ (A_bs + A_bb @ P)).tocsr()
+    if drop > 0:
+        size = np.abs(P)
+        largest = size.max(axis=1).toarray().ravel()
+        keep = size.data >= drop * np.repeat(largest, np.diff(P.indptr))
+        P = sp.csr_matrix((P.data * keep, P.indices, P.indptr), shape=P.shape)
+        P.eliminate_zeros()
+    return P
 
 
 def _contiguous(index):
