@@ -2,12 +2,14 @@
 ``S`` of ``fibre_cube(n, 1000, 20)``, preconditioned by the auxiliary matrix ``A_aux`` solved
 exactly (SuperLU) and by its AMG V-cycle, for several penalties.
 
-    python benchmarks/penalty_schur.py --n 20 --penalty-factor 1e2 1e3 1e4
+    python benchmarks/penalty_schur.py --n 20 --penalty-factor 1e2 1e3 1e4 [--smoothing 0 1] [--theta 0 0.02] [--no-exact]
 
 With the beam block solved exactly, the auxiliary-space sweep of ``solver = "amg"`` is CG on
 ``S`` preconditioned by ``A_aux``: the exact-solve column is the floor that no AMG of ``A_aux``
 can go below, the V-cycle column what the solver gets (the same count as the sweep on the whole
-system). The scene is that of ``benchmarks/penalty_solve.py`` (same ``system``). The SuperLU
+system). ``--smoothing`` and ``--theta`` give the auxiliary space's Jacobi steps on its
+prolongation and its AMG strength threshold (the other settings are the preconditioner's
+defaults), ``--no-exact`` skips the SuperLU column. The scene is that of ``benchmarks/penalty_solve.py`` (same ``system``). The SuperLU
 factorisation of ``A_aux`` takes about 30 s and 2 GB at n = 20; do not run it at n = 40.
 """
 import argparse
@@ -34,7 +36,7 @@ def main(argv=None):
     parser.add_argument("--n", type=int, default=20)
     parser.add_argument("--penalty-factor", type=float, nargs="+", default=[1e2, 1e3, 1e4])
     parser.add_argument("--rtol", type=float, default=1e-8)
-    parser.add_argument("--smoothing", type=int, nargs="+", default=[0, 1],
+    parser.add_argument("--smoothing", type=int, nargs="+", default=[0],
                         help="Jacobi steps on the prolongation of A_aux (0: the lumped follow operator)")
     parser.add_argument("--theta", type=float, nargs="+", default=[0.0],
                         help="strength threshold of the AMG of A_aux")

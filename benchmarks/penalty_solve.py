@@ -1,7 +1,7 @@
 """Linear solve of the penalty system of ``fibre_cube(n, 1000, 20)`` against the solid it sits in.
 
     python benchmarks/penalty_solve.py --n 20 40 [--direct 20] [--plain 10] [--schur 20 40] [--penalty-factor 1e3] [--profile]
-                                       [--repeat 3] [--aux 0:0 1:0.02]
+                                       [--repeat 3] [--aux 0:0 1:0.02:1e-3:f]
 
 The system is the linearised model (solid: linear elastic E = 1e9, ν = 0.3, clamped at x = 0,
 traction on x = 1; 1000 torsion-free fibres E = 2e11, radius 3 mm; mortar penalty ε =
@@ -15,8 +15,9 @@ loaded machine closer to the idle wall time than the wall time is), the ratios o
 CPU time and iterations to the solid alone (measured in the same run), and the peak resident
 memory of the process so far. Solvers: ``solid`` (the solid alone), ``aux<k>-<θ>`` (CG + auxiliary-space
 preconditioner, what ``solver = "amg"``/``"auto"`` runs for penalty-coupled beams, with ``k`` Jacobi
-steps on its prolongation and strength threshold ``θ`` in its AMG, ``--aux k:θ ...``; ``0:0`` is the
-preconditioner before session 9), ``amg`` (CG +
+steps on its prolongation and strength threshold ``θ`` in its AMG, ``--aux k:θ[:drop[:f]] ...``:
+the default ``1:0.02:1e-3:f`` is the preconditioner's default, ``0:0`` its settings before session 9,
+``LUMPED``), ``amg`` (CG +
 smoothed aggregation on the whole matrix, the path before the auxiliary space; ``--plain``, slow
 at large ε), ``schur`` (CG on the solid's Schur complement with the auxiliary space's V-cycle,
 ``--schur``, ``schur<k>-<θ>``) and ``direct`` (SuperLU, ``--direct``). ``--profile`` adds where the auxiliary-space
@@ -68,8 +69,8 @@ def peak_memory_gb():
 
 def run(A, b, rtol, options, split, profile):
     """One timed solve: (x, info) with ``cpu_time``, ``load``, ``memory`` added (and ``timings``
-    of the auxiliary space with ``profile``). ``options["smoothing"]`` (aux and schur): ``(k, θ)``, the
-    auxiliary space is built here with k Jacobi steps on its prolongation and AMG strength θ."""
+    of the auxiliary space with ``profile``). ``options["smoothing"]`` (aux and schur): ``(k, θ, drop, filter)``,
+    the auxiliary space is built here with those settings."""
     setup = 0.0
     cpu = time.process_time()
     options = dict(options)
@@ -99,10 +100,12 @@ def main(argv=None):
     parser.add_argument("--plain", type=int, nargs="*", default=[], help="sizes n to also solve with plain AMG")
     parser.add_argument("--schur", type=int, nargs="*", default=[],
                         help="sizes n to also solve by CG on the solid's Schur complement (method 'schur')")
-    parser.add_argument("--aux", nargs="+", default=["1:0.02"], metavar="K:THETA",
+    parser.add_argument("--aux", nargs="+", default=["1:0.02:1e-3:f"], metavar="K:THETA[:DROP[:f]]",
                         help="auxiliary spaces to run: K Jacobi steps on the prolongation (0: the lumped "
-                             "follow operator), strength threshold THETA of its AMG; one aux (and schur) row "
-                             "each, named aux<K>-<THETA>")
+                             "follow operator), strength threshold THETA of its AMG, relative drop threshold "
+                             "of the smoothed prolongation (default 0), ':f' for the AMG's filter_entries; "
+                             "one aux (and schur) row each, named aux<K>-<THETA>[-<DROP>][f]. Default: the "
+                             "preconditioner's defaults; 0:0 is AuxiliarySpacePreconditioner.LUMPED")
     parser.add_argument("--penalty-factor", type=float, default=1e3)
     parser.add_argument("--rtol", type=float, default=1e-8)
     parser.add_argument("--profile", action="store_true", help="print where the auxiliary space spends its time")

@@ -29,18 +29,34 @@ class AuxiliarySpacePreconditioner:
         Rigid-body modes of the solid DOFs, for the AMG of the auxiliary matrix.
     block_size : {None, 1, 3}
         AMG aggregation of the auxiliary (solid) matrix, see :func:`build_amg`.
+    smoothing : {0, 1, 2}
+        Damped Jacobi steps that move ``prolongation`` towards the beams' response to a solid
+        motion before ``E`` is formed (:func:`smooth_prolongation`); 0 takes it as it is.
+    drop : float
+        After smoothing, entries of ``P`` below ``drop`` times the largest of their row are left out.
+    theta : float
+        Strength threshold of the AMG of ``A_aux`` (:func:`build_amg`).
+    filter_entries : bool
+        The AMG smooths its prolongation with the strong entries of ``A_aux`` only (:func:`build_amg`).
 
     Attributes
     ----------
+    LUMPED : dict
+        The settings before session 9 (``smoothing=0, theta=0, drop=0, filter_entries=False``):
+        the lumped follow operator as it is and AMG on every entry of ``A_aux``. The Lagrange block
+        preconditioner (:func:`~mortar1d3d.solvers.saddle.solve_saddle`) still uses them.
     auxiliary : scipy.sparse.csr_matrix, (n_s, n_s)
-        ``A_aux = Eᵀ A E`` with ``E = [I; P]`` (solid rows, then beam rows).
+        ``A_aux = Eᵀ A E`` with ``E = [I; P]`` (solid rows, then beam rows), ``P`` the smoothed
+        prolongation.
+    prolongation : (n_b, n_s) scipy.sparse.csr_matrix
+        That ``P``.
     amg : pyamg.multilevel.MultilevelSolver
         Hierarchy of ``A_aux``.
     setup_time : float
         Seconds to build all of the above and factorise the beam block.
     timings : dict of str to float
-        Wall seconds of the parts: set-up (``"auxiliary matrix"``, ``"amg set-up"``, ``"beam
-        factorisation"``) and, summed over the calls of :meth:`matvec` so far,
+        Wall seconds of the parts: set-up (``"prolongation smoothing"``, ``"auxiliary matrix"``,
+        ``"amg set-up"``, ``"beam factorisation"``) and, summed over the calls of :meth:`matvec` so far,
         ``"applications"``, of which ``"amg cycles"`` (with the products that restrict the
         residual) and ``"beam solves"``.
 
@@ -67,18 +83,35 @@ class AuxiliarySpacePreconditioner:
     norm at n = 20), but neither leaving them out of the aggregation (strength threshold θ = 0.02:
     20 -> 17 CG iterations at n = 20, 33 -> 32 at n = 40 with a denser coarse level and 40 % more
     set-up) nor out of the matrix (kept SPD by adding their absolute row sums to the diagonal:
-    37-40 iterations at n = 20) paid off; aggregation along every entry it is.
+    37-40 iterations at n = 20) paid off with the lumped ``P`` (``LUMPED``).
+
+    **The smoothed prolongation** (the default since session 9). ``A_aux − S = eᵀ A_BB e`` with
+    ``S`` the solid's Schur complement and ``e = P + A_BB⁻¹ A_BS`` the defect of ``P`` against the
+    beams' response to a solid motion: with the lumped follow operator that defect carries the
+    penalty, so ``A_aux`` drifts from ``S`` as ε grows (CG on ``S`` with an exact solve of
+    ``A_aux``: 8 / 17 / 50 iterations at ε = 1e2 / 1e3 / 1e4 E, n = 20). One damped Jacobi step
+    of ``P`` towards ``−A_BB⁻¹ A_BS`` (:func:`smooth_prolongation`, entries below 1e-3 of their
+    row's largest dropped) brings the exact-solve count at ε = 1e3 E from 17 to 9 (n = 20) and the
+    spectrum of ``A_aux⁻¹ S`` on ``fibre_cube(6, 1000, 20)`` from [0.56, 1] to [0.94, 1]
+    (benchmarks/penalty_spectrum.py). The V-cycle then limits: with θ = 0 it still needs 20; with
+    θ = 0.02 and the AMG's prolongation smoothed on the strong entries only (``filter_entries``,
+    which keeps its coarse level and set-up small) CG on the whole system needs 12 iterations at
+    n = 20 (the solid alone 11) and 20 at n = 40 (solid 12), against 20 and 33 with ``LUMPED``
+    (benchmarks/README.md, "A smoothed follow operator"). Smoothing costs one product
+    ``A_BB P`` and a Lanczos estimate of ``λ_max(D⁻¹ A_BB)`` in the set-up.
 
     Because ``P`` keeps the gap of ``E d_S`` small, the coupling between the two spaces is of
     the order of the beam stiffness, not of ε. One application is the symmetric multiplicative
     Schwarz sweep beam → auxiliary → beam (symmetric and positive definite, so CG applies).
-    Measured on ``fibre_cube(n, 1000, 20)`` at ε = 1e3 E, rtol 1e-8 (benchmarks/penalty_solve.py):
-    14, 20, 33 CG iterations for n = 10, 20, 40, against 608-783 for AMG on ``A`` (n = 10, 20).
+    Measured on ``fibre_cube(n, 1000, 20)`` at ε = 1e3 E, rtol 1e-8 (benchmarks/penalty_solve.py),
+    with ``LUMPED``: 14, 20, 33 CG iterations for n = 10, 20, 40, against 608-783 for AMG on ``A``
+    (n = 10, 20).
     The additive variant (both corrections from the same residual) saves one product with ``A``
     per application but needed 16/24 iterations against 14/19 (n = 10/20). At a small penalty
     (ε ~ 10 E) plain AMG is the better choice (medium test problem: 19 against 28 iterations),
-    but the auxiliary space stays bounded as ε grows (18 iterations at ε = 1e3 and 1e4 E where
-    plain AMG needs 103 and 319).
+    but the auxiliary space stays bounded as ε grows (``LUMPED``: 18 iterations at ε = 1e3 and
+    1e4 E where plain AMG needs 103 and 319; on ``fibre_cube(8, 150, 10)`` 16 at 1e3 E and 45 at
+    1e4 E, the default 12 and 16).
     """
 
     #: the settings before session 9 (the lumped follow operator as it is, AMG with θ = 0): pass as
