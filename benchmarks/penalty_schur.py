@@ -2,12 +2,14 @@
 ``S`` of ``fibre_cube(n, 1000, 20)``, preconditioned by the auxiliary matrix ``A_aux`` solved
 exactly (SuperLU) and by its AMG V-cycle, for several penalties.
 
-    python benchmarks/penalty_schur.py --n 20 --penalty-factor 1e2 1e3 1e4
+    python benchmarks/penalty_schur.py --n 20 --penalty-factor 1e2 1e3 1e4 [--smoothing 0 1] [--theta 0 0.02] [--no-exact]
 
 With the beam block solved exactly, the auxiliary-space sweep of ``solver = "amg"`` is CG on
 ``S`` preconditioned by ``A_aux``: the exact-solve column is the floor that no AMG of ``A_aux``
 can go below, the V-cycle column what the solver gets (the same count as the sweep on the whole
-system). The scene is that of ``benchmarks/penalty_solve.py`` (same ``system``). The SuperLU
+system). ``--smoothing`` and ``--theta`` give the auxiliary space's Jacobi steps on its
+prolongation and its AMG strength threshold (the other settings are the preconditioner's
+defaults), ``--no-exact`` skips the SuperLU column. The scene is that of ``benchmarks/penalty_solve.py`` (same ``system``). The SuperLU
 factorisation of ``A_aux`` takes about 30 s and 2 GB at n = 20; do not run it at n = 40.
 """
 import argparse
@@ -34,31 +36,39 @@ def main(argv=None):
     parser.add_argument("--n", type=int, default=20)
     parser.add_argument("--penalty-factor", type=float, nargs="+", default=[1e2, 1e3, 1e4])
     parser.add_argument("--rtol", type=float, default=1e-8)
+    parser.add_argument("--smoothing", type=int, nargs="+", default=[0],
+                        help="Jacobi steps on the prolongation of A_aux (0: the lumped follow operator)")
+    parser.add_argument("--theta", type=float, nargs="+", default=[0.0],
+                        help="strength threshold of the AMG of A_aux")
+    parser.add_argument("--no-exact", action="store_true", help="skip the SuperLU solve of A_aux")
     args = parser.parse_args(argv)
-    print(f"{'n':>3} {'eps/E':>7} {'its exact A_aux':>15} {'its V-cycle':>11} {'factor cpu s':>12} {'load':>5}")
+    print(f"{'n':>3} {'eps/E':>7} {'smooth':>6} {'theta':>6} {'nnz A_aux':>10} {'its exact A_aux':>15} "
+          f"{'its V-cycle':>11} {'coarse':>7} {'factor cpu s':>12} {'load':>5}")
     for factor in args.penalty_factor:
         model, A, b, _ = system(args.n, factor)
         split = model._follow_split()
         solid = split["solid"]
         R = model.rigid_body_modes()[model.free]
-        pre = AuxiliarySpacePreconditioner(A, solid, split["beam"], split["prolongation"], R[solid], block_size=3)
-        S = SchurComplement(pre)
-        operator = spla.LinearOperator(S.shape, matvec=S.matvec, dtype=float)
-        rhs = S.rhs(b)
+        for smoothing, theta in [(k, t) for k in args.smoothing for t in args.theta]:
+            pre = AuxiliarySpacePreconditioner(A, solid, split["beam"], split["prolongation"], R[solid],
+                                               block_size=3, smoothing=smoothing, theta=theta)
+            S = SchurComplement(pre)
+            operator = spla.LinearOperator(S.shape, matvec=S.matvec, dtype=float)
+            rhs = S.rhs(b)
 
-        def residual(x):
-            return np.linalg.norm(rhs - S.matvec(x)) / np.linalg.norm(rhs)
+            def residual(x):
+                return np.linalg.norm(rhs - S.matvec(x)) / np.linalg.norm(rhs)
 
-        def iterations(apply):
-            return run_krylov("cg", operator, rhs, np.zeros(len(solid)), apply, args.rtol, 2000, residual,
-                              lambda x: 0.0)[1]
+            def iterations(apply):
+                return run_krylov("cg", operator, rhs, np.zeros(len(solid)), apply, args.rtol, 2000, residual,
+                                  lambda x: 0.0)[1]
 
-        cpu = time.process_time()
-        lu = factorize(pre.auxiliary, symmetric_positive=True)
-        cpu = time.process_time() - cpu
-        print(f"{args.n:3d} {factor:7.0e} {iterations(lu.solve):15d} {iterations(pre._cycle.matvec):11d} "
-              f"{cpu:12.1f} {os.getloadavg()[0]:5.1f}", flush=True)
-
+            cpu = time.process_time()
+            exact = "" if args.no_exact else iterations(factorize(pre.auxiliary, symmetric_positive=True).solve)
+            cpu = time.process_time() - cpu
+            print(f"{args.n:3d} {factor:7.0e} {smoothing:6d} {theta:6.3f} {pre.auxiliary.nnz:10d} {exact:>15} "
+                  f"{iterations(pre._cycle.matvec):11d} {pre.amg.levels[-1].A.shape[0]:7d} {cpu:12.1f} "
+                  f"{os.getloadavg()[0]:5.1f}", flush=True)
 
 if __name__ == "__main__":
     main()

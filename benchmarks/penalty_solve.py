@@ -1,7 +1,7 @@
 """Linear solve of the penalty system of ``fibre_cube(n, 1000, 20)`` against the solid it sits in.
 
     python benchmarks/penalty_solve.py --n 20 40 [--direct 20] [--plain 10] [--schur 20 40] [--penalty-factor 1e3] [--profile]
-                                       [--repeat 3]
+                                       [--repeat 3] [--aux 0:0 1:0.02:1e-3:f]
 
 The system is the linearised model (solid: linear elastic E = 1e9, ν = 0.3, clamped at x = 0,
 traction on x = 1; 1000 torsion-free fibres E = 2e11, radius 3 mm; mortar penalty ε =
@@ -13,11 +13,14 @@ setup and solve seconds, CG iterations, the true relative residual, the differen
 direct solution where that was computed, the process CPU seconds of setup + solve (on a
 loaded machine closer to the idle wall time than the wall time is), the ratios of wall time,
 CPU time and iterations to the solid alone (measured in the same run), and the peak resident
-memory of the process so far. Solvers: ``solid`` (the solid alone), ``aux`` (CG + auxiliary-space
-preconditioner, what ``solver = "amg"``/``"auto"`` runs for penalty-coupled beams), ``amg`` (CG +
+memory of the process so far. Solvers: ``solid`` (the solid alone), ``aux<k>-<θ>`` (CG + auxiliary-space
+preconditioner, what ``solver = "amg"``/``"auto"`` runs for penalty-coupled beams, with ``k`` Jacobi
+steps on its prolongation and strength threshold ``θ`` in its AMG, ``--aux k:θ[:drop[:f]] ...``:
+the default ``1:0.02:1e-3:f`` is the preconditioner's default, ``0:0`` its settings before session 9,
+``LUMPED``), ``amg`` (CG +
 smoothed aggregation on the whole matrix, the path before the auxiliary space; ``--plain``, slow
 at large ε), ``schur`` (CG on the solid's Schur complement with the auxiliary space's V-cycle,
-``--schur``) and ``direct`` (SuperLU, ``--direct``). ``--profile`` adds where the auxiliary-space
+``--schur``, ``schur<k>-<θ>``) and ``direct`` (SuperLU, ``--direct``). ``--profile`` adds where the auxiliary-space
 set-up and its applications spent their time (:attr:`AuxiliarySpacePreconditioner.timings`).
 The 1-minute load average is printed with every row: wall times on a shared machine are only
 comparable at the same load; ``--repeat k`` keeps the fastest of k solves of each system.
@@ -66,14 +69,19 @@ def peak_memory_gb():
 
 def run(A, b, rtol, options, split, profile):
     """One timed solve: (x, info) with ``cpu_time``, ``load``, ``memory`` added (and ``timings``
-    of the auxiliary space with ``profile``)."""
+    of the auxiliary space with ``profile``). ``options["smoothing"]`` (aux and schur): ``(k, θ, drop, filter)``,
+    the auxiliary space is built here with those settings."""
     setup = 0.0
     cpu = time.process_time()
-    if profile:
+    options = dict(options)
+    smoothing = options.pop("smoothing", None)
+    if smoothing is not None:
+        smoothing, theta, drop, filt = smoothing
         t = time.perf_counter()
         R_solid = options["near_nullspace"][split["solid"]]
         options = dict(options, preconditioner=AuxiliarySpacePreconditioner(
-            A, split["solid"], split["beam"], split["prolongation"], R_solid, block_size=3))
+            A, split["solid"], split["beam"], split["prolongation"], R_solid, block_size=3,
+            smoothing=smoothing, theta=theta, drop=drop, filter_entries=filt))
         setup = time.perf_counter() - t
     x, info = solve_linear(A, b, rtol=rtol, maxiter=2000, **options)
     info["setup_time"] += setup
@@ -92,6 +100,12 @@ def main(argv=None):
     parser.add_argument("--plain", type=int, nargs="*", default=[], help="sizes n to also solve with plain AMG")
     parser.add_argument("--schur", type=int, nargs="*", default=[],
                         help="sizes n to also solve by CG on the solid's Schur complement (method 'schur')")
+    parser.add_argument("--aux", nargs="+", default=["1:0.02:1e-3:f"], metavar="K:THETA[:DROP[:f]]",
+                        help="auxiliary spaces to run: K Jacobi steps on the prolongation (0: the lumped "
+                             "follow operator), strength threshold THETA of its AMG, relative drop threshold "
+                             "of the smoothed prolongation (default 0), ':f' for the AMG's filter_entries; "
+                             "one aux (and schur) row each, named aux<K>-<THETA>[-<DROP>][f]. Default: the "
+                             "preconditioner's defaults; 0:0 is AuxiliarySpacePreconditioner.LUMPED")
     parser.add_argument("--penalty-factor", type=float, default=1e3)
     parser.add_argument("--rtol", type=float, default=1e-8)
     parser.add_argument("--profile", action="store_true", help="print where the auxiliary space spends its time")
@@ -99,7 +113,7 @@ def main(argv=None):
                         help="solve each system this many times and keep the fastest (CPU seconds) run")
     args = parser.parse_args(argv)
     print(f"penalty ε = {args.penalty_factor:g} E_solid, rtol {args.rtol:g}")
-    print(f"{'n':>3} {'solid':>7} {'beam':>7} {'asm s':>6} {'solver':>6} {'setup s':>8} {'solve s':>8} "
+    print(f"{'n':>3} {'solid':>7} {'beam':>7} {'asm s':>6} {'solver':>12} {'setup s':>8} {'solve s':>8} "
           f"{'total s':>8} {'cpu s':>7} {'its':>5} {'rel. res':>8} {'|x-x_dir|':>9} "
           f"{'t/solid':>7} {'cpu/sol':>7} {'it/sol':>6} {'mem GB':>6} {'load':>5}")
     for n in args.n:
@@ -112,9 +126,14 @@ def main(argv=None):
         R = model.rigid_body_modes()[model.free]
         split = model._follow_split()
         sizes = f"{n:3d} {len(split['solid']):7d} {len(split['beam']):7d} {t_asm:6.1f}"
-        runs.append(("aux", sizes, A, b, dict(method="aux", near_nullspace=R, block_size=3, **split)))
-        if n in args.schur:
-            runs.append(("schur", sizes, A, b, dict(method="schur", near_nullspace=R, block_size=3, **split)))
+        variants = [(int(v.split(":")[0]), float(v.split(":")[1]), float((v.split(":") + ["0"])[2]),
+                     len(v.split(":")) > 3) for v in args.aux]
+        for method in ("aux", "schur") if n in args.schur else ("aux",):
+            for k, theta, drop, filt in variants:
+                runs.append((f"{method}{k}-{theta:g}" + (f"-{drop:g}" if drop else "") + ("f" if filt else ""),
+                             sizes, A, b,
+                             dict(method=method, near_nullspace=R, block_size=3, smoothing=(k, theta, drop, filt),
+                                  **split)))
         if n in args.plain:
             runs.append(("amg", sizes, A, b, dict(method="amg", near_nullspace=R, block_size=3)))
         if n in args.direct:
@@ -123,7 +142,7 @@ def main(argv=None):
         for name, sizes, A, b, kw in runs:
             best = None
             for _ in range(args.repeat):
-                x, info = run(A, b, args.rtol, kw, split, args.profile and name == "aux")
+                x, info = run(A, b, args.rtol, kw, split, args.profile and name.startswith("aux"))
                 if best is None or info["cpu_time"] < best[1]["cpu_time"]:
                     best = (x, info)
             results[name] = (sizes,) + best
@@ -135,7 +154,7 @@ def main(argv=None):
             total = info["setup_time"] + info["solve_time"]
             ratios = (total / (base["setup_time"] + base["solve_time"]), info["cpu_time"] / base["cpu_time"],
                       info["iterations"] / max(base["iterations"], 1))
-            print(f"{sizes} {name:>6} {info['setup_time']:8.1f} {info['solve_time']:8.1f} {total:8.1f} "
+            print(f"{sizes} {name:>12} {info['setup_time']:8.1f} {info['solve_time']:8.1f} {total:8.1f} "
                   f"{info['cpu_time']:7.1f} {info['iterations']:5d} {info['residual']:8.1e} {diff:>9} "
                   f"{ratios[0]:7.2f} {ratios[1]:7.2f} {ratios[2]:6.2f} {info['memory']:6.2f} {info['load']:5.1f}",
                   flush=True)

@@ -86,10 +86,10 @@ def test_auxiliary_space_on_fibres_uses_the_banded_beam_factor_and_agrees_with_d
     assert pre._s == slice(0, len(solid))                        # solid first, beams after: no gathers
     x, info = solve_linear(A, b, preconditioner=pre, rtol=1e-8)
     assert info["method"] == "aux" and info["converged"] and info["residual"] <= 1e-8
-    assert info["iterations"] <= 20                             # measured 16
+    assert info["iterations"] <= 20                             # measured 12 (16 before session 9)
     x_direct, _ = solve_linear(A, b, "direct")
     assert np.linalg.norm(x - x_direct) <= 1e-7 * np.linalg.norm(x_direct)
-    assert set(pre.timings) == {"auxiliary matrix", "amg set-up", "beam factorisation", "applications",
+    assert set(pre.timings) == {"prolongation smoothing", "auxiliary matrix", "amg set-up", "beam factorisation", "applications",
                                 "amg cycles", "beam solves"}
     # the parts of an application are timed inside it (a bookkeeping check, not a speed claim)
     t = pre.timings
@@ -153,3 +153,80 @@ def test_schur_cg_reaches_rtol_with_the_auxiliary_space_iterations(fibre_system)
     assert "ran instead" in other["note"]
     x2_direct, _ = solve_linear(A2, b, "direct")
     assert np.linalg.norm(x2 - x2_direct) <= 1e-7 * np.linalg.norm(x2_direct)
+
+
+def test_smoothed_prolongation_keeps_translations_and_approaches_the_beams_response(fibre_system):
+    """One Jacobi step of ``P`` towards ``−A_BB⁻¹ A_BS`` (the beams' response to a solid motion, with
+    which ``Eᵀ A E`` would be the Schur complement): a rigid translation, which the lumped operator
+    already carries exactly (no gap, no beam strain), stays; the energy of the defect
+    ``P x + A_BB⁻¹ A_BS x`` in ``A_BB`` falls for random solid motions; entries below ``drop``
+    times the row's largest are left out."""
+    from mortar1d3d.solvers.direct import factorize_spd_block
+    from mortar1d3d.solvers.preconditioners import smooth_prolongation
+    A, b, R, split = fibre_system
+    s, bm = split["solid"], split["beam"]
+    A_bb, A_bs, P0 = A[bm][:, bm].tocsr(), A[bm][:, s].tocsr(), split["prolongation"]
+    P1 = smooth_prolongation(A_bb, A_bs, P0, 1, drop=0.0)
+    assert smooth_prolongation(A_bb, A_bs, P0, 0) is P0
+    # a translation of the free solid DOFs is rigid wherever the beams do not reach the clamped face
+    # (whose DOFs are not among the free ones): there the lumped operator carries it exactly,
+    # balanced (no beam strain, no gap), and the step leaves it as it is
+    translations = R[s][:, :3]
+    force = np.abs(A_bs @ translations + A_bb @ (P0 @ translations)).max(axis=1)
+    balanced = force <= 1e-9 * np.abs(A_bb).max()
+    assert balanced.mean() >= 0.8
+    assert np.abs(P0 @ translations - R[bm][:, :3])[balanced].max() <= 1e-12
+    assert np.abs(P1 @ translations - P0 @ translations)[balanced].max() <= 1e-10
+    assert np.abs(P1 @ translations - P0 @ translations)[~balanced].max() > 1e-3     # it moves elsewhere
+    factor = factorize_spd_block(A_bb)
+    x = np.random.default_rng(3).standard_normal((len(s), 4))
+    response = factor.solve(-(A_bs @ x))
+
+    def defect(P):
+        e = P @ x - response
+        return np.einsum("ij,ij->j", e, A_bb @ e) / np.einsum("ij,ij->j", x, (A[s][:, s] @ x))
+
+    assert np.all(defect(P1) < 0.3 * defect(P0))
+    dropped = smooth_prolongation(A_bb, A_bs, P0, 1, drop=1e-3)
+    assert dropped.nnz < P1.nnz
+    largest = np.abs(P1).max(axis=1).toarray().ravel()
+    gone = np.abs(P1 - dropped).max(axis=1).toarray().ravel()
+    assert np.all(gone < 1e-3 * largest + 1e-300)
+
+
+@pytest.fixture(scope="module")
+def stiff_penalty_system():
+    """The scene of ``fibre_system`` at ε = 1e4 E (where the lumped follow operator's gap costs most)."""
+    import mortar1d3d as m13
+    from mortar1d3d.model import Model
+    beams, solid = m13.generate.fibre_cube(8, 150, 10)
+    scene = m13.Scene(solid={"mesh": solid, "material": {"model": "linear_elastic", "E": 1e9, "nu": 0.3}},
+                      beams=[{"mesh": beams, "section": {"E": 2e11, "radius": 0.003}}],
+                      dirichlet=[{"on": "solid:x_min"}],
+                      load=[{"type": "traction", "on": "solid:x_max", "value": [0, 0, -1e6]}],
+                      coupling={"penalty": 1e13},
+                      analysis={"kinematics": "linear", "solver": "amg"})
+    model = Model(scene).prepare()
+    r, K = model.residual(np.zeros(model.n_unknowns), 1.0)
+    free = model.free
+    return K[free][:, free].tocsr(), -r[free], model.rigid_body_modes()[free], model._follow_split()
+
+
+@pytest.mark.parametrize("system, smoothed, lumped", [("fibre_system", 13, 16), ("stiff_penalty_system", 18, 45)])
+def test_smoothed_auxiliary_space_needs_fewer_iterations_than_the_lumped_one(system, smoothed, lumped, request):
+    """The default (one smoothing step, AMG with θ = 0.02 and filtered prolongation smoothing) against
+    the settings before (``LUMPED``): measured 12 against 16 iterations at the default ε = 1e3 E,
+    16 against 45 at 1e4 E; both reach the direct solution."""
+    from mortar1d3d.solvers.linear import AuxiliarySpacePreconditioner, solve_linear
+    A, b, R, split = request.getfixturevalue(system)
+    s = split["solid"]
+    x_direct, _ = solve_linear(A, b, "direct")
+    counts = []
+    for options in ({}, AuxiliarySpacePreconditioner.LUMPED):
+        pre = AuxiliarySpacePreconditioner(A, s, split["beam"], split["prolongation"], R[s], block_size=3, **options)
+        assert pre.smoothing == options.get("smoothing", 1)
+        x, info = solve_linear(A, b, preconditioner=pre, rtol=1e-8)
+        assert info["converged"] and np.linalg.norm(b - A @ x) <= 1e-8 * np.linalg.norm(b)
+        assert np.linalg.norm(x - x_direct) <= 1e-6 * np.linalg.norm(x_direct)
+        counts.append(info["iterations"])
+    assert counts[0] <= smoothed < lumped <= counts[1]

@@ -4,12 +4,13 @@ import time
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from ._common import check_square, split_dofs
 from .amg import build_amg
 from .direct import factorize_spd_block
 
-__all__ = ["AuxiliarySpacePreconditioner"]
+__all__ = ["AuxiliarySpacePreconditioner", "smooth_prolongation"]
 
 
 class AuxiliarySpacePreconditioner:
@@ -28,18 +29,34 @@ class AuxiliarySpacePreconditioner:
         Rigid-body modes of the solid DOFs, for the AMG of the auxiliary matrix.
     block_size : {None, 1, 3}
         AMG aggregation of the auxiliary (solid) matrix, see :func:`build_amg`.
+    smoothing : {0, 1, 2}
+        Damped Jacobi steps that move ``prolongation`` towards the beams' response to a solid
+        motion before ``E`` is formed (:func:`smooth_prolongation`); 0 takes it as it is.
+    drop : float
+        After smoothing, entries of ``P`` below ``drop`` times the largest of their row are left out.
+    theta : float
+        Strength threshold of the AMG of ``A_aux`` (:func:`build_amg`).
+    filter_entries : bool
+        The AMG smooths its prolongation with the strong entries of ``A_aux`` only (:func:`build_amg`).
 
     Attributes
     ----------
+    LUMPED : dict
+        The settings before session 9 (``smoothing=0, theta=0, drop=0, filter_entries=False``):
+        the lumped follow operator as it is and AMG on every entry of ``A_aux``. The Lagrange block
+        preconditioner (:func:`~mortar1d3d.solvers.saddle.solve_saddle`) still uses them.
     auxiliary : scipy.sparse.csr_matrix, (n_s, n_s)
-        ``A_aux = Eᵀ A E`` with ``E = [I; P]`` (solid rows, then beam rows).
+        ``A_aux = Eᵀ A E`` with ``E = [I; P]`` (solid rows, then beam rows), ``P`` the smoothed
+        prolongation.
+    prolongation : (n_b, n_s) scipy.sparse.csr_matrix
+        That ``P``.
     amg : pyamg.multilevel.MultilevelSolver
         Hierarchy of ``A_aux``.
     setup_time : float
         Seconds to build all of the above and factorise the beam block.
     timings : dict of str to float
-        Wall seconds of the parts: set-up (``"auxiliary matrix"``, ``"amg set-up"``, ``"beam
-        factorisation"``) and, summed over the calls of :meth:`matvec` so far,
+        Wall seconds of the parts: set-up (``"prolongation smoothing"``, ``"auxiliary matrix"``,
+        ``"amg set-up"``, ``"beam factorisation"``) and, summed over the calls of :meth:`matvec` so far,
         ``"applications"``, of which ``"amg cycles"`` (with the products that restrict the
         residual) and ``"beam solves"``.
 
@@ -66,21 +83,43 @@ class AuxiliarySpacePreconditioner:
     norm at n = 20), but neither leaving them out of the aggregation (strength threshold θ = 0.02:
     20 -> 17 CG iterations at n = 20, 33 -> 32 at n = 40 with a denser coarse level and 40 % more
     set-up) nor out of the matrix (kept SPD by adding their absolute row sums to the diagonal:
-    37-40 iterations at n = 20) paid off; aggregation along every entry it is.
+    37-40 iterations at n = 20) paid off with the lumped ``P`` (``LUMPED``).
+
+    **The smoothed prolongation** (the default since session 9). ``A_aux − S = eᵀ A_BB e`` with
+    ``S`` the solid's Schur complement and ``e = P + A_BB⁻¹ A_BS`` the defect of ``P`` against the
+    beams' response to a solid motion: with the lumped follow operator that defect carries the
+    penalty, so ``A_aux`` drifts from ``S`` as ε grows (CG on ``S`` with an exact solve of
+    ``A_aux``: 8 / 17 / 50 iterations at ε = 1e2 / 1e3 / 1e4 E, n = 20). One damped Jacobi step
+    of ``P`` towards ``−A_BB⁻¹ A_BS`` (:func:`smooth_prolongation`, entries below 1e-3 of their
+    row's largest dropped) brings the exact-solve count at ε = 1e3 E from 17 to 9 (n = 20) and the
+    spectrum of ``A_aux⁻¹ S`` on ``fibre_cube(6, 1000, 20)`` from [0.56, 1] to [0.94, 1]
+    (benchmarks/penalty_spectrum.py). The V-cycle then limits: with θ = 0 it still needs 20; with
+    θ = 0.02 and the AMG's prolongation smoothed on the strong entries only (``filter_entries``,
+    which keeps its coarse level and set-up small) CG on the whole system needs 12 iterations at
+    n = 20 (the solid alone 11) and 20 at n = 40 (solid 12), against 20 and 33 with ``LUMPED``
+    (benchmarks/README.md, "A smoothed follow operator"). Smoothing costs one product
+    ``A_BB P`` and a Lanczos estimate of ``λ_max(D⁻¹ A_BB)`` in the set-up.
 
     Because ``P`` keeps the gap of ``E d_S`` small, the coupling between the two spaces is of
     the order of the beam stiffness, not of ε. One application is the symmetric multiplicative
     Schwarz sweep beam → auxiliary → beam (symmetric and positive definite, so CG applies).
-    Measured on ``fibre_cube(n, 1000, 20)`` at ε = 1e3 E, rtol 1e-8 (benchmarks/penalty_solve.py):
-    14, 20, 33 CG iterations for n = 10, 20, 40, against 608-783 for AMG on ``A`` (n = 10, 20).
+    Measured on ``fibre_cube(n, 1000, 20)`` at ε = 1e3 E, rtol 1e-8 (benchmarks/penalty_solve.py),
+    with ``LUMPED``: 14, 20, 33 CG iterations for n = 10, 20, 40, against 608-783 for AMG on ``A``
+    (n = 10, 20).
     The additive variant (both corrections from the same residual) saves one product with ``A``
     per application but needed 16/24 iterations against 14/19 (n = 10/20). At a small penalty
     (ε ~ 10 E) plain AMG is the better choice (medium test problem: 19 against 28 iterations),
-    but the auxiliary space stays bounded as ε grows (18 iterations at ε = 1e3 and 1e4 E where
-    plain AMG needs 103 and 319).
+    but the auxiliary space stays bounded as ε grows (``LUMPED``: 18 iterations at ε = 1e3 and
+    1e4 E where plain AMG needs 103 and 319; on ``fibre_cube(8, 150, 10)`` 16 at 1e3 E and 45 at
+    1e4 E, the default 12 and 16).
     """
 
-    def __init__(self, A, solid, beam, prolongation, near_nullspace=None, *, block_size=None):
+    #: the settings before session 9 (the lumped follow operator as it is, AMG with θ = 0): pass as
+    #: ``AuxiliarySpacePreconditioner(..., **AuxiliarySpacePreconditioner.LUMPED)``
+    LUMPED = dict(smoothing=0, theta=0.0, drop=0.0, filter_entries=False)
+
+    def __init__(self, A, solid, beam, prolongation, near_nullspace=None, *, block_size=None, smoothing=1,
+                 theta=0.02, drop=1e-3, filter_entries=True):
         start = time.perf_counter()
         A = check_square(A, "A")
         n = A.shape[0]
@@ -97,24 +136,31 @@ class AuxiliarySpacePreconditioner:
             raise ValueError(f"near_nullspace must have one row per solid DOF ({n_s}), got {null.shape}")
         # the model orders the free DOFs solid first, beams after: slices are views, no gathers
         self._s, self._b = _contiguous(self.solid), _contiguous(self.beam)
-        P = prolongation.tocsr()
+        if smoothing not in (0, 1, 2):
+            raise ValueError(f"smoothing must be 0, 1 or 2 (Jacobi steps on the prolongation), got {smoothing!r}")
         self.A = A
         self.shape = A.shape
         self.A_beam_rows = A[self._b].tocsr()                   # rows of the beam DOFs
         self.A_beam_cols = self.A_beam_rows.T.tocsr()            # A is symmetric
         A_bb = self.A_beam_rows[:, self._b]
         A_sb = self.A_beam_cols[self._s]
+        t = time.perf_counter()
+        P = smooth_prolongation(A_bb, self.A_beam_rows[:, self._s], prolongation.tocsr(), smoothing, drop)
+        smoothing_time = time.perf_counter() - t
+        self.smoothing = smoothing
         # Eᵀ A E with E = [I; P], without forming E
         cross = (A_sb @ P).tocsr()
         self.auxiliary = (A[self._s][:, self._s] + cross + cross.T + P.T @ (A_bb @ P)).tocsr()
         self.prolongation = P
         self._restriction = P.T.tocsr()
-        self.timings = {"auxiliary matrix": time.perf_counter() - start}
+        self.timings = {"prolongation smoothing": smoothing_time,
+                        "auxiliary matrix": time.perf_counter() - start - smoothing_time}
         t = time.perf_counter()
         # "local" weighting: the spectral-radius estimate of the default took up to a third of the AMG
         # setup of fibre_cube(40) (CPU 14-18 s against 12.4 s, loaded machine), same 33 CG iterations
         self.amg = build_amg(self.auxiliary, null, block_size=block_size, weighting="local",
-                             improve_candidates=False)
+                             improve_candidates=False, theta=theta,
+                             filter_entries=filter_entries)
         self._cycle = self.amg.aspreconditioner(cycle="V")
         self.timings["amg set-up"] = time.perf_counter() - t
         t = time.perf_counter()
@@ -147,6 +193,51 @@ class AuxiliarySpacePreconditioner:
         self.timings["beam solves"] += (t1 - start) + (end - t3)
         self.timings["applications"] += end - start
         return x
+
+
+def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
+    """``P`` moved ``steps`` damped Jacobi steps towards the harmonic extension ``−A_BB⁻¹ A_BS``.
+
+    Parameters
+    ----------
+    A_bb, A_bs : scipy.sparse matrices, (n_b, n_b) SPD and (n_b, n_s)
+        Beam block and beam-solid block of the penalty system.
+    P : (n_b, n_s) scipy.sparse.csr_matrix
+        The follow operator to start from.
+    steps : int
+        Number of steps (0 returns ``P``).
+
+    Returns
+    -------
+    P : (n_b, n_s) scipy.sparse.csr_matrix
+        ``P ← P + ω D⁻¹ (−A_BS − A_BB P)``, ``D = diag(A_BB)``, ``ω = 1 / λ_max(D⁻¹ A_BB)``.
+
+    Notes
+    -----
+    The best ``P`` for the auxiliary space is the beams' response to a solid motion,
+    ``−A_BB⁻¹ A_BS``: with it ``A_aux = Eᵀ A E`` *is* the solid's Schur complement ``S``
+    (``A_aux − S = (P + A_BB⁻¹ A_BS)ᵀ A_BB (P + A_BB⁻¹ A_BS)``), but it is dense along each beam.
+    Every step here widens each row of ``P`` by one band of ``A_BB`` (one beam node's
+    neighbours), as smoothed aggregation smooths its tentative prolongator. ``λ_max`` is
+    estimated by Lanczos (ARPACK, tolerance 1e-2) from the vector of ones, so the result is
+    deterministic.
+    """
+    if steps == 0:
+        return P
+    d = A_bb.diagonal()
+    scale = sp.diags(1.0 / np.sqrt(d))
+    scaled = (scale @ A_bb @ scale).tocsr()
+    rho = spla.eigsh(scaled, k=1, which="LA", v0=np.ones(len(d)), tol=1e-2, return_eigenvectors=False)[0]
+    jacobi = sp.diags(1.0 / (rho * d))
+    for _ in range(steps):
+        P = (P - jacobi @ (A_bs + A_bb @ P)).tocsr()
+    if drop > 0:
+        size = np.abs(P)
+        largest = size.max(axis=1).toarray().ravel()
+        keep = size.data >= drop * np.repeat(largest, np.diff(P.indptr))
+        P = sp.csr_matrix((P.data * keep, P.indices, P.indptr), shape=P.shape)
+        P.eliminate_zeros()
+    return P
 
 
 def _contiguous(index):

@@ -378,8 +378,10 @@ def solve_saddle(K, B, kappa, b, c, method="auto", *, solid=None, beam=None, pen
         if preconditioner is not None:
             primal, apply_primal, levels = preconditioner.primal, preconditioner.apply, preconditioner.levels
         elif primal == "aux":
+            # the lumped follow operator as before: the smoothed one was measured on penalty systems only
             aux = AuxiliarySpacePreconditioner(K_gamma, solid, beam, prolongation,
-                                               None if null is None else null[solid], block_size=block_size)
+                                               None if null is None else null[solid], block_size=block_size,
+                                               **AuxiliarySpacePreconditioner.LUMPED)
             levels = aux.levels
             apply_primal = aux.matvec
         elif primal == "monolithic":

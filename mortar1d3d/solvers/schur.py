@@ -89,7 +89,8 @@ def schur_cg(A, b, preconditioner, x, rtol, maxiter):
     ``r_S = rhs − S x_S``: CG's residual on ``S`` is the whole system's, so ``rtol`` means what it
     means for the other paths. The true residual is checked on ``A`` itself. On
     ``fibre_cube(n, 1000, 20)`` (ε = 1e3 E) the iterations equal those of the auxiliary-space
-    sweep on ``A`` (20 at n = 20) and each is cheaper (benchmarks/README.md, "The solid's Schur
+    sweep on ``A`` (20 at n = 20 with the preconditioner's ``LUMPED`` settings; not measured with
+    its smoothed prolongation) and each is cheaper (benchmarks/README.md, "The solid's Schur
     complement").
     """
     S = SchurComplement(preconditioner)
