@@ -16,7 +16,7 @@ CPU time and iterations to the solid alone (measured in the same run), and the p
 memory of the process so far. Solvers: ``solid`` (the solid alone), ``aux<k>-<θ>`` (CG + auxiliary-space
 preconditioner, what ``solver = "amg"``/``"auto"`` runs for penalty-coupled beams, with ``k`` Jacobi
 steps on its prolongation and strength threshold ``θ`` in its AMG, ``--aux k:θ[:drop[:f]] ...``:
-the default ``1:0.02:1e-3:f`` is the preconditioner's default, ``0:0`` its settings before session 9,
+the default ``1:0.02:1e-3:f`` is the preconditioner's default, ``0:0`` its settings before the smoothed prolongation (``LUMPED``),
 ``LUMPED``), ``amg`` (CG +
 smoothed aggregation on the whole matrix, the path before the auxiliary space; ``--plain``, slow
 at large ε), ``schur`` (CG on the solid's Schur complement with the auxiliary space's V-cycle,
@@ -127,7 +127,7 @@ def main(argv=None):
         split = model._follow_split()
         sizes = f"{n:3d} {len(split['solid']):7d} {len(split['beam']):7d} {t_asm:6.1f}"
         variants = [(int(v.split(":")[0]), float(v.split(":")[1]), float((v.split(":") + ["0"])[2]),
-                     len(v.split(":")) > 3) for v in args.aux]
+                     (v.split(":") + ["", "", "", ""])[3] == "f") for v in args.aux]
         for method in ("aux", "schur") if n in args.schur else ("aux",):
             for k, theta, drop, filt in variants:
                 runs.append((f"{method}{k}-{theta:g}" + (f"-{drop:g}" if drop else "") + ("f" if filt else ""),

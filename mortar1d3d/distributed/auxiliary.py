@@ -147,9 +147,14 @@ class AuxiliarySweep:
         index = PETSc.IS().createGeneral(self.beam_rows.astype(PETSc.IntType), comm=comm)
         beam = A.createSubMatrix(index, index)
         options = PETSc.Options()
-        if not options.hasName("mortar_beam_sub_pc_type"):
+        ours = not options.hasName("mortar_beam_sub_pc_type")
+        if ours:
             options.setValue("mortar_beam_sub_pc_type", "lu")      # each rank's beam block: exact
-        self.beam = _preonly(beam, "mortar_beam_", PETSc.PC.Type.BJACOBI)
+        try:
+            self.beam = _preonly(beam, "mortar_beam_", PETSc.PC.Type.BJACOBI)
+        finally:
+            if ours:        # read by the set-up above; PETSc's options are the process's, not ours to keep
+                options.delValue("mortar_beam_sub_pc_type")
         self._rb, self._xb = beam.createVecs()
         aux.destroy(), beam.destroy()                   # the KSPs keep their references
         self._r = A.createVecLeft()

@@ -473,20 +473,23 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     # load steps send are reported apart from the set-up (benchmarks/distributed_scaling.py reads them)
     stage = PETSc.Log.Stage("mortar1d3d solve")
     stage.push()
-    if model.linear:
-        z, record, linear_residual = solve_linear_step(system, z0, started=start)
-        records, history = [record], [z.copy()]
-        if callback:
-            callback(record, 1, 1)
-    else:
-        a = scene.analysis
-        z, records, history = solve_load_steps(system, z0, a["steps"], rtol=a["rtol"], increment_rtol=a["rtol"],
-                                               max_iterations=a["max_iterations"], max_cuts=a["max_cuts"],
-                                               progress=callback)
-    stage.pop()
-    system.solver.close()
-    if system.solver.auxiliary:
-        system.solver.auxiliary["follow"].destroy()
+    try:
+        if model.linear:
+            z, record, linear_residual = solve_linear_step(system, z0, started=start)
+            records, history = [record], [z.copy()]
+            if callback:
+                callback(record, 1, 1)
+        else:
+            a = scene.analysis
+            z, records, history = solve_load_steps(system, z0, a["steps"], rtol=a["rtol"], increment_rtol=a["rtol"],
+                                                   max_iterations=a["max_iterations"], max_cuts=a["max_cuts"],
+                                                   progress=callback)
+    finally:
+        # the kept preconditioner (the sweep, its GAMG, its tangents) and E, also after a failed solve
+        stage.pop()
+        system.solver.close()
+        if system.solver.auxiliary:
+            system.solver.auxiliary["follow"].destroy()
     clock("solve")
     # the solution, the history and the last residual (the reactions) in the serial numbering, on rank 0
     history_local = history

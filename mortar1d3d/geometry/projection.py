@@ -535,8 +535,8 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
 
     Candidates are ``pair_solid[p0:p1]`` (ascending); returns -1 if none contains the point.
     With ``only`` >= 0, tests just that element. On success ``xi`` holds the point's ξ.
-    Before a non-affine element's Newton projection the point must lie in its box and in its
-    ``hull`` (:func:`.search.in_hull`): points outside either are farther from the element than
+    Before a non-affine element's Newton projection the point must lie in its box and, for a type
+    with hull planes (``HULL_TEST``; not hex8), in its ``hull`` (:func:`.search.in_hull`): points outside either are farther from the element than
     any inside test accepts, so these tests change no result, only how many projections run.
     This is the ownership rule of both integrations (docs/conventions.md §1-§2): a point on a face,
     edge or node shared by several elements belongs to the lowest-index one. Affine elements

@@ -342,6 +342,9 @@ def find_candidate_pairs(beam_boxes, solid_boxes):
 #: points per parameter unit): the margin is about 1e2-1e3 times that. Rational elements get it
 #: times (w_max / w_min)², which bounds how much their weights can stretch the derivatives.
 HULL_MARGIN = 1e-3
+#: round-off of coordinates shifted between frames, relative to their magnitude (16 ulps): added to
+#: every plane's offset and pair test
+_SHIFT_ROUND_OFF = 16 * 2.220446049250313e-16
 #: beam elements: parameters up to this far (relative, η units) outside [-1, 1] count (crossings
 #: are accepted at η within 1e-9 of the element's ends), so their points lie within this fraction
 #: of the beam box's diagonal outside the hull of its control points
@@ -430,7 +433,7 @@ def _solid_hulls(points, conn, codes, solid_origin, solid_h, margin, hull, worke
                         X[a, i] = points[conn[s, a], i] - solid_origin[s, i]
                         big = max(big, abs(points[conn[s, a], i]))
                 # round-off of the coordinates far from the origin (the kernels shift points between frames)
-                hull_planes(code, X, C, margin * solid_h[s] * spread + 16 * 2.220446049250313e-16 * big, hull[s])
+                hull_planes(code, X, C, margin * solid_h[s] * spread + _SHIFT_ROUND_OFF * big, hull[s])
             begin, stop = claim(claims, n, worker)
 
 
@@ -484,7 +487,7 @@ def _hull_pair_counts(pair_offsets, pair_solid, hull, solid_origin, beam_code, Q
                 for i in range(3):
                     size += (beam_boxes[e, 1, i] - beam_boxes[e, 0, i]) ** 2
                 big = max(abs(beam_origin[e, 0]), abs(beam_origin[e, 1]), abs(beam_origin[e, 2]))
-                pad = margin * size ** 0.5 + 16 * 2.220446049250313e-16 * big
+                pad = margin * size ** 0.5 + _SHIFT_ROUND_OFF * big
                 n = 0
                 for p in range(pair_offsets[e], pair_offsets[e + 1]):
                     s = pair_solid[p]

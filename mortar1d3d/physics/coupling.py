@@ -141,7 +141,7 @@ def point_triplets(ops, beams, solid):
     """The scalar entries (rows, cols, vals) of the Gauss-point constraint operator G of ``ops``'s
     integration points: row g holds H_k(η_g) at beam columns and −N_l(ξ_g) at solid ones, one column per
     node triplet: solid node l at column l, the beam mesh's centreline DOF triplet c (DOFs 3c … 3c+2) at
-    ``solid.n_nodes + c``. Serial (:class:`Coupling`) and per rank (:mod:`mortar1d3d.distributed.solve`)."""
+    ``solid.n_nodes + c``. Serial (:class:`Coupling`) and per rank (the PETSc backend)."""
     p = ops.point_fields
     nnz = ops.n_integration_points * (MAX_FUNCTIONS + solid.connectivity.shape[1])
     rows, cols, vals = np.empty(nnz, np.int64), np.empty(nnz, np.int64), np.empty(nnz)

@@ -42,7 +42,7 @@ class AuxiliarySpacePreconditioner:
     Attributes
     ----------
     LUMPED : dict
-        The settings before session 9 (``smoothing=0, theta=0, drop=0, filter_entries=False``):
+        The settings before the smoothed prolongation (CHANGELOG, 2026-11-27) (``smoothing=0, theta=0, drop=0, filter_entries=False``):
         the lumped follow operator as it is and AMG on every entry of ``A_aux``. The Lagrange block
         preconditioner (:func:`~mortar1d3d.solvers.saddle.solve_saddle`) still uses them.
     auxiliary : scipy.sparse.csr_matrix, (n_s, n_s)
@@ -85,14 +85,14 @@ class AuxiliarySpacePreconditioner:
     set-up) nor out of the matrix (kept SPD by adding their absolute row sums to the diagonal:
     37-40 iterations at n = 20) paid off with the lumped ``P`` (``LUMPED``).
 
-    **The smoothed prolongation** (the default since session 9). ``A_aux − S = eᵀ A_BB e`` with
+    **The smoothed prolongation** (the default since 2026-11-27). ``A_aux − S = eᵀ A_BB e`` with
     ``S`` the solid's Schur complement and ``e = P + A_BB⁻¹ A_BS`` the defect of ``P`` against the
     beams' response to a solid motion: with the lumped follow operator that defect carries the
     penalty, so ``A_aux`` drifts from ``S`` as ε grows (CG on ``S`` with an exact solve of
     ``A_aux``: 8 / 17 / 50 iterations at ε = 1e2 / 1e3 / 1e4 E, n = 20). One damped Jacobi step
     of ``P`` towards ``−A_BB⁻¹ A_BS`` (:func:`smooth_prolongation`, entries below 1e-3 of their
     row's largest dropped) brings the exact-solve count at ε = 1e3 E from 17 to 9 (n = 20) and the
-    spectrum of ``A_aux⁻¹ S`` on ``fibre_cube(6, 1000, 20)`` from [0.56, 1] to [0.94, 1]
+    spectrum of ``A_aux⁻¹ S`` on ``fibre_cube(6, 1000, 20)`` from [0.56, 1] to [0.92, 1]
     (benchmarks/penalty_spectrum.py). The V-cycle then limits: with θ = 0 it still needs 20; with
     θ = 0.02 and the AMG's prolongation smoothed on the strong entries only (``filter_entries``,
     which keeps its coarse level and set-up small) CG on the whole system needs 12 iterations at
@@ -114,7 +114,7 @@ class AuxiliarySpacePreconditioner:
     1e4 E, the default 12 and 16).
     """
 
-    #: the settings before session 9 (the lumped follow operator as it is, AMG with θ = 0): pass as
+    #: the settings before the smoothed prolongation (the lumped follow operator as it is, AMG with θ = 0): pass as
     #: ``AuxiliarySpacePreconditioner(..., **AuxiliarySpacePreconditioner.LUMPED)``
     LUMPED = dict(smoothing=0, theta=0.0, drop=0.0, filter_entries=False)
 
@@ -222,12 +222,15 @@ def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
     estimated by Lanczos (ARPACK, tolerance 1e-2) from the vector of ones, so the result is
     deterministic.
     """
-    if steps == 0:
+    if steps == 0 or A_bb.shape[0] == 0:
         return P
     d = A_bb.diagonal()
     scale = sp.diags(1.0 / np.sqrt(d))
     scaled = (scale @ A_bb @ scale).tocsr()
-    rho = spla.eigsh(scaled, k=1, which="LA", v0=np.ones(len(d)), tol=1e-2, return_eigenvectors=False)[0]
+    if len(d) < 3:      # ARPACK needs k < n: the few eigenvalues directly
+        rho = float(np.linalg.eigvalsh(scaled.toarray()).max())
+    else:
+        rho = spla.eigsh(scaled, k=1, which="LA", v0=np.ones(len(d)), tol=1e-2, return_eigenvectors=False)[0]
     jacobi = sp.diags(1.0 / (rho * d))
     for _ in range(steps):
         P = (P - jacobi @ (A_bs + A_bb @ P)).tocsr()
