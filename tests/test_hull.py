@@ -126,10 +126,36 @@ def no_planes(points, conn, codes, solid_origin, solid_h, margin=None):
     return np.zeros((conn.shape[0], MAX_FACES, 4))
 
 
-@pytest.mark.parametrize("element", ["tetra10", "hexahedron27"])
-def test_operators_are_the_same_bits_without_the_planes(element, monkeypatch):
+def _mixed_mesh():
+    """A distorted hex8 block (a type without planes) beside a distorted tet10 block (with them), the
+    two meshed independently and joined at x = 1 without shared nodes."""
+    hexes = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (3, 3, 3), "hexahedron"), 0.1, seed=1)
+    tets = generate.distort(generate.box((1, 0, 0), (2, 1, 1), (3, 3, 3), "tetra10"), 0.1, seed=2)
+    return m13.SolidMesh(np.vstack([hexes.points, tets.points]),
+                         {"hexahedron": hexes.connectivity[:, :8], "tetra10": tets.connectivity[:, :10] + hexes.n_nodes})
+
+
+def _mixed_beams():
+    """fibre_cube's 30 straight fibres stretched along x over both blocks."""
     beams, _ = generate.fibre_cube(4, 30, 4)
-    solid = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (4, 4, 4), element), 0.1, seed=1)
+    stretch = np.array([2.0, 1.0, 1.0])
+    t = beams.tangents * stretch
+    return m13.BeamMesh.hermite(beams.positions * stretch, t / np.linalg.norm(t, axis=1)[:, None], beams.elements)
+
+
+@pytest.mark.parametrize("element", ["tetra10", "hexahedron27", "mixed"])
+def test_operators_are_the_same_bits_without_the_planes(element, monkeypatch):
+    """Planes or none: the same operators to the bit. ``mixed``: hex8 (no planes, zero rows) and tet10
+    (planes) in one mesh, so that the per-type choice is tested where both kinds meet."""
+    if element == "mixed":
+        beams, solid = _mixed_beams(), _mixed_mesh()
+        hull, _, _ = hulls(solid)
+        hex8 = solid.element_codes == BY_CODE[0].code
+        assert BY_CODE[0].name == "hexahedron" and hex8.any() and (~hex8).any()
+        assert not hull[hex8].any() and hull[~hex8].any()
+    else:
+        beams, _ = generate.fibre_cube(4, 30, 4)
+        solid = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (4, 4, 4), element), 0.1, seed=1)
     results = {}
     for planes in ("hull", "none"):
         if planes == "none":
@@ -148,5 +174,7 @@ def test_operators_are_the_same_bits_without_the_planes(element, monkeypatch):
             assert x.data.tobytes() == y.data.tobytes(), (integration, name)
         assert a.kappa.tobytes() == b.kappa.tobytes()
         assert a.segments.tobytes() == b.segments.tobytes()
+        # the beams run through both kinds of elements (else the mixed case would test one kind)
+        assert len(set(solid.element_codes[a.segments["solid_element"]].tolist())) == len(set(solid.element_codes))
         for field, values in a.point_fields.items():
             assert np.asarray(values).tobytes() == np.asarray(b.point_fields[field]).tobytes(), field
