@@ -23,6 +23,7 @@ cut beams).
 """
 import numpy as np
 
+from ..physics.coupling import chord_triplets
 from .petsc import coo_matrix, petsc
 
 
@@ -86,13 +87,7 @@ def follow_matrix(model, ops, kappa, numbering, layout, part, comm, rotation=Non
         cols.append(cm[keep])                        # the solid field is the rank-major solid numbering
         vals.append(vm[keep] / kap[keep])
         if mesh.element_type.has_tangents:
-            elements = np.flatnonzero(part.beam_part[k] == rank)
-            a, b = mesh.elements[elements, 0], mesh.elements[elements, 1]
-            inverse_length = 1.0 / np.linalg.norm(mesh.positions[b] - mesh.positions[a], axis=1)
-            adjacent = np.bincount(mesh.elements.ravel(), minlength=mesh.n_nodes).astype(np.float64)
-            r = np.concatenate([a, a, b, b])
-            c = np.concatenate([b, a, b, a])
-            v = np.concatenate([inverse_length, -inverse_length, inverse_length, -inverse_length]) / adjacent[r]
+            r, c, v = chord_triplets(mesh, np.flatnonzero(part.beam_part[k] == rank))
             for i in range(3):
                 chord_rows.append(layout.of_serial[g.dofs.start + per_node * r + 3 + i])
                 chord_cols.append(layout.of_serial[g.dofs.start + per_node * c + i])

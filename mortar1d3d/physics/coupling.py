@@ -121,14 +121,8 @@ def follow_operator(ops, beams):
     positions = (sp.diags(scale) @ M).tocsr()
     if not beams.element_type.has_tangents:
         return expand3(positions)
-    X = beams.positions
-    a, b = beams.elements[:, 0], beams.elements[:, 1]
-    inverse_length = 1.0 / np.linalg.norm(X[b] - X[a], axis=1)
-    adjacent = np.bincount(beams.elements.ravel(), minlength=n_nodes).astype(np.float64)
-    rows = np.concatenate([a, a, b, b])
-    cols = np.concatenate([b, a, b, a])
-    vals = np.concatenate([inverse_length, -inverse_length, inverse_length, -inverse_length])
-    chord = sp.csr_matrix((vals / adjacent[rows], (rows, cols)), shape=(n_nodes, n_nodes))
+    rows, cols, vals = chord_triplets(beams, np.arange(beams.n_elements))
+    chord = sp.csr_matrix((vals, (rows, cols)), shape=(n_nodes, n_nodes))
     tangents = (chord @ positions).tocsr()
     # interleave to the Hermite layout: node k holds [r_k, t_k]
     order = np.empty(2 * n_nodes, dtype=np.int64)
@@ -164,6 +158,19 @@ def point_projection(ops, beams):
     _lm_projection(np.ascontiguousarray(p["beam_element"]), np.ascontiguousarray(p["eta"]),
                    np.ascontiguousarray(p["weight"]), lm_index, lm.n_functions, rows, cols, vals)
     return sp.csr_matrix((vals, (rows, cols)), shape=(n_lm, ops.n_integration_points))
+
+
+def chord_triplets(beams, elements):
+    """The Hermite tangents of :func:`follow_operator` from node positions, as (rows, cols, values):
+    t_k = mean over node k's elements of the chord derivative (r_b − r_a) / |X_b − X_a|, the terms of
+    ``elements`` (all of them serially; each rank its own, summed by PETSc in the distributed sweep)."""
+    a, b = beams.elements[elements, 0], beams.elements[elements, 1]
+    inverse_length = 1.0 / np.linalg.norm(beams.positions[b] - beams.positions[a], axis=1)
+    adjacent = np.bincount(beams.elements.ravel(), minlength=beams.n_nodes).astype(np.float64)
+    rows = np.concatenate([a, a, b, b])
+    cols = np.concatenate([b, a, b, a])
+    vals = np.concatenate([inverse_length, -inverse_length, inverse_length, -inverse_length])
+    return rows, cols, vals / adjacent[rows]
 
 
 def expand3(A):
