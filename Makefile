@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-mpi fuzz bench report docs venv clean conformance
+.PHONY: demo test test-mpi fuzz bench bench-targets report docs venv clean conformance
 
 $(STAMP): pyproject.toml
 	@command -v $(PYTHON) >/dev/null 2>&1 || { echo "$(PYTHON) not found; run 'make PYTHON=python3 ...'"; exit 1; }
@@ -44,6 +44,11 @@ fuzz: $(STAMP)
 
 bench: $(STAMP)
 	NUMBA_NUM_THREADS=2 $(PY) -m pytest benchmarks -q -p no:randomly -p no:xdist --benchmark-only --benchmark-columns=min,median,max,rounds
+
+# every speed target of issue 22 with its figure and ratio (benchmarks/targets.py): ~40 min;
+# QUICK=1 about a third of it, LARGE=1 adds the 1M-unknown solve and 1e7 points (~30 min, 11 GB)
+bench-targets: $(STAMP)
+	NUMBA_NUM_THREADS=2 $(PY) benchmarks/targets.py $(if $(QUICK),--quick,) $(if $(LARGE),--large,)
 
 # the documentation site: HTML in docs/_build/html, warnings are errors, then every internal link
 # and anchor of the built pages and every public name's API entry are checked (docs/check_site.py)

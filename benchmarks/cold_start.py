@@ -22,6 +22,11 @@ signatures. Recording adds a little to the wall time.
 ``--what element``: ``import mortar1d3d`` and the first element-based assembly of the same scene
 alone (what a user of element-based integration waits for on a first run).
 
+``--warm``: then run the same code once more in a new process on the cache the first one filled
+(the warm start: kernels loaded, nothing compiled), and print its time too. Each child prints its
+own time from before ``import mortar1d3d`` to the end (``in process``: the interpreter's start
+is not in it), which is what the start-up targets are about.
+
 To compare two versions, pair whole runs of this script so that both see the machine of the same
 minutes: alternate the two commands (A B A B ...) and compare their CPU seconds (user + system of
 the whole process, e.g. from ``/usr/bin/time``) run by run::
@@ -39,9 +44,10 @@ import tempfile
 import time
 from pathlib import Path
 
+from _record import record
 from test_startup import STARTUP_CODE
 
-WARMUP_CODE = "import mortar1d3d as m; m.warmup()"
+WARMUP_CODE = "import time; t=time.perf_counter(); import mortar1d3d as m; m.warmup(); print(time.perf_counter()-t)"
 #: the element-based half of STARTUP_CODE alone
 ELEMENT_CODE = STARTUP_CODE.replace("m.assemble_mortar(b,s,integration='segment'); ", "")
 assert ELEMENT_CODE != STARTUP_CODE
@@ -109,6 +115,27 @@ atexit.register(_report)
 """
 
 
+def _child(code, env, root, show):
+    """Run ``code`` in a new interpreter: its wall and CPU seconds (user + system) and the time it
+    printed itself on its last line (from before ``import mortar1d3d`` to the end)."""
+    t0 = time.perf_counter()
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    proc = subprocess.run([sys.executable, "-c", code], env=env, cwd=root, check=True, text=True,
+                          stdout=subprocess.PIPE)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    own, other = None, []
+    for line in proc.stdout.splitlines():      # the measured code's one number; the recorder's report after it
+        try:
+            own = float(line)
+        except ValueError:
+            other.append(line)
+    if show:
+        print("\n".join(other), flush=True)
+    return {"wall_s": wall, "cpu_s": (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime),
+            "in_process_s": own}
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--package", default=str(Path(__file__).resolve().parents[1]), metavar="CHECKOUT",
@@ -118,6 +145,8 @@ def main(argv=None):
                         help="list the N functions with the largest own compile time")
     parser.add_argument("--dump", metavar="JSON",
                         help="with --kernels: write every compilation (function, own time, argument types) to JSON")
+    parser.add_argument("--warm", action="store_true",
+                        help="also time the same code in a second process on the cache the first one filled")
     args = parser.parse_args(argv)
     root = Path(args.package).resolve()
     if not (root / "mortar1d3d" / "__init__.py").is_file():
@@ -131,14 +160,15 @@ def main(argv=None):
     try:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache,
                    PYTHONPATH=os.pathsep.join([str(root)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
-        t0 = time.perf_counter()
-        before = resource.getrusage(resource.RUSAGE_CHILDREN)
-        subprocess.run([sys.executable, "-c", code + check], env=env, cwd=root, check=True,
-                       stdout=None if args.kernels > 0 else subprocess.DEVNULL)
-        wall = time.perf_counter() - t0
-        after = resource.getrusage(resource.RUSAGE_CHILDREN)
-        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-        print(f"{args.what} from an empty cache, package {root}: {wall:.1f} s wall, {cpu:.1f} CPU s")
+        cold = _child(code + check, env, root, show=args.kernels > 0)
+        print(f"{args.what} from an empty cache, package {root}: {cold['wall_s']:.1f} s wall "
+              f"({cold['in_process_s']:.1f} s in process), {cold['cpu_s']:.1f} CPU s")
+        warm = None
+        if args.warm:
+            warm = _child(code.split("\n")[-1] + check, env, root, show=False)      # without the recorder
+            print(f"{args.what} from the filled cache: {warm['wall_s']:.2f} s wall "
+                  f"({warm['in_process_s']:.2f} s in process), {warm['cpu_s']:.2f} CPU s")
+        record("cold_start", what=args.what, package=str(root), cold=cold, warm=warm)
     finally:
         shutil.rmtree(cache, ignore_errors=True)
 

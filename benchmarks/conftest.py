@@ -239,6 +239,8 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
                      f"{mem['maxrss_before_assembly_mib']:.0f} MiB){own}")
     lines.append("")
     lines.append("targets are reported, not asserted; timings on a loaded machine are noisy")
+    lines.append("the targets of issue 22 (Newton path, first run, coupled solve, scaling), each with its ratio: "
+                 "make bench-targets (benchmarks/targets.py)")
 
     tr.write_sep("=", "mortar1d3d benchmark summary")
     for line in lines:

@@ -40,6 +40,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # measure this 
 import mortar1d3d as m13  # noqa: E402
 from mortar1d3d.model import Model  # noqa: E402
 from mortar1d3d.solvers.linear import solve_linear, solve_saddle  # noqa: E402
+from _record import record  # noqa: E402
 from penalty_solve import peak_memory_gb  # noqa: E402
 
 
@@ -146,6 +147,9 @@ def main(argv=None):
                   f"{total / base_total:6.2f} {info['cpu_time'] / base['cpu_time']:7.2f} "
                   f"{info['iterations'] / max(base['iterations'], 1):6.2f} {info['memory']:6.2f} "
                   f"{info['load']:5.1f}", flush=True)
+            record("lagrange_solve", case=case, path=name, unknowns=int(unknowns), cpu_s=info["cpu_time"],
+                   iterations=int(info["iterations"]), cpu_per_penalty=info["cpu_time"] / base["cpu_time"],
+                   load=info["load"])
 
 
 if __name__ == "__main__":

@@ -34,6 +34,7 @@ import time
 
 import numpy as np
 
+from _record import record
 from throughput import _package_root
 
 # the package must be imported from the chosen checkout before anything imports it
@@ -292,6 +293,8 @@ def main(argv=None):
         print(f"{integration}-based: {ops.n_integration_points} points, {rates[integration]:.3g} points/s; "
               f"stages [ms]: {stages}")
         print(f"  diagnostics: {ops.diagnostics}")
+    record("newton_path", scene=args.scene, element_gp_per_s=rates["element"],
+           segment_gp_per_s=rates["segment"])
 
     ctx = KernelInput(beams, solid_mesh)
     crossing = sg.pair_crossings(ctx, ctx.pair_beam(), ctx.pair_solid, SEARCH_POINTS)

@@ -37,6 +37,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # measure this checkout's package
 
 import mortar1d3d as m13  # noqa: E402
+from _record import record  # noqa: E402
 from mortar1d3d.model import Model  # noqa: E402
 from mortar1d3d.solvers.linear import AuxiliarySpacePreconditioner, solve_linear  # noqa: E402
 
@@ -158,6 +159,9 @@ def main(argv=None):
                   f"{info['cpu_time']:7.1f} {info['iterations']:5d} {info['residual']:8.1e} {diff:>9} "
                   f"{ratios[0]:7.2f} {ratios[1]:7.2f} {ratios[2]:6.2f} {info['memory']:6.2f} {info['load']:5.1f}",
                   flush=True)
+            record("penalty_solve", n=n, solver=name, unknowns=int(x.shape[0]), cpu_s=info["cpu_time"],
+                   iterations=int(info["iterations"]), cpu_per_solid=ratios[1], iterations_per_solid=ratios[2],
+                   peak_memory_gb=info["memory"], load=info["load"])
             if "timings" in info:
                 print("      " + ", ".join(f"{k} {v:.2f} s" for k, v in info["timings"].items()), flush=True)
 

@@ -45,6 +45,7 @@ import numpy as np
 # throughput puts the measured checkout (``--package CHECKOUT``, default this one) first on the path
 from throughput import _timed  # noqa: E402,I100
 
+from _record import record  # noqa: E402
 import mortar1d3d as m13  # noqa: E402
 from control import control_times  # noqa: E402
 from mortar1d3d.model import Model  # noqa: E402
@@ -126,6 +127,8 @@ def assembly(points, rounds, stages=False, order="generated"):
                     + f"; page faults per 1000 points {1e3 * faults / count:.2f}", flush=True)
             del beams, solid
         print(f"{integration:<12}slope of log(time/control) over log(points): {slope(sizes, ratios):.3f}")
+        record("scaling_assembly", integration=integration, points=[int(p) for p in sizes],
+               per_control=ratios, slope=slope(sizes, ratios))
 
 
 def newton_scene(n, enforcement="penalty"):
@@ -194,6 +197,8 @@ def newton(unknowns, rounds, profile=0, enforcement="penalty"):
             _profile(lambda: model.residual(z, 1.0, tangent=True), profile)
         del model
     print(f"slope of log(time/control) over log(unknowns): {slope(sizes, ratios):.3f}")
+    record("scaling_newton", enforcement=enforcement, unknowns=[int(u) for u in sizes], per_control=ratios,
+           slope=slope(sizes, ratios))
 
 
 def main(argv=None):

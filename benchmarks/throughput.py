@@ -45,6 +45,7 @@ def _package_root(argv):
 sys.path.insert(0, str(_package_root(None)))
 
 import mortar1d3d as m13  # noqa: E402
+from _record import record  # noqa: E402
 from control import control_times, core_times  # noqa: E402
 
 THREADS = (1, 2)
@@ -146,6 +147,14 @@ def main(argv=None):
     for integration in integrations:
         print(f"{integration:8s} speed-up / the claimed control's of the same round: median "
               f"{np.median(ratio[integration] / claimed_ratio):.2f}")
+        one = np.array([t for t, _, _ in calls[integration, 1]])
+        record("throughput", distort=args.distort, integration=integration,
+               gp_per_s_1thread=float(n_points[integration] / np.median(one)),
+               gp_per_s_1thread_best=float(n_points[integration] / one.min()),
+               per_control_1thread=float(np.median(one / np.array(control[1]))),
+               control_1thread_s=float(np.median(control[1])),
+               of_claimed=float(np.median(ratio[integration] / claimed_ratio)),
+               claimed_speedup=float(np.median(claimed_ratio)))
     if cores and cores[0]:
         per_cpu = {cpu: np.median([c[cpu] for c in cores]) for cpu in cores[0]}
         ceiling = np.array([1.0 + min(c.values()) / max(c.values()) for c in cores])
