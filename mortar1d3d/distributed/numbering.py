@@ -2,10 +2,12 @@
 
 PETSc gives each rank one contiguous range of rows of a matrix or entries of a vector. The serial
 numbering (docs/conventions.md §2) interleaves what different ranks own, so the distributed path
-renumbers: within each kind (solid nodes, the nodes of each beam group, the multiplier (LM) nodes
-of each beam group) the nodes of rank 0 come first, then those of rank 1, ..., each rank's in
-their serial order. A node is owned by the rank of the lowest-index element that uses it (the
-solid's and the beams' own elements); an interior LM node by its beam element's rank.
+renumbers: within each kind (solid nodes, the nodes of each beam group, the rotation nodes of each
+beam group with a material frame, the multiplier (LM) nodes of each beam group) the nodes of rank 0
+come first, then those of rank 1, ..., each rank's in their serial order. A node is owned by the
+rank of the lowest-index element that uses it (the solid's and the beams' own elements; a rotation
+node, an element's middle node among them, by the lowest-index beam element whose triads it
+interpolates); an interior LM node by its beam element's rank.
 
 A kind's renumbering is ``new = new_of_old[old]`` with ``ranges[r]:ranges[r + 1]`` the new ids
 that rank r owns; DOFs follow their node (``dofs_per_node * node + component``).
@@ -85,21 +87,31 @@ class Numbering:
         Centreline nodes of each beam group.
     lm : list of Renumbering
         LM nodes of each beam group (numbered as :func:`~mortar1d3d.mortar.assemble.lm_numbering`).
+    rotations : list of (Renumbering or None)
+        Rotation nodes of each beam group (:meth:`~mortar1d3d.physics.beam_types.BeamType.rotation_nodes`:
+        the mesh nodes, then one middle node per element); None for a group without them.
     """
 
     solid: Renumbering
     beams: list
     lm: list
+    rotations: list = ()
 
     @classmethod
-    def of(cls, partition, solid, beam_meshes, lm="line2"):
+    def of(cls, partition, solid, beam_meshes, lm="line2", beam_types=None):
+        """The numbering of ``partition``; ``beam_types`` (one :class:`~mortar1d3d.physics.beam_types.BeamType`
+        per group) numbers the rotation nodes of the groups whose type has them."""
         n = partition.n_parts
         solid_num = Renumbering.from_owner(node_owner(solid.connectivity, partition.solid_part, solid.n_nodes), n)
-        beams, lms = [], []
+        beams, lms, rotations = [], [], []
         n_int = multiplier_type(lm).n_interior
-        for mesh, part in zip(beam_meshes, partition.beam_part):
+        types = [None] * len(beam_meshes) if beam_types is None else list(beam_types)
+        for mesh, part, kind in zip(beam_meshes, partition.beam_part, types):
             owner = node_owner(mesh.elements, part, mesh.n_nodes)
             beams.append(Renumbering.from_owner(owner, n))
             # LM nodes: the beam's (end) nodes, then n_int interior ones per element
             lms.append(Renumbering.from_owner(np.concatenate([owner, np.repeat(part, n_int)]), n))
-        return cls(solid_num, beams, lms)
+            table = None if kind is None else kind.rotation_nodes(mesh)
+            rotations.append(None if table is None or table.shape[1] == 0 else Renumbering.from_owner(
+                node_owner(table, part, kind.n_rotation_nodes(mesh)), n))
+        return cls(solid_num, beams, lms, rotations)

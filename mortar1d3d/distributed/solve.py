@@ -39,7 +39,8 @@ from .petsc import coo_matrix, gather_vector, petsc, summed_vector
 @dataclass(frozen=True)
 class SystemLayout:
     """The system's rank-major numbering: rank r owns ``[its solid node DOFs | its group-0 beam node
-    DOFs | group 1 | ...]``, one contiguous range ``ranges[r]:ranges[r + 1]``.
+    DOFs | group 1 | ... | its rotation nodes' DOFs of the groups with rotations, group by group]``,
+    one contiguous range ``ranges[r]:ranges[r + 1]``.
 
     Attributes
     ----------
@@ -55,6 +56,13 @@ class SystemLayout:
     def of(cls, numbering, dofmap, per_node):
         kinds = [(numbering.solid, 3, dofmap.solid)] + [
             (num, p, block) for num, p, block in zip(numbering.beams, per_node, dofmap.centreline)]
+        rotations = list(numbering.rotations) + [None] * (len(dofmap.rotations) - len(numbering.rotations))
+        for k, (num, block) in enumerate(zip(rotations, dofmap.rotations)):
+            if block.size and num is None:
+                raise ValueError(f"SystemLayout: beam group {k} has rotations but the numbering has no rotation "
+                                 "nodes (Numbering.of(..., beam_types=...))")
+            if block.size:
+                kinds.append((num, 3, block))
         n_parts = len(numbering.solid.ranges) - 1
         sizes = np.array([[p * num.count(r) for num, p, _ in kinds] for r in range(n_parts)], dtype=np.int64)
         ranges = np.concatenate([[0], np.cumsum(sizes.sum(axis=1))])
@@ -98,8 +106,9 @@ def _unsupported(model):
     sc = model.scene
     if sc.coupled and sc.coupling.get("rotational") is not None:
         return "coupling.rotational: not distributed yet; use backend = \"serial\""
-    if any(g.rotations.size for g in model.groups):
-        return "beams[..].model: beams with rotations (simo_reissner) are not distributed yet; use backend = \"serial\""
+    for i, d in enumerate(sc.dirichlet):
+        if d.get("twist"):
+            return f"dirichlet[{i}].twist: twist supports are not distributed yet; use backend = \"serial\""
     if sc.solid is None:
         return "solid: the PETSc backend needs a solid"
     return None
@@ -339,8 +348,10 @@ def _linear_solver(model, layout, comm, coupling=None, kappa=None):
     disp = owned < n
     modes = [R[owned[disp], j] for j in range(R.shape[1])]
     if not model.lagrange:
-        # follower loads of a nonlinear analysis make the tangent non-symmetric: GMRES instead of CG
-        symmetric = not (model.pressures or model.moments)
+        # follower loads and beams with rotations (or 4C's beam3eb) make the tangent of a nonlinear
+        # analysis non-symmetric: GMRES instead of CG
+        symmetric = not (model.pressures or model.moments) and (
+            model.linear or all(g.type.symmetric_tangent for g in model.groups))
         if penalty_preconditioner() == "aux" and model.scene.coupled and model.groups and model.solid_mesh is not None:
             # the beams' unknowns follow each rank's solid ones in its range
             own_solid = int(np.count_nonzero(owned < 3 * model.n_solid_nodes))
@@ -423,7 +434,8 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     else:
         solid_part, beam_part = parts(model.solid_mesh, beam_meshes, size)
         part = partition(model.solid_mesh, beam_meshes, size, solid_part=solid_part, beam_part=beam_part)
-    numbering = Numbering.of(part, model.solid_mesh, beam_meshes, scene.coupling["lm"] if scene.coupled else "line2")
+    numbering = Numbering.of(part, model.solid_mesh, beam_meshes, scene.coupling["lm"] if scene.coupled else "line2",
+                             [g.type for g in model.groups])
     layout = SystemLayout.of(numbering, model.dofmap, [g.type.dofs_per_node for g in model.groups])
     clock("partition")
     ops, coupling, lagrange, kappa_rows, weighted, lm_rows = [], None, model.lagrange, None, None, None

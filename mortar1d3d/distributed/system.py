@@ -87,15 +87,29 @@ class OwnedPhysics:
             self.moments = [(dofs, moment, layout.of_serial[dofs]) for dofs, moment in model.moments]
         reference = model.reference()
         self.beams = []          # per group with owned elements: (group, owned elements, their entries, mesh, its entry of `parts`)
+        #: per group with rotations and owned elements: its physics (:class:`_Framed`)
+        self.framed = {}
         for k, g in enumerate(model.groups):
             owned = part.owned_beams(rank, k)
             mesh, nodes = beam_submesh(g.mesh, owned)
             if mesh is None:
                 continue
             entries = _entry_of_elements(g)[owned]
-            physics = g.type.make_physics(mesh, [(1, model.scene.beams[e]["section"]) for e in entries])
+            specs = [model.scene.beams[e] for e in entries]
+            sections = [(1, spec["section"]) for spec in specs]
             per_node = g.type.dofs_per_node
             serial = (g.dofs.start + per_node * nodes[:, None] + np.arange(per_node)[None, :]).ravel()
+            if g.rotations.size:
+                # the serial reference triads and rules of the rank's rotation nodes: its mesh nodes,
+                # then its elements' middle nodes (the sub-mesh's rotation nodes in their order)
+                rotation_nodes = np.concatenate([nodes, g.mesh.n_nodes + owned])
+                physics = _Framed(g.type.make_physics(mesh, sections, g.triads[rotation_nodes],
+                                                      [spec.get("force_rule") for spec in specs],
+                                                      [spec.get("virtual_spins") for spec in specs]))
+                serial = np.concatenate([serial, g.rotations.dofs(rotation_nodes, [0, 1, 2])])
+                self.framed[k] = physics
+            else:
+                physics = g.type.make_physics(mesh, sections)
             self.parts.append((physics, serial, layout.of_serial[serial]))
             self.beams.append((k, owned, entries, mesh, len(self.parts) - 1))
         #: the serial unknowns this rank's evaluation reads (sorted): the displacements of its owned
@@ -152,6 +166,26 @@ class OwnedPhysics:
             return np.zeros(0, np.int64), np.zeros(0)
         system = self.parts[0][2]
         return np.tile(system, len(values)), np.concatenate([self.solid.body_force(b) for b in values])
+
+
+class _Framed:
+    """The physics of beams with rotations (``evaluate(d, psi)``, ``sample(d, psi, eta)``) on one
+    vector of unknowns ``[centreline DOFs | ψ of the rotation nodes]``, as the other beam types'."""
+
+    def __init__(self, physics):
+        self.physics, self.n = physics, physics.n_centreline_dofs
+
+    def _split(self, x):
+        return x[:self.n], x[self.n:].reshape(-1, 3)
+
+    def evaluate(self, x, tangent=True):
+        return self.physics.evaluate(*self._split(x), tangent=tangent)
+
+    def sample(self, x, eta):
+        return self.physics.sample(*self._split(x), eta)
+
+    def update(self, psi, spin):
+        return self.physics.update(psi, spin)
 
 
 def _cat(parts, dtype):
@@ -228,6 +262,12 @@ class DistributedSystem:
         self._reference = np.zeros(self.sizes[0])
         leading = self.owned_serial < len(reference)
         self._reference[leading] = reference[self.owned_serial[leading]]
+        # the rotation nodes this rank owns, per group: the places of their three unknowns in its part
+        self._spins = []
+        for k, b in enumerate(model.dofmap.rotations):
+            mine = np.flatnonzero((self.owned_serial >= b.start) & (self.owned_serial < b.stop))
+            if len(mine):
+                self._spins.append((physics.framed[k], mine.reshape(-1, 3)))
         self.last_linear_info = None
         #: over all linear solves so far: their count, KSP iterations, preconditioner set-up and
         #: solve wall seconds (this rank's clock; the set-up is collective)
@@ -241,6 +281,25 @@ class DistributedSystem:
     def reference(self):
         """The base configuration of this rank's unknowns (zero for the multipliers)."""
         return self._reference
+
+    def update(self, z, free, dz):
+        """Apply the Newton increment ``dz`` (on this rank's ``free`` unknowns) to its part ``z``, as
+        :meth:`~mortar1d3d.model.model.Model.update`: additive, but for the rotation nodes, whose
+        increment is a spin Δθ and whose ψ becomes log(exp(Δθ) exp(ψ)) (each node on its owner, no
+        communication)."""
+        if not self._spins:
+            z[free] += dz
+            return
+        step = np.zeros(len(z))
+        step[free] = dz
+        for physics, places in self._spins:
+            spin = step[places]
+            step[places] = 0.0
+            psi = z[places]
+            moved = np.any(spin != 0.0, axis=1)          # the others keep their bits
+            psi[moved] = physics.update(psi, spin)[moved]
+            z[places] = psi
+        z[free] += step[free]
 
     def norm(self, v):
         """The 2-norm of the distributed vector whose part on this rank is ``v``: the ranks' sums
