@@ -343,10 +343,16 @@ def _linear_solver(model, layout, comm, coupling=None, kappa=None):
         symmetric = not (model.pressures or model.moments)
         if penalty_preconditioner() == "aux" and model.scene.coupled and model.groups and model.solid_mesh is not None:
             # the beams' unknowns follow each rank's solid ones in its range
+            from .auxiliary import FOLLOW_SETTINGS, follow_choice
             own_solid = int(np.count_nonzero(owned < 3 * model.n_solid_nodes))
+            # rank 0 estimates the smoothing's weight on the free beam unknowns in the serial order
+            free_beam = np.zeros(0, np.int64)
+            if rank == 0:
+                free_beam = np.setdiff1d(np.arange(3 * model.n_solid_nodes, n), model.fixed_dofs)
             return LinearSolver("aux", symmetric=symmetric, reuse=reuse_preconditioner(), auxiliary={
                 "beam_rows": int(layout.ranges[rank]) + np.arange(own_solid, len(owned)),
-                "solid_modes": [m[:own_solid] for m in modes], "follow": None})
+                "solid_modes": [m[:own_solid] for m in modes], "follow": None,
+                "smoothing": FOLLOW_SETTINGS[follow_choice()], "free_beam_rows": layout.of_serial[free_beam]})
         return LinearSolver("gamg", near_null_space=modes, symmetric=symmetric, reuse=reuse_preconditioner())
     PETSc = petsc()
     first = int(layout.ranges[rank])
