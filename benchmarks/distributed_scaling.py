@@ -43,9 +43,10 @@ import numpy as np
 import mortar1d3d as m13
 
 
-def scene(cells, fibres, steps=None):
-    """The benchmark cube; ``steps``: nonlinear (Saint Venant–Kirchhoff) in that many load steps."""
-    beams, solid = m13.generate.fibre_cube(cells, fibres, 10)
+def scene(cells, fibres, steps=None, elements=10):
+    """The benchmark cube; ``steps``: nonlinear (Saint Venant–Kirchhoff) in that many load steps;
+    ``elements``: Hermite elements per fibre."""
+    beams, solid = m13.generate.fibre_cube(cells, fibres, elements)
     model, analysis = "linear_elastic", {"kinematics": "linear"}
     if steps:
         model, analysis = "saint_venant_kirchhoff", {"kinematics": "nonlinear", "steps": steps}
@@ -129,6 +130,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cells", type=int, default=12)
     parser.add_argument("--fibres", type=int, default=300)
+    parser.add_argument("--fibre-elements", type=int, default=10, metavar="N",
+                        help="elements per fibre (default 10; --fibre-elements equal to --cells keeps a beam "
+                             "element one cell long at every size: the tangent's stencil then stays the same)")
     parser.add_argument("--partition-only", action="store_true")
     parser.add_argument("--replicated-only", action="store_true")
     parser.add_argument("--nonlinear", type=int, default=0, metavar="STEPS",
@@ -153,7 +157,7 @@ def main():
     if args.nonlinear:
         PETSc.Log.begin()
     start = time.perf_counter()
-    result = m13.solve(scene(args.cells, args.fibres, args.nonlinear))
+    result = m13.solve(scene(args.cells, args.fibres, args.nonlinear, args.fibre_elements))
     wall = time.perf_counter() - start
     memory = comm.tompi4py().gather(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, root=0)
     traffic = {}
@@ -175,8 +179,10 @@ def main():
                            for g in result.distributed["traffic"]["ghost_entries"]]}
     if result is not None:
         info = result.distributed
-        print(json.dumps({"ranks": info["ranks"], "cells": args.cells, "fibres": args.fibres, **traffic,
-                          "unknowns": info["unknowns"], "iterations": info["iterations"], "wall": round(wall, 3),
+        print(json.dumps({"ranks": info["ranks"], "cells": args.cells, "fibres": args.fibres,
+                          "fibre_elements": args.fibre_elements, **traffic,
+                          "unknowns": info["unknowns"], "owned": info["owned"], "iterations": info["iterations"],
+                          "wall": round(wall, 3),
                           "ksp": info["ksp"], "pc": info["pc"], "petsc_options": args.petsc_options,
                           # over all solves (Newton: every iteration): KSP iterations, set-up and solve seconds (rank 0)
                           "linear_solves": {k: round(v, 3) for k, v in info["linear_solves"].items()},

@@ -529,7 +529,8 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     info_solve = system.last_linear_info or {}
     if not lagrange:        # (with multipliers made before the solve)
         served = _served_model(model, ops, numbering, comm)
-    info = {"ranks": size, "unknowns": system.n_unknowns, "iterations": info_solve.get("iterations"),
+    info = {"ranks": size, "unknowns": system.n_unknowns, "owned": np.diff(layout.ranges).tolist(),
+            "iterations": info_solve.get("iterations"),
             "ksp": info_solve.get("ksp"), "pc": info_solve.get("pc"), "partition": part.stats,
             "linear_solves": {**system.linear_totals, "builds": system.solver.builds, "reuses": system.solver.reuses},
             "timings": clock.times, "cpu": comm.tompi4py().allgather(clock.cpu),
