@@ -7,13 +7,15 @@
     python benchmarks/distributed_scaling.py --cells 24 --fibres 1200 --replicated-only  # input memory per rank
     mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 12 --fibres 300 --nonlinear 2   # Newton on PETSc
     mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 24 --fibres 1200 --petsc-options "-mortar_penalty_pc gamg"
+    mpiexec --oversubscribe -n 4 python benchmarks/distributed_scaling.py --cells 20 --fibres 1200 --fibre-elements 20 > r.json
+    python benchmarks/memory_fit.py r*.json        # the memory model from such runs (its docstring)
 
 ``--petsc-options`` inserts PETSc options before the solve: ``-mortar_penalty_pc gamg`` takes GAMG on
 the whole penalty system instead of the auxiliary-space sweep (the default), ``-mortar_reuse_pc 0``
 sets a preconditioner up for every Newton solve; the sweep's GAMG and beam solver take options with
 the prefixes ``mortar_aux_`` and ``mortar_beam_`` (docs/distributed.md). One option alone starts with
-a dash: give it as ``--petsc-options=-mortar_aux_ksp_view``. ``linear_solves`` in the
-output: over all solves, their count, CG iterations, set-ups and reuses, and rank 0's set-up and CG
+a dash: give it as ``--petsc-options=-mortar_aux_ksp_view``. ``owned`` in the output: the
+unknowns each rank owns; ``linear_solves``: over all solves, their count, CG iterations, set-ups and reuses, and rank 0's set-up and CG
 seconds.
 
 With ``--nonlinear STEPS`` the analysis is geometrically nonlinear (Saint Venant–Kirchhoff, STEPS
@@ -25,7 +27,7 @@ that other ranks own, once per residual evaluation; the iterate, residual and in
 distributed, nothing is gathered during the loop).
 
 The scene is the benchmark cube (docs/conventions.md §5) with hexahedra, ``--fibres`` straight fibres
-of 10 Hermite elements as one beam entry, clamped at z = 0 and pulled at z = 1, linear (or nonlinear,
+of 10 Hermite elements (``--fibre-elements``) as one beam entry, clamped at z = 0 and pulled at z = 1, linear (or nonlinear,
 above), mortar penalty, CG with the penalty preconditioner to rtol 1e-8. Rank 0 prints the stage times (slowest rank, after a barrier),
 each rank's CPU time per stage up to the barrier (its own work: on a loaded machine the fairer
 measure of balance), the CG iterations, the vector entries each rank receives per matrix product (ghosts), the stored
