@@ -824,7 +824,7 @@ def test_smoothed_follow_matrix_equals_the_serial_smoothed_prolongation(name):
     serial tangent, distributed (supports: identity rows and columns), equals the prolongation of
     the serial AuxiliarySpacePreconditioner (its defaults) to 1e-12 for the three partitions; the
     smoothing moves P by more than 1e-2 of its size (so the comparison sees it)."""
-    from mortar1d3d.distributed.auxiliary import FOLLOW_SETTINGS, jacobi_weight, smoothed_follow
+    from mortar1d3d.distributed.auxiliary import FOLLOW_SETTINGS, beam_spectral_radius, smoothed_follow
     from mortar1d3d.distributed.petsc import coo_matrix
     from mortar1d3d.solvers.preconditioners import AuxiliarySpacePreconditioner
     model, matrices = _follow_matrices(name)
@@ -847,7 +847,7 @@ def test_smoothed_follow_matrix_equals_the_serial_smoothed_prolongation(name):
         A = coo_matrix(COMM, rows[mine], layout.of_serial[K.col[mine]], K.data[mine], sizes, sizes)
         beam_rows = first + np.arange(3 * numbering.solid.count(RANK), last - first)
         free_beam = free[(free >= n_s) & (free < model.n_displacement_dofs)]
-        rho = jacobi_weight(A, layout.of_serial[free_beam] if RANK == 0 else [], COMM)
+        rho = beam_spectral_radius(A, layout.of_serial[free_beam] if RANK == 0 else [], COMM)
         smoothed = smoothed_follow(A, E, beam_rows, rho, FOLLOW_SETTINGS["smoothed"]["drop"])
         P, solid, fixed_solid, fixed_beam = _free_split(model, numbering, layout, smoothed)
         A.destroy(), E.destroy(), smoothed.destroy()

@@ -133,7 +133,7 @@ def follow_matrix(model, ops, kappa, numbering, layout, part, comm, rotation=Non
     return E
 
 
-def jacobi_weight(A, rows, comm):
+def beam_spectral_radius(A, rows, comm):
     """``λ_max(D⁻¹ A_BB)`` of the free beam unknowns, estimated as the serial
     :func:`~mortar1d3d.solvers.preconditioners.smooth_prolongation` does (ARPACK's Lanczos from the
     vector of ones, tolerance 1e-2; the few eigenvalues directly below three unknowns), so that the
@@ -200,7 +200,7 @@ def jacobi_weight(A, rows, comm):
 def smoothed_follow(A, E, beam_rows, rho, drop):
     """``E`` with its beam rows ``P`` moved one damped Jacobi step towards the beams' response to a
     solid motion, ``P − (ρ D)⁻¹ (A_BS + A_BB P)`` (``D``: the diagonal of ``A``'s beam rows, ``ρ``:
-    :func:`jacobi_weight`), then each row's entries below ``drop`` times its largest left out: the
+    :func:`beam_spectral_radius`), then each row's entries below ``drop`` times its largest left out: the
     serial :func:`~mortar1d3d.solvers.preconditioners.smooth_prolongation` on this rank's rows.
     The solid rows (the identity) are kept; fixed beam rows (zero rows of ``E``, identity rows of
     ``A``) stay zero. Returns a new matrix.
@@ -253,7 +253,7 @@ class AuxiliarySweep:
         ``P`` smoothed at every set-up (:func:`smoothed_follow`) with ``drop``, and ``A_aux``'s GAMG
         with the strength ``threshold`` (:data:`FOLLOW_SETTINGS`); None: the lumped ``P``.
     free_beam_rows : (k,) int, optional
-        Rank 0: system rows of the free beam unknowns in the serial order (:func:`jacobi_weight`).
+        Rank 0: system rows of the free beam unknowns in the serial order (:func:`beam_spectral_radius`).
     """
 
     def __init__(self, follow, beam_rows, solid_modes, smoothing=None, free_beam_rows=()):
@@ -270,7 +270,7 @@ class AuxiliarySweep:
         self.A = A
         self.E, defaults = self.lumped, {}
         if self.smoothing is not None:
-            rho = jacobi_weight(A, self.free_beam_rows, comm)
+            rho = beam_spectral_radius(A, self.free_beam_rows, comm)
             if rho is not None:
                 self.E = smoothed_follow(A, self.lumped, self.beam_rows, rho, self.smoothing["drop"])
             defaults["mortar_aux_pc_gamg_threshold"] = self.smoothing["threshold"]
