@@ -7,13 +7,15 @@
     python benchmarks/distributed_scaling.py --cells 24 --fibres 1200 --replicated-only  # input memory per rank
     mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 12 --fibres 300 --nonlinear 2   # Newton on PETSc
     mpiexec -n 2 python benchmarks/distributed_scaling.py --cells 24 --fibres 1200 --petsc-options "-mortar_penalty_pc gamg"
+    mpiexec --oversubscribe -n 4 python benchmarks/distributed_scaling.py --cells 20 --fibres 1200 --fibre-elements 20 > r.json
+    python benchmarks/memory_fit.py r*.json        # the memory model from such runs (its docstring)
 
 ``--petsc-options`` inserts PETSc options before the solve: ``-mortar_penalty_pc gamg`` takes GAMG on
 the whole penalty system instead of the auxiliary-space sweep (the default), ``-mortar_reuse_pc 0``
 sets a preconditioner up for every Newton solve; the sweep's GAMG and beam solver take options with
 the prefixes ``mortar_aux_`` and ``mortar_beam_`` (docs/distributed.md). One option alone starts with
-a dash: give it as ``--petsc-options=-mortar_aux_ksp_view``. ``linear_solves`` in the
-output: over all solves, their count, CG iterations, set-ups and reuses, and rank 0's set-up and CG
+a dash: give it as ``--petsc-options=-mortar_aux_ksp_view``. ``owned`` in the output: the
+unknowns each rank owns; ``linear_solves``: over all solves, their count, CG iterations, set-ups and reuses, and rank 0's set-up and CG
 seconds.
 
 With ``--nonlinear STEPS`` the analysis is geometrically nonlinear (Saint Venant–Kirchhoff, STEPS
@@ -25,7 +27,7 @@ that other ranks own, once per residual evaluation; the iterate, residual and in
 distributed, nothing is gathered during the loop).
 
 The scene is the benchmark cube (docs/conventions.md §5) with hexahedra, ``--fibres`` straight fibres
-of 10 Hermite elements as one beam entry, clamped at z = 0 and pulled at z = 1, linear (or nonlinear,
+of 10 Hermite elements (``--fibre-elements``) as one beam entry, clamped at z = 0 and pulled at z = 1, linear (or nonlinear,
 above), mortar penalty, CG with the penalty preconditioner to rtol 1e-8. Rank 0 prints the stage times (slowest rank, after a barrier),
 each rank's CPU time per stage up to the barrier (its own work: on a loaded machine the fairer
 measure of balance), the CG iterations, the vector entries each rank receives per matrix product (ghosts), the stored
@@ -43,9 +45,10 @@ import numpy as np
 import mortar1d3d as m13
 
 
-def scene(cells, fibres, steps=None):
-    """The benchmark cube; ``steps``: nonlinear (Saint Venant–Kirchhoff) in that many load steps."""
-    beams, solid = m13.generate.fibre_cube(cells, fibres, 10)
+def scene(cells, fibres, steps=None, elements=10):
+    """The benchmark cube; ``steps``: nonlinear (Saint Venant–Kirchhoff) in that many load steps;
+    ``elements``: Hermite elements per fibre."""
+    beams, solid = m13.generate.fibre_cube(cells, fibres, elements)
     model, analysis = "linear_elastic", {"kinematics": "linear"}
     if steps:
         model, analysis = "saint_venant_kirchhoff", {"kinematics": "nonlinear", "steps": steps}
@@ -129,6 +132,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cells", type=int, default=12)
     parser.add_argument("--fibres", type=int, default=300)
+    parser.add_argument("--fibre-elements", type=int, default=10, metavar="N",
+                        help="elements per fibre (default 10; --fibre-elements equal to --cells keeps a beam "
+                             "element one cell long at every size: the tangent's stencil then stays the same)")
     parser.add_argument("--partition-only", action="store_true")
     parser.add_argument("--replicated-only", action="store_true")
     parser.add_argument("--nonlinear", type=int, default=0, metavar="STEPS",
@@ -153,7 +159,7 @@ def main():
     if args.nonlinear:
         PETSc.Log.begin()
     start = time.perf_counter()
-    result = m13.solve(scene(args.cells, args.fibres, args.nonlinear))
+    result = m13.solve(scene(args.cells, args.fibres, args.nonlinear, args.fibre_elements))
     wall = time.perf_counter() - start
     memory = comm.tompi4py().gather(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, root=0)
     traffic = {}
@@ -175,8 +181,10 @@ def main():
                            for g in result.distributed["traffic"]["ghost_entries"]]}
     if result is not None:
         info = result.distributed
-        print(json.dumps({"ranks": info["ranks"], "cells": args.cells, "fibres": args.fibres, **traffic,
-                          "unknowns": info["unknowns"], "iterations": info["iterations"], "wall": round(wall, 3),
+        print(json.dumps({"ranks": info["ranks"], "cells": args.cells, "fibres": args.fibres,
+                          "fibre_elements": args.fibre_elements, **traffic,
+                          "unknowns": info["unknowns"], "owned": info["owned"], "iterations": info["iterations"],
+                          "wall": round(wall, 3),
                           "ksp": info["ksp"], "pc": info["pc"], "petsc_options": args.petsc_options,
                           # over all solves (Newton: every iteration): KSP iterations, set-up and solve seconds (rank 0)
                           "linear_solves": {k: round(v, 3) for k, v in info["linear_solves"].items()},

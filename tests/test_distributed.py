@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 import mortar1d3d as m13
 from mortar1d3d.distributed import available
@@ -737,6 +738,55 @@ def test_parallel_vtu_line_load_of_the_gauss_point_penalty():
 # --------------------------------------------------------------------------------------------
 # the penalty preconditioners: the auxiliary-space sweep (default) and GAMG on the whole system
 # --------------------------------------------------------------------------------------------
+def _follow_matrices(name):
+    """For the test scenes of the follow operator: the serial model and, per partition of PARTS,
+    ``(label, numbering, layout, E)`` with the distributed lumped ``E`` (:func:`follow_matrix`)."""
+    from mortar1d3d.distributed.auxiliary import follow_matrix
+    from mortar1d3d.distributed.petsc import coo_matrix
+    from mortar1d3d.distributed.solve import SystemLayout, _group_operators
+    from mortar1d3d.model.model import Model
+    scene = _rebar_with("clamp")() if name == "clamp" else SOLVE_SCENES[name]()
+    model = Model(build(scene)).prepare()
+    meshes = [g.mesh for g in model.groups]
+
+    def parts():
+        for label, parts in PARTS:
+            if parts is None:
+                part = partition(model.solid_mesh, meshes, SIZE, "metis")
+            else:
+                solid_part, beam_part = parts(model.solid_mesh, meshes, SIZE)
+                part = partition(model.solid_mesh, meshes, SIZE, solid_part=solid_part, beam_part=beam_part)
+            numbering = Numbering.of(part, model.solid_mesh, meshes, scene.coupling["lm"])
+            layout = SystemLayout.of(numbering, model.dofmap, [g.type.dofs_per_node for g in model.groups])
+            ops, kappa = _group_operators(model, part, numbering, COMM)
+            rotation = None
+            if model.basis:
+                T = model.basis.matrix_T(model.n_displacement_dofs).tocoo()
+                first, last = layout.ranges[RANK], layout.ranges[RANK + 1]
+                rows = layout.of_serial[T.row]
+                mine = (rows >= first) & (rows < last)
+                sizes = (int(last - first), int(layout.ranges[-1]))
+                rotation = coo_matrix(COMM, rows[mine], layout.of_serial[T.col[mine]], T.data[mine], sizes, sizes)
+            yield label, numbering, layout, follow_matrix(model, ops, kappa, numbering, layout, part, COMM,
+                                                          rotation=rotation)
+    return model, parts()
+
+
+def _free_split(model, numbering, layout, E):
+    """``E`` gathered and split as the serial prolongation: ``(P, solid, fixed_solid_columns,
+    fixed_beam_rows)``, P the free beam rows × the free solid columns in the serial order, solid
+    the solid rows (every rank)."""
+    from mortar1d3d.distributed.petsc import gather_matrix
+    n_s = 3 * model.n_solid_nodes
+    free = model.free[model.free < model.n_displacement_dofs]
+    fixed = np.setdiff1d(np.arange(model.n_displacement_dofs), free)
+    E = gather_matrix(E)
+    solid_cols = numbering.solid.dofs(np.arange(n_s), 3)
+    P = E[layout.of_serial[free[free >= n_s]]][:, solid_cols[free[free < n_s]]]
+    solid = E[layout.of_serial[np.arange(n_s)]][:, solid_cols].toarray()
+    return P, solid, E[:, solid_cols[fixed[fixed < n_s]]], E[layout.of_serial[fixed[fixed >= n_s]]]
+
+
 @pytest.mark.parametrize("name", ["rebar", "cube", "clamp"])
 def test_follow_matrix_equals_the_serial_follow_operator(name):
     """E = [I; P] formed by PETSc from the distributed M and κ (and the chords of each rank's beam
@@ -744,55 +794,82 @@ def test_follow_matrix_equals_the_serial_follow_operator(name):
     (Model._follow_split: free beam rows × free solid columns, clamped tangents in their frames) to
     1e-12, for the three partitions; the solid rows are the identity, fixed solid unknowns carry
     no beam, fixed beam rows are zero."""
-    from mortar1d3d.distributed.auxiliary import follow_matrix
-    from mortar1d3d.distributed.petsc import coo_matrix, gather_matrix
-    from mortar1d3d.distributed.solve import SystemLayout, _group_operators
-    from mortar1d3d.model.model import Model
-    scene = _rebar_with("clamp")() if name == "clamp" else SOLVE_SCENES[name]()
-    model = Model(build(scene)).prepare()
-    follow = model._follow_split()
-    n_s = 3 * model.n_solid_nodes
-    free = model.free[model.free < model.n_displacement_dofs]
-    fixed = np.setdiff1d(np.arange(model.n_displacement_dofs), free)
-    meshes = [g.mesh for g in model.groups]
-    for label, parts in PARTS:
-        if parts is None:
-            part = partition(model.solid_mesh, meshes, SIZE, "metis")
-        else:
-            solid_part, beam_part = parts(model.solid_mesh, meshes, SIZE)
-            part = partition(model.solid_mesh, meshes, SIZE, solid_part=solid_part, beam_part=beam_part)
-        numbering = Numbering.of(part, model.solid_mesh, meshes, scene.coupling["lm"])
-        layout = SystemLayout.of(numbering, model.dofmap, [g.type.dofs_per_node for g in model.groups])
-        ops, kappa = _group_operators(model, part, numbering, COMM)
-        rotation = None
-        if model.basis:
-            T = model.basis.matrix_T(model.n_displacement_dofs).tocoo()
-            first, last = layout.ranges[RANK], layout.ranges[RANK + 1]
-            rows = layout.of_serial[T.row]
-            mine = (rows >= first) & (rows < last)
-            sizes = (int(last - first), int(layout.ranges[-1]))
-            rotation = coo_matrix(COMM, rows[mine], layout.of_serial[T.col[mine]], T.data[mine], sizes, sizes)
-        E = gather_matrix(follow_matrix(model, ops, kappa, numbering, layout, part, COMM, rotation=rotation))
-        solid_cols = numbering.solid.dofs(np.arange(n_s), 3)
-        beam = free[free >= n_s]
-        P = E[layout.of_serial[beam]][:, solid_cols[free[free < n_s]]]
-        reference = follow["prolongation"]
+    model, matrices = _follow_matrices(name)
+    reference = model._follow_split()["prolongation"]
+    for label, numbering, layout, E in matrices:
+        P, solid, fixed_solid, fixed_beam = _free_split(model, numbering, layout, E)
+        E.destroy()
         assert abs(P - reference).max() <= 1e-12 * abs(reference).max(), label
         assert abs(P).max() > 0 and reference.nnz > 0
-        solid = E[layout.of_serial[np.arange(n_s)]][:, solid_cols].toarray()
-        assert np.array_equal(solid, np.eye(n_s)), label
-        fixed_solid = fixed[fixed < n_s]
-        assert E[:, solid_cols[fixed_solid]].nnz == len(fixed_solid), label
-        fixed_beam = fixed[fixed >= n_s]
-        assert E[layout.of_serial[fixed_beam]].nnz == 0, label
+        assert np.array_equal(solid, np.eye(len(solid))), label
+        assert fixed_solid.nnz == fixed_solid.shape[1], label
+        assert fixed_beam.nnz == 0, label
         if name == "clamp":
-            assert len(fixed_beam) > 0
+            assert fixed_beam.shape[0] > 0
+
+
+def test_smoothed_follow_settings_are_the_serial_defaults():
+    """-mortar_follow smoothed (the default) takes the serial AuxiliarySpacePreconditioner's
+    defaults (one smoothing step, drop, AMG strength θ), lumped its LUMPED settings."""
+    import inspect
+    from mortar1d3d.distributed.auxiliary import FOLLOW_SETTINGS, follow_choice
+    from mortar1d3d.solvers.preconditioners import AuxiliarySpacePreconditioner
+    serial = {k: v.default for k, v in inspect.signature(AuxiliarySpacePreconditioner).parameters.items()}
+    assert serial["smoothing"] == 1 and AuxiliarySpacePreconditioner.LUMPED["smoothing"] == 0
+    assert FOLLOW_SETTINGS["smoothed"] == {"drop": serial["drop"], "threshold": serial["theta"]}
+    assert FOLLOW_SETTINGS["lumped"] is None
+    assert follow_choice() == "smoothed"
+    with _petsc_options(mortar_follow="lumped"):
+        assert follow_choice() == "lumped"
+    with _petsc_options(mortar_follow="jacobi"), pytest.raises(ValueError, match="expected smoothed or lumped"):
+        follow_choice()
+
+
+@pytest.mark.parametrize("name", ["rebar", "cube", "clamp"])
+def test_smoothed_follow_matrix_equals_the_serial_smoothed_prolongation(name):
+    """The smoothed E of the sweep (one damped Jacobi step of P towards the beams' response, the
+    weak entries dropped; the weight ω estimated by rank 0 with distributed products) from the
+    serial tangent, distributed (supports: identity rows and columns), equals the prolongation of
+    the serial AuxiliarySpacePreconditioner (its defaults) to 1e-12 for the three partitions; the
+    smoothing moves P by more than 1e-2 of its size (so the comparison sees it)."""
+    from mortar1d3d.distributed.auxiliary import FOLLOW_SETTINGS, beam_spectral_radius, smoothed_follow
+    from mortar1d3d.distributed.petsc import coo_matrix
+    from mortar1d3d.solvers.preconditioners import AuxiliarySpacePreconditioner
+    model, matrices = _follow_matrices(name)
+    _, K = model.residual(np.zeros(model.n_unknowns), 1.0)
+    free, split = model.free, model._follow_split()
+    reference = AuxiliarySpacePreconditioner(K[free][:, free].tocsr(), split["solid"], split["beam"],
+                                             split["prolongation"]).prolongation
+    lumped = split["prolongation"]
+    assert abs(reference - lumped).max() > 1e-2 * abs(reference).max()
+    # the supports as the distributed system holds them: identity rows and columns
+    keep = np.zeros(K.shape[0])
+    keep[free] = 1.0
+    K = (sp.diags(keep) @ K @ sp.diags(keep) + sp.diags(1.0 - keep)).tocoo()
+    n_s = 3 * model.n_solid_nodes
+    for label, numbering, layout, E in matrices:
+        first, last = int(layout.ranges[RANK]), int(layout.ranges[RANK + 1])
+        rows = layout.of_serial[K.row]
+        mine = (rows >= first) & (rows < last)
+        sizes = (last - first, int(layout.ranges[-1]))
+        A = coo_matrix(COMM, rows[mine], layout.of_serial[K.col[mine]], K.data[mine], sizes, sizes)
+        beam_rows = first + np.arange(3 * numbering.solid.count(RANK), last - first)
+        free_beam = free[(free >= n_s) & (free < model.n_displacement_dofs)]
+        rho = beam_spectral_radius(A, layout.of_serial[free_beam] if RANK == 0 else [], COMM)
+        smoothed = smoothed_follow(A, E, beam_rows, rho, FOLLOW_SETTINGS["smoothed"]["drop"])
+        P, solid, fixed_solid, fixed_beam = _free_split(model, numbering, layout, smoothed)
+        A.destroy(), E.destroy(), smoothed.destroy()
+        assert abs(P - reference).max() <= 1e-12 * abs(reference).max(), (label, abs(P - reference).max())
+        assert P.nnz == reference.nnz, label
+        assert np.array_equal(solid, np.eye(len(solid))), label
+        assert fixed_solid.nnz == fixed_solid.shape[1] and fixed_beam.nnz == 0, label
 
 
 def test_auxiliary_space_needs_few_iterations_where_gamg_needs_many():
     """The scene of benchmarks/distributed_scaling.py (linear, rtol 1e-8) in 6³ hex8 with 40
-    fibres: CG with the auxiliary-space sweep converges in at most 30 iterations (19, 23, 21 on 1,
-    2, 3 ranks), GAMG on the whole system needs more than five times as many (252, 236, 260); both
+    fibres: CG with the auxiliary-space sweep converges in at most 30 iterations (13, 21, 18 on 1,
+    2, 3 ranks with the smoothed follow operator, the default; 19, 23, 21 with -mortar_follow lumped),
+    GAMG on the whole system needs more than five times as many (252, 236, 260); both
     reach the serial direct solution to 1e-6 (the iterative solves' tolerance times the
     conditioning)."""
     from mortar1d3d.distributed.solve import solve_distributed

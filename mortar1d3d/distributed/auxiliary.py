@@ -20,11 +20,34 @@ applies). PETSc options: prefix ``mortar_aux_`` for the KSP/GAMG of ``A_aux`` (e
 ``-mortar_aux_pc_gamg_threshold``) and ``mortar_beam_`` for the beam block (e.g.
 ``-mortar_beam_pc_type lu -mortar_beam_pc_factor_mat_solver_type mumps`` for an exact solve of
 cut beams).
+
+``P`` is smoothed at every set-up as the serial default does
+(:func:`~mortar1d3d.solvers.preconditioners.smooth_prolongation`): one damped Jacobi step towards
+the beams' response to a solid motion, ``P ← P − ω D⁻¹ (A_BS + A_BB P)`` with ``D = diag(A_BB)``
+and ``ω = 1 / λ_max(D⁻¹ A_BB)`` estimated as the serial code does, then the entries below
+``1e-3`` of their row's largest dropped, and GAMG of ``A_aux`` with the serial strength threshold
+(``-mortar_aux_pc_gamg_threshold 0.02`` unless given). ``-mortar_follow lumped`` takes the lumped
+``P`` as it is and GAMG without a threshold (the serial ``AuxiliarySpacePreconditioner.LUMPED``).
 """
 import numpy as np
+import scipy.sparse as sp
 
 from ..physics.coupling import chord_triplets
-from .petsc import coo_matrix, petsc
+from .petsc import Entries, coo_matrix, petsc
+
+#: the PETSc option choosing the follow operator of the sweep: ``smoothed`` (default) or ``lumped``
+FOLLOW_OPTION = "mortar_follow"
+#: the serial defaults of :class:`~mortar1d3d.solvers.preconditioners.AuxiliarySpacePreconditioner`
+#: for each choice: relative drop of the smoothed P, the GAMG strength threshold of A_aux
+FOLLOW_SETTINGS = {"smoothed": {"drop": 1e-3, "threshold": 0.02}, "lumped": None}
+
+
+def follow_choice():
+    """``smoothed`` or ``lumped``, from the PETSc option ``-mortar_follow`` (default ``smoothed``)."""
+    value = petsc().Options().getString(FOLLOW_OPTION, "smoothed")
+    if value not in FOLLOW_SETTINGS:
+        raise ValueError(f"-{FOLLOW_OPTION}: expected smoothed or lumped, got {value!r}")
+    return value
 
 
 def follow_matrix(model, ops, kappa, numbering, layout, part, comm, rotation=None):
@@ -110,6 +133,110 @@ def follow_matrix(model, ops, kappa, numbering, layout, part, comm, rotation=Non
     return E
 
 
+def beam_spectral_radius(A, rows, comm):
+    """``λ_max(D⁻¹ A_BB)`` of the free beam unknowns, estimated as the serial
+    :func:`~mortar1d3d.solvers.preconditioners.smooth_prolongation` does (ARPACK's Lanczos from the
+    vector of ones, tolerance 1e-2; the few eigenvalues directly below three unknowns), so that the
+    smoothed ``P`` is the serial one whatever the ranks: rank 0 runs the iteration on vectors of the
+    free beam unknowns in their serial order, every product with ``A`` is distributed (the other
+    ranks take part in each). ``None`` without free beam unknowns.
+
+    Parameters
+    ----------
+    A : PETSc.Mat
+        The system (supports: identity rows and columns).
+    rows : (k,) int
+        Rank 0: the system rows of the free beam unknowns, in the serial order; other ranks: none.
+    """
+    mpi = comm.tompi4py()
+    n = mpi.bcast(len(rows) if comm.getRank() == 0 else None, root=0)
+    if n == 0:
+        return None
+    x, y = A.createVecs()
+    entries = Entries(x, rows if comm.getRank() == 0 else [])
+    diagonal = A.getDiagonal()
+    scale = 1.0 / np.sqrt(entries(diagonal))
+    diagonal.destroy()
+
+    def product(v):
+        """``(D^-½ A_BB D^-½) v`` (collective; ``v`` is read on rank 0 only)."""
+        PETSc = petsc()
+        x.set(0.0)
+        if len(scale):
+            entries.values.setArray(scale * v)
+        entries.scatter.scatter(entries.values, x, addv=PETSc.InsertMode.INSERT_VALUES, mode=PETSc.ScatterMode.REVERSE)
+        A.mult(x, y)
+        return scale * entries(y)
+
+    try:
+        if comm.getRank() == 0:
+            import scipy.sparse.linalg as spla
+            try:
+                def matvec(v):
+                    mpi.bcast(True, root=0)
+                    return product(np.ravel(v))
+                if n < 3:
+                    columns = np.column_stack([matvec(e) for e in np.eye(n)])
+                    found = float(np.linalg.eigvalsh(columns).max())
+                else:
+                    operator = spla.LinearOperator((n, n), matvec=matvec, dtype=np.float64)
+                    found = float(spla.eigsh(operator, k=1, which="LA", v0=np.ones(n), tol=1e-2,
+                                             return_eigenvectors=False)[0])
+            except Exception as exc:            # every rank raises it, none waits for a product
+                found = exc
+            mpi.bcast(False, root=0)
+            found = mpi.bcast(found, root=0)
+        else:
+            while mpi.bcast(None, root=0):
+                product(None)
+            found = mpi.bcast(None, root=0)
+    finally:
+        x.destroy(), y.destroy(), entries.scatter.destroy(), entries.values.destroy()
+    if isinstance(found, Exception):
+        raise found
+    return found
+
+
+def smoothed_follow(A, E, beam_rows, rho, drop):
+    """``E`` with its beam rows ``P`` moved one damped Jacobi step towards the beams' response to a
+    solid motion, ``P − (ρ D)⁻¹ (A_BS + A_BB P)`` (``D``: the diagonal of ``A``'s beam rows, ``ρ``:
+    :func:`beam_spectral_radius`), then each row's entries below ``drop`` times its largest left out: the
+    serial :func:`~mortar1d3d.solvers.preconditioners.smooth_prolongation` on this rank's rows.
+    The solid rows (the identity) are kept; fixed beam rows (zero rows of ``E``, identity rows of
+    ``A``) stay zero. Returns a new matrix.
+    """
+    PETSc = petsc()
+    first, last = A.getOwnershipRange()
+    local = np.asarray(beam_rows) - first
+    n_local, n_solid = last - first, E.getSize()[1]
+
+    def rows_of(M):
+        indptr, indices, data = M.getValuesCSR()
+        return sp.csr_matrix((data, indices, indptr), shape=(n_local, n_solid))
+
+    product = A.matMult(E)                      # beam rows: A_BS + A_BB P
+    held, moved = rows_of(E), rows_of(product)[local]
+    product.destroy()
+    d = A.getDiagonal()
+    jacobi = sp.diags(1.0 / (rho * d.getArray()[local]))
+    d.destroy()
+    P = (held[local] - jacobi @ moved).tocsr()
+    if drop > 0:
+        size = np.abs(P)
+        largest = size.max(axis=1).toarray().ravel()
+        keep = size.data >= drop * np.repeat(largest, np.diff(P.indptr))
+        P = sp.csr_matrix((P.data * keep, P.indices, P.indptr), shape=P.shape)
+    P.eliminate_zeros()
+    rows = sp.vstack([held[:local[0] if len(local) else n_local], P], format="csr")
+    rows.sort_indices()
+    smoothed = PETSc.Mat().create(comm=A.getComm())
+    smoothed.setSizes(E.getSizes())
+    smoothed.setType(PETSc.Mat.Type.MPIAIJ)           # as A, also on one rank (MatPtAP wants the same type)
+    smoothed.setPreallocationCSR((rows.indptr.astype(PETSc.IntType), rows.indices.astype(PETSc.IntType), rows.data))
+    smoothed.assemble()
+    return smoothed
+
+
 class AuxiliarySweep:
     """The python context of a ``PCPYTHON``: the symmetric sweep beam → auxiliary space → beam
     (module docstring), set up from the preconditioner's matrix.
@@ -117,16 +244,22 @@ class AuxiliarySweep:
     Parameters
     ----------
     follow : PETSc.Mat
-        ``E`` (system rows × solid field), in the unknowns' basis.
+        ``E`` (system rows × solid field), in the unknowns' basis, with the lumped ``P``.
     beam_rows : (k,) int
         System rows of this rank's beam unknowns.
     solid_modes : list of (3 n_solid_owned,) arrays
         This rank's entries of the solid's rigid-body modes (near null space of ``A_aux``).
+    smoothing : dict, optional
+        ``P`` smoothed at every set-up (:func:`smoothed_follow`) with ``drop``, and ``A_aux``'s GAMG
+        with the strength ``threshold`` (:data:`FOLLOW_SETTINGS`); None: the lumped ``P``.
+    free_beam_rows : (k,) int, optional
+        Rank 0: system rows of the free beam unknowns in the serial order (:func:`beam_spectral_radius`).
     """
 
-    def __init__(self, follow, beam_rows, solid_modes):
-        self.E, self.beam_rows, self.modes = follow, np.asarray(beam_rows), solid_modes
-        self.amg = self.beam = self.A = None
+    def __init__(self, follow, beam_rows, solid_modes, smoothing=None, free_beam_rows=()):
+        self.lumped, self.beam_rows, self.modes = follow, np.asarray(beam_rows), solid_modes
+        self.smoothing, self.free_beam_rows = smoothing, np.asarray(free_beam_rows, dtype=np.int64)
+        self.amg = self.beam = self.A = self.E = None
 
     def setUp(self, pc):
         from .linear import null_space
@@ -135,21 +268,21 @@ class AuxiliarySweep:
         _, A = pc.getOperators()
         comm = A.getComm()
         self.A = A
+        self.E, defaults = self.lumped, {}
+        if self.smoothing is not None:
+            rho = beam_spectral_radius(A, self.free_beam_rows, comm)
+            if rho is not None:
+                self.E = smoothed_follow(A, self.lumped, self.beam_rows, rho, self.smoothing["drop"])
+            defaults["mortar_aux_pc_gamg_threshold"] = self.smoothing["threshold"]
         aux = A.ptap(self.E)
         aux.setBlockSize(3)
         aux.setNearNullSpace(null_space(self.modes, comm))
-        self.amg = _preonly(aux, "mortar_aux_", PETSc.PC.Type.GAMG)
+        with _defaults(defaults):
+            self.amg = _preonly(aux, "mortar_aux_", PETSc.PC.Type.GAMG)
         index = PETSc.IS().createGeneral(self.beam_rows.astype(PETSc.IntType), comm=comm)
         beam = A.createSubMatrix(index, index)
-        options = PETSc.Options()
-        ours = not options.hasName("mortar_beam_sub_pc_type")
-        if ours:
-            options.setValue("mortar_beam_sub_pc_type", "lu")      # each rank's beam block: exact
-        try:
+        with _defaults({"mortar_beam_sub_pc_type": "lu"}):      # each rank's beam block: exact
             self.beam = _preonly(beam, "mortar_beam_", PETSc.PC.Type.BJACOBI)
-        finally:
-            if ours:        # read by the set-up above; PETSc's options are the process's, not ours to keep
-                options.delValue("mortar_beam_sub_pc_type")
         self._rb, self._xb = beam.createVecs()
         aux.destroy(), beam.destroy()                   # the KSPs keep their references
         self._r = A.createVecLeft()
@@ -178,12 +311,33 @@ class AuxiliarySweep:
         self._beam_solve(res, y)
 
     def destroy(self, pc=None):
+        if self.E is not None and self.E is not self.lumped:
+            self.E.destroy()                            # the smoothed E of the last set-up (the lumped is the caller's)
+        self.E = None
         for name in ("amg", "beam", "_rb", "_xb", "_r", "_s", "_z", "_scatter"):
             obj = getattr(self, name, None)
             if obj is not None:
                 obj.destroy()
             setattr(self, name, None)
         self.A = None
+
+
+class _defaults:
+    """PETSc options set for a ``with`` block where the user has not given them (the set-up inside
+    reads them); PETSc's options are the process's, so ours are removed again afterwards."""
+
+    def __init__(self, values):
+        self.values, self.ours = values, []
+
+    def __enter__(self):
+        options = petsc().Options()
+        self.ours = [k for k in self.values if not options.hasName(k)]
+        for key in self.ours:
+            options.setValue(key, self.values[key])
+
+    def __exit__(self, *exc):
+        for key in self.ours:
+            petsc().Options().delValue(key)
 
 
 def _preonly(A, prefix, pc_type):

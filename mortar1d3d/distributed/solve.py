@@ -354,10 +354,16 @@ def _linear_solver(model, layout, comm, coupling=None, kappa=None):
             model.linear or all(g.type.symmetric_tangent for g in model.groups))
         if penalty_preconditioner() == "aux" and model.scene.coupled and model.groups and model.solid_mesh is not None:
             # the beams' unknowns follow each rank's solid ones in its range
+            from .auxiliary import FOLLOW_SETTINGS, follow_choice
             own_solid = int(np.count_nonzero(owned < 3 * model.n_solid_nodes))
+            # rank 0 estimates the smoothing's weight on the free beam unknowns in the serial order
+            free_beam = np.zeros(0, np.int64)
+            if rank == 0:
+                free_beam = np.setdiff1d(np.arange(3 * model.n_solid_nodes, n), model.fixed_dofs)
             return LinearSolver("aux", symmetric=symmetric, reuse=reuse_preconditioner(), auxiliary={
                 "beam_rows": int(layout.ranges[rank]) + np.arange(own_solid, len(owned)),
-                "solid_modes": [m[:own_solid] for m in modes], "follow": None})
+                "solid_modes": [m[:own_solid] for m in modes], "follow": None,
+                "smoothing": FOLLOW_SETTINGS[follow_choice()], "free_beam_rows": layout.of_serial[free_beam]})
         return LinearSolver("gamg", near_null_space=modes, symmetric=symmetric, reuse=reuse_preconditioner())
     PETSc = petsc()
     first = int(layout.ranges[rank])
@@ -535,7 +541,8 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     info_solve = system.last_linear_info or {}
     if not lagrange:        # (with multipliers made before the solve)
         served = _served_model(model, ops, numbering, comm)
-    info = {"ranks": size, "unknowns": system.n_unknowns, "iterations": info_solve.get("iterations"),
+    info = {"ranks": size, "unknowns": system.n_unknowns, "owned": np.diff(layout.ranges).tolist(),
+            "iterations": info_solve.get("iterations"),
             "ksp": info_solve.get("ksp"), "pc": info_solve.get("pc"), "partition": part.stats,
             "linear_solves": {**system.linear_totals, "builds": system.solver.builds, "reuses": system.solver.reuses},
             "timings": clock.times, "cpu": comm.tompi4py().allgather(clock.cpu),
