@@ -98,7 +98,8 @@ class AuxiliarySpacePreconditioner:
     (benchmarks/penalty_spectrum.py). The V-cycle then limits: with θ = 0 it still needs 20; with
     θ = 0.02 and the AMG's prolongation smoothed on the strong entries only (``filter_entries``,
     which keeps its coarse level and set-up small) CG on the whole system needs 12 iterations at
-    n = 20 (the solid alone 11) and 20 at n = 40 (solid 12), against 20 and 33 with ``LUMPED``
+    n = 20 (the solid alone 11) and 20 at n = 40 (solid 12; 19 since :func:`largest_eigenvalue`),
+    against 20 and 33 with ``LUMPED``
     (benchmarks/README.md, "A smoothed follow operator"). Smoothing costs one product
     ``A_BB P`` and a Lanczos estimate of ``λ_max(D⁻¹ A_BB)`` in the set-up.
 
@@ -269,10 +270,12 @@ def largest_eigenvalue(A, steps=LANCZOS_STEPS):
     """The largest Ritz value of ``steps`` Lanczos steps on the symmetric matrix ``A`` from the
     vector of ones (deterministic; the exact largest eigenvalue when ``A`` is that small).
 
-    A lower bound of ``λ_max`` that converges fast from below. On the scaled beam block of
-    ``fibre_cube(20, 1000, 20)`` (126,000 DOFs, 1000 identical fibres, so the top eigenvalue is
-    highly multiple) 10 steps give 2.804 against ARPACK's 2.816 at tolerance 1e-2, for a third of
-    its CPU seconds (ARPACK's restarts were 0.57 s of a 3.4 s set-up there).
+    A lower bound of ``λ_max`` that converges fast from below. It replaced ARPACK (tolerance 1e-2),
+    whose restarts were slow on the scaled beam block of ``fibre_cube(n, 1000, 20)`` (126,000 DOFs,
+    1000 fibres alike, so the top of the spectrum is a tight cluster): the ``"prolongation smoothing"`` of
+    :attr:`AuxiliarySpacePreconditioner.timings` at n = 20 went from 3.4-5.4 to 2.2 wall seconds at
+    a load of 8, with the same 12 CG iterations (19 instead of 20 at n = 40; benchmarks/README.md,
+    "Cheaper set-up and applications").
     """
     n = A.shape[0]
     if n <= steps:
