@@ -247,3 +247,43 @@ def test_smoothed_auxiliary_space_needs_fewer_iterations_than_the_lumped_one(sys
         assert np.linalg.norm(x - x_direct) <= 1e-6 * np.linalg.norm(x_direct)
         counts.append(info["iterations"])
     assert counts[0] <= smoothed < lumped <= counts[1]
+
+
+def test_largest_eigenvalue_by_lanczos_from_the_ones_vector():
+    """A lower bound of λ_max close to it after 10 steps; exact for matrices of at most 10 rows and
+    when the ones vector spans an invariant subspace (the recurrence stops early)."""
+    from mortar1d3d.solvers.preconditioners import largest_eigenvalue
+    spectrum = np.linspace(0.5, 3.0, 400)
+    estimate = largest_eigenvalue(sp.diags(spectrum))
+    assert estimate <= 3.0 and estimate >= 0.98 * 3.0
+    assert largest_eigenvalue(sp.diags(spectrum), steps=40) >= estimate
+    small = np.diag([1.0, 4.0, 2.0]) + 0.5 * (np.eye(3, k=1) + np.eye(3, k=-1))
+    assert largest_eigenvalue(sp.csr_matrix(small)) == pytest.approx(np.linalg.eigvalsh(small).max(), rel=1e-14)
+    # a periodic chain: row sums 0, so the ones vector is an eigenvector (eigenvalue 0);
+    # the Ritz value of a one-dimensional Krylov space is that eigenvalue, not λ_max = 4 (a lower bound)
+    ring = 2.0 * sp.eye(50) - sp.eye(50, k=1) - sp.eye(50, k=-1) - sp.eye(50, k=49) - sp.eye(50, k=-49)
+    assert largest_eigenvalue(ring.tocsr()) == pytest.approx(0.0, abs=1e-12)
+
+
+def test_application_is_the_symmetric_sweep_beam_aux_beam(fibre_system):
+    """The application (two beam solves, products with A_SB and A_BS, one V-cycle) equals the sweep
+    written out: beam solve, auxiliary-space correction through E = [I; P], beam solve of the new
+    residual, to round-off; and it is symmetric."""
+    from mortar1d3d.solvers.linear import AuxiliarySpacePreconditioner
+    A, b, R, split = fibre_system
+    s, bm = split["solid"], split["beam"]
+    pre = AuxiliarySpacePreconditioner(A, s, bm, split["prolongation"], R[s], block_size=3)
+    P = pre.prolongation
+    rng = np.random.default_rng(21)
+    r, q = rng.standard_normal((2, A.shape[0]))
+    x = np.zeros(A.shape[0])
+    x[bm] = pre._beam_factor.solve(r[bm])
+    residual = r - A @ x
+    z = pre._cycle.matvec(residual[s] + P.T @ residual[bm])
+    x[s] += z
+    x[bm] += P @ z
+    x[bm] += pre._beam_factor.solve((r - A @ x)[bm])
+    got = pre.matvec(r)
+    assert np.abs(got - x).max() <= 1e-9 * np.abs(x).max()
+    assert abs(q @ pre.matvec(r) - r @ pre.matvec(q)) <= 1e-10 * abs(r @ got)
+    assert r @ got > 0

@@ -4,7 +4,6 @@ import time
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ._common import check_square, split_dofs
 from .amg import build_amg
@@ -50,6 +49,9 @@ class AuxiliarySpacePreconditioner:
         prolongation.
     prolongation : (n_b, n_s) scipy.sparse.csr_matrix
         That ``P``.
+    A_bs, A_sb : scipy.sparse.csr_matrix, (n_b, n_s) and (n_s, n_b)
+        The coupling blocks of ``A`` (all an application multiplies with besides the V-cycle and the
+        beam solves).
     amg : pyamg.multilevel.MultilevelSolver
         Hierarchy of ``A_aux``.
     setup_time : float
@@ -96,7 +98,8 @@ class AuxiliarySpacePreconditioner:
     (benchmarks/penalty_spectrum.py). The V-cycle then limits: with θ = 0 it still needs 20; with
     θ = 0.02 and the AMG's prolongation smoothed on the strong entries only (``filter_entries``,
     which keeps its coarse level and set-up small) CG on the whole system needs 12 iterations at
-    n = 20 (the solid alone 11) and 20 at n = 40 (solid 12), against 20 and 33 with ``LUMPED``
+    n = 20 (the solid alone 11) and 20 at n = 40 (solid 12; 19 since :func:`largest_eigenvalue`),
+    against 20 and 33 with ``LUMPED``
     (benchmarks/README.md, "A smoothed follow operator"). Smoothing costs one product
     ``A_BB P`` and a Lanczos estimate of ``λ_max(D⁻¹ A_BB)`` in the set-up.
 
@@ -140,19 +143,25 @@ class AuxiliarySpacePreconditioner:
             raise ValueError(f"smoothing must be 0, 1 or 2 (Jacobi steps on the prolongation), got {smoothing!r}")
         self.A = A
         self.shape = A.shape
-        self.A_beam_rows = A[self._b].tocsr()                   # rows of the beam DOFs
-        self.A_beam_cols = self.A_beam_rows.T.tocsr()            # A is symmetric
-        A_bb = self.A_beam_rows[:, self._b]
-        A_sb = self.A_beam_cols[self._s]
+        beam_rows = A[self._b].tocsr()                           # rows of the beam DOFs
+        A_bb = beam_rows[:, self._b].tocsr()
+        self.A_bs = beam_rows[:, self._s].tocsr()
+        self.A_sb = self.A_bs.T.tocsr()                          # A is symmetric
+        del beam_rows
         t = time.perf_counter()
-        P = smooth_prolongation(A_bb, self.A_beam_rows[:, self._s], prolongation.tocsr(), smoothing, drop)
+        P = smooth_prolongation(A_bb, self.A_bs, prolongation.tocsr(), smoothing, drop)
         smoothing_time = time.perf_counter() - t
         self.smoothing = smoothing
-        # Eᵀ A E with E = [I; P], without forming E
-        cross = (A_sb @ P).tocsr()
-        self.auxiliary = (A[self._s][:, self._s] + cross + cross.T + P.T @ (A_bb @ P)).tocsr()
+        # Eᵀ A E with E = [I; P], without forming E: the beams' part (a few entries per solid DOF near
+        # a beam) summed first, then added to the solid block once (each sum of sparse matrices
+        # merges all their entries, and A_SS is the largest)
+        cross = (self.A_sb @ P).tocsr()
+        beams = cross + cross.T + P.T @ (A_bb @ P)
+        del cross
+        A_ss = A[self._s, self._s] if isinstance(self._s, slice) else A[self._s][:, self._s]
+        self.auxiliary = (A_ss + beams).tocsr()
+        del A_ss, beams
         self.prolongation = P
-        self._restriction = P.T.tocsr()
         self.timings = {"prolongation smoothing": smoothing_time,
                         "auxiliary matrix": time.perf_counter() - start - smoothing_time}
         t = time.perf_counter()
@@ -175,19 +184,25 @@ class AuxiliarySpacePreconditioner:
         return len(self.amg.levels)
 
     def matvec(self, r):
-        """One symmetric sweep: beam block, auxiliary space, beam block."""
+        """One symmetric sweep: beam block, auxiliary space, beam block.
+
+        With the beam block solved exactly the sweep reduces to ``z = V(r_S − A_SB A_BB⁻¹ r_B)``,
+        ``x = [z; A_BB⁻¹ (r_B − A_BS z)]`` (``V`` the V-cycle of ``A_aux``): the beam residual after the
+        first solve is zero, so its restriction ``Pᵀ r_B`` drops out, and ``P z`` cancels in the second
+        beam correction. Products with ``A_SB`` and ``A_BS`` only; ``P`` enters through ``A_aux``.
+        """
         start = time.perf_counter()
         s, b = self._s, self._b
         x = np.empty_like(r)
-        x_b = self._beam_factor.solve(r[b])
+        r_b = r[b]
+        y_b = self._beam_factor.solve(r_b)
         t1 = time.perf_counter()
-        residual = r - self.A_beam_cols @ x_b
-        z = self._cycle.matvec(residual[s] + self._restriction @ residual[b])
+        z = self._cycle.matvec(r[s] - self.A_sb @ y_b)
         t2 = time.perf_counter()
         x[s] = z
-        x[b] = x_b + self.prolongation @ z
+        r_b = r_b - self.A_bs @ z
         t3 = time.perf_counter()
-        x[b] += self._beam_factor.solve(r[b] - self.A_beam_rows @ x)
+        x[b] = self._beam_factor.solve(r_b)
         end = time.perf_counter()
         self.timings["amg cycles"] += t2 - t1
         self.timings["beam solves"] += (t1 - start) + (end - t3)
@@ -219,18 +234,15 @@ def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
     (``A_aux − S = (P + A_BB⁻¹ A_BS)ᵀ A_BB (P + A_BB⁻¹ A_BS)``), but it is dense along each beam.
     Every step here widens each row of ``P`` by one band of ``A_BB`` (one beam node's
     neighbours), as smoothed aggregation smooths its tentative prolongator. ``λ_max`` is
-    estimated by Lanczos (ARPACK, tolerance 1e-2) from the vector of ones, so the result is
-    deterministic.
+    estimated by 10 Lanczos steps from the vector of ones (:func:`largest_eigenvalue`), so the
+    result is deterministic.
     """
     if steps == 0 or A_bb.shape[0] == 0:
         return P
     d = A_bb.diagonal()
     scale = sp.diags(1.0 / np.sqrt(d))
     scaled = (scale @ A_bb @ scale).tocsr()
-    if len(d) < 3:      # ARPACK needs k < n: the few eigenvalues directly
-        rho = float(np.linalg.eigvalsh(scaled.toarray()).max())
-    else:
-        rho = spla.eigsh(scaled, k=1, which="LA", v0=np.ones(len(d)), tol=1e-2, return_eigenvectors=False)[0]
+    rho = largest_eigenvalue(scaled)
     jacobi = sp.diags(1.0 / (rho * d))
     for _ in range(steps):
         P = (P - jacobi @ (A_bs + A_bb @ P)).tocsr()
@@ -248,3 +260,40 @@ def _contiguous(index):
     if len(index) and index[-1] - index[0] == len(index) - 1 and np.all(np.diff(index) == 1):
         return slice(int(index[0]), int(index[-1]) + 1)
     return index
+
+
+#: Lanczos steps of :func:`largest_eigenvalue`
+LANCZOS_STEPS = 10
+
+
+def largest_eigenvalue(A, steps=LANCZOS_STEPS):
+    """The largest Ritz value of ``steps`` Lanczos steps on the symmetric matrix ``A`` from the
+    vector of ones (deterministic; the exact largest eigenvalue when ``A`` is that small).
+
+    A lower bound of ``λ_max`` that converges fast from below. It replaced ARPACK (tolerance 1e-2),
+    whose restarts were slow on the scaled beam block of ``fibre_cube(n, 1000, 20)`` (126,000 DOFs,
+    1000 fibres alike, so the top of the spectrum is a tight cluster): the ``"prolongation smoothing"`` of
+    :attr:`AuxiliarySpacePreconditioner.timings` at n = 20 went from 3.4-5.4 to 2.2 wall seconds at
+    a load of 8, with the same 12 CG iterations (19 instead of 20 at n = 40; benchmarks/README.md,
+    "Cheaper set-up and applications").
+    """
+    n = A.shape[0]
+    if n <= steps:
+        dense = A.toarray() if sp.issparse(A) else np.asarray(A)
+        return float(np.linalg.eigvalsh(dense).max())
+    v = np.full(n, 1.0 / np.sqrt(n))
+    previous = np.zeros(n)
+    alpha, beta = np.zeros(steps), np.zeros(steps)
+    for j in range(steps):
+        w = A @ v
+        if j:
+            w -= beta[j - 1] * previous
+        alpha[j] = w @ v
+        w -= alpha[j] * v
+        beta[j] = np.linalg.norm(w)
+        if beta[j] <= 1e-14 * abs(alpha[j]):      # an invariant subspace: its Ritz values are exact
+            steps = j + 1
+            break
+        previous, v = v, w / beta[j]
+    T = np.diag(alpha[:steps]) + np.diag(beta[:steps - 1], 1) + np.diag(beta[:steps - 1], -1)
+    return float(np.linalg.eigvalsh(T).max())

@@ -24,7 +24,7 @@ class SchurComplement:
     -----
     One product costs one product with the solid rows of ``A`` (``[A_SS, A_SB]``), one with
     ``A_BS`` and one banded solve with ``A_BB``; the auxiliary-space sweep on the whole system
-    costs a product with ``A`` in CG, two banded solves and two products with the beam rows.
+    costs a product with ``A`` in CG, two banded solves and the products with ``A_SB`` and ``A_BS``.
     The Schur complement of ``A`` in the basis ``[d_S; d_B − P d_S]`` is the same ``S`` (a change
     of basis of the beam block only), so its V-cycle on ``A_aux = Eᵀ A E ≥ S`` is the
     preconditioner here as it is inside the auxiliary-space sweep.
@@ -35,7 +35,7 @@ class SchurComplement:
         self._s, self._b = pre._s, pre._b
         self.n = pre.shape[0]
         self.rows = pre.A[self._s].tocsr()                    # [A_SS, A_SB]
-        self.coupling = pre.A_beam_rows[:, self._s].tocsr()   # A_BS
+        self.coupling = pre.A_bs                              # A_BS
         self.factor = pre._beam_factor
         n_s = self.rows.shape[0]
         self.shape = (n_s, n_s)
