@@ -135,11 +135,11 @@ def follow_matrix(model, ops, kappa, numbering, layout, part, comm, rotation=Non
 
 def beam_spectral_radius(A, rows, comm):
     """``λ_max(D⁻¹ A_BB)`` of the free beam unknowns, estimated as the serial
-    :func:`~mortar1d3d.solvers.preconditioners.smooth_prolongation` does (ARPACK's Lanczos from the
-    vector of ones, tolerance 1e-2; the few eigenvalues directly below three unknowns), so that the
-    smoothed ``P`` is the serial one whatever the ranks: rank 0 runs the iteration on vectors of the
-    free beam unknowns in their serial order, every product with ``A`` is distributed (the other
-    ranks take part in each). ``None`` without free beam unknowns.
+    :func:`~mortar1d3d.solvers.preconditioners.smooth_prolongation` does (the same
+    :func:`~mortar1d3d.solvers.preconditioners.largest_eigenvalue`: a few Lanczos steps from the
+    vector of ones), so that the smoothed ``P`` is the serial one whatever the ranks: rank 0 runs the
+    iteration on vectors of the free beam unknowns in their serial order, every product with ``A``
+    is distributed (the other ranks take part in each). ``None`` without free beam unknowns.
 
     Parameters
     ----------
@@ -171,17 +171,12 @@ def beam_spectral_radius(A, rows, comm):
     try:
         if comm.getRank() == 0:
             import scipy.sparse.linalg as spla
+            from ..solvers.preconditioners import largest_eigenvalue
             try:
                 def matvec(v):
                     mpi.bcast(True, root=0)
                     return product(np.ravel(v))
-                if n < 3:
-                    columns = np.column_stack([matvec(e) for e in np.eye(n)])
-                    found = float(np.linalg.eigvalsh(columns).max())
-                else:
-                    operator = spla.LinearOperator((n, n), matvec=matvec, dtype=np.float64)
-                    found = float(spla.eigsh(operator, k=1, which="LA", v0=np.ones(n), tol=1e-2,
-                                             return_eigenvectors=False)[0])
+                found = largest_eigenvalue(spla.LinearOperator((n, n), matvec=matvec, dtype=np.float64))
             except Exception as exc:            # every rank raises it, none waits for a product
                 found = exc
             mpi.bcast(False, root=0)

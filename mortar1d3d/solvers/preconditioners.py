@@ -267,8 +267,9 @@ LANCZOS_STEPS = 10
 
 
 def largest_eigenvalue(A, steps=LANCZOS_STEPS):
-    """The largest Ritz value of ``steps`` Lanczos steps on the symmetric matrix ``A`` from the
-    vector of ones (deterministic; the exact largest eigenvalue when ``A`` is that small).
+    """The largest Ritz value of ``steps`` Lanczos steps on the symmetric matrix ``A`` (anything with
+    ``shape`` and ``A @ v``: a sparse matrix or a ``LinearOperator``) from the vector of ones
+    (deterministic; the exact largest eigenvalue when ``A`` is that small).
 
     A lower bound of ``λ_max`` that converges fast from below. It replaced ARPACK (tolerance 1e-2),
     whose restarts were slow on the scaled beam block of ``fibre_cube(n, 1000, 20)`` (126,000 DOFs,
@@ -279,8 +280,9 @@ def largest_eigenvalue(A, steps=LANCZOS_STEPS):
     """
     n = A.shape[0]
     if n <= steps:
-        dense = A.toarray() if sp.issparse(A) else np.asarray(A)
-        return float(np.linalg.eigvalsh(dense).max())
+        # the matrix itself, column by column (``A`` may be a sparse matrix or any linear operator,
+        # e.g. the distributed product of mortar1d3d's PETSc backend); products with 0 and 1 are exact
+        return float(np.linalg.eigvalsh(np.asarray(A @ np.eye(n))).max())
     v = np.full(n, 1.0 / np.sqrt(n))
     previous = np.zeros(n)
     alpha, beta = np.zeros(steps), np.zeros(steps)
