@@ -22,6 +22,18 @@ signatures. Recording adds a little to the wall time.
 ``--what element``: ``import mortar1d3d`` and the first element-based assembly of the same scene
 alone (what a user of element-based integration waits for on a first run).
 
+``--warm [N]``: afterwards the same code N (default 1) more times, each in a fresh process with the
+now populated cache (the warm start: every kernel loaded, nothing compiled); their CPU seconds and
+the in-process time the code prints are reported as well, and, with ``--kernels``, their compile
+events (there should be none: a kernel that compiles again in every process, e.g. after a "Cannot
+cache" warning, shows up here). ``--cache DIR`` uses and keeps DIR as the cache instead of a new
+empty one: to pair warm starts of two versions, populate a directory per version once, then
+alternate ``--cache DIR_A --package A --warm 4`` and the same for B.
+
+Numba's settings reach the child through the environment, e.g. ``NUMBA_OPT=1`` for the LLVM
+optimisation level (the cache directory is new in every run, so no kernel compiled at another
+level is loaded).
+
 To compare two versions, pair whole runs of this script so that both see the machine of the same
 minutes: alternate the two commands (A B A B ...) and compare their CPU seconds (user + system of
 the whole process, e.g. from ``/usr/bin/time``) run by run::
@@ -116,6 +128,12 @@ def main(argv=None):
     parser.add_argument("--what", choices=("first", "element", "warmup"), default="first")
     parser.add_argument("--kernels", type=int, default=0, metavar="N",
                         help="list the N functions with the largest own compile time")
+    parser.add_argument("--warm", type=int, nargs="?", const=1, default=0, metavar="N",
+                        help="then run the same code N (default 1) more times, each in a new process with the "
+                             "populated cache")
+    parser.add_argument("--cache", metavar="DIR",
+                        help="use (and keep) DIR as the kernel cache instead of a new empty directory: with a "
+                             "populated one, every run is a warm start")
     parser.add_argument("--dump", metavar="JSON",
                         help="with --kernels: write every compilation (function, own time, argument types) to JSON")
     args = parser.parse_args(argv)
@@ -127,20 +145,31 @@ def main(argv=None):
         dump = repr(str(Path(args.dump).resolve())) if args.dump else "None"
         code = RECORDER_CODE.replace("KERNELS", str(args.kernels)).replace("DUMP", dump) + "\n" + code
     check = f"; import mortar1d3d as _m; assert _m.__file__.startswith({str(root)!r}), _m.__file__"
-    cache = tempfile.mkdtemp(prefix="m13-cold-")
+    cache = str(Path(args.cache).resolve()) if args.cache else tempfile.mkdtemp(prefix="m13-cold-")
     try:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache,
                    PYTHONPATH=os.pathsep.join([str(root)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
-        t0 = time.perf_counter()
-        before = resource.getrusage(resource.RUSAGE_CHILDREN)
-        subprocess.run([sys.executable, "-c", code + check], env=env, cwd=root, check=True,
-                       stdout=None if args.kernels > 0 else subprocess.DEVNULL)
-        wall = time.perf_counter() - t0
-        after = resource.getrusage(resource.RUSAGE_CHILDREN)
-        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-        print(f"{args.what} from an empty cache, package {root}: {wall:.1f} s wall, {cpu:.1f} CPU s")
+        for run in range(1 + args.warm):
+            cold = not any(Path(cache).rglob("*.nbi"))
+            if run > 0 and args.kernels > 0:   # its compile events are listed; the dump is the cold run's
+                code = code.replace(dump, "None")
+            t0 = time.perf_counter()
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
+            child = subprocess.run([sys.executable, "-c", code + check], env=env, cwd=root, check=True,
+                                   stdout=None if args.kernels > 0 else subprocess.PIPE, text=True)
+            wall = time.perf_counter() - t0
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+            inside = ""
+            try:   # the code's last output: its own time in the process (STARTUP_CODE prints it)
+                inside = f" ({float(child.stdout.split()[-1]):.2f} s in the process)"
+            except (AttributeError, IndexError, ValueError):
+                pass
+            where = "from an empty cache" if cold else "with a populated cache (warm start)"
+            print(f"{args.what} {where}, package {root}: {wall:.1f} s wall{inside}, {cpu:.2f} CPU s", flush=True)
     finally:
-        shutil.rmtree(cache, ignore_errors=True)
+        if not args.cache:
+            shutil.rmtree(cache, ignore_errors=True)
 
 
 if __name__ == "__main__":
