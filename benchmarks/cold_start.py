@@ -22,10 +22,17 @@ signatures. Recording adds a little to the wall time.
 ``--what element``: ``import mortar1d3d`` and the first element-based assembly of the same scene
 alone (what a user of element-based integration waits for on a first run).
 
-``--warm``: then run the same code once more in a new process on the cache the first one filled
-(the warm start: kernels loaded, nothing compiled), and print its time too. Each child prints its
-own time from before ``import mortar1d3d`` to the end (``in process``: the interpreter's start
-is not in it), which is what the start-up targets are about.
+``--warm [N]``: afterwards the same code N (default 1) more times, each in a fresh process with the
+now populated cache (the warm start: every kernel loaded, nothing compiled); their CPU seconds and
+the in-process time the code prints are reported as well, and, with ``--kernels``, their compile
+events (there should be none: a kernel that compiles again in every process, e.g. after a "Cannot
+cache" warning, shows up here). ``--cache DIR`` uses and keeps DIR as the cache instead of a new
+empty one: to pair warm starts of two versions, populate a directory per version once, then
+alternate ``--cache DIR_A --package A --warm 4`` and the same for B.
+
+Numba's settings reach the child through the environment, e.g. ``NUMBA_OPT=1`` for the LLVM
+optimisation level (the cache directory is new in every run, so no kernel compiled at another
+level is loaded).
 
 To compare two versions, pair whole runs of this script so that both see the machine of the same
 minutes: alternate the two commands (A B A B ...) and compare their CPU seconds (user + system of
@@ -143,10 +150,14 @@ def main(argv=None):
     parser.add_argument("--what", choices=("first", "element", "warmup"), default="first")
     parser.add_argument("--kernels", type=int, default=0, metavar="N",
                         help="list the N functions with the largest own compile time")
+    parser.add_argument("--warm", type=int, nargs="?", const=1, default=0, metavar="N",
+                        help="then run the same code N (default 1) more times, each in a new process with the "
+                             "populated cache")
+    parser.add_argument("--cache", metavar="DIR",
+                        help="use (and keep) DIR as the kernel cache instead of a new empty directory: with a "
+                             "populated one, every run is a warm start")
     parser.add_argument("--dump", metavar="JSON",
                         help="with --kernels: write every compilation (function, own time, argument types) to JSON")
-    parser.add_argument("--warm", action="store_true",
-                        help="also time the same code in a second process on the cache the first one filled")
     args = parser.parse_args(argv)
     root = Path(args.package).resolve()
     if not (root / "mortar1d3d" / "__init__.py").is_file():
@@ -156,21 +167,26 @@ def main(argv=None):
         dump = repr(str(Path(args.dump).resolve())) if args.dump else "None"
         code = RECORDER_CODE.replace("KERNELS", str(args.kernels)).replace("DUMP", dump) + "\n" + code
     check = f"; import mortar1d3d as _m; assert _m.__file__.startswith({str(root)!r}), _m.__file__"
-    cache = tempfile.mkdtemp(prefix="m13-cold-")
+    cache = str(Path(args.cache).resolve()) if args.cache else tempfile.mkdtemp(prefix="m13-cold-")
     try:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache,
                    PYTHONPATH=os.pathsep.join([str(root)] + [p for p in [os.environ.get("PYTHONPATH")] if p]))
-        cold = _child(code + check, env, root, show=args.kernels > 0)
-        print(f"{args.what} from an empty cache, package {root}: {cold['wall_s']:.1f} s wall "
-              f"({cold['in_process_s']:.1f} s in process), {cold['cpu_s']:.1f} CPU s")
-        warm = None
-        if args.warm:
-            warm = _child(code.split("\n")[-1] + check, env, root, show=False)      # without the recorder
-            print(f"{args.what} from the filled cache: {warm['wall_s']:.2f} s wall "
-                  f"({warm['in_process_s']:.2f} s in process), {warm['cpu_s']:.2f} CPU s")
-        record("cold_start", what=args.what, package=str(root), cold=cold, warm=warm)
+        runs = []
+        for run in range(1 + args.warm):
+            cold = not any(Path(cache).rglob("*.nbi"))
+            if run > 0 and args.kernels > 0:   # its compile events are listed; the dump is the cold run's
+                code = code.replace(dump, "None")
+            child = _child(code + check, env, root, show=args.kernels > 0)
+            runs.append(dict(child, cold=cold))
+            inside = "" if child["in_process_s"] is None else f" ({child['in_process_s']:.2f} s in the process)"
+            where = "from an empty cache" if cold else "with a populated cache (warm start)"
+            print(f"{args.what} {where}, package {root}: {child['wall_s']:.1f} s wall{inside}, "
+                  f"{child['cpu_s']:.2f} CPU s", flush=True)
+        record("cold_start", what=args.what, package=str(root), cold=next((r for r in runs if r["cold"]), None),
+               warm=[r for r in runs if not r["cold"]])
     finally:
-        shutil.rmtree(cache, ignore_errors=True)
+        if not args.cache:
+            shutil.rmtree(cache, ignore_errors=True)
 
 
 if __name__ == "__main__":

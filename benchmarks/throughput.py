@@ -1,7 +1,7 @@
 """Standalone throughput of assemble_mortar outside pytest (best and median of repeated calls).
 
     .venv/bin/python benchmarks/throughput.py [--repeats 9] [--distort 0.1] [--drop] [--no-reuse]
-                                              [--package CHECKOUT]
+                                              [--package CHECKOUT] [--scene-warmup]
 
 Same scene as the pytest-benchmark harness (fibre_cube(20, 1000, 20), n_gauss=4, straight
 fibres). Every round times each integration with 1 and then 2 threads back to back, and the
@@ -19,6 +19,10 @@ To compare two versions of the library on a shared machine, run this script alte
 ``--package`` naming each checkout and compare the lines ``per control``: each call's time divided
 by the 1-thread control's time of the same round (median over the rounds), a figure in which the
 machine's speed of the moment cancels.
+
+The run time of kernels compiled at another LLVM optimisation level: ``NUMBA_OPT=N`` with a
+cache directory of that level's own (Numba's cache does not record the level, so a shared one would
+load kernels compiled at another), e.g. ``NUMBA_OPT=1 NUMBA_CACHE_DIR=/tmp/opt1 ... --scene-warmup``.
 """
 import argparse
 import resource
@@ -81,6 +85,10 @@ def main(argv=None):
     parser.add_argument("--package", metavar="CHECKOUT", default=None,
                         help="measure the mortar1d3d package of another checkout (a directory holding mortar1d3d/) "
                              "with this harness, e.g. an older commit in a git worktree")
+    parser.add_argument("--scene-warmup", action="store_true",
+                        help="compile by one call of each integration on the scene instead of mortar1d3d.warmup() "
+                             "(only the kernels measured: quicker from an empty cache, e.g. a cache directory per "
+                             "NUMBA_OPT level)")
     parser.add_argument("--full", type=float, default=1.85, metavar="X",
                         help="also report the speed-up over the rounds whose control reached X (default 1.85)")
     args = parser.parse_args(argv)
@@ -90,7 +98,11 @@ def main(argv=None):
     if args.no_reuse:
         from mortar1d3d import _memory
         _memory.POOL_LIMIT = 0
-    m13.warmup()
+    if args.scene_warmup:
+        for integration in ("element", "segment"):
+            m13.assemble_mortar(beams, solid, integration=integration, n_gauss=4)
+    else:
+        m13.warmup()
     print(f"package {Path(m13.__file__).resolve().parent}")
     print(f"threading layer {numba.threading_layer()}, NUMBA_NUM_THREADS {numba.config.NUMBA_NUM_THREADS}"
           + (f", cube distorted by {args.distort} cells" if args.distort else ""))

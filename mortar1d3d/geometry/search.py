@@ -16,6 +16,7 @@ from numba import literal_unroll, prange
 
 from .._config import PARAMETER_TOL, njit, njit_parallel, njit_inline
 from .._memory import carve
+from .._unlinked import unlinked
 from .._schedule import claim, new_claims, workers
 from ..elements import beam as beam_functions
 from ..elements.beam import CODES as _BEAM_CODES, select as _beam_kernel
@@ -122,8 +123,8 @@ def _beam_frames(positions, tangents, elements, lengths, code, padding, Q, origi
         global_q = np.empty((beam_functions.MAX_FUNCTIONS, 3))
         begin, stop = claim(claims, n_el, worker)
         while begin < stop:
-            _beam_frames_chunk(code, begin, stop, positions, tangents, elements, lengths, padding, Q, origin,
-                               boxes, size, zero, ctrl, global_q)
+            _beam_frames_chunk_call(code, begin, stop, positions, tangents, elements, lengths, padding, Q,
+                                    origin, boxes, size, zero, ctrl, global_q)
             begin, stop = claim(claims, n_el, worker)
 
 
@@ -143,6 +144,10 @@ def _beam_frames_chunk(code, begin, stop, positions, tangents, elements, lengths
                 _beam_kernel(k, "coefficients")(positions, tangents, nodes, zero, global_q)
                 _hull_box(ctrl, _beam_kernel(k, "control_points")(global_q, lengths[e], ctrl), boxes[e])
                 size[e] = _finish_box(boxes[e], padding)
+
+
+#: called once per chunk through a symbol, not compiled into the kernel again (see mortar1d3d._unlinked)
+_beam_frames_chunk_call = unlinked(_beam_frames_chunk)
 
 
 @njit

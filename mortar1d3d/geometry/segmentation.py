@@ -30,6 +30,7 @@ from numba import prange
 
 from .._config import MERGE_TOL, PARAMETER_TOL, SEGMENT_OWNER_TOL, TOUCH_TOL, njit, njit_parallel
 from .._memory import carve
+from .._unlinked import unlinked
 from .._schedule import claim, new_claims, workers
 from ..elements.solid import dispatch as solid
 from .beam import beam_point, beams_affine
@@ -215,141 +216,156 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
         dg = np.empty(S)
         begin, stop = claim(claims, n_pairs, worker)
         while begin < stop:
-            for p in range(begin, stop):
-                e = pair_beam[p]
-                s = pair_solid[p]
-                code = codes[s]
-                h = solid_h[s]
-                Qe = Q[e]
-                load_element(points, conn, s, code, solid_origin, X)
-                overflow[p] = False
-                no_face[p] = not _faces_in_reach(code, X, h, beam_boxes[e], solid_origin[s], C, reach)
-                if no_face[p]:
-                    out_count[p] = 0
-                    continue
-                s0 = beam_origin[e, 0] - solid_origin[s, 0]
-                s1 = beam_origin[e, 1] - solid_origin[s, 1]
-                s2 = beam_origin[e, 2] - solid_origin[s, 2]
-                # samples along the beam element: ξ(η) and dξ/dη = J⁻¹ r'(η) (warm-started Newton)
-                solid.centre(code, xi)
-                affine = is_affine(linear, s)
-                for k in range(S):
-                    eta_s[k] = -1.0 + 2.0 * k / (S - 1)
-                    r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Qe, lengths[e], s0, s1, s2, eta_s[k], H, dH)
-                    if affine:
-                        # ξ(η) and dξ/dη = A⁻¹ r' directly
-                        ok[k] = True
-                        linear_parameters(code, linear, s, r0, r1, r2, xi_s[k])
-                        for i in range(3):
-                            dxi_s[k, i] = linear[s, i, 0] * d0 + linear[s, i, 1] * d1 + linear[s, i, 2] * d2
-                        continue
-                    if k == 0:
-                        linear_parameters(code, linear, s, r0, r1, r2, xi)    # else: from the centre
-                    start[:] = xi
-                    ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
-                    if not (ok[k] and (solid.is_inside(code, xi, PARAMETER_TOL)
-                                       or certified_outside(code, linear, s, xi))):
-                        # the warm start may have followed a branch of the map folded outside a
-                        # curved element: locate the sample for certain
-                        start[:] = xi
-                        status = locate_point(code, X, r0, r1, r2, h, PARAMETER_TOL, linear, s, xi, trial, N, dN,
-                                              a, stack)
-                        ok[k] = status != NOT_CONVERGED
-                        if not ok[k]:
-                            xi[:] = start
-                    if ok[k]:
-                        xi_s[k] = xi
-                        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, N, dN)
-                        det, dxi_s[k, 0], dxi_s[k, 1], dxi_s[k, 2] = solve3(j00, j01, j02, j10, j11, j12, j20, j21,
-                                                                           j22, d0, d1, d2)
-                    else:
-                        xi_s[k] = start
-                        dxi_s[k] = 0.0
-                        solid.centre(code, xi)
-                faces = solid.faces(code)
-                line = affine and straight[e]
-                count = np.int64(0)     # not the literal 0: _record would compile for it as well
-                for f in range(faces.shape[0]):
-                    if not reach[f]:
-                        continue
-                    face = faces[f]
-                    for k in range(S):
-                        g[k] = (face[3, 0] * (xi_s[k, 0] - face[0, 0]) + face[3, 1] * (xi_s[k, 1] - face[0, 1])
-                                + face[3, 2] * (xi_s[k, 2] - face[0, 2]))
-                        dg[k] = face[3, 0] * dxi_s[k, 0] + face[3, 1] * dxi_s[k, 1] + face[3, 2] * dxi_s[k, 2]
-                    for k in range(S):
-                        if not ok[k]:
-                            # the projection failed here: start on the face centre
-                            start[:] = solid.FACE_CENTROIDS[code, f]
-                            eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s[k],
-                                                start[0], start[1], start[2], z, xi, N, dN, H, dH)
-                            count = _record(eta, f, out_eta, out_face, p, count, overflow)
-                    for k in range(S - 1):
-                        if not (ok[k] and ok[k + 1]):
-                            continue
-                        step = eta_s[k + 1] - eta_s[k]
-                        g0, g1 = g[k], g[k + 1]
-                        d0, d1 = dg[k] * step, dg[k + 1] * step
-                        # cheap reject: the cubic stays clearly on one side of the face
-                        if min(g0, g1) > 0.5 * (abs(d0) + abs(d1)) or max(g0, g1) < -0.5 * (abs(d0) + abs(d1)):
-                            continue
-                        # scan the cubic model: start Newton at each sign change and at a near touch
-                        prev = g0
-                        best = abs(g0)
-                        best_t = 0.0
-                        for i in range(1, _SCAN + 1):
-                            t = i / _SCAN
-                            cur = _hermite_g(g0, g1, d0, d1, t)
-                            t_start = -1.0
-                            if prev * cur <= 0.0 and not (prev == 0.0 and i > 1):
-                                step = prev / (prev - cur) if prev != cur else 0.5
-                                t_start = t - 1.0 / _SCAN + (1.0 / _SCAN) * step
-                            if abs(cur) < best:
-                                best = abs(cur)
-                                best_t = t
-                            prev = cur
-                            if t_start < 0.0:
-                                continue
-                            eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
-                                               t_start, z, xi, N, dN, H, dH)
-                            count = _record(eta, f, out_eta, out_face, p, count, overflow)
-                        if line:
-                            # g is linear in η: a sign change is its only root, and it cannot touch the
-                            # face or cross it twice (the searches below found each crossing again)
-                            continue
-                        # a sample on the face: the scan starts Newton there and finds that point again;
-                        # a crossing soon after it (leaving at a corner and coming back) is a root of
-                        # the cubic divided by its known root (found by make fuzz, see test_hard_cases)
-                        for end in range(2):
-                            if abs(g1 if end else g0) > PARAMETER_TOL:
-                                continue
-                            if end:
-                                r_a, r_b = _deflated_roots(g0, -d1, -d0)
-                                r_a, r_b = 1.0 - r_a, 1.0 - r_b
-                            else:
-                                r_a, r_b = _deflated_roots(g1, d0, d1)
-                            for t_start in (r_a, r_b):
-                                if not 0.0 < t_start < 1.0:
-                                    continue
-                                eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s,
-                                                   k, t_start, z, xi, N, dN, H, dH)
-                                count = _record(eta, f, out_eta, out_face, p, count, overflow)
-                        if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0:
-                            # close to the face without a sign change: a touch or a missed double crossing.
-                            # Newton converges to one of two close roots; the other lies about as far on
-                            # the other side of the extremum of g: start there too (a dip through the
-                            # face shorter than a sample interval has both ends found)
-                            eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
-                                               best_t, z, xi, N, dN, H, dH)
-                            count = _record(eta, f, out_eta, out_face, p, count, overflow)
-                            if not np.isnan(eta):
-                                t_mirror = 2.0 * best_t - (eta - eta_s[k]) / (eta_s[k + 1] - eta_s[k])
-                                if 0.0 < t_mirror < 1.0:
-                                    eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s,
-                                                       xi_s, k, t_mirror, z, xi, N, dN, H, dH)
-                                    count = _record(eta, f, out_eta, out_face, p, count, overflow)
-                out_count[p] = count
+            _pair_crossings_chunk_call(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h,
+                                       linear, beam_code, Q, lengths, beam_origin, beam_boxes, straight, out_eta,
+                                       out_face, out_count, no_face, overflow, X, xi, S, C, reach, eta_s, H, dH, start,
+                                       ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z)
             begin, stop = claim(claims, n_pairs, worker)
+
+
+@njit
+def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear,
+                          beam_code, Q, lengths, beam_origin, beam_boxes, straight, out_eta, out_face, out_count,
+                          no_face, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok, trial, N, dN, a, stack, xi_s,
+                          dxi_s, g, dg, z):
+    for p in range(begin, stop):
+        e = pair_beam[p]
+        s = pair_solid[p]
+        code = codes[s]
+        h = solid_h[s]
+        Qe = Q[e]
+        load_element(points, conn, s, code, solid_origin, X)
+        overflow[p] = False
+        no_face[p] = not _faces_in_reach(code, X, h, beam_boxes[e], solid_origin[s], C, reach)
+        if no_face[p]:
+            out_count[p] = 0
+            continue
+        s0 = beam_origin[e, 0] - solid_origin[s, 0]
+        s1 = beam_origin[e, 1] - solid_origin[s, 1]
+        s2 = beam_origin[e, 2] - solid_origin[s, 2]
+        # samples along the beam element: ξ(η) and dξ/dη = J⁻¹ r'(η) (warm-started Newton)
+        solid.centre(code, xi)
+        affine = is_affine(linear, s)
+        for k in range(S):
+            eta_s[k] = -1.0 + 2.0 * k / (S - 1)
+            r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Qe, lengths[e], s0, s1, s2, eta_s[k], H, dH)
+            if affine:
+                # ξ(η) and dξ/dη = A⁻¹ r' directly
+                ok[k] = True
+                linear_parameters(code, linear, s, r0, r1, r2, xi_s[k])
+                for i in range(3):
+                    dxi_s[k, i] = linear[s, i, 0] * d0 + linear[s, i, 1] * d1 + linear[s, i, 2] * d2
+                continue
+            if k == 0:
+                linear_parameters(code, linear, s, r0, r1, r2, xi)    # else: from the centre
+            start[:] = xi
+            ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
+            if not (ok[k] and (solid.is_inside(code, xi, PARAMETER_TOL)
+                               or certified_outside(code, linear, s, xi))):
+                # the warm start may have followed a branch of the map folded outside a
+                # curved element: locate the sample for certain
+                start[:] = xi
+                status = locate_point(code, X, r0, r1, r2, h, PARAMETER_TOL, linear, s, xi, trial, N, dN,
+                                      a, stack)
+                ok[k] = status != NOT_CONVERGED
+                if not ok[k]:
+                    xi[:] = start
+            if ok[k]:
+                xi_s[k] = xi
+                j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, N, dN)
+                det, dxi_s[k, 0], dxi_s[k, 1], dxi_s[k, 2] = solve3(j00, j01, j02, j10, j11, j12, j20, j21,
+                                                                   j22, d0, d1, d2)
+            else:
+                xi_s[k] = start
+                dxi_s[k] = 0.0
+                solid.centre(code, xi)
+        faces = solid.faces(code)
+        line = affine and straight[e]
+        count = np.int64(0)     # not the literal 0: _record would compile for it as well
+        for f in range(faces.shape[0]):
+            if not reach[f]:
+                continue
+            face = faces[f]
+            for k in range(S):
+                g[k] = (face[3, 0] * (xi_s[k, 0] - face[0, 0]) + face[3, 1] * (xi_s[k, 1] - face[0, 1])
+                        + face[3, 2] * (xi_s[k, 2] - face[0, 2]))
+                dg[k] = face[3, 0] * dxi_s[k, 0] + face[3, 1] * dxi_s[k, 1] + face[3, 2] * dxi_s[k, 2]
+            for k in range(S):
+                if not ok[k]:
+                    # the projection failed here: start on the face centre
+                    start[:] = solid.FACE_CENTROIDS[code, f]
+                    eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s[k],
+                                        start[0], start[1], start[2], z, xi, N, dN, H, dH)
+                    count = _record(eta, f, out_eta, out_face, p, count, overflow)
+            for k in range(S - 1):
+                if not (ok[k] and ok[k + 1]):
+                    continue
+                step = eta_s[k + 1] - eta_s[k]
+                g0, g1 = g[k], g[k + 1]
+                d0, d1 = dg[k] * step, dg[k + 1] * step
+                # cheap reject: the cubic stays clearly on one side of the face
+                if min(g0, g1) > 0.5 * (abs(d0) + abs(d1)) or max(g0, g1) < -0.5 * (abs(d0) + abs(d1)):
+                    continue
+                # scan the cubic model: start Newton at each sign change and at a near touch
+                prev = g0
+                best = abs(g0)
+                best_t = 0.0
+                for i in range(1, _SCAN + 1):
+                    t = i / _SCAN
+                    cur = _hermite_g(g0, g1, d0, d1, t)
+                    t_start = -1.0
+                    if prev * cur <= 0.0 and not (prev == 0.0 and i > 1):
+                        step = prev / (prev - cur) if prev != cur else 0.5
+                        t_start = t - 1.0 / _SCAN + (1.0 / _SCAN) * step
+                    if abs(cur) < best:
+                        best = abs(cur)
+                        best_t = t
+                    prev = cur
+                    if t_start < 0.0:
+                        continue
+                    eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
+                                       t_start, z, xi, N, dN, H, dH)
+                    count = _record(eta, f, out_eta, out_face, p, count, overflow)
+                if line:
+                    # g is linear in η: a sign change is its only root, and it cannot touch the
+                    # face or cross it twice (the searches below found each crossing again)
+                    continue
+                # a sample on the face: the scan starts Newton there and finds that point again;
+                # a crossing soon after it (leaving at a corner and coming back) is a root of
+                # the cubic divided by its known root (found by make fuzz, see test_hard_cases)
+                for end in range(2):
+                    if abs(g1 if end else g0) > PARAMETER_TOL:
+                        continue
+                    if end:
+                        r_a, r_b = _deflated_roots(g0, -d1, -d0)
+                        r_a, r_b = 1.0 - r_a, 1.0 - r_b
+                    else:
+                        r_a, r_b = _deflated_roots(g1, d0, d1)
+                    for t_start in (r_a, r_b):
+                        if not 0.0 < t_start < 1.0:
+                            continue
+                        eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s,
+                                           k, t_start, z, xi, N, dN, H, dH)
+                        count = _record(eta, f, out_eta, out_face, p, count, overflow)
+                if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0:
+                    # close to the face without a sign change: a touch or a missed double crossing.
+                    # Newton converges to one of two close roots; the other lies about as far on
+                    # the other side of the extremum of g: start there too (a dip through the
+                    # face shorter than a sample interval has both ends found)
+                    eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
+                                       best_t, z, xi, N, dN, H, dH)
+                    count = _record(eta, f, out_eta, out_face, p, count, overflow)
+                    if not np.isnan(eta):
+                        t_mirror = 2.0 * best_t - (eta - eta_s[k]) / (eta_s[k + 1] - eta_s[k])
+                        if 0.0 < t_mirror < 1.0:
+                            eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s,
+                                               xi_s, k, t_mirror, z, xi, N, dN, H, dH)
+                            count = _record(eta, f, out_eta, out_face, p, count, overflow)
+        out_count[p] = count
+
+
+#: the loop body of :func:`_pair_crossings` (per claimed chunk), optimised once: called through a symbol
+_pair_crossings_chunk_call = unlinked(_pair_crossings_chunk)
 
 
 @njit
@@ -450,138 +466,153 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count,
         owners = np.empty(64, dtype=np.int64)
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
-            for e in range(begin, stop):
-                p0 = pair_offsets[e]
-                p1 = pair_offsets[e + 1]
-                m = 0
-                h = np.inf
-                big = max(abs(beam_origin[e, 0]), abs(beam_origin[e, 1]), abs(beam_origin[e, 2]))
-                for p in range(p0, p1):
-                    m += crossing_count[p]
-                    h = min(h, solid_h[pair_solid[p]])
-                # far from the origin the coordinates themselves carry round-off (about eps |x|; in
-                # parameter units relative to h): a beam meant to lie in a face is off it by that much
-                round_off = 2.220446049250313e-16 * big / h
-                owner_tol = SEGMENT_OWNER_TOL + 8.0 * round_off
-                touch_tol = TOUCH_TOL + 64.0 * round_off
-                if m + 2 > cuts.shape[0]:
-                    cuts = np.empty(2 * (m + 2))
-                    reach = np.empty(2 * (m + 2))
-                    touch = np.empty(2 * (m + 2), dtype=np.bool_)
-                    owners = np.empty(2 * (m + 2), dtype=np.int64)
-                # breakpoints: -1, the crossings (sorted; physically coincident ones merged), +1
-                m = np.int64(0)     # not the literal 0: _insertion_sort would compile for it as well
-                for p in range(p0, p1):
-                    for q in range(crossing_count[p]):
-                        cuts[1 + m] = crossing_eta[p, q]
-                        m += 1
-                _insertion_sort(cuts[1:], m)
-                cuts[0] = -1.0
-                reach[0] = _merge_distance(beam_code, Q[e], lengths[e], -1.0, h, H, dH)
-                n_pts = 1
-                for q in range(1, m + 1):
-                    tol = _merge_distance(beam_code, Q[e], lengths[e], cuts[q], h, H, dH)
-                    if cuts[q] > cuts[n_pts - 1] + max(tol, reach[n_pts - 1]) and cuts[q] < 1.0 - tol:
-                        cuts[n_pts] = cuts[q]
-                        reach[n_pts] = tol
-                        n_pts += 1
-                cuts[n_pts] = 1.0
-                reach[n_pts] = _merge_distance(beam_code, Q[e], lengths[e], 1.0, h, H, dH)
-                n_pts += 1
-
-                # a tangential touch: two consecutive crossings of the same face of one candidate with
-                # the centreline on that face between them (the face condition vanishes there and,
-                # both ends being roots, so does its derivative: a double root, which Newton
-                # resolves only to about sqrt(round-off), into several close cuts). Every interval
-                # between them is a touch.
-                for iv in range(n_pts - 1):
-                    touch[iv] = False
-                for p in range(p0, p1):
-                    for q in range(crossing_count[p]):
-                        eta1 = crossing_eta[p, q]
-                        eta2 = _next_crossing(crossing_eta, crossing_face, crossing_count, p, q, reach[0])
-                        if eta2 == np.inf:
-                            continue
-                        g = _face_condition(e, pair_solid[p], crossing_face[p, q], 0.5 * (eta1 + eta2), codes, conn,
-                                            points, solid_origin, solid_h, linear, beam_code, Q, lengths, beam_origin,
-                                            X, xi, trial, N, dN, H, dH, a, stack)
-                        if not abs(g) <= touch_tol:
-                            continue
-                        for iv in range(n_pts - 1):
-                            if cuts[iv] >= eta1 - 2.0 * reach[iv] and cuts[iv + 1] <= eta2 + 2.0 * reach[iv + 1]:
-                                touch[iv] = True
-
-                # owner of every interval: the lowest-index candidate containing its midpoint
-                for iv in range(n_pts - 1):
-                    owners[iv] = -1
-                    mid = 0.5 * (cuts[iv] + cuts[iv + 1])
-                    r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
-                    first = p0
-                    while first < p1:
-                        owner = first_containing(r0, r1, r2, e, pair_solid, first, p1, beam_origin, solid_boxes, hull,
-                                                 codes, conn, points, solid_origin, solid_h, linear, owner_tol, X, xi,
-                                                 trial, N, dN, a, stack, ANY_CANDIDATE)
-                        if owner < 0:
-                            break
-                        p = first
-                        while pair_solid[p] != owner:
-                            p += 1
-                        # a piece bounded by crossings of the owner's faces lies on the owner's side of
-                        # those faces only if the face conditions say so at its midpoint, not within the
-                        # inside tolerance: a piece that leaves through a face and comes back through it,
-                        # or a beam that passes an edge or a corner just outside, crossing the faces'
-                        # planes beyond the faces (within the crossings' tolerance)
-                        if _beyond_bounding_faces(codes[owner], crossing_eta, crossing_face, crossing_count, p,
-                                                  cuts[iv], cuts[iv + 1], 2.0 * max(reach[iv], reach[iv + 1]),
-                                                  xi) <= touch_tol:
-                            owners[iv] = owner
-                            break
-                        first = p + 1
-                # a run of touches stays on the side the beam is on: it joins a neighbouring piece whose
-                # owner contains it, or is not coupled (a touch from outside). A beam element that
-                # lies in a face from end to end has no such neighbour: its pieces are owned as usual.
-                iv = 0
-                while iv < n_pts - 1:
-                    if not touch[iv]:
-                        iv += 1
-                        continue
-                    last = iv
-                    while last + 1 < n_pts - 1 and touch[last + 1]:
-                        last += 1
-                    if iv == 0 and last == n_pts - 2:
-                        break
-                    before = owners[iv - 1] if iv > 0 else -1
-                    after = owners[last + 1] if last + 1 < n_pts - 1 else -1
-                    for k in range(iv, last + 1):
-                        owners[k] = -1
-                        mid = 0.5 * (cuts[k] + cuts[k + 1])
-                        r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
-                        for neighbour in (before, after):
-                            if neighbour >= 0 and first_containing(
-                                    r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes, conn,
-                                    points, solid_origin, solid_h, linear, owner_tol, X, xi, trial, N, dN, a, stack,
-                                    neighbour) == neighbour:
-                                owners[k] = neighbour
-                                break
-                    iv = last + 1
-
-                base = seg_offsets[e]
-                n_seg = 0
-                for iv in range(n_pts - 1):
-                    owner = owners[iv]
-                    if owner < 0:
-                        continue
-                    a_eta = cuts[iv]
-                    b_eta = cuts[iv + 1]
-                    if n_seg > 0 and seg_solid[base + n_seg - 1] == owner and seg_end[base + n_seg - 1] == a_eta:
-                        seg_end[base + n_seg - 1] = b_eta
-                    else:
-                        seg_solid[base + n_seg] = owner
-                        seg_start[base + n_seg] = a_eta
-                        seg_end[base + n_seg] = b_eta
-                        n_seg += 1
-                seg_count[e] = n_seg
+            _tile_chunk_call(begin, stop, pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes,
+                             conn, points, solid_origin, solid_h, solid_boxes, hull, linear, beam_code, Q, lengths,
+                             beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count, cuts, reach, H, dH,
+                             touch, owners, X, xi, trial, N, dN, a, stack)
             begin, stop = claim(claims, n_beam, worker)
+
+
+@njit
+def _tile_chunk(begin, stop, pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes, conn,
+                points, solid_origin, solid_h, solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin,
+                seg_offsets, seg_solid, seg_start, seg_end, seg_count, cuts, reach, H, dH, touch, owners, X, xi, trial,
+                N, dN, a, stack):
+    for e in range(begin, stop):
+        p0 = pair_offsets[e]
+        p1 = pair_offsets[e + 1]
+        m = 0
+        h = np.inf
+        big = max(abs(beam_origin[e, 0]), abs(beam_origin[e, 1]), abs(beam_origin[e, 2]))
+        for p in range(p0, p1):
+            m += crossing_count[p]
+            h = min(h, solid_h[pair_solid[p]])
+        # far from the origin the coordinates themselves carry round-off (about eps |x|; in
+        # parameter units relative to h): a beam meant to lie in a face is off it by that much
+        round_off = 2.220446049250313e-16 * big / h
+        owner_tol = SEGMENT_OWNER_TOL + 8.0 * round_off
+        touch_tol = TOUCH_TOL + 64.0 * round_off
+        if m + 2 > cuts.shape[0]:
+            cuts = np.empty(2 * (m + 2))
+            reach = np.empty(2 * (m + 2))
+            touch = np.empty(2 * (m + 2), dtype=np.bool_)
+            owners = np.empty(2 * (m + 2), dtype=np.int64)
+        # breakpoints: -1, the crossings (sorted; physically coincident ones merged), +1
+        m = np.int64(0)     # not the literal 0: _insertion_sort would compile for it as well
+        for p in range(p0, p1):
+            for q in range(crossing_count[p]):
+                cuts[1 + m] = crossing_eta[p, q]
+                m += 1
+        _insertion_sort(cuts[1:], m)
+        cuts[0] = -1.0
+        reach[0] = _merge_distance(beam_code, Q[e], lengths[e], -1.0, h, H, dH)
+        n_pts = 1
+        for q in range(1, m + 1):
+            tol = _merge_distance(beam_code, Q[e], lengths[e], cuts[q], h, H, dH)
+            if cuts[q] > cuts[n_pts - 1] + max(tol, reach[n_pts - 1]) and cuts[q] < 1.0 - tol:
+                cuts[n_pts] = cuts[q]
+                reach[n_pts] = tol
+                n_pts += 1
+        cuts[n_pts] = 1.0
+        reach[n_pts] = _merge_distance(beam_code, Q[e], lengths[e], 1.0, h, H, dH)
+        n_pts += 1
+
+        # a tangential touch: two consecutive crossings of the same face of one candidate with
+        # the centreline on that face between them (the face condition vanishes there and,
+        # both ends being roots, so does its derivative: a double root, which Newton
+        # resolves only to about sqrt(round-off), into several close cuts). Every interval
+        # between them is a touch.
+        for iv in range(n_pts - 1):
+            touch[iv] = False
+        for p in range(p0, p1):
+            for q in range(crossing_count[p]):
+                eta1 = crossing_eta[p, q]
+                eta2 = _next_crossing(crossing_eta, crossing_face, crossing_count, p, q, reach[0])
+                if eta2 == np.inf:
+                    continue
+                g = _face_condition(e, pair_solid[p], crossing_face[p, q], 0.5 * (eta1 + eta2), codes, conn,
+                                    points, solid_origin, solid_h, linear, beam_code, Q, lengths, beam_origin,
+                                    X, xi, trial, N, dN, H, dH, a, stack)
+                if not abs(g) <= touch_tol:
+                    continue
+                for iv in range(n_pts - 1):
+                    if cuts[iv] >= eta1 - 2.0 * reach[iv] and cuts[iv + 1] <= eta2 + 2.0 * reach[iv + 1]:
+                        touch[iv] = True
+
+        # owner of every interval: the lowest-index candidate containing its midpoint
+        for iv in range(n_pts - 1):
+            owners[iv] = -1
+            mid = 0.5 * (cuts[iv] + cuts[iv + 1])
+            r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
+            first = p0
+            while first < p1:
+                owner = first_containing(r0, r1, r2, e, pair_solid, first, p1, beam_origin, solid_boxes, hull,
+                                         codes, conn, points, solid_origin, solid_h, linear, owner_tol, X, xi,
+                                         trial, N, dN, a, stack, ANY_CANDIDATE)
+                if owner < 0:
+                    break
+                p = first
+                while pair_solid[p] != owner:
+                    p += 1
+                # a piece bounded by crossings of the owner's faces lies on the owner's side of
+                # those faces only if the face conditions say so at its midpoint, not within the
+                # inside tolerance: a piece that leaves through a face and comes back through it,
+                # or a beam that passes an edge or a corner just outside, crossing the faces'
+                # planes beyond the faces (within the crossings' tolerance)
+                if _beyond_bounding_faces(codes[owner], crossing_eta, crossing_face, crossing_count, p,
+                                          cuts[iv], cuts[iv + 1], 2.0 * max(reach[iv], reach[iv + 1]),
+                                          xi) <= touch_tol:
+                    owners[iv] = owner
+                    break
+                first = p + 1
+        # a run of touches stays on the side the beam is on: it joins a neighbouring piece whose
+        # owner contains it, or is not coupled (a touch from outside). A beam element that
+        # lies in a face from end to end has no such neighbour: its pieces are owned as usual.
+        iv = 0
+        while iv < n_pts - 1:
+            if not touch[iv]:
+                iv += 1
+                continue
+            last = iv
+            while last + 1 < n_pts - 1 and touch[last + 1]:
+                last += 1
+            if iv == 0 and last == n_pts - 2:
+                break
+            before = owners[iv - 1] if iv > 0 else -1
+            after = owners[last + 1] if last + 1 < n_pts - 1 else -1
+            for k in range(iv, last + 1):
+                owners[k] = -1
+                mid = 0.5 * (cuts[k] + cuts[k + 1])
+                r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
+                for neighbour in (before, after):
+                    if neighbour >= 0 and first_containing(
+                            r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes, conn,
+                            points, solid_origin, solid_h, linear, owner_tol, X, xi, trial, N, dN, a, stack,
+                            neighbour) == neighbour:
+                        owners[k] = neighbour
+                        break
+            iv = last + 1
+
+        base = seg_offsets[e]
+        n_seg = 0
+        for iv in range(n_pts - 1):
+            owner = owners[iv]
+            if owner < 0:
+                continue
+            a_eta = cuts[iv]
+            b_eta = cuts[iv + 1]
+            if n_seg > 0 and seg_solid[base + n_seg - 1] == owner and seg_end[base + n_seg - 1] == a_eta:
+                seg_end[base + n_seg - 1] = b_eta
+            else:
+                seg_solid[base + n_seg] = owner
+                seg_start[base + n_seg] = a_eta
+                seg_end[base + n_seg] = b_eta
+                n_seg += 1
+        seg_count[e] = n_seg
+
+
+#: the loop body of :func:`_tile` (per claimed chunk), optimised once: called through a symbol
+_tile_chunk_call = unlinked(_tile_chunk)
 
 
 _GAP_PROBES = 7
@@ -612,42 +643,56 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
         a_buf, stack = search_buffers()
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
-            for e in range(begin, stop):
-                p0 = pair_offsets[e]
-                p1 = pair_offsets[e + 1]
-                base = seg_offsets[e]
-                if certain[e] and seg_count[e] == 1 and seg_start[base] == -1.0 and seg_end[base] == 1.0:
-                    bad[e] = False
-                    continue
-                failed = False
-                gap_start = -1.0
-                for q in range(seg_count[e] + 1):
-                    last = q == seg_count[e]
-                    a = 1.0 if last else seg_start[base + q]
-                    if a - gap_start > PARAMETER_TOL:
-                        for k in range(1, _GAP_PROBES + 1):
-                            eta = gap_start + k * (a - gap_start) / (_GAP_PROBES + 1)
-                            r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
-                            if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull,
-                                                codes, conn, points, solid_origin, solid_h, linear, -loose, X, xi,
-                                                trial, N, dN, a_buf, stack, ANY_CANDIDATE) >= 0:
-                                failed = True
-                    if last or failed:
-                        break
-                    b = seg_end[base + q]
-                    owner = seg_solid[base + q]
-                    for k in (1, 3):
-                        eta = a + 0.25 * k * (b - a)
-                        r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
-                        if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes,
-                                            conn, points, solid_origin, solid_h, linear, loose, X, xi, trial, N, dN,
-                                            a_buf, stack, owner) != owner:
-                            failed = True
-                    if failed:
-                        break
-                    gap_start = b
-                bad[e] = failed
+            _check_tiling_chunk_call(begin, stop, seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets,
+                                     pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear,
+                                     beam_code, Q, lengths, beam_origin, certain, bad, H, dH, loose, X, xi, trial, N,
+                                     dN, a_buf, stack)
             begin, stop = claim(claims, n_beam, worker)
+
+
+@njit
+def _check_tiling_chunk(begin, stop, seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, pair_solid,
+                        codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear, beam_code, Q, lengths,
+                        beam_origin, certain, bad, H, dH, loose, X, xi, trial, N, dN, a_buf, stack):
+    for e in range(begin, stop):
+        p0 = pair_offsets[e]
+        p1 = pair_offsets[e + 1]
+        base = seg_offsets[e]
+        if certain[e] and seg_count[e] == 1 and seg_start[base] == -1.0 and seg_end[base] == 1.0:
+            bad[e] = False
+            continue
+        failed = False
+        gap_start = -1.0
+        for q in range(seg_count[e] + 1):
+            last = q == seg_count[e]
+            a = 1.0 if last else seg_start[base + q]
+            if a - gap_start > PARAMETER_TOL:
+                for k in range(1, _GAP_PROBES + 1):
+                    eta = gap_start + k * (a - gap_start) / (_GAP_PROBES + 1)
+                    r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
+                    if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull,
+                                        codes, conn, points, solid_origin, solid_h, linear, -loose, X, xi,
+                                        trial, N, dN, a_buf, stack, ANY_CANDIDATE) >= 0:
+                        failed = True
+            if last or failed:
+                break
+            b = seg_end[base + q]
+            owner = seg_solid[base + q]
+            for k in (1, 3):
+                eta = a + 0.25 * k * (b - a)
+                r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
+                if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes,
+                                    conn, points, solid_origin, solid_h, linear, loose, X, xi, trial, N, dN,
+                                    a_buf, stack, owner) != owner:
+                    failed = True
+            if failed:
+                break
+            gap_start = b
+        bad[e] = failed
+
+
+#: the loop body of :func:`_check_tiling` (per claimed chunk), optimised once: called through a symbol
+_check_tiling_chunk_call = unlinked(_check_tiling_chunk)
 
 
 @njit

@@ -20,6 +20,7 @@ from numba import literal_unroll, prange
 
 from .._config import PARAMETER_TOL, njit, njit_parallel
 from .._memory import carve
+from .._unlinked import unlinked
 from .._schedule import claim, new_claims, workers
 from ..elements import beam as beam_elements
 from ..elements.solid import dispatch as solid
@@ -49,9 +50,10 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
         a, stack = search_buffers()
         begin, stop = claim(claims, n_seg, worker)
         while begin < stop:
-            _segment_points_chunk(beam_code, begin, stop, seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
-                                  codes, conn, points, solid_origin, solid_h, linear, Q, lengths, beam_origin, eta,
-                                  xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack)
+            _segment_points_chunk_call(beam_code, begin, stop, seg_beam, seg_solid, seg_start, seg_end, seg_points,
+                                       gx, gw, codes, conn, points, solid_origin, solid_h, linear, Q, lengths,
+                                       beam_origin, eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a,
+                                       stack)
             begin, stop = claim(claims, n_seg, worker)
 
 
@@ -111,6 +113,10 @@ def _segment_points_chunk(beam_code, begin, stop, seg_beam, seg_solid, seg_start
                     status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
 
 
+#: called once per chunk through a symbol, not compiled into the kernel again (see mortar1d3d._unlinked)
+_segment_points_chunk_call = unlinked(_segment_points_chunk)
+
+
 @njit_parallel
 def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid_origin, solid_h,
                     solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin,
@@ -122,9 +128,10 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
         a, stack = search_buffers()
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
-            _element_points_chunk(beam_code, begin, stop, pair_offsets, pair_solid, gx, gw, codes, conn, points,
-                                  solid_origin, solid_h, solid_boxes, hull, linear, Q, lengths, beam_origin, beam,
-                                  owner, eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack)
+            _element_points_chunk_call(beam_code, begin, stop, pair_offsets, pair_solid, gx, gw, codes, conn,
+                                       points, solid_origin, solid_h, solid_boxes, hull, linear, Q, lengths,
+                                       beam_origin, beam, owner, eta, xi, weight, position, status, X, N, dN, H, dH,
+                                       x, trial, a, stack)
             begin, stop = claim(claims, n_beam, worker)
 
 
@@ -163,6 +170,10 @@ def _element_points_chunk(beam_code, begin, stop, pair_offsets, pair_solid, gx, 
                         owner[k] = s
                         status[k] = POINT_INSIDE
                         xi[k] = x
+
+
+#: called once per chunk through a symbol, not compiled into the kernel again (see mortar1d3d._unlinked)
+_element_points_chunk_call = unlinked(_element_points_chunk)
 
 
 def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):

@@ -16,6 +16,7 @@ from numba import prange
 
 from .._config import announce_compilation, njit, njit_parallel
 from .._memory import carve
+from .._unlinked import unlinked
 from .._schedule import claim, new_claims, workers
 from ..elements.multiplier import multiplier as multiplier_type
 from ..elements.multiplier import shape as lm_shape
@@ -135,37 +136,49 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
         kg = np.empty(4)
         begin, stop = claim(claims, n_groups, worker)
         while begin < stop:
-            for g in range(begin, stop):
-                e = p_beam[group_start[g]]
-                s = p_solid[group_start[g]]
-                nN = solid_types.n_nodes(codes[s])
-                # a call per point only for rational elements (their weights)
-                rational = solid_types.RATIONAL[codes[s]]
-                Dg[:] = 0.0
-                Mg[:] = 0.0
-                kg[:] = 0.0
-                for q in range(group_start[g], group_start[g + 1]):
-                    lm_shape(n_phi, eta[q], Phi)
-                    beam_shape(beam_code, eta[q], lengths[e], H)
-                    solid_types.shape(codes[s], xi[q], N)
-                    if rational:
-                        solid_types.weighted_values(codes[s], conn[s], points, N)
-                    w = weight[q]
-                    for j in range(n_phi):
-                        wj = w * Phi[j]
-                        kg[j] += wj
-                        for k in range(nH):
-                            Dg[j, k] += wj * H[k]
-                        for a in range(nN):
-                            Mg[j, a] += wj * N[a]
-                for j in range(n_phi):
-                    kappa_local[g, j] = kg[j]
-                    for k in range(nH):
-                        D_local[g, j * nH + k] = Dg[j, k]
-                    base = m_offsets[g] + j * nN
-                    for a in range(nN):
-                        M_local[base + a] = Mg[j, a]
+            _group_operators_chunk_call(begin, stop, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths,
+                                        n_phi, codes, conn, points, m_offsets, D_local, M_local, kappa_local, Dg, Mg,
+                                        kg, Phi, H, N, nH)
             begin, stop = claim(claims, n_groups, worker)
+
+
+@njit
+def _group_operators_chunk(begin, stop, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
+                           codes, conn, points, m_offsets, D_local, M_local, kappa_local, Dg, Mg, kg, Phi, H, N, nH):
+    for g in range(begin, stop):
+        e = p_beam[group_start[g]]
+        s = p_solid[group_start[g]]
+        nN = solid_types.n_nodes(codes[s])
+        # a call per point only for rational elements (their weights)
+        rational = solid_types.RATIONAL[codes[s]]
+        Dg[:] = 0.0
+        Mg[:] = 0.0
+        kg[:] = 0.0
+        for q in range(group_start[g], group_start[g + 1]):
+            lm_shape(n_phi, eta[q], Phi)
+            beam_shape(beam_code, eta[q], lengths[e], H)
+            solid_types.shape(codes[s], xi[q], N)
+            if rational:
+                solid_types.weighted_values(codes[s], conn[s], points, N)
+            w = weight[q]
+            for j in range(n_phi):
+                wj = w * Phi[j]
+                kg[j] += wj
+                for k in range(nH):
+                    Dg[j, k] += wj * H[k]
+                for a in range(nN):
+                    Mg[j, a] += wj * N[a]
+        for j in range(n_phi):
+            kappa_local[g, j] = kg[j]
+            for k in range(nH):
+                D_local[g, j * nH + k] = Dg[j, k]
+            base = m_offsets[g] + j * nN
+            for a in range(nN):
+                M_local[base + a] = Mg[j, a]
+
+
+#: the loop body of :func:`_group_operators` (per claimed chunk), optimised once: called through a symbol
+_group_operators_chunk_call = unlinked(_group_operators_chunk)
 
 
 @njit
