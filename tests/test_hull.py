@@ -178,30 +178,3 @@ def test_operators_are_the_same_bits_without_the_planes(element, monkeypatch):
         assert len(set(solid.element_codes[a.segments["solid_element"]].tolist())) == len(set(solid.element_codes))
         for field, values in a.point_fields.items():
             assert np.asarray(values).tobytes() == np.asarray(b.point_fields[field]).tobytes(), field
-
-
-def test_a_mesh_without_plane_types_gets_no_rows_and_the_same_bits(monkeypatch):
-    """A distorted hex8 mesh (no type of it uses planes) gets a hull of no rows, so that no point pays a
-    plane test; the operators are the bits of the zero rows (every element without a bound) that a
-    mixed mesh gives its hex8 elements."""
-    beams, _ = generate.fibre_cube(4, 30, 4)
-    solid = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (4, 4, 4), "hexahedron"), 0.1, seed=1)
-    assert context.KernelInput(beams, solid).hull.shape == (solid.n_elements, 0, 4)
-    results = {}
-    for rows in ("none", "zero"):
-        if rows == "zero":
-            # the context now takes the mesh for one with plane types: zero rows for its hex8 elements
-            monkeypatch.setattr(context, "HULL_TEST", np.ones_like(context.HULL_TEST))
-            hull = context.KernelInput(beams, solid).hull
-            assert hull.shape == (solid.n_elements, MAX_FACES, 4) and not hull.any()
-        for integration in ("element", "segment"):
-            results[rows, integration] = m13.assemble_mortar(beams, solid, integration=integration, n_gauss=4)
-    for integration in ("element", "segment"):
-        a, b = results["none", integration], results["zero", integration]
-        assert a.diagnostics["candidate_pairs"] == b.diagnostics["candidate_pairs"]
-        for name in ("D", "M"):
-            x, y = getattr(a, name).tocsr(), getattr(b, name).tocsr()
-            np.testing.assert_array_equal(x.indices, y.indices)
-            assert x.data.tobytes() == y.data.tobytes(), (integration, name)
-        assert a.kappa.tobytes() == b.kappa.tobytes()
-        assert a.segments.tobytes() == b.segments.tobytes()

@@ -42,8 +42,7 @@ class KernelInput:
         Half-spaces n·x <= c (unit normal, offset; local frame) containing each solid element with a
         margin, one along each face (:func:`~.search.solid_hulls`): a tighter bound than the box for
         elements oblique to the axes, tested per pair and per point before a Newton projection
-        (zero rows, no bound, for the types whose descriptor sets ``hull_test`` False: hex8; no rows at
-        all, shape (n, 0, 4), when no type of the mesh uses them).
+        (zero rows, no bound, for the types whose descriptor sets ``hull_test`` False: hex8).
     linear : (n, 5, 3) float64
         Each element's map linearised at its centre and inverted (exact for affine elements):
         the table of :func:`~mortar1d3d.geometry.projection.linear_maps`.
@@ -85,12 +84,9 @@ class KernelInput:
         self.Q, self.beam_origin, self.beam_boxes, _ = beam_frames(beams)
         self.lengths = beams.lengths
         self.beam_code = beams.element_type.code
-        planes = HULL_TEST[np.unique(self.codes)].any()
-        # a mesh without a type that uses planes gets none (no rows): no plane test per point
-        self.hull = (solid_hulls(self.points, self.conn, self.codes, self.solid_origin, self.solid_h) if planes
-                     else np.zeros((len(self.codes), 0, 4)))
+        self.hull = solid_hulls(self.points, self.conn, self.codes, self.solid_origin, self.solid_h)
         self.pair_offsets, self.pair_solid = find_candidate_pairs(self.beam_boxes, self.solid_boxes)
-        if planes:
+        if HULL_TEST[np.unique(self.codes)].any():
             self.pair_offsets, self.pair_solid = hull_pairs(self.pair_offsets, self.pair_solid, self.hull,
                                                             self.solid_origin, self.beam_code, self.Q, self.lengths,
                                                             self.beam_origin, self.beam_boxes)

@@ -550,11 +550,9 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
 
     Candidates are ``pair_solid[p0:p1]`` (ascending); returns -1 if none contains the point.
     With ``only`` >= 0, tests just that element. On success ``xi`` holds the point's ξ.
-    Before a non-affine element's Newton projection the point must lie in its box and in its ``hull``
-    (:func:`.search.in_hull`; zero rows for a type without planes, none at all for a mesh without
-    such types, so that a hex8 mesh pays no test and no type check per candidate): points outside
-    either are farther from the element than any inside test accepts, so these tests change no
-    result, only how many projections run.
+    Before a non-affine element's Newton projection the point must lie in its box and, for a type
+    with hull planes (``HULL_TEST``; not hex8), in its ``hull`` (:func:`.search.in_hull`): points outside either are farther from the element than
+    any inside test accepts, so these tests change no result, only how many projections run.
     This is the ownership rule of both integrations (docs/conventions.md §1-§2): a point on a face,
     edge or node shared by several elements belongs to the lowest-index one. Affine elements
     are located with their inverse map (``linear``, :func:`linear_maps`), the others by
@@ -576,7 +574,7 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
             linear_parameters(code, linear, s, x0, x1, x2, xi)
             if solid.is_inside(code, xi, tol):
                 return s
-        elif in_hull(hull, s, x0, x1, x2):
+        elif not solid.HULL_TEST[code] or in_hull(hull, s, x0, x1, x2):
             load_element(points, conn, s, code, solid_origin, X)
             if locate_point(code, X, x0, x1, x2, solid_h[s], tol, linear, s, xi, trial, N, dN, a, stack) == INSIDE:
                 return s
