@@ -52,14 +52,22 @@ def _node_sum(X, N, n):
     return x0, x1, x2
 
 
-@njit
+@njit_inline
 def map_point(code, X, xi, N):
     """x(ξ) = Σ_a N_a(ξ) X_a for element type ``code`` with local nodes ``X``; returns (x0, x1, x2).
 
-    Rational types take their node weights from ``X[:, 3]`` (``N`` then holds R_a)."""
+    Rational types take their node weights from ``X[:, 3]`` (``N`` then holds R_a). Inlined into
+    its callers with the trilinear hexahedron's case written out (no call, so no reference counting
+    of the three array arguments per evaluation); every other type goes on in :func:`_map_other`."""
     if code == _HEX8:
         hex8.shape(xi, N)
         return _node_sum(X, N, 8)
+    return _map_other(code, X, xi, N)
+
+
+@njit
+def _map_other(code, X, xi, N):
+    """:func:`map_point` of every type but hex8."""
     if code == _HEX27:
         hex27.shape(xi, N)
         return _node_sum(X, N, 27)
@@ -92,13 +100,20 @@ def _gradient_sum(X, dN, n):
     return j00, j01, j02, j10, j11, j12, j20, j21, j22
 
 
-@njit
+@njit_inline
 def jacobian(code, X, xi, N, dN):
     """J[i, k] = ∂x_i/∂ξ_k as a 9-tuple, row by row. ``N`` is scratch: a rational type leaves R_a(ξ)
-    there (polynomial types do not touch it)."""
+    there (polynomial types do not touch it). Inlined as :func:`map_point`; the other types go on in
+    :func:`_jacobian_other`."""
     if code == _HEX8:
         hex8.deriv(xi, dN)
         return _gradient_sum(X, dN, 8)
+    return _jacobian_other(code, X, xi, N, dN)
+
+
+@njit
+def _jacobian_other(code, X, xi, N, dN):
+    """:func:`jacobian` of every type but hex8."""
     if code == _HEX27:
         hex27.deriv(xi, dN)
         return _gradient_sum(X, dN, 27)

@@ -13,7 +13,7 @@ Parameter space [-1, 1]^3; node a sits at ``REFERENCE_NODES[a]``.
 """
 import numpy as np
 
-from ..._config import njit
+from ..._config import njit_inline
 from ...quadrature import hexahedron_rule
 from ..descriptor import SolidElementType
 from .hex_family import CORNERS, HEXAHEDRON
@@ -21,7 +21,7 @@ from .hex_family import CORNERS, HEXAHEDRON
 REFERENCE_NODES = CORNERS
 
 
-@njit
+@njit_inline
 def shape(xi, N):
     """Write the 8 shape function values at ``xi`` (3,) into ``N`` (8,)."""
     for a in range(8):
@@ -29,7 +29,7 @@ def shape(xi, N):
                         * (1.0 + REFERENCE_NODES[a, 2] * xi[2]))
 
 
-@njit
+@njit_inline
 def deriv(xi, dN):
     """Write ∂N_a/∂ξ_i at ``xi`` into ``dN`` (8, 3)."""
     for a in range(8):
