@@ -33,6 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..physics.coupling import chord_triplets
+from ..solvers.preconditioners import drop_weak_entries, largest_eigenvalue
 from .petsc import Entries, coo_matrix, petsc
 
 #: the PETSc option choosing the follow operator of the sweep: ``smoothed`` (default) or ``lumped``
@@ -171,7 +172,6 @@ def beam_spectral_radius(A, rows, comm):
     try:
         if comm.getRank() == 0:
             import scipy.sparse.linalg as spla
-            from ..solvers.preconditioners import largest_eigenvalue
             try:
                 def matvec(v):
                     mpi.bcast(True, root=0)
@@ -217,10 +217,7 @@ def smoothed_follow(A, E, beam_rows, rho, drop):
     d.destroy()
     P = (held[local] - jacobi @ moved).tocsr()
     if drop > 0:
-        size = np.abs(P)
-        largest = size.max(axis=1).toarray().ravel()
-        keep = size.data >= drop * np.repeat(largest, np.diff(P.indptr))
-        P = sp.csr_matrix((P.data * keep, P.indices, P.indptr), shape=P.shape)
+        P = drop_weak_entries(P, drop)
     P.eliminate_zeros()
     rows = sp.vstack([held[:local[0] if len(local) else n_local], P], format="csr")
     rows.sort_indices()

@@ -247,11 +247,18 @@ def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
     for _ in range(steps):
         P = (P - jacobi @ (A_bs + A_bb @ P)).tocsr()
     if drop > 0:
-        size = np.abs(P)
-        largest = size.max(axis=1).toarray().ravel()
-        keep = size.data >= drop * np.repeat(largest, np.diff(P.indptr))
-        P = sp.csr_matrix((P.data * keep, P.indices, P.indptr), shape=P.shape)
-        P.eliminate_zeros()
+        P = drop_weak_entries(P, drop)
+    return P
+
+
+def drop_weak_entries(P, drop):
+    """``P`` (CSR) without the entries below ``drop`` times the largest magnitude of their row
+    (stored zeros removed); also the PETSc sweep's rule (:mod:`mortar1d3d.distributed.auxiliary`)."""
+    size = np.abs(P)
+    largest = size.max(axis=1).toarray().ravel()
+    keep = size.data >= drop * np.repeat(largest, np.diff(P.indptr))
+    P = sp.csr_matrix((P.data * keep, P.indices, P.indptr), shape=P.shape)
+    P.eliminate_zeros()
     return P
 
 
