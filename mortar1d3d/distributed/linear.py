@@ -32,6 +32,22 @@ def null_space(modes, comm):
     return PETSc.NullSpace().create(vectors=vecs, comm=comm)
 
 
+#: PETSc's KSP_DIVERGED_INDEFINITE_PC: CG met a preconditioner that is not positive definite
+DIVERGED_INDEFINITE_PC = -8
+
+
+def divergence_hint(method, reason):
+    """What a user can do when a penalty solve did not converge for ``reason`` (PETSc's converged
+    reason), appended to the error; empty where there is nothing specific to say."""
+    if method == "aux" and reason == DIVERGED_INDEFINITE_PC:
+        return ("; the auxiliary-space sweep became indefinite, as it can where the partition cuts a beam "
+                "across three or more ranks (its block-Jacobi beam solve is then not a convergent smoother; "
+                "docs/distributed.md, 'Not yet distributed'): solve the beam block exactly with the PETSc "
+                "options -mortar_beam_pc_type lu -mortar_beam_pc_factor_mat_solver_type mumps, or take GAMG "
+                "on the whole system with -mortar_penalty_pc gamg")
+    return ""
+
+
 class LinearSolver:
     """One KSP configuration, applied to each tangent system.
 
@@ -109,7 +125,8 @@ class LinearSolver:
             ksp.destroy()
         if reason < 0:
             raise ConvergenceError(f"PETSc KSP {info['ksp']} with {info['pc']} did not converge "
-                                   f"(reason {reason}) after {info['iterations']} iterations")
+                                   f"(reason {reason}) after {info['iterations']} iterations"
+                                   + divergence_hint(self.method, reason))
         return info
 
     def _configure(self, A, b, rtol):
