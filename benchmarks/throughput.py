@@ -22,7 +22,7 @@ machine's speed of the moment cancels.
 
 The run time of kernels compiled at another LLVM optimisation level: ``NUMBA_OPT=N`` with a
 cache directory of that level's own (Numba's cache does not record the level, so a shared one would
-load kernels compiled at another), e.g. ``NUMBA_OPT=1 NUMBA_CACHE_DIR=/tmp/opt1 ... --scene-warmup``.
+load kernels compiled at another), e.g. ``NUMBA_OPT=1 NUMBA_CACHE_DIR=CACHE_DIR_OPT1 ... --scene-warmup``.
 """
 import argparse
 import resource

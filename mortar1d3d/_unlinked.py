@@ -19,6 +19,13 @@ This reaches into Numba's internals (the code library's ``_reload_init``, the ca
 which ``tests/test_unlinked.py`` checks on the Numba the tests run with. On a Numba older than the
 one it was written for (:data:`SUPPORTED_FROM`), :func:`unlinked` returns the kernel itself: an
 ordinary call, compiled into the caller as before (the same results, a longer first compile).
+
+A constraint: a kernel that calls through :func:`unlinked` must itself be called from Python only,
+not from another compiled function. The hook travels in the library of the function holding the
+call; a compiled function calling that kernel, compiled in a process that loaded the kernel from
+the cache, would be cached without it, and a later process loading it would meet an unresolved
+symbol. Every kernel using it today (the chunked parallel kernels of ``geometry``, ``integration``
+and ``mortar``) is called from Python.
 """
 
 #: the oldest Numba whose internals :func:`unlinked` was written and tested against

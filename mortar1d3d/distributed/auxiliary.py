@@ -189,7 +189,7 @@ def beam_spectral_radius(A, rows, comm):
         x.destroy(), y.destroy(), entries.scatter.destroy(), entries.values.destroy()
     if isinstance(found, Exception):
         raise found
-    return found
+    return max(found, 1.0)          # as the serial code: the scaled block's unit diagonal bounds λ_max below
 
 
 def smoothed_follow(A, E, beam_rows, rho, drop):

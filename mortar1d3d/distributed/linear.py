@@ -41,7 +41,7 @@ def divergence_hint(method, reason):
     reason), appended to the error; empty where there is nothing specific to say."""
     if method == "aux" and reason == DIVERGED_INDEFINITE_PC:
         return ("; the auxiliary-space sweep became indefinite, as it can where the partition cuts a beam "
-                "across three or more ranks (its block-Jacobi beam solve is then not a convergent smoother; "
+                "across three or more ranks (probably because its block-Jacobi beam solve is then not a convergent smoother; "
                 "docs/distributed.md, 'Not yet distributed'): solve the beam block exactly with the PETSc "
                 "options -mortar_beam_pc_type lu -mortar_beam_pc_factor_mat_solver_type mumps, or take GAMG "
                 "on the whole system with -mortar_penalty_pc gamg")

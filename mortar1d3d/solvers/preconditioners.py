@@ -242,7 +242,9 @@ def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
     d = A_bb.diagonal()
     scale = sp.diags(1.0 / np.sqrt(d))
     scaled = (scale @ A_bb @ scale).tocsr()
-    rho = largest_eigenvalue(scaled)
+    # scaled has a unit diagonal, so its λ_max is at least 1: a Lanczos start that misses the top of
+    # the spectrum (an invariant subspace of the ones vector) cannot make ω blow up
+    rho = max(largest_eigenvalue(scaled), 1.0)
     jacobi = sp.diags(1.0 / (rho * d))
     for _ in range(steps):
         P = (P - jacobi @ (A_bs + A_bb @ P)).tocsr()
