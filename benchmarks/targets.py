@@ -117,45 +117,50 @@ def _median_ratio(rounds, key):
 
 
 def figures(records):
-    """key -> (figure, where it came from), from the records of the children."""
+    """key -> (figure, where it came from, the step that measured it), from the records of the children."""
     out = {}
+
+    def put(key, value, note, record):
+        out[key] = (value, note, record.get("step"))
+
     for r in records:
         kind = r["kind"]
         if kind == "throughput" and r["distort"] > 0:
-            out[f"hex8_{r['integration']}"] = (
-                r["gp_per_s_1thread"], f"median of the rounds; control {1e3 * r['control_1thread_s']:.0f} ms")
+            put(f"hex8_{r['integration']}", r["gp_per_s_1thread"],
+                f"median of the rounds; control {1e3 * r['control_1thread_s']:.0f} ms", r)
         elif kind == "throughput":
-            out[f"threads_{r['integration']}"] = (
-                r["of_claimed"], f"claimed control's speed-up {r['claimed_speedup']:.2f}x")
+            put(f"threads_{r['integration']}", r["of_claimed"],
+                f"claimed control's speed-up {r['claimed_speedup']:.2f}x", r)
         elif kind == "cold_start":
             if r["what"] in ("warmup", "element") and r.get("cold"):      # none with a filled --cache
-                cold = r["cold"]
-                out[f"{r['what']}_cold"] = (cold["cpu_s"], f"wall {cold['wall_s']:.0f} s")
+                put(f"{r['what']}_cold", r["cold"]["cpu_s"], f"wall {r['cold']['wall_s']:.0f} s", r)
             warm = [w for w in r.get("warm") or [] if w.get("in_process_s") is not None]
             if warm:
-                times = [w["in_process_s"] for w in warm]
-                out[f"{r['what']}_warm"] = (float(np.median(times)), f"median of {len(warm)} warm start(s), "
-                                                                     f"wall {np.median([w['wall_s'] for w in warm]):.1f} s")
+                put(f"{r['what']}_warm", float(np.median([w["in_process_s"] for w in warm])),
+                    f"median of {len(warm)} warm start(s), wall {np.median([w['wall_s'] for w in warm]):.1f} s", r)
         elif kind == "penalty_solve" and r["solver"].startswith("aux"):
-            out[f"penalty_{r['n']}_cpu"] = (r["cpu_per_solid"], f"{r['cpu_s']:.1f} CPU s, {r['unknowns']} unknowns, "
-                                                                f"peak {r['peak_memory_gb']:.1f} GB")
-            out[f"penalty_{r['n']}_its"] = (r["iterations_per_solid"], f"{r['iterations']} iterations")
+            put(f"penalty_{r['n']}_cpu", r["cpu_per_solid"],
+                f"{r['cpu_s']:.1f} CPU s, {r['unknowns']} unknowns, peak {r['peak_memory_gb']:.1f} GB", r)
+            put(f"penalty_{r['n']}_its", r["iterations_per_solid"], f"{r['iterations']} iterations", r)
         elif kind == "lagrange_solve" and r["path"] == "lagrange gmres":
-            out["lagrange_cpu"] = (r["cpu_per_penalty"], f"{r['cpu_s']:.1f} CPU s, {r['iterations']} iterations")
+            put("lagrange_cpu", r["cpu_per_penalty"], f"{r['cpu_s']:.1f} CPU s, {r['iterations']} iterations", r)
         elif kind == "scaling_assembly":
-            out[f"slope_{r['integration']}"] = (r["slope"], f"{r['points'][0]:.0e} to {r['points'][-1]:.0e} points")
+            put(f"slope_{r['integration']}", r["slope"], f"{r['points'][0]:.0e} to {r['points'][-1]:.0e} points", r)
         elif kind == "scaling_newton":
-            out["slope_newton"] = (r["slope"], f"{r['unknowns'][0]:.0e} to {r['unknowns'][-1]:.0e} unknowns")
+            put("slope_newton", r["slope"], f"{r['unknowns'][0]:.0e} to {r['unknowns'][-1]:.0e} unknowns", r)
     # the curved types against the distorted hex8 of the same round
     rounds = {}
     for r in records:
         if r["kind"] == "newton_path":
             rounds.setdefault(r["round"], {})[r["scene"]] = r
-    per_round = []
+    per_round, first = [], {}
     for found in rounds.values():
         base = found.get("hex8")
         if base is None:
             continue
+        for scene in ("hex27", "tet10", "nurbs27"):
+            if scene in found:
+                first.setdefault(scene, found[scene])
         per_round.append({f"{scene}_{i}": found[scene][f"{i}_gp_per_s"] / base[f"{i}_gp_per_s"]
                           for scene in ("hex27", "tet10", "nurbs27") if scene in found
                           for i in ("element", "segment")})
@@ -163,22 +168,23 @@ def figures(records):
         for i in ("element", "segment"):
             value = _median_ratio(per_round, f"{scene}_{i}")
             if value is not None:
-                out[f"{scene}_{i}"] = (value, f"median of {len(per_round)} round(s)")
+                put(f"{scene}_{i}", value, f"median of {len(per_round)} round(s), each over its hex8", first[scene])
     return out
 
 
 def table(found, commands):
-    """Rows (item, what, figure, target, ratio, met, note, command) for every target measured."""
+    """Rows (item, what, figure, target, ratio, met, note, command) for every target measured;
+    ``commands``: the command line of each step by its name."""
     rows = []
     for item, key, what, target, larger in TARGETS:
         if key not in found:
             continue
-        value, note = found[key]
+        value, note, step = found[key]
         ratio = value / target
         met = ratio >= 1.0 if larger else ratio <= 1.0
         rows.append(dict(item=item, key=key, what=what, figure=value, target=target,
                          direction=">=" if larger else "<=", ratio=ratio, met=bool(met), note=note,
-                         command=commands.get(key, "")))
+                         command=commands.get(step, "")))
     return rows
 
 
@@ -193,24 +199,6 @@ def format_table(rows):
                      f"{r['direction'] + ' ' + _fmt(r['target']):>10}  {r['ratio']:>10.2f}  "
                      f"{'yes' if r['met'] else 'no':>4}  {r['note']}")
     return lines
-
-
-def _command_of(key, ran):
-    """The command line of the step that measured ``key``."""
-    script = {"hex8": "throughput.py", "threads": "throughput.py", "warmup": "cold_start.py",
-              "element": "cold_start.py", "first": "cold_start.py", "penalty": "penalty_solve.py",
-              "lagrange": "lagrange_solve.py", "slope": "scaling.py"}.get(key.split("_")[0], "newton_path.py")
-    for name, item, s, argv, _ in ran:
-        if s != script:
-            continue
-        if s == "throughput.py" and (key.startswith("hex8")) != ("--distort" in argv):
-            continue
-        if s == "cold_start.py" and argv[1] != key.split("_")[0]:
-            continue
-        if s == "newton_path.py":
-            argv = ["--scene", "hex8|" + key.split("_")[0]] + argv[2:]
-        return "benchmarks/" + " ".join([s] + argv)
-    return ""
 
 
 def main(argv=None):
@@ -251,7 +239,8 @@ def main(argv=None):
         print(f"{time.perf_counter() - t0:.0f} s, {len(got)} figure(s), load {load[-1]:.1f}{status}", flush=True)
 
     found = figures(records)
-    rows = table(found, {key: _command_of(key, plan) for key in found})
+    rows = table(found, {name: "benchmarks/" + " ".join([script, *child_args])
+                         for name, _, script, child_args, _ in plan})
     print()
     print(f"issue 22 targets ({'quick' if args.quick else 'full'} run, {time.perf_counter() - t_all:.0f} s; "
           f"1-minute load average {min(load):.1f}-{max(load):.1f}; figures are the machine's of the moment)")

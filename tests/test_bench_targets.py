@@ -108,3 +108,17 @@ def test_record_appends_json_lines_only_when_asked(tmp_path, monkeypatch):
     record("y", b=[1, 2])
     assert read(path) == [{"kind": "x", "a": 1}, {"kind": "y", "b": [1, 2]}]
     assert json.loads(path.read_text().splitlines()[1])["kind"] == "y"
+
+
+def test_each_row_names_the_command_of_the_step_that_measured_it():
+    records = [dict(r, step="throughput_distorted") if r["kind"] == "throughput" and r["distort"] > 0 else
+               dict(r, step=f"newton_path_{r['scene']}_{r['round']}") if r["kind"] == "newton_path" else r
+               for r in RECORDS]
+    commands = {"throughput_distorted": "benchmarks/throughput.py --distort 0.1",
+                "newton_path_hex27_0": "benchmarks/newton_path.py --scene hex27",
+                "newton_path_tet10_0": "benchmarks/newton_path.py --scene tet10"}
+    rows = {r["key"]: r for r in targets.table(targets.figures(records), commands)}
+    assert rows["hex8_segment"]["command"] == "benchmarks/throughput.py --distort 0.1"
+    assert rows["hex27_element"]["command"] == "benchmarks/newton_path.py --scene hex27"
+    assert rows["tet10_segment"]["command"] == "benchmarks/newton_path.py --scene tet10"
+    assert rows["lagrange_cpu"]["command"] == ""                  # its record names no step here
