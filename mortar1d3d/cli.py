@@ -18,6 +18,13 @@ def _run(args):
     from .solvers.newton import ConvergenceError
     try:
         scene = _read_scene(args.scene)
+        if args.backend:
+            scene.analysis = {**scene.analysis, "backend": args.backend}
+        ranks = launched_ranks()
+        if ranks > 1 and scene.analysis.get("backend") != "petsc":
+            raise SceneError(f"analysis.backend = \"{scene.analysis.get('backend')}\" under an MPI launcher with "
+                             f"{ranks} processes: each would solve the whole scene and write the same files; "
+                             "set analysis.backend = \"petsc\" (or run --backend petsc), or run without mpiexec")
         if not args.quiet:
             print(f"mortar1d3d run {args.scene}: {scene!r}", flush=True)
         start = time.perf_counter()
@@ -38,6 +45,22 @@ def _run(args):
         print(f"wrote {len(paths)} files to {out}/ (open {out / 'result.pvd'} in ParaView) "
               f"in {time.perf_counter() - start:.2f} s")
     return 0
+
+
+#: environment variables in which MPI launchers give the number of processes started (Open MPI,
+#: MPICH/Intel MPI and Slurm's PMI, MVAPICH)
+LAUNCHER_SIZE_VARIABLES = ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "MV2_COMM_WORLD_SIZE")
+
+
+def launched_ranks(environ=None):
+    """The number of processes an MPI launcher (``mpiexec``, ``srun``) started with this one, 1 if
+    none did, read from the launcher's environment without starting MPI."""
+    environ = os.environ if environ is None else environ
+    for name in LAUNCHER_SIZE_VARIABLES:
+        value = environ.get(name, "")
+        if value.isdigit() and int(value) > 0:
+            return int(value)
+    return 1
 
 
 def _read_scene(path):
@@ -135,6 +158,8 @@ def _main(argv):
     run.add_argument("--out", help="output directory (default results/<scene name>)")
     run.add_argument("--samples", type=int, default=8, help="beam samples per element in the output")
     run.add_argument("--quiet", action="store_true", help="no progress output")
+    run.add_argument("--backend", choices=("serial", "petsc"),
+                     help="analysis.backend instead of the scene's (petsc: under mpiexec -n N, docs/distributed.md)")
     pl = sub.add_parser("plan", help="print what solving a scene file will compute")
     pl.add_argument("scene")
     chk = sub.add_parser("check", help="run a 4C input file (.4C.yaml) and compare with its RESULT DESCRIPTION")

@@ -557,6 +557,46 @@ def test_benchmark_and_composite_plate_solves_equal_the_serial_ones(name):
         assert out["z"] <= 1e-10, (name, label, out)
 
 
+def test_composite_plate_with_lagrange_multipliers_equals_the_serial_run():
+    """The composite plate (hex20, anchored fibres, nonlinear) with Lagrange multipliers: the
+    displacements, the multipliers λ and the line load equal the serial ones to 1e-10 (the penalty
+    plate above checks the displacements only: its line load carries the penalty's conditioning)."""
+    def make():
+        scene = _plate_scene()
+        scene.coupling = {**scene.coupling, "enforcement": "lagrange"}
+        return scene
+
+    serial = m13.solve(_with(make(), solver="direct", backend="serial"))
+    n = serial.model.n_displacement_dofs
+    assert serial.model.n_multipliers > 0
+
+    def check(serial, result):
+        return {"u": _relative(result.z[:n], serial.z[:n]), "lambda": _relative(result.z[n:], serial.z[n:]),
+                "line_load": _relative(result.line_load, serial.line_load),
+                "iterations": [s.iterations for s in result.steps]}
+
+    for label, out in _compare(serial, lambda: _with(make(), solver="direct", backend="petsc"), check):
+        assert out["iterations"] == [s.iterations for s in serial.steps], label
+        assert max(out["u"], out["lambda"], out["line_load"]) <= 1e-10, (label, out)
+
+
+@pytest.mark.parametrize("enforcement", ["penalty", "lagrange"])
+def test_a_floating_body_stops_every_rank_before_the_solve(enforcement):
+    """The serial support check (rigid-body modes) runs before any distributed solve, and its
+    SceneError is raised on every rank (none is left waiting for rank 0)."""
+    from mortar1d3d.scene import SceneError
+
+    def make():
+        scene = _cube_scene()()
+        scene.dirichlet = []
+        scene.coupling = {**scene.coupling, "enforcement": enforcement}
+        return _with(scene, backend="petsc")
+
+    with pytest.raises(SceneError, match=r"^dirichlet: the solid with its coupled beams can move freely"):
+        m13.solve(make())
+    COMM.barrier()          # every rank got here: none waits in a collective call
+
+
 # --------------------------------------------------------------------------------------------
 # features lifted in the third slice: follower loads, clamps, fibre materials; dependent rows
 # --------------------------------------------------------------------------------------------

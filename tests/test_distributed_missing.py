@@ -65,3 +65,29 @@ def test_an_indefinite_sweep_names_what_to_do():
     assert "-mortar_penalty_pc gamg" in hint and "three or more ranks" in hint
     assert divergence_hint("aux", -3) == ""                  # KSP_DIVERGED_ITS: nothing specific
     assert divergence_hint("gamg", DIVERGED_INDEFINITE_PC) == ""
+
+
+@pytest.mark.parametrize("environ, ranks", [({}, 1), ({"OMPI_COMM_WORLD_SIZE": "4"}, 4), ({"PMI_SIZE": "3"}, 3),
+                                            ({"MV2_COMM_WORLD_SIZE": "2"}, 2), ({"PMI_SIZE": ""}, 1)])
+def test_launched_ranks_read_from_the_launcher_environment(environ, ranks):
+    from mortar1d3d.cli import launched_ranks
+    assert launched_ranks(environ) == ranks
+
+
+def test_a_serial_run_under_mpiexec_stops_instead_of_solving_once_per_process(monkeypatch, tmp_path, capsys):
+    """Under ``mpiexec -n 2`` a serial scene would be solved by both processes, which would write the
+    same files: the command refuses it naming the key, and --backend overrides the scene's."""
+    path = tmp_path / "scene.toml"
+    path.write_text('[solid]\nmesh = { box = [[0, 0, 0], [1, 1, 1]], cells = [1, 1, 1] }\n'
+                    'material = { model = "linear_elastic", E = 1.0, nu = 0.3 }\n'
+                    '[[dirichlet]]\non = "solid:x_min"\nvalue = [0, 0, 0]\n'
+                    '[analysis]\nkinematics = "linear"\n')
+    monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert 'analysis.backend = "serial" under an MPI launcher with 2 processes' in err
+    assert not (tmp_path / "out").exists()
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet", "--backend", "serial"]) == 2
+    monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "1")
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet", "--backend", "serial"]) == 0
+    assert (tmp_path / "out" / "result.pvd").exists()

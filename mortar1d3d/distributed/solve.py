@@ -16,8 +16,9 @@ input is replicated in this slice); the work that grows with the model is distri
   :func:`~mortar1d3d.solvers.newton.solve_load_steps` (nonlinear: load steps, Newton iterations,
   its convergence tests) or :func:`~mortar1d3d.solvers.newton.solve_linear_step` (linear) runs on
   it, on every rank, with the iterate, residual and increment distributed (each rank its part);
-* each linear solve is a PETSc KSP (:mod:`.linear`): CG + GAMG with the rigid-body modes, MUMPS,
-  or for multipliers a Schur-complement field split.
+* each linear solve is a PETSc KSP (:mod:`.linear`): for penalty systems CG with the
+  auxiliary-space sweep (:mod:`.auxiliary`, the default) or with GAMG and the rigid-body modes,
+  MUMPS, or for multipliers a Schur-complement field split.
 
 The solution is gathered on rank 0, which builds the :class:`~mortar1d3d.result.Result` from the
 gathered operators (no serial mortar assembly); the other ranks return None.
@@ -28,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..model.checks import check_linear_displacements
 from ..physics.coupling import expand3, coupled_nodes, point_projection, point_triplets
 from ..scene import SceneError
 from .assemble import assemble_distributed
@@ -461,11 +463,12 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     clock("coupling")
     physics = OwnedPhysics(model, part, layout, rank)         # in the numbering of all unknowns
     clock("stiffness")
-    served, dependent = None, None
+    # the serial model on rank 0 from the gathered operators, before any solve: its preparation runs
+    # the serial checks of the supports (rigid-body and zero-energy modes), which stop every rank
+    served, dependent = _served_model(model, ops, numbering, comm), None
     if lagrange:
         # the serial check of dependent multiplier rows, on rank 0 (same rows, same warning, same
         # SceneError); the other ranks learn which multipliers are left out
-        served = _served_model(model, ops, numbering, comm)
         found = None
         if rank == 0:
             try:
@@ -473,10 +476,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
                 found = dependent.rows
             except SceneError as exc:
                 found = exc
-        found = comm.tompi4py().bcast(found, root=0)
-        if isinstance(found, SceneError):
-            raise SceneError(str(found))
-        dropped = found
+        dropped = _raise_together(comm, found)
     system = DistributedSystem(model, physics, layout, coupling, physics.body_forces(model._body_loads.values),
                                _linear_solver(model, layout, comm, coupling, kappa_rows), comm,
                                dropped=dropped if lagrange else ())
@@ -539,8 +539,6 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     if weighted is not None:
         weighted.destroy()
     info_solve = system.last_linear_info or {}
-    if not lagrange:        # (with multipliers made before the solve)
-        served = _served_model(model, ops, numbering, comm)
     info = {"ranks": size, "unknowns": system.n_unknowns, "owned": np.diff(layout.ranges).tolist(),
             "iterations": info_solve.get("iterations"),
             "ksp": info_solve.get("ksp"), "pc": info_solve.get("pc"), "partition": part.stats,
@@ -552,6 +550,8 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
                         "ghost_updates": system.ghost_updates}}
     if rank != 0:
         return None
+    if model.linear:
+        check_linear_displacements(served, z)      # warns as the serial solve does (on rank 0)
     # the reactions come from the last residual: of the linear step (r(z0) + K (z - z0), as the serial
     # path keeps it) or of the last Newton iterate
     served.last_residual = last_residual
@@ -565,14 +565,32 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
 
 def _served_model(model, ops, numbering, comm):
     """Collective: the serial model prepared with the gathered operators on rank 0 (no serial
-    mortar assembly), which builds the Result; None on the other ranks."""
+    mortar assembly), which builds the Result; None on the other ranks.
+
+    Preparing it runs the serial checks of the supports (:meth:`~mortar1d3d.model.model.Model.check_supports`);
+    a SceneError they raise on rank 0 is raised on every rank (none waits for rank 0 in a later
+    collective call)."""
     from ..model.model import Model
     # every rank sends its part of the operators and points, rank 0 keeps them
     outputs = [(d.gathered(), _gathered_points(comm, d.local)) for d in ops]
-    if comm.getRank() != 0:
-        return None
-    gathered = [_serial_operators(model, g, out, numbering, k) for k, (g, out) in enumerate(zip(model.groups, outputs))]
-    return Model(model_built(model)).prepare(operators=gathered or None)
+    served = None
+    if comm.getRank() == 0:
+        try:
+            gathered = [_serial_operators(model, g, out, numbering, k)
+                        for k, (g, out) in enumerate(zip(model.groups, outputs))]
+            served = Model(model_built(model)).prepare(operators=gathered or None)
+        except SceneError as exc:
+            served = exc
+    _raise_together(comm, served if isinstance(served, SceneError) else None)
+    return served
+
+
+def _raise_together(comm, found):
+    """Collective: rank 0's ``found`` on every rank, raised there as a SceneError if it is one."""
+    found = comm.tompi4py().bcast(found, root=0)
+    if isinstance(found, SceneError):
+        raise SceneError(str(found))
+    return found
 
 
 def _dependent_rows(served):
