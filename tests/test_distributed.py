@@ -57,6 +57,9 @@ SCENES = {
     "cube-line3-auto": lambda: _cube("line3", "auto"),
     "rebar": lambda: _scene_meshes(m13.Scene.from_toml(ROOT / "examples" / "scenes" / "rebar_cantilever.toml")),
     "plate": lambda: _scene_meshes(_plate_scene()),
+    # the benchmark scene itself (docs/conventions.md §5): 8000 hex8, 1000 fibres of 20 elements
+    "benchmark": lambda: (*m13.generate.fibre_cube(20, 1000, 20)[::-1],
+                          {"integration": "segment", "n_gauss": 4, "lm": "line2", "search_points": 6}),
 }
 
 
