@@ -890,6 +890,82 @@ def test_auxiliary_space_needs_few_iterations_where_gamg_needs_many():
     assert max(out["aux"][1], out["gamg"][1]) <= 1e-6, out
 
 
+def _dealt_beams(solid, beams, n):
+    """The METIS partition of the solid with every beam's elements dealt to the ranks in turn (element
+    e to rank e mod n): each beam cut at every node, over all ranks."""
+    return partition(solid, beams, n, "metis").solid_part, [np.arange(b.n_elements) % n for b in beams]
+
+
+def test_beam_solve_rows_hold_whole_beams():
+    """The beam block of the sweep in whole beams (auxiliary.beam_solve_rows), for 3 parts on any
+    number of ranks: the ranks' rows are disjoint and together every beam unknown; each beam's rows
+    go to the rank owning most of its elements (the fibre cube's fibres have 10 elements each: fibre
+    f's dealt to 3 ranks give 4 to rank f mod 3); a beam the partition keeps on one rank is solved
+    by the rank owning its rows."""
+    from mortar1d3d.distributed.auxiliary import beam_of_element, beam_solve_rows, whole_beam_part
+    from mortar1d3d.distributed.solve import SystemLayout
+    from mortar1d3d.model.model import Model
+    model = Model(build(_benchmark_scene()()))
+    beams = [g.mesh for g in model.groups]
+    beam = beam_of_element(beams[0])
+    assert np.array_equal(beam, np.repeat(np.arange(12), 10))
+    for label, (solid_part, beam_part) in (("metis", (None, None)), ("dealt", _dealt_beams(model.solid_mesh, beams, 3))):
+        part = (partition(model.solid_mesh, beams, 3, "metis") if solid_part is None else
+                partition(model.solid_mesh, beams, 3, solid_part=solid_part, beam_part=beam_part))
+        numbering = Numbering.of(part, model.solid_mesh, beams, "line2", [g.type for g in model.groups])
+        layout = SystemLayout.of(numbering, model.dofmap, [g.type.dofs_per_node for g in model.groups])
+        rows = [beam_solve_rows(model, part, layout, r) for r in range(3)]
+        every = np.sort(np.concatenate(rows))
+        assert np.array_equal(every, np.sort(layout.of_serial[model.groups[0].dofs.slice])), label
+        solver = whole_beam_part(beams[0], part.beam_part[0], 3)
+        assert all(len(set(solver[beam == b])) == 1 for b in range(12)), label
+        # the first node of every element in the rows of its beam's rank
+        per_node = model.groups[0].type.dofs_per_node
+        rank_of_row = np.zeros(layout.ranges[-1], dtype=np.int64)
+        for r in range(3):
+            rank_of_row[rows[r]] = r
+        node_rank = rank_of_row[layout.of_serial[model.groups[0].dofs.start + per_node * beams[0].elements[:, 0]]]
+        assert np.array_equal(node_rank, solver), label
+        if label == "dealt":
+            assert np.array_equal(solver, np.repeat(np.arange(12) % 3, 10)), label
+        # a beam the partition keeps on one rank is solved by the rank that owns its rows (nothing moves)
+        whole = np.array([len(set(part.beam_part[0][beam == b])) == 1 for b in range(12)])
+        owner = np.searchsorted(layout.ranges, np.arange(layout.ranges[-1]), side="right") - 1
+        kept = whole[beam]
+        assert np.array_equal(owner[layout.of_serial[model.groups[0].dofs.start + per_node * beams[0].elements[kept, 0]]],
+                              solver[kept]), label
+        assert label == "dealt" or kept.any(), label
+
+
+def test_sweep_on_beams_cut_over_every_rank_reaches_the_serial_solution():
+    """Beams cut at every node (each fibre's elements dealt to the ranks in turn): the default sweep
+    solves each beam whole (its beam block gathered on one rank), so CG reaches the serial direct
+    solution to 1e-10 (rtol 1e-13) on 1, 2, 3 ranks. With the beam block of each rank's owned beam
+    unknowns (-mortar_beam_blocks rank, the sweep before) block Jacobi is no convergent smoother of
+    beams cut over three ranks and CG stops at 3 ranks with PETSc's KSP_DIVERGED_INDEFINITE_PC (−8);
+    on 1 and 2 ranks it converges (two blocks cannot push λ_max(J⁻¹ A_bb) past 2)."""
+    from mortar1d3d.distributed.solve import solve_distributed
+    from mortar1d3d.errors import ConvergenceError
+    make = _benchmark_scene(3, 12)
+    serial = m13.solve(_with(make(), solver="direct", backend="serial"))
+    out = {}
+    for blocks in ("beam", "rank"):
+        found = None
+        try:
+            with _petsc_options(mortar_beam_blocks=blocks):
+                result = solve_distributed(_with(make(), rtol=1e-13), comm=COMM, parts=_dealt_beams)
+            if RANK == 0:
+                found = (result.distributed["iterations"], _relative(result.z, serial.z))
+        except ConvergenceError as exc:
+            found = ("reason -8" in str(exc), None)
+        out[blocks] = COMM.tompi4py().bcast(found, root=0)
+    assert out["beam"][1] is not None and out["beam"][1] <= 1e-10, out
+    if SIZE >= 3:
+        assert out["rank"] == (True, None), out
+    else:
+        assert out["rank"][1] is not None and out["rank"][1] <= 1e-10, out
+
+
 @pytest.mark.parametrize("preconditioner", ["aux", "gamg"])
 @pytest.mark.parametrize("reuse", ["1", "0"])
 def test_newton_reuses_the_preconditioner_with_the_same_iterations(preconditioner, reuse):
