@@ -263,13 +263,19 @@ def smoothed_follow(A, E, beam_rows, rho, drop):
     local = np.asarray(beam_rows) - first
     n_local, n_solid = last - first, E.getSize()[1]
 
-    def rows_of(M):
+    def rows_of(M, n_rows):
         indptr, indices, data = M.getValuesCSR()
-        return sp.csr_matrix((data, indices, indptr), shape=(n_local, n_solid))
+        return sp.csr_matrix((data, indices, indptr), shape=(n_rows, n_solid))
 
-    product = A.matMult(E)                      # beam rows: A_BS + A_BB P
-    held, moved = rows_of(E), rows_of(product)[local]
-    product.destroy()
+    # A_BS + A_BB P: the beam rows of A E only (the solid rows of A E, K_SS + A_SB P, are not needed)
+    comm = A.getComm()
+    columns = A.getOwnershipRangeColumn()
+    rows_is = PETSc.IS().createGeneral(np.asarray(beam_rows).astype(PETSc.IntType), comm=comm)
+    cols_is = PETSc.IS().createStride(columns[1] - columns[0], first=columns[0], step=1, comm=comm)
+    beam_part = A.createSubMatrix(rows_is, cols_is)
+    product = beam_part.matMult(E)
+    held, moved = rows_of(E, n_local), rows_of(product, len(local))
+    product.destroy(), beam_part.destroy(), rows_is.destroy(), cols_is.destroy()
     d = A.getDiagonal()
     jacobi = sp.diags(1.0 / (rho * d.getArray()[local]))
     d.destroy()
