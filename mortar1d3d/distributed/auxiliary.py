@@ -12,14 +12,20 @@ the penalty ties together. As in the serial library, the space is split into
   carries, an elasticity matrix on the solid nodes, preconditioned by one GAMG V-cycle with the
   solid's rigid-body modes;
 - the *beam space*: ``A_bb`` (the beam rows and columns of ``A``), block-diagonal per beam, solved
-  by block Jacobi over the ranks with a sparse LU of each rank's block (exact when no beam is cut
-  by the partition; a cut beam's coupling across ranks is what block Jacobi leaves out).
+  exactly by block Jacobi with a sparse LU of each rank's block, the blocks made of whole beams
+  (:func:`beam_solve_rows`): a beam the partition cuts is solved by the rank owning most of its
+  elements, which gets the beam's other rows from their owners (``MatCreateSubMatrix``).
 
-One application is the symmetric multiplicative sweep beam → auxiliary → beam (symmetric, so CG
-applies). PETSc options: prefix ``mortar_aux_`` for the KSP/GAMG of ``A_aux`` (e.g.
+One application is the symmetric multiplicative sweep beam → auxiliary → beam, symmetric, and
+positive definite because the beam solve is exact (a convergent beam smoother suffices:
+``λ_max(J⁻¹ A_bb) < 2``). The blocks of each rank's owned beam unknowns
+(``-mortar_beam_blocks rank``, the sweep before) are not: a beam cut over three ranks can push
+``λ_max(J⁻¹ A_bb)`` past 2 (2.70 on the fibre cube with its beams dealt to three ranks,
+benchmarks/distributed_sweep.py), and CG then stops with ``KSP_DIVERGED_INDEFINITE_PC``. PETSc
+options: prefix ``mortar_aux_`` for the KSP/GAMG of ``A_aux`` (e.g.
 ``-mortar_aux_pc_gamg_threshold``) and ``mortar_beam_`` for the beam block (e.g.
-``-mortar_beam_pc_type lu -mortar_beam_pc_factor_mat_solver_type mumps`` for an exact solve of
-cut beams).
+``-mortar_beam_pc_type lu -mortar_beam_pc_factor_mat_solver_type mumps``: one parallel LU of the
+whole block).
 
 ``P`` is smoothed at every set-up as the serial default does
 (:func:`~mortar1d3d.solvers.preconditioners.smooth_prolongation`): one damped Jacobi step towards
