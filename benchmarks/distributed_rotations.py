@@ -8,9 +8,11 @@ solves, the Newton iterations per step, and the largest relative difference of t
 from the serial direct run (displacements and rotation vectors apart):
 
 * ``aux``: the auxiliary-space sweep (the default; its beam block holds the rotation unknowns,
-  block Jacobi over the ranks with a sparse LU per rank);
+  block Jacobi with a sparse LU per rank over blocks of whole beams: exact);
+* ``aux-rank``: the same over the blocks of each rank's owned beam unknowns
+  (``-mortar_beam_blocks rank``, the sweep before: inexact for a beam the partition cuts);
 * ``aux-mumps``: the same with MUMPS on the whole beam block (``-mortar_beam_pc_type lu
-  -mortar_beam_pc_factor_mat_solver_type mumps``: exact also for a beam the partition cuts);
+  -mortar_beam_pc_factor_mat_solver_type mumps``);
 * ``gamg``: GAMG on the whole system (``-mortar_penalty_pc gamg``).
 
 Run it under MPI (it prints JSON lines from rank 0; the partition is METIS)::
@@ -31,6 +33,7 @@ from mortar1d3d.distributed.solve import solve_distributed
 SCENE = Path(__file__).resolve().parents[1] / "examples" / "scenes" / "rebar_cantilever.toml"
 PRECONDITIONERS = {
     "aux": {"mortar_penalty_pc": "aux"},
+    "aux-rank": {"mortar_penalty_pc": "aux", "mortar_beam_blocks": "rank"},
     "aux-mumps": {"mortar_penalty_pc": "aux", "mortar_beam_pc_type": "lu",
                   "mortar_beam_pc_factor_mat_solver_type": "mumps"},
     "gamg": {"mortar_penalty_pc": "gamg"},

@@ -58,11 +58,13 @@ def test_unknown_backend_is_a_scene_error():
 
 def test_an_indefinite_sweep_names_what_to_do():
     """The error of a penalty solve whose auxiliary-space sweep became indefinite (PETSc's reason -8)
-    names the two PETSc options that avoid it; other reasons and methods get no such hint."""
+    names the option that makes it possible (-mortar_beam_blocks rank: the beam solve on the ranks'
+    owned beam unknowns) and the PETSc options that avoid it; other reasons and methods get no such hint."""
     from mortar1d3d.distributed.linear import DIVERGED_INDEFINITE_PC, divergence_hint
     hint = divergence_hint("aux", DIVERGED_INDEFINITE_PC)
     assert "-mortar_beam_pc_type lu -mortar_beam_pc_factor_mat_solver_type mumps" in hint
     assert "-mortar_penalty_pc gamg" in hint and "three or more ranks" in hint
+    assert "-mortar_beam_blocks rank" in hint
     assert divergence_hint("aux", -3) == ""                  # KSP_DIVERGED_ITS: nothing specific
     assert divergence_hint("gamg", DIVERGED_INDEFINITE_PC) == ""
 

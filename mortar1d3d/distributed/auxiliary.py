@@ -12,14 +12,20 @@ the penalty ties together. As in the serial library, the space is split into
   carries, an elasticity matrix on the solid nodes, preconditioned by one GAMG V-cycle with the
   solid's rigid-body modes;
 - the *beam space*: ``A_bb`` (the beam rows and columns of ``A``), block-diagonal per beam, solved
-  by block Jacobi over the ranks with a sparse LU of each rank's block (exact when no beam is cut
-  by the partition; a cut beam's coupling across ranks is what block Jacobi leaves out).
+  exactly by block Jacobi with a sparse LU of each rank's block, the blocks made of whole beams
+  (:func:`beam_solve_rows`): a beam the partition cuts is solved by the rank owning most of its
+  elements, which gets the beam's other rows from their owners (``MatCreateSubMatrix``).
 
-One application is the symmetric multiplicative sweep beam → auxiliary → beam (symmetric, so CG
-applies). PETSc options: prefix ``mortar_aux_`` for the KSP/GAMG of ``A_aux`` (e.g.
+One application is the symmetric multiplicative sweep beam → auxiliary → beam, symmetric, and
+positive definite because the beam solve is exact (a convergent beam smoother suffices:
+``λ_max(J⁻¹ A_bb) < 2``). The blocks of each rank's owned beam unknowns
+(``-mortar_beam_blocks rank``, the sweep before) are not: a beam cut over three ranks can push
+``λ_max(J⁻¹ A_bb)`` past 2 (2.70 on the fibre cube with its beams dealt to three ranks,
+benchmarks/distributed_sweep.py), and CG then stops with ``KSP_DIVERGED_INDEFINITE_PC``. PETSc
+options: prefix ``mortar_aux_`` for the KSP/GAMG of ``A_aux`` (e.g.
 ``-mortar_aux_pc_gamg_threshold``) and ``mortar_beam_`` for the beam block (e.g.
-``-mortar_beam_pc_type lu -mortar_beam_pc_factor_mat_solver_type mumps`` for an exact solve of
-cut beams).
+``-mortar_beam_pc_type lu -mortar_beam_pc_factor_mat_solver_type mumps``: one parallel LU of the
+whole block).
 
 ``P`` is smoothed at every set-up as the serial default does
 (:func:`~mortar1d3d.solvers.preconditioners.smooth_prolongation`): one damped Jacobi step towards
@@ -34,6 +40,7 @@ import scipy.sparse as sp
 
 from ..physics.coupling import chord_triplets
 from ..solvers.preconditioners import drop_weak_entries, largest_eigenvalue
+from .numbering import node_owner
 from .petsc import Entries, coo_matrix, petsc
 
 #: the PETSc option choosing the follow operator of the sweep: ``smoothed`` (default) or ``lumped``
@@ -41,6 +48,63 @@ FOLLOW_OPTION = "mortar_follow"
 #: the serial defaults of :class:`~mortar1d3d.solvers.preconditioners.AuxiliarySpacePreconditioner`
 #: for each choice: relative drop of the smoothed P, the GAMG strength threshold of A_aux
 FOLLOW_SETTINGS = {"smoothed": {"drop": 1e-3, "threshold": 0.02}, "lumped": None}
+
+
+#: the PETSc option choosing the blocks of the beam solve: ``beam`` (default: every beam whole in the block
+#: of one rank, so block Jacobi solves A_bb exactly) or ``rank`` (each rank's owned beam unknowns, cut
+#: beams solved inexactly: the sweep can then be indefinite, docs/distributed.md)
+BLOCKS_OPTION = "mortar_beam_blocks"
+
+
+def beam_of_element(mesh):
+    """The beam of every element of ``mesh``: the connected pieces of the mesh (elements joined by
+    shared nodes), numbered from 0."""
+    import scipy.sparse.csgraph as csgraph
+    elements = np.asarray(mesh.elements, dtype=np.int64)
+    if len(elements) == 0:
+        return np.zeros(0, dtype=np.int64)
+    # nodes joined along each element (its first node to every other): the beams are the node graph's components
+    first = np.repeat(elements[:, 0], elements.shape[1] - 1)
+    graph = sp.coo_matrix((np.ones(len(first)), (first, elements[:, 1:].ravel())), shape=(mesh.n_nodes,) * 2)
+    _, component = csgraph.connected_components(graph, directed=False)
+    return component[elements[:, 0]]
+
+
+def whole_beam_part(mesh, element_part, n_parts):
+    """The rank of every element of ``mesh`` when each beam (:func:`beam_of_element`) is given whole
+    to the rank that owns most of its elements in ``element_part`` (ties: the lowest rank)."""
+    element_part = np.asarray(element_part, dtype=np.int64)
+    if len(element_part) == 0:
+        return element_part.copy()
+    beam = beam_of_element(mesh)
+    counts = np.zeros((beam.max() + 1, n_parts), dtype=np.int64)
+    np.add.at(counts, (beam, element_part), 1)
+    return np.argmax(counts, axis=1)[beam]          # argmax: the first of equal counts
+
+
+def beam_solve_rows(model, part, layout, rank):
+    """System rows of the beam unknowns (positions, tangents, rotations) whose beam block ``rank``
+    solves: those of the beams :func:`whole_beam_part` gives it, whichever ranks own the rows. ``A_bb``
+    couples no two beams, so block Jacobi over these blocks is the exact ``A_bb⁻¹``; a beam that the
+    partition keeps on one rank stays with its rows (nothing moves)."""
+    n_parts = len(layout.ranges) - 1
+    rows = [np.zeros(0, dtype=np.int64)]
+    for k, g in enumerate(model.groups):
+        solver = whole_beam_part(g.mesh, part.beam_part[k], n_parts)
+        for block, table in ((g.dofs, g.mesh.elements), (g.rotations, g.type.rotation_nodes(g.mesh))):
+            if block.size == 0:
+                continue
+            owner = node_owner(table, solver, block.size // block.dofs_per_node)
+            rows.append(layout.of_serial[block.start + np.flatnonzero(np.repeat(owner, block.dofs_per_node) == rank)])
+    return np.sort(np.concatenate(rows))
+
+
+def blocks_choice():
+    """``beam`` or ``rank``, from the PETSc option ``-mortar_beam_blocks`` (default ``beam``)."""
+    value = petsc().Options().getString(BLOCKS_OPTION, "beam")
+    if value not in ("beam", "rank"):
+        raise ValueError(f"-{BLOCKS_OPTION}: expected beam or rank, got {value!r}")
+    return value
 
 
 def follow_choice():
@@ -205,13 +269,19 @@ def smoothed_follow(A, E, beam_rows, rho, drop):
     local = np.asarray(beam_rows) - first
     n_local, n_solid = last - first, E.getSize()[1]
 
-    def rows_of(M):
+    def rows_of(M, n_rows):
         indptr, indices, data = M.getValuesCSR()
-        return sp.csr_matrix((data, indices, indptr), shape=(n_local, n_solid))
+        return sp.csr_matrix((data, indices, indptr), shape=(n_rows, n_solid))
 
-    product = A.matMult(E)                      # beam rows: A_BS + A_BB P
-    held, moved = rows_of(E), rows_of(product)[local]
-    product.destroy()
+    # A_BS + A_BB P: the beam rows of A E only (the solid rows of A E, K_SS + A_SB P, are not needed)
+    comm = A.getComm()
+    columns = A.getOwnershipRangeColumn()
+    rows_is = PETSc.IS().createGeneral(np.asarray(beam_rows).astype(PETSc.IntType), comm=comm)
+    cols_is = PETSc.IS().createStride(columns[1] - columns[0], first=columns[0], step=1, comm=comm)
+    beam_part = A.createSubMatrix(rows_is, cols_is)
+    product = beam_part.matMult(E)
+    held, moved = rows_of(E, n_local), rows_of(product, len(local))
+    product.destroy(), beam_part.destroy(), rows_is.destroy(), cols_is.destroy()
     d = A.getDiagonal()
     jacobi = sp.diags(1.0 / (rho * d.getArray()[local]))
     d.destroy()
@@ -246,11 +316,15 @@ class AuxiliarySweep:
         with the strength ``threshold`` (:data:`FOLLOW_SETTINGS`); None: the lumped ``P``.
     free_beam_rows : (k,) int, optional
         Rank 0: system rows of the free beam unknowns in the serial order (:func:`beam_spectral_radius`).
+    solve_rows : (k,) int, optional
+        System rows of the beam block this rank solves (:func:`beam_solve_rows`: whole beams, also
+        rows other ranks own); default (and with ``-mortar_beam_blocks rank``) ``beam_rows``.
     """
 
-    def __init__(self, follow, beam_rows, solid_modes, smoothing=None, free_beam_rows=()):
+    def __init__(self, follow, beam_rows, solid_modes, smoothing=None, free_beam_rows=(), solve_rows=None):
         self.lumped, self.beam_rows, self.modes = follow, np.asarray(beam_rows), solid_modes
         self.smoothing, self.free_beam_rows = smoothing, np.asarray(free_beam_rows, dtype=np.int64)
+        self.solve_rows = self.beam_rows if solve_rows is None else np.asarray(solve_rows, dtype=np.int64)
         self.amg = self.beam = self.A = self.E = None
 
     def setUp(self, pc):
@@ -271,9 +345,12 @@ class AuxiliarySweep:
         aux.setNearNullSpace(null_space(self.modes, comm))
         with _defaults(defaults):
             self.amg = _preonly(aux, "mortar_aux_", PETSc.PC.Type.GAMG)
-        index = PETSc.IS().createGeneral(self.beam_rows.astype(PETSc.IntType), comm=comm)
+        # the beam block, rows and columns in the order of the ranks' blocks (whole beams: PETSc moves a
+        # cut beam's rows that other ranks own to the rank solving it)
+        solve_rows = self.solve_rows if blocks_choice() == "beam" else self.beam_rows
+        index = PETSc.IS().createGeneral(solve_rows.astype(PETSc.IntType), comm=comm)
         beam = A.createSubMatrix(index, index)
-        with _defaults({"mortar_beam_sub_pc_type": "lu"}):      # each rank's beam block: exact
+        with _defaults({"mortar_beam_sub_pc_type": "lu"}):      # each rank's block: exact
             self.beam = _preonly(beam, "mortar_beam_", PETSc.PC.Type.BJACOBI)
         self._rb, self._xb = beam.createVecs()
         aux.destroy(), beam.destroy()                   # the KSPs keep their references
@@ -283,7 +360,8 @@ class AuxiliarySweep:
         index.destroy()
 
     def _beam_solve(self, r, y):
-        """``y += A_bb⁻¹ r_b`` (the beam rows of ``r``; block Jacobi over the ranks)."""
+        """``y += A_bb⁻¹ r_b`` (the beam rows of ``r``; block Jacobi over the ranks' blocks: exact with
+        whole beams)."""
         PETSc = petsc()
         self._scatter.scatter(r, self._rb, addv=PETSc.InsertMode.INSERT_VALUES, mode=PETSc.ScatterMode.FORWARD)
         self.beam.solve(self._rb, self._xb)

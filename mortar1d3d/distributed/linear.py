@@ -40,10 +40,10 @@ def divergence_hint(method, reason):
     """What a user can do when a penalty solve did not converge for ``reason`` (PETSc's converged
     reason), appended to the error; empty where there is nothing specific to say."""
     if method == "aux" and reason == DIVERGED_INDEFINITE_PC:
-        return ("; the auxiliary-space sweep became indefinite, as it can where the partition cuts a beam "
-                "across three or more ranks (probably because its block-Jacobi beam solve is then not a convergent smoother; "
-                "docs/distributed.md, 'Not yet distributed'): solve the beam block exactly with the PETSc "
-                "options -mortar_beam_pc_type lu -mortar_beam_pc_factor_mat_solver_type mumps, or take GAMG "
+        return ("; the auxiliary-space sweep became indefinite, as it can with -mortar_beam_blocks rank where the "
+                "partition cuts a beam across three or more ranks (the beam solve is then not a convergent smoother; "
+                "docs/distributed.md): leave out -mortar_beam_blocks rank (whole beams, the default), solve the beam "
+                "block with -mortar_beam_pc_type lu -mortar_beam_pc_factor_mat_solver_type mumps, or take GAMG "
                 "on the whole system with -mortar_penalty_pc gamg")
     return ""
 

@@ -481,9 +481,10 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
                                _linear_solver(model, layout, comm, coupling, kappa_rows), comm,
                                dropped=dropped if lagrange else ())
     if system.solver.method == "aux":
-        from .auxiliary import follow_matrix
+        from .auxiliary import beam_solve_rows, follow_matrix
         system.solver.auxiliary["follow"] = follow_matrix(model, ops, kappa, numbering, layout, part, comm,
                                                           rotation=system.rotation)
+        system.solver.auxiliary["solve_rows"] = beam_solve_rows(model, part, layout, rank)
     clock("loads_supports")
     callback = _print_step if (progress is True and rank == 0) else None
     z0 = np.zeros(system.sizes[0])                           # this rank's part of the iterate
