@@ -10,6 +10,7 @@ from numba import prange
 
 from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit, njit_inline, njit_parallel
 from .._schedule import claim, new_claims, workers
+from .._unlinked import unlinked
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from ..elements.solid import hex8, hex27, tet10
@@ -464,7 +465,7 @@ def locate_point(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, sta
             return INSIDE
         if certified_outside(code, table, s, xi):
             return OUTSIDE
-    return locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged)
+    return _locate_rare_call(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged)
 
 
 @njit
@@ -478,6 +479,10 @@ def locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stac
     if status != NOT_CONVERGED:
         store_residual(code, X, p0, p1, p2, xi, trial, N)
     return status
+
+
+#: called through a symbol, not compiled into every loop that inlines locate_point (see mortar1d3d._unlinked)
+_locate_rare_call = unlinked(locate_rare)
 
 
 @njit
