@@ -15,7 +15,12 @@ is typed) and, through Numba's ``reload_init`` hook of a compiled function, befo
 is loaded in another process (which loads or compiles the callee first). The caller stays
 cachable: no address is frozen into its code.
 
-This reaches into Numba's internals (the code library's ``_reload_init``, the calling convention),
+It is used where a callee is large and its call is rare or carries much work: chunk functions of
+``prange`` kernels, the solid's element kernel, the rare path of locating a point, and the element
+dispatch's kernels of every type but the hot one (:func:`mortar1d3d.elements.selector.kernel_selector`).
+
+This reaches into Numba's internals (the code library's ``_reload_init``, ``CompileResult._rebuild``,
+the calling convention),
 which ``tests/test_unlinked.py`` checks on the Numba the tests run with. On a Numba older than the
 one it was written for (:data:`SUPPORTED_FROM`), :func:`unlinked` returns the kernel itself: an
 ordinary call, compiled into the caller as before (the same results, a longer first compile).
