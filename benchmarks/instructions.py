@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/instructions.py [--package CHECKOUT ...] [--integration segment]
                                                 [--stage call|search|points] [--distort 0.1]
                                                 [--n 10] [--fibres 200] [--calls 3]
-                                                [--element hexahedron|hexahedron27|tetra10]
+                                                [--element hexahedron|hexahedron27|tetra10|nurbs27]
 
 On a shared, noisy machine seconds move by ±10 % from one run to the next; the number of executed
 instructions does not (callgrind counts them on a simulated CPU, whatever else the machine does).
@@ -72,10 +72,16 @@ def _child(args):
         raise SystemExit(f"imported {m13.__file__}, not the package of {args.package}")
     numba.set_num_threads(1)
     beams, solid = m13.generate.fibre_cube(args.n, args.fibres, args.n)
-    if args.element != "hexahedron":
+    if args.element == "nurbs27":
+        # newton_path.py's nurbs27 scene: the NURBS pipe of nurbs_throughput.py with its helices
+        # (--n, --fibres and --distort do not apply)
+        sys.path.insert(0, str(HERE.parent))
+        from nurbs_throughput import helices, meshes
+        beams, solid = helices(40), meshes((2, 24, 8))[0]
+    elif args.element != "hexahedron":
         # the same cube as quadratic elements (as newton_path.py's hex27 and tet10 scenes)
         solid = m13.generate.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (args.n,) * 3, element=args.element)
-    if args.distort:
+    if args.distort and args.element != "nurbs27":
         solid = m13.generate.distort(solid, args.distort, seed=1)
     m13.assemble_mortar(beams, solid, integration=args.integration, n_gauss=4)
     call = _stage_call(m13, beams, solid, args)
@@ -141,8 +147,9 @@ def main(argv=None):
     parser.add_argument("--distort", type=float, default=0.1, metavar="A",
                         help="move interior solid nodes by up to A times the element size (0: regular)")
     parser.add_argument("--n", type=int, default=10, help="solid elements per edge (default 10)")
-    parser.add_argument("--element", default="hexahedron", choices=("hexahedron", "hexahedron27", "tetra10"),
-                        help="solid element type of the cube (default hexahedron: fibre_cube's own mesh)")
+    parser.add_argument("--element", default="hexahedron", choices=("hexahedron", "hexahedron27", "tetra10", "nurbs27"),
+                        help="solid element type of the cube (default hexahedron: fibre_cube's own mesh); "
+                             "nurbs27: newton_path.py's NURBS pipe scene instead of the cube")
     parser.add_argument("--fibres", type=int, default=200)
     parser.add_argument("--stage", default="call", choices=("call", "search", "points"),
                         help="count whole assemble_mortar calls (default) or one stage of element-based "

@@ -15,17 +15,26 @@ is typed) and, through Numba's ``reload_init`` hook of a compiled function, befo
 is loaded in another process (which loads or compiles the callee first). The caller stays
 cachable: no address is frozen into its code.
 
-This reaches into Numba's internals (the code library's ``_reload_init``, the calling convention),
+It is used where a callee is large and its call is rare or carries much work: chunk functions of
+``prange`` kernels, the solid's element kernel, the rare path of locating a point, and the element
+dispatch's kernels of every type but the hot one (:func:`mortar1d3d.elements.selector.kernel_selector`).
+
+This reaches into Numba's internals (the code library's ``_reload_init``, ``CompileResult._rebuild``,
+the calling convention),
 which ``tests/test_unlinked.py`` checks on the Numba the tests run with. On a Numba older than the
 one it was written for (:data:`SUPPORTED_FROM`), :func:`unlinked` returns the kernel itself: an
 ordinary call, compiled into the caller as before (the same results, a longer first compile).
 
-A constraint: a kernel that calls through :func:`unlinked` must itself be called from Python only,
-not from another compiled function. The hook travels in the library of the function holding the
-call; a compiled function calling that kernel, compiled in a process that loaded the kernel from
-the cache, would be cached without it, and a later process loading it would meet an unresolved
-symbol. Every kernel using it today (the chunked parallel kernels of ``geometry``, ``integration``
-and ``mortar``) is called from Python.
+Kernels calling through :func:`unlinked` may be called from other compiled functions at any
+depth (the element dispatch of :mod:`mortar1d3d.elements.solid.dispatch` is called from most
+kernels). Numba passes a callee's hooks on to a caller compiled in the same process (the caller
+links the callee's library and inherits its ``_reload_init``), but a callee loaded from the cache
+comes with an empty ``_reload_init`` on its library (the hooks are kept on the compile result
+only), so a caller compiled in a process that loaded the callee from the cache would be cached
+without them, and a later process loading that caller would meet an unresolved symbol.
+:func:`_keep_hooks_on_load` therefore puts this module's hooks back on the library of every
+compile result Numba rebuilds from the cache (Numba's ``CompileResult._rebuild``, wrapped once;
+other hooks are left as they are).
 """
 
 #: the oldest Numba whose internals :func:`unlinked` was written and tested against
@@ -53,6 +62,25 @@ def _register(dispatcher, argtypes):
     address = cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name)
     ll.add_symbol(_symbol(dispatcher, argtypes), address)
     return cres
+
+
+def _keep_hooks_on_load():
+    """Wrap Numba's ``CompileResult._rebuild`` (a cache load) so that the rebuilt library carries
+    the :class:`_Reload` hooks of its compile result, as a freshly compiled one does."""
+    from numba.core.compiler import CompileResult
+
+    rebuild = CompileResult._rebuild.__func__
+    if getattr(rebuild, "_keeps_unlinked_hooks", False):
+        return
+
+    def _rebuild(cls, *args, **kwargs):
+        cres = rebuild(cls, *args, **kwargs)
+        if cres.reload_init:
+            cres.library._reload_init.update(h for h in cres.reload_init if isinstance(h, _Reload))
+        return cres
+
+    _rebuild._keeps_unlinked_hooks = True
+    CompileResult._rebuild = classmethod(_rebuild)
 
 
 class _Reload:
@@ -91,6 +119,7 @@ def unlinked(dispatcher):
 
     if tuple(numba.version_info.short) < SUPPORTED_FROM:
         return dispatcher
+    _keep_hooks_on_load()
 
     @intrinsic
     def call(typingctx, *args):

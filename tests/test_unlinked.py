@@ -96,3 +96,61 @@ def test_an_older_numba_gets_the_ordinary_call(monkeypatch):
     assert _unlinked.unlinked(_segment_points_chunk) is not _segment_points_chunk
     monkeypatch.setattr(_unlinked, "SUPPORTED_FROM", (99, 0))
     assert _unlinked.unlinked(_segment_points_chunk) is _segment_points_chunk
+
+
+NESTED = textwrap.dedent("""
+    import numpy as np
+    from mortar1d3d._config import njit
+    from mortar1d3d._unlinked import unlinked
+
+    @njit
+    def leaf(x, out):
+        out[0] = np.cos(x) * 3.0
+
+    leaf_call = unlinked(leaf)
+
+    @njit
+    def middle(x, out):
+        leaf_call(x, out)
+        return out[0] + 1.0
+
+    @njit
+    def outer(x, out):
+        return middle(x, out) * 2.0
+""")
+
+NESTED_RUN = textwrap.dedent("""
+    import json, sys, warnings
+    warnings.simplefilter("error")
+    import numpy as np
+    import nested_probe as p
+    out = np.zeros(1)
+    f = getattr(p, sys.argv[1])
+    value = f(0.25, out)
+    print(json.dumps(dict(value=value, misses=sum(f.stats.cache_misses.values()),
+                          hits=sum(f.stats.cache_hits.values()))))
+""")
+
+
+def test_a_caller_of_an_unlinked_caller_compiled_after_a_cache_load(tmp_path):
+    """``middle`` calls through the symbol and is loaded from the cache in the process that compiles
+    ``outer``: ``outer``'s cache entry must still register the symbol when a third process loads it
+    (the hooks are put back on the loaded library, see ``_keep_hooks_on_load``)."""
+    import numpy as np
+
+    (tmp_path / "nested_probe.py").write_text(NESTED)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
+               PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]))
+
+    def run(name):
+        done = subprocess.run([sys.executable, "-c", NESTED_RUN, name], env=env, cwd=tmp_path,
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        return json.loads(done.stdout.strip().splitlines()[-1])
+
+    expected = (np.cos(0.25) * 3.0 + 1.0) * 2.0
+    assert run("middle")["misses"] == 1                      # middle (and leaf) compiled and cached
+    second = run("outer")                                    # middle loaded, outer compiled
+    assert (second["value"], second["misses"]) == (expected, 1)
+    third = run("outer")                                     # outer loaded: its hook registers leaf
+    assert (third["value"], third["misses"], third["hits"]) == (expected, 0, 1)

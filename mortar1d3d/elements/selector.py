@@ -16,23 +16,41 @@ type, which Numba's on-disk cache can store. Adding a type to a registry adds it
 from numba import types
 from numba.extending import intrinsic
 
+from .._unlinked import unlinked
 
-def kernel_selector(registry):
+
+def kernel_selector(registry, linked=None):
     """A stand-in ``select(k, name)`` for use in njit code: the kernel ``name`` of ``registry[k]``.
 
     An intrinsic, not an ``@overload``: its value is the kernel itself (a dispatcher, which has no
     run-time data), typed when the caller is typed and emitted as nothing. An overload would compile
     an implementation function per (k, name) pair, one more compilation each (37 on a first run).
+
+    ``linked``: if given, the codes whose kernels are called directly (compiled into the caller, so
+    that LLVM can inline them); the other codes' kernels are called through
+    :func:`mortar1d3d._unlinked.unlinked`: compiled once on their own, each caller holding a
+    declaration. A scene of one element type then does not have the other types' code optimised
+    again inside every kernel that dispatches over the registry.
     """
+    wrappers = {}
+
+    def selected(typingctx, code, name):
+        kernel = getattr(registry[code], name)
+        if linked is None or code in linked:
+            return kernel
+        if (code, name) not in wrappers:
+            wrappers[code, name] = unlinked(kernel)
+            typingctx.refresh()   # the new intrinsic registered itself with the typing registry
+        return wrappers[code, name]
 
     @intrinsic
     def select(typingctx, k, name):
         if isinstance(k, types.IntegerLiteral) and isinstance(name, types.StringLiteral):
-            kernel = getattr(registry[k.literal_value], name.literal_value)
+            kernel = selected(typingctx, k.literal_value, name.literal_value)
 
             def codegen(context, builder, signature, args):
                 return context.get_dummy_value()
 
-            return types.Dispatcher(kernel)(k, name), codegen
+            return typingctx.resolve_value_type(kernel)(k, name), codegen
 
     return select

@@ -10,6 +10,7 @@ from numba import prange
 
 from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit, njit_inline, njit_parallel
 from .._schedule import claim, new_claims, workers
+from .._unlinked import unlinked
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from ..elements.solid import hex8, hex27, tet10
@@ -464,7 +465,7 @@ def locate_point(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, sta
             return INSIDE
         if certified_outside(code, table, s, xi):
             return OUTSIDE
-    return locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged)
+    return _locate_rare_call(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged)
 
 
 @njit
@@ -478,6 +479,10 @@ def locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stac
     if status != NOT_CONVERGED:
         store_residual(code, X, p0, p1, p2, xi, trial, N)
     return status
+
+
+#: called through a symbol, not compiled into every loop that inlines locate_point (see mortar1d3d._unlinked)
+_locate_rare_call = unlinked(locate_rare)
 
 
 @njit
@@ -628,6 +633,12 @@ def affine_parameters(code, Ainv, x0, x1, x2, xi):
         xi[i] = solid.REFERENCE_NODES[code, 0, i] + Ainv[i, 0] * x0 + Ainv[i, 1] * x1 + Ainv[i, 2] * x2
 
 
+#: called once per element through a symbol, not compiled into linear_maps' parallel body and kernel
+#: again (see mortar1d3d._unlinked)
+_affine_inverse_call = unlinked(affine_inverse)
+_certified_margin_call = unlinked(certified_margin)
+
+
 @njit_parallel
 def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
     """The inverse of every element's map linearised at its parameter centre, for locating points.
@@ -657,13 +668,13 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
                 solid.centre(code, xc)
                 table[s, 3, 0], table[s, 3, 1], table[s, 3, 2] = map_point(code, X, xc, N)
                 table[s, 4, 1] = table[s, 4, 2] = 0.0
-                if affine_inverse(code, X, solid_h[s], EXACT_AFFINE_TOL, table[s, :3]):
+                if _affine_inverse_call(code, X, solid_h[s], EXACT_AFFINE_TOL, table[s, :3]):
                     table[s, 4, 0] = 1.0
                     continue
                 j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xc, N, dN)
                 if inverse3(j00, j01, j02, j10, j11, j12, j20, j21, j22, table[s, :3]) > 0.0:
                     table[s, 4, 0] = 0.0
-                    table[s, 4, 1] = certified_margin(code, X, table[s, :3], a)
+                    table[s, 4, 1] = _certified_margin_call(code, X, table[s, :3], a)
                 else:
                     table[s, :, :] = np.nan
             begin, stop = claim(claims, n, worker)

@@ -264,6 +264,11 @@ def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, di
     return m
 
 
+#: called once per beam element through a symbol, not compiled into _find_pairs' parallel body and
+#: kernel again (see mortar1d3d._unlinked)
+_candidates_of_call = unlinked(_candidates_of)
+
+
 @njit_parallel
 def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, workers):
     # one pass of overlap tests: each beam element gets room for every entry of the cells it
@@ -289,8 +294,8 @@ def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             for e in range(begin, stop):
-                counts[e + 1] = _candidates_of(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell,
-                                               dims, lo, hi, work[room[e]:room[e + 1]])
+                counts[e + 1] = _candidates_of_call(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell,
+                                                    dims, lo, hi, work[room[e]:room[e + 1]])
             begin, stop = claim(claims, n_beam, worker)
     offsets = np.cumsum(counts)
     solids = np.empty(offsets[-1], dtype=np.int64)

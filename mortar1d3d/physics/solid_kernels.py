@@ -24,6 +24,7 @@ from numba import prange
 
 from .._config import CHUNK, njit, njit_inline, njit_parallel
 from .._schedule import n_chunks
+from .._unlinked import unlinked
 from ..elements.solid.dispatch import N_NODES
 from .fibre_material import add_fibres
 from .kinematics import det3, green_lagrange, small_strain
@@ -204,6 +205,11 @@ def _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam,
     return energy, status
 
 
+#: called once per element through a symbol: its code is optimised once, not again in the parallel
+#: body and in the kernel (see mortar1d3d._unlinked)
+_element_call = unlinked(_element)
+
+
 @njit_parallel
 def assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_ptr, colour_blocks, block, node_ptr,
                     slot_ptr, slots, mat_code, lam, mu, linear, want_tangent, fibre_ptr, fibre_data, fibre_set, f,
@@ -240,7 +246,7 @@ def assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_ptr
             D = np.empty((3, w))
             k = colour_blocks[c]
             for e in range(k * block, min(n_el, (k + 1) * block)):
-                energy, st = _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam, mu,
+                energy, st = _element_call(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam, mu,
                                       linear, want_tangent, C0, ue, fe, Ke, F, S, Cv, P, A, G, D, fibre_ptr,
                                       fibre_data, fibre_set)
                 element_energy[e] = energy

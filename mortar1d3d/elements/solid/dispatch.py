@@ -16,7 +16,7 @@ from numba import literal_unroll
 
 from ..._config import njit, njit_inline
 from ..selector import kernel_selector
-from .registry import FAMILIES, SOLID_TYPES
+from .registry import FAMILIES, LINKED_TYPES, SOLID_TYPES
 
 SOLID_MODULES = {m.DESCRIPTOR.name: m for m in SOLID_TYPES}
 SOLID_ELEMENTS = {name: m.DESCRIPTOR for name, m in SOLID_MODULES.items()}
@@ -196,8 +196,9 @@ _FAMILY_CODES = tuple(range(len(FAMILIES)))
 
 
 #: ``_type_kernel(k, name)``: kernel ``name`` of the type with literal code k; ``_family_kernel``
-#: likewise for families (resolved when a kernel is compiled, see :mod:`..selector`)
-_type_kernel = kernel_selector(SOLID_TYPES)
+#: likewise for families (resolved when a kernel is compiled, see :mod:`..selector`); the kernels of
+#: types other than ``LINKED_TYPES`` are called through a symbol, not compiled into the caller
+_type_kernel = kernel_selector(SOLID_TYPES, linked=tuple(SOLID_TYPES.index(m) for m in LINKED_TYPES))
 _family_kernel = kernel_selector(FAMILIES)
 
 
