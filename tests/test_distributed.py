@@ -236,9 +236,6 @@ def test_unsupported_features_name_their_key():
     data = tomllib.loads((ROOT / "examples" / "scenes" / "rebar_cantilever.toml").read_text())
     data["beams"][0].update(model="simo_reissner", section={"E": 200e9, "nu": 0.3, "radius": 0.01})
     data["analysis"]["backend"] = "petsc"
-    rotational = {**data, "coupling": {**data["coupling"], "rotational": {}}}
-    with pytest.raises(SceneError, match=r"^coupling\.rotational: not distributed yet"):
-        m13.solve(m13.Scene.from_dict(rotational))
     data["dirichlet"][1]["twist"] = True
     with pytest.raises(SceneError, match=r"^dirichlet\[1\]\.twist: twist supports are not distributed yet"):
         m13.solve(m13.Scene.from_dict(data))
@@ -254,11 +251,11 @@ ALL_ON_RANK_0 = ("ranks 1.. own nothing", lambda solid, beams, n: (
 PARTS = [("metis", None), NO_BEAM_ON_RANK_0, ALL_ON_RANK_0]
 
 
-def _compare(serial, make, check):
+def _compare(serial, make, check, partitions=PARTS):
     """Solve ``make()`` on PETSc with each partition of PARTS; rank 0 computes ``check(serial, result)``
     (a dict of named errors or flags), which every rank then asserts (decided together)."""
     from mortar1d3d.distributed.solve import solve_distributed
-    for label, parts in PARTS:
+    for label, parts in partitions:
         result = solve_distributed(make(), comm=COMM, parts=parts)
         outcome = check(serial, result) if RANK == 0 else None
         assert RANK == 0 or result is None
@@ -1038,3 +1035,63 @@ def test_parallel_vtu_of_simo_reissner_beams():
         assert found["timesteps"] == found["serial_timesteps"] == [0.0, 0.5, 1.0], label
         assert max(found[f] for f in fields[:-2]) <= 1e-10, (label, {f: found[f] for f in fields})
         assert max(found["n"], found["m"]) <= 1e-8, (label, found["n"], found["m"])
+
+
+# --------------------------------------------------------------------------------------------
+# the rotational coupling of simo_reissner beams (coupling.rotational)
+# --------------------------------------------------------------------------------------------
+def _twisted_fibre(enforcement="penalty", **rotational):
+    """examples/scenes/twisted_fibre.toml (a fibre on the axis of a block twisted at its free end,
+    its cross-sections tied to the block by the rotational coupling) with the rotational coupling
+    enforced by ``enforcement``, the positional penalty at 100 E (why:
+    test_newton_iterates_equal_the_serial_ones), MUMPS."""
+    import tomllib
+    data = tomllib.loads((ROOT / "examples" / "scenes" / "twisted_fibre.toml").read_text())
+    data["coupling"]["penalty"] = 5e9
+    data["coupling"]["rotational"].update(enforcement=enforcement, **rotational)
+
+    def scene(**analysis):
+        data["analysis"] = {"kinematics": "nonlinear", "steps": 2, "solver": "direct", **analysis}
+        return m13.Scene.from_dict(data)
+    return scene
+
+
+def _line_moment_check(serial, result):
+    """:func:`_rotations_check` and the line moments; the reactions (the block's clamp takes a pure
+    torque: its resultant force is zero but for round-off) relative to one end load, 1.5 kN."""
+    return {**_rotations_check(serial, result),
+            "reactions": float(np.abs(np.array(result.reactions) - np.array(serial.reactions)).max() / 1500.0),
+            "line_moment": float(np.abs(result.line_moment - serial.line_moment).max()
+                                 / np.abs(serial.line_moment).max())}
+
+
+#: the beams cut into SIZE consecutive pieces, one per rank (every LM node between two pieces has
+#: parts on two ranks), the solid as METIS cuts it
+BEAMS_CUT = ("beams cut over every rank", lambda solid, beams, n: (
+    partition(solid, beams, n, "metis").solid_part, [np.arange(b.n_elements) * n // b.n_elements for b in beams]))
+
+
+@pytest.mark.parametrize("enforcement, kinematics, options", [
+    ("penalty", "linear", {}), ("penalty", "nonlinear", {}), ("lagrange", "linear", {}),
+    ("lagrange", "nonlinear", {}), ("penalty", "nonlinear", {"lm": "line2", "forces": "fourc"}),
+    ("penalty", "nonlinear", {"constraint": "gauss_point"})])
+def test_rotational_coupling_equals_the_serial_run(enforcement, kinematics, options):
+    """The twisted fibre on PETSc: each rank evaluates the rotational coupling of its owned beam
+    elements with the serial kernels, the LM nodes a cut beam shares are summed over the ranks
+    (penalty: the line moments from the summed gaps, ε Gᵀ κ⁻¹ G by PETSc; Lagrange: the multipliers
+    numbered with their LM nodes' ranks). Displacements, rotation vectors and multipliers of every
+    step equal the serial ones to 1e-10, the line moments to 1e-8, the same Newton iterations,
+    for the three partitions (one with a rank owning no beam element)."""
+    make = _twisted_fibre(enforcement, **options)
+    serial = m13.solve(make(kinematics=kinematics))
+    # the coupling acts: the fibre turns with the block and carries a moment
+    assert np.abs(serial.z[serial.model.groups[0].rotations.slice]).max() > 1e-2
+    assert np.abs(serial.line_moment).max() > 1e2
+    assert (len(serial.z) > serial.model.n_displacement_dofs) == (enforcement == "lagrange")
+    for label, out in _compare(serial, lambda: make(kinematics=kinematics, backend="petsc"), _line_moment_check,
+                               PARTS + [BEAMS_CUT]):
+        assert out["ranks"] == SIZE
+        assert out["iterations"] == [s.iterations for s in serial.steps], (label, out)
+        assert max(out["positions"], out["rotations"], out["multipliers"]) <= 1e-10, (label, out)
+        assert out["reactions"] <= 1e-8, (label, out)
+        assert out["line_moment"] <= 1e-8, (label, out)

@@ -33,6 +33,7 @@ from ..scene import SceneError
 from .assemble import assemble_distributed
 from .numbering import Numbering
 from .partition import partition
+from .rotational import rotational_parts
 from .petsc import coo_matrix, gather_vector, petsc, summed_vector
 
 
@@ -104,8 +105,6 @@ class SystemLayout:
 def _unsupported(model):
     """SceneError naming the key of the first feature this slice does not distribute."""
     sc = model.scene
-    if sc.coupled and sc.coupling.get("rotational") is not None:
-        return "coupling.rotational: not distributed yet; use backend = \"serial\""
     for i, d in enumerate(sc.dirichlet):
         if d.get("twist"):
             return f"dirichlet[{i}].twist: twist supports are not distributed yet; use backend = \"serial\""
@@ -340,7 +339,8 @@ def _linear_solver(model, layout, comm, coupling=None, kappa=None):
     from .linear import LinearSolver
     rank = comm.getRank()
     solver = model.scene.analysis["solver"]
-    if solver == "direct" or (model.lagrange and solver == "auto"):
+    if solver == "direct" or ((model.lagrange or model.rotational_lagrange) and solver == "auto"):
+        # (rotational multipliers: MUMPS only, as the serial model takes its direct solver only)
         return LinearSolver("mumps")
     n = model.n_displacement_dofs
     owned = layout.owned_serial(rank)
@@ -350,8 +350,10 @@ def _linear_solver(model, layout, comm, coupling=None, kappa=None):
     if not model.lagrange:
         # follower loads and beams with rotations (or 4C's beam3eb) make the tangent of a nonlinear
         # analysis non-symmetric: GMRES instead of CG
+        rot = model.scene.coupling.get("rotational") if model.scene.coupled else None
         symmetric = not (model.pressures or model.moments) and (
-            model.linear or all(g.type.symmetric_tangent for g in model.groups))
+            model.linear or all(g.type.symmetric_tangent for g in model.groups)) and (
+            rot is None or (model.linear and rot["forces"] == "variational"))
         if penalty_preconditioner() == "aux" and model.scene.coupled and model.groups and model.solid_mesh is not None:
             # the beams' unknowns follow each rank's solid ones in its range
             from .auxiliary import FOLLOW_SETTINGS, follow_choice
@@ -445,11 +447,17 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     layout = SystemLayout.of(numbering, model.dofmap, [g.type.dofs_per_node for g in model.groups])
     clock("partition")
     ops, coupling, lagrange, kappa_rows, weighted, lm_rows = [], None, model.lagrange, None, None, None
+    rotational, first_multiplier = [], []
     if scene.coupled:
         ops, kappa = _group_operators(model, part, numbering, comm)
+        # the rotational coupling's parts; its multipliers follow the positional ones
+        rotational, rotational_owners = rotational_parts(model, ops, part, numbering, comm)
+        maps, owners = _multipliers(model, numbering, kappa) if lagrange else ([], np.zeros(0, np.int64))
+        if len(owners) + len(rotational_owners):
+            layout = layout.with_multipliers(np.concatenate([owners, rotational_owners]))
+        first_multiplier = model.n_displacement_dofs + len(owners) + np.cumsum(
+            [0] + [p.n_multipliers for p in rotational[:-1]], dtype=np.int64)
         if lagrange:
-            maps, owners = _multipliers(model, numbering, kappa)
-            layout = layout.with_multipliers(owners)
             coupling = _saddle_matrix(model, ops, numbering, layout, maps, comm)
             kappa_rows = np.concatenate([np.repeat(k[coupled_nodes(k)], 3) for k in kappa])
             # λ of the output: the multipliers of the state (−1: an LM row without one)
@@ -460,6 +468,10 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
             coupling, weighted, lm_rows = _penalty_matrix(model, ops, numbering, layout, comm)
     clock("coupling")
     physics = OwnedPhysics(model, part, layout, rank)         # in the numbering of all unknowns
+    physics.read_also(np.concatenate([np.zeros(0, np.int64)] + [p.reads(f) for p, f in zip(rotational,
+                                                                                          first_multiplier)]))
+    for p, f in zip(rotational, first_multiplier):
+        p.bind(layout, physics, f)
     clock("stiffness")
     served, dependent = None, None
     if lagrange:
@@ -479,7 +491,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
         dropped = found
     system = DistributedSystem(model, physics, layout, coupling, physics.body_forces(model._body_loads.values),
                                _linear_solver(model, layout, comm, coupling, kappa_rows), comm,
-                               dropped=dropped if lagrange else ())
+                               dropped=dropped if lagrange else (), rotational=rotational)
     if system.solver.method == "aux":
         from .auxiliary import follow_matrix
         system.solver.auxiliary["follow"] = follow_matrix(model, ops, kappa, numbering, layout, part, comm,
@@ -506,6 +518,8 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
         # the kept preconditioner (the sweep, its GAMG, its tangents) and E, also after a failed solve
         stage.pop()
         system.solver.close()
+        for p in rotational:
+            p.close()
         if system.solver.auxiliary:
             system.solver.auxiliary["follow"].destroy()
     clock("solve")

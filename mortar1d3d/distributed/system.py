@@ -45,6 +45,26 @@ def _entry_of_elements(g):
     return entry
 
 
+def owned_beam_physics(model, k, owned):
+    """The physics of the beam elements ``owned`` (ascending) of group ``k`` on a mesh of their
+    own: ``(mesh, its nodes' serial ids, physics, serial rotation nodes)``. A group with rotations
+    gets the serial reference triads and rules of its rotation nodes (the sub-mesh's nodes, then its
+    elements' middle nodes: the sub-mesh's rotation nodes in their order); otherwise the last is
+    None, and everything is None without elements."""
+    g = model.groups[k]
+    mesh, nodes = beam_submesh(g.mesh, owned)
+    if mesh is None:
+        return None, nodes, None, None
+    specs = [model.scene.beams[e] for e in _entry_of_elements(g)[owned]]
+    sections = [(1, spec["section"]) for spec in specs]
+    if not g.rotations.size:
+        return mesh, nodes, g.type.make_physics(mesh, sections), None
+    rotation_nodes = np.concatenate([nodes, g.mesh.n_nodes + owned])
+    return mesh, nodes, g.type.make_physics(mesh, sections, g.triads[rotation_nodes],
+                                            [spec.get("force_rule") for spec in specs],
+                                            [spec.get("virtual_spins") for spec in specs]), rotation_nodes
+
+
 class OwnedPhysics:
     """The solid and beam physics of one rank's owned elements, with their unknowns in the system numbering.
 
@@ -91,36 +111,40 @@ class OwnedPhysics:
         self.framed = {}
         for k, g in enumerate(model.groups):
             owned = part.owned_beams(rank, k)
-            mesh, nodes = beam_submesh(g.mesh, owned)
+            mesh, nodes, physics, rotation_nodes = owned_beam_physics(model, k, owned)
             if mesh is None:
                 continue
             entries = _entry_of_elements(g)[owned]
-            specs = [model.scene.beams[e] for e in entries]
-            sections = [(1, spec["section"]) for spec in specs]
             per_node = g.type.dofs_per_node
             serial = (g.dofs.start + per_node * nodes[:, None] + np.arange(per_node)[None, :]).ravel()
-            if g.rotations.size:
-                # the serial reference triads and rules of the rank's rotation nodes: its mesh nodes,
-                # then its elements' middle nodes (the sub-mesh's rotation nodes in their order)
-                rotation_nodes = np.concatenate([nodes, g.mesh.n_nodes + owned])
-                physics = _Framed(g.type.make_physics(mesh, sections, g.triads[rotation_nodes],
-                                                      [spec.get("force_rule") for spec in specs],
-                                                      [spec.get("virtual_spins") for spec in specs]))
+            if rotation_nodes is not None:
+                physics = _Framed(physics)
                 serial = np.concatenate([serial, g.rotations.dofs(rotation_nodes, [0, 1, 2])])
                 self.framed[k] = physics
-            else:
-                physics = g.type.make_physics(mesh, sections)
             self.parts.append((physics, serial, layout.of_serial[serial]))
             self.beams.append((k, owned, entries, mesh, len(self.parts) - 1))
+        self._unindexed = (self.parts, [(reference[dofs], moment, system, dofs) for dofs, moment, system in self.moments],
+                           self.beams, [])
+        self.read_also(np.zeros(0, np.int64))
+
+    def read_also(self, serial):
+        """Adds the serial unknowns ``serial`` to those each evaluation reads (:attr:`needed`), for
+        a term evaluated beside this physics (the rotational coupling: the solid nodes of the
+        elements its beams reach, its multipliers); before the system's ghost update is made."""
+        parts, moments, beams, extra = self._unindexed
+        extra.append(np.asarray(serial, dtype=np.int64))
         #: the serial unknowns this rank's evaluation reads (sorted): the displacements of its owned
-        #: elements' nodes and of the end-moment nodes; `evaluate` takes them in this order
-        self.needed = np.unique(np.concatenate([serial for _, serial, _ in self.parts]
-                                               + [dofs for dofs, _, _ in self.moments] + [np.zeros(0, np.int64)]))
-        self.parts = [(physics, serial, system, np.searchsorted(self.needed, serial))
-                      for physics, serial, system in self.parts]
-        self.moments = [(reference[dofs], moment, system, np.searchsorted(self.needed, dofs))
-                        for dofs, moment, system in self.moments]
-        self.beams = [(k, owned, entries, mesh, self.parts[i]) for k, owned, entries, mesh, i in self.beams]
+        #: elements' nodes and of the end-moment nodes (and what `read_also` added); `evaluate`
+        #: takes them in this order
+        self.needed = np.unique(np.concatenate([serial for _, serial, _ in parts] + [dofs for *_, dofs in moments]
+                                               + extra))
+        self.parts = [(physics, serial, system, self.place(serial)) for physics, serial, system in parts]
+        self.moments = [(reference, moment, system, self.place(dofs)) for reference, moment, system, dofs in moments]
+        self.beams = [(k, owned, entries, mesh, self.parts[i]) for k, owned, entries, mesh, i in beams]
+
+    def place(self, serial):
+        """The places of the serial unknowns ``serial`` in :attr:`needed` (they must be there)."""
+        return np.searchsorted(self.needed, serial)
 
     def solid_displacement(self, d):
         """(n_owned_solid_nodes, 3) displacements of the owned solid elements' nodes, from ``d`` (:attr:`needed` order)."""
@@ -220,9 +244,11 @@ class DistributedSystem:
     (``Tᵀ r``, ``Tᵀ K T``) with ``T`` a distributed matrix of the rotated triplets.
     """
 
-    def __init__(self, model, physics, layout, coupling, body, solver, comm, dropped=()):
+    def __init__(self, model, physics, layout, coupling, body, solver, comm, dropped=(), rotational=()):
         PETSc = petsc()
         self.model, self.physics, self.layout, self.coupling = model, physics, layout, coupling
+        #: the rotational coupling's parts (:class:`~.rotational.RotationalPart`), bound to this layout
+        self.rotational = list(rotational)
         self.solver, self.comm = solver, comm
         self.rank = comm.getRank()
         self.n = model.n_displacement_dofs
@@ -354,13 +380,25 @@ class DistributedSystem:
         d = self.ghosted(x)
         try:
             (f_idx, f_val), K = self.physics.evaluate(d, tangent, t)
+            states = [part.start(d) for part in self.rotational]
         except (FloatingPointError, ValueError, ArithmeticError) as exc:
             failed = str(exc)
-        # one rank's failure is every rank's (the Newton loop must take the same branch everywhere)
-        messages = [m for m in self.comm.tompi4py().allgather(failed) if m]
-        if messages:
-            x.destroy()
-            raise ArithmeticError(messages[0])
+        self._agree(failed, x)
+        rows_of_G = []
+        if self.rotational:
+            # the rotational coupling: the line moments of the LM nodes (collective), then each
+            # rank finishes its points (docs: mortar1d3d.distributed.rotational)
+            moments = [part.exchange(state, d) for part, state in zip(self.rotational, states)]
+            try:
+                for part, state, lam in zip(self.rotational, states, moments):
+                    (fi, fv), Kr, G = part.finish(state, lam, tangent)
+                    f_idx, f_val = np.concatenate([f_idx, fi]), np.concatenate([f_val, fv])
+                    if tangent:
+                        K = tuple(np.concatenate([a, b]) for a, b in zip(K, Kr))
+                    rows_of_G.append(G)
+            except (FloatingPointError, ValueError, ArithmeticError) as exc:
+                failed = str(exc)
+            self._agree(failed, x)
         r = summed_vector(self.comm, f_idx, f_val, self.sizes)
         r.axpy(-t, self.load)
         if self.coupling is not None:
@@ -377,6 +415,11 @@ class DistributedSystem:
         A = coo_matrix(self.comm, *K, self.sizes, self.sizes, block_size=self.solver.block_size)
         if self.coupling is not None:
             A.axpy(1.0, self.coupling, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        for part, G in zip(self.rotational, rows_of_G):
+            Kr = part.tangent(G)
+            if Kr is not None:
+                A.axpy(1.0, Kr, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+                Kr.destroy()
         if self.rotation is not None:
             physical, A = A, A.PtAP(self.rotation)
             physical.destroy()
@@ -385,6 +428,14 @@ class DistributedSystem:
             self.last_tangent.destroy()
         self.last_tangent = A
         return self.last_residual, A
+
+    def _agree(self, failed, x):
+        """One rank's failure is every rank's (the Newton loop must take the same branch everywhere):
+        raises ArithmeticError on every rank if ``failed`` (a message or None) is set on any."""
+        messages = [m for m in self.comm.tompi4py().allgather(failed) if m]
+        if messages:
+            x.destroy()
+            raise ArithmeticError(messages[0])
 
     def free_block(self, K):
         """The tangent on the free unknowns: ``K`` itself (the supports are removed in :meth:`solve_linear`)."""

@@ -273,12 +273,25 @@ class RotationalCoupling:
         csr). Rows: the LM nodes (mortar) or the points (gauss_point), :attr:`rows`. Last, the
         rows of the forces' own Jacobians ``Σ_p R_jp w_p Jf_p`` (``G`` itself for variational forces;
         with ``forces="fourc"`` ``r`` and ``λᵀ ∂²g`` are those of 4C's forces)."""
+        state = self.point_state(u_solid, psi)
+        return self.linearised(state, moments(state[-1]), tangent)
+
+    def point_state(self, u_solid, psi):
+        """The first half of :meth:`_linearise`: the points' relative rotations and Jacobians at
+        ``(u_solid, psi)``, and last the weighted gaps ``g`` (n_rows, 3). A caller that sums ``g``
+        with other parts of the same rows (the same LM node on two processes) forms the line
+        moments from the sum and hands them to :meth:`linearised`."""
         self.n_evaluations += 1
         x, triads, psi_p, J18 = self._run(u_solid, psi, True)
         J = self._local_jacobian(J18)
         cols = self._columns()
         g = np.asarray(self.rows @ (self.weight[:, None] * psi_p))
-        lam_j = moments(g)
+        return x, triads, psi_p, J, cols, g
+
+    def linearised(self, state, lam_j, tangent):
+        """The second half of :meth:`_linearise`, with the line moments ``lam_j`` (n_rows, 3) of
+        the rows: what :meth:`_linearise` returns."""
+        x, triads, psi_p, J, cols, g = state
         lam_p = np.asarray(self.rows.T @ lam_j)                                      # (n_pts, 3)
         used = cols >= 0
         Jf = J
@@ -336,11 +349,15 @@ class RotationalCoupling:
         _, r, Gm, K_lam, Gf = self._linearise(u_solid, psi, lambda g: self.penalty * kinv[:, None] * g, tangent)
         if not tangent:
             return r, None
-        # ε Gᵀ κ⁻¹ G, plus the geometric part of the constraint's second derivative (fourc forces:
-        # their rows Gf instead of the left G, and their own second part)
-        K = self.penalty * (Gf.T @ sp.diags(np.repeat(kinv, 3)) @ Gm)
+        return r, self.penalty_tangent(Gm, K_lam, Gf)
+
+    def penalty_tangent(self, Gm, K_lam, Gf):
+        """The penalty's tangent from what :meth:`linearised` returns: ε Gᵀ κ⁻¹ G, plus the
+        geometric part of the constraint's second derivative (fourc forces: their rows Gf instead
+        of the left G, and their own second part)."""
+        K = self.penalty * (Gf.T @ sp.diags(np.repeat(self.rows_kappa_inverse, 3)) @ Gm)
         K = K + K_lam
-        return r, K.tocsr()
+        return K.tocsr()
 
     def constraint(self, u_solid, psi, multipliers, tangent=True):
         """Lagrange: the multipliers' forces, the constraint rows and their linearisation.
