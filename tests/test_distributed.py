@@ -230,15 +230,14 @@ def test_solve_and_command_line_with_the_petsc_backend():
     assert (path / "out" / "parallel" / "result.pvd").exists() and (path / "out" / "parallel" / "beams_0002.pvtu").exists()
 
 
-def test_unsupported_features_name_their_key():
-    import tomllib
+def test_a_scene_without_solid_names_its_key():
     from mortar1d3d.scene import SceneError
-    data = tomllib.loads((ROOT / "examples" / "scenes" / "rebar_cantilever.toml").read_text())
-    data["beams"][0].update(model="simo_reissner", section={"E": 200e9, "nu": 0.3, "radius": 0.01})
-    data["analysis"]["backend"] = "petsc"
-    data["dirichlet"][1]["twist"] = True
-    with pytest.raises(SceneError, match=r"^dirichlet\[1\]\.twist: twist supports are not distributed yet"):
-        m13.solve(m13.Scene.from_dict(data))
+    scene = m13.Scene(beams=[{"curve": {"line": [[0, 0, 0], [1, 0, 0]]}, "elements": 2, "model": "torsion_free",
+                              "section": {"E": 1.0, "radius": 0.01}}],
+                      dirichlet=[{"on": "beam:0:start", "clamp": True}],
+                      analysis={"kinematics": "linear", "backend": "petsc"})
+    with pytest.raises(SceneError, match=r"^solid: the PETSc backend needs a solid"):
+        m13.solve(scene)
 
 
 # --------------------------------------------------------------------------------------------
@@ -921,13 +920,14 @@ def _simo_reissner_rebar(support="rotation", enforcement="penalty"):
     """The rebar cantilever with a ``simo_reissner`` rebar (penalty 100 E, why:
     test_newton_iterates_equal_the_serial_ones): its start held in position and rotation
     (``rotation = [0, 0, 0]``), or clamped (position, the tangent's direction in its rotated frame,
-    the triad); a straight fibre tied by position only would have a free twist."""
+    the triad), or in position and twist only (``twist = true``: bending rotations free); a straight
+    fibre tied by position only would have a free twist."""
     import tomllib
     data = tomllib.loads((ROOT / "examples" / "scenes" / "rebar_cantilever.toml").read_text())
     data["coupling"]["penalty"] = 3e12
     data["coupling"]["enforcement"] = enforcement
     data["beams"][0].update(model="simo_reissner", section={"E": 200e9, "nu": 0.3, "radius": 0.01})
-    data["dirichlet"][1]["rotation" if support == "rotation" else "clamp"] = [0.0, 0.0, 0.0] if support == "rotation" else True
+    data["dirichlet"][1][support] = [0.0, 0.0, 0.0] if support == "rotation" else True
 
     def scene(**analysis):
         data["analysis"] = {"kinematics": "nonlinear", "steps": 2, "solver": "direct", **analysis}
@@ -956,11 +956,14 @@ def _rotations_check(serial, result):
 
 
 @pytest.mark.parametrize("kinematics, support", [("linear", "rotation"), ("nonlinear", "rotation"),
-                                                 ("nonlinear", "clamp")])
+                                                 ("nonlinear", "clamp"), ("linear", "twist"), ("nonlinear", "twist")])
 def test_simo_reissner_rebar_equals_the_serial_run(kinematics, support):
     """A simo_reissner rebar on PETSc (MUMPS): rotation nodes (the elements' middle nodes among
     them) numbered per rank, each rank's owned elements evaluated with their rotations, the
-    multiplicative update on each rank's rotation nodes, rotation supports and clamps: the serial
+    multiplicative update on each rank's rotation nodes, rotation supports, clamps and twist
+    supports (only the twist held: the start's rotation unknowns total rotation vectors in its frame,
+    updated additively, the residual and tangent through the change of variables of
+    Model._twist_jacobian on the rank that owns the node): the serial
     displacements and rotation vectors to 1e-10, reactions to 1e-8, the same Newton iterations,
     for the three partitions."""
     make = _simo_reissner_rebar(support)

@@ -105,9 +105,6 @@ class SystemLayout:
 def _unsupported(model):
     """SceneError naming the key of the first feature this slice does not distribute."""
     sc = model.scene
-    for i, d in enumerate(sc.dirichlet):
-        if d.get("twist"):
-            return f"dirichlet[{i}].twist: twist supports are not distributed yet; use backend = \"serial\""
     if sc.solid is None:
         return "solid: the PETSc backend needs a solid"
     return None

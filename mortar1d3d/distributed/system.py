@@ -289,11 +289,17 @@ class DistributedSystem:
         leading = self.owned_serial < len(reference)
         self._reference[leading] = reference[self.owned_serial[leading]]
         # the rotation nodes this rank owns, per group: the places of their three unknowns in its part
+        # twist supports (Model._twist_jacobian): the first places of the held rotation triplets this
+        # rank owns; their unknowns are total rotation vectors in their frames, updated additively
+        self._twist_any = bool(model.twist_starts.size)
+        twist = layout.of_serial[model.twist_starts]
+        self._twist = twist[(twist >= first) & (twist < first + self.sizes[0])] - first
         self._spins = []
         for k, b in enumerate(model.dofmap.rotations):
-            mine = np.flatnonzero((self.owned_serial >= b.start) & (self.owned_serial < b.stop))
+            mine = np.flatnonzero((self.owned_serial >= b.start) & (self.owned_serial < b.stop)).reshape(-1, 3)
+            mine = mine[~np.isin(mine[:, 0], self._twist)]
             if len(mine):
-                self._spins.append((physics.framed[k], mine.reshape(-1, 3)))
+                self._spins.append((physics.framed[k], mine))
         self.last_linear_info = None
         #: over all linear solves so far: their count, KSP iterations, preconditioner set-up and
         #: solve wall seconds (this rank's clock; the set-up is collective)
@@ -403,6 +409,7 @@ class DistributedSystem:
         r.axpy(-t, self.load)
         if self.coupling is not None:
             r.axpy(1.0, self.coupling * x)
+        twist = self._twist_residual(x, r, tangent) if self._twist_any else None
         x.destroy()
         if self.rotation is not None:
             physical, r = r, r.duplicate()
@@ -420,6 +427,8 @@ class DistributedSystem:
             if Kr is not None:
                 A.axpy(1.0, Kr, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
                 Kr.destroy()
+        if twist is not None:
+            A = self._twist_tangent(A, twist)
         if self.rotation is not None:
             physical, A = A, A.PtAP(self.rotation)
             physical.destroy()
@@ -428,6 +437,39 @@ class DistributedSystem:
             self.last_tangent.destroy()
         self.last_tangent = A
         return self.last_residual, A
+
+    def _twist_residual(self, x, r, tangent):
+        """The twist supports' change of variables on the residual (as ``Model._twist_jacobian``,
+        each rank on the held triplets it owns): ``r ← Dᵀ r`` in place, D the identity but for the
+        left Jacobian T(ψ) on those triplets. Returns their blocks (T, E) for :meth:`_twist_tangent`."""
+        from ..model.model import twist_blocks
+        blocks = twist_blocks(x.getArray(), r.getArray(), self._twist, tangent)
+        values = r.getArray().copy()
+        for s, (T, _) in zip(self._twist, blocks):
+            values[s:s + 3] = T.reshape(3, 3).T @ values[s:s + 3]
+        r.setArray(values)
+        return blocks
+
+    def _twist_tangent(self, A, blocks):
+        """``Dᵀ A D + E`` (``Model._twist_jacobian``) of the twist supports' blocks (collective)."""
+        PETSc = petsc()
+        first = int(self.layout.ranges[self.rank])
+        keep = np.ones(self.sizes[0], dtype=bool)
+        rows, cols, D_vals, E_vals = [], [], [], []
+        for s, (T, E) in zip(self._twist, blocks):
+            keep[s:s + 3] = False
+            rows.append(first + np.repeat(np.arange(s, s + 3), 3)), cols.append(first + np.tile(np.arange(s, s + 3), 3))
+            D_vals.append(T), E_vals.append(E)
+        diagonal = first + np.flatnonzero(keep)
+        D = coo_matrix(self.comm, np.concatenate([diagonal] + rows), np.concatenate([diagonal] + cols),
+                       np.concatenate([np.ones(len(diagonal))] + D_vals), self.sizes, self.sizes)
+        E = coo_matrix(self.comm, _cat(rows, np.int64), _cat(cols, np.int64), _cat(E_vals, float), self.sizes,
+                       self.sizes)
+        physical, A = A, A.PtAP(D)
+        A.axpy(1.0, E, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        for m in (physical, D, E):
+            m.destroy()
+        return A
 
     def _agree(self, failed, x):
         """One rank's failure is every rank's (the Newton loop must take the same branch everywhere):
