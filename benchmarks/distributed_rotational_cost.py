@@ -11,8 +11,10 @@ round solves the three in turn in the same MPI job (so the machine's load of the
 by the three) and takes, per variant, the solve stage's CPU seconds per Newton iteration (the
 largest over the ranks: ``result.distributed["cpu"]``, each rank's own clock up to the stage's
 barrier; Open MPI's waiting ranks poll, so it includes waiting) and the wall seconds per Newton
-iteration. Rank 0 prints one JSON line per variant with the medians over the rounds of these and
-of their ratios to ``none`` in the same round, the Newton iterations, the unknowns and the load
+iteration, counting every Newton iteration made (one linear solve each: those of a load step that
+did not converge and was cut too). Rank 0 prints one JSON line per variant with the medians over
+the rounds of these and of their ratios to ``none`` in the same round, the Newton iterations of
+the converged steps (``newton``) and all of them (``iterations``), the unknowns and the load
 average (``os.getloadavg``) at the end.
 """
 import argparse
@@ -39,10 +41,11 @@ def run(cells, elements, variant, comm):
     if comm.getRank() != 0:
         return None
     info = result.distributed
-    newton = sum(s.iterations for s in result.steps)
+    # every Newton iteration made, those of a step that was cut and repeated too: one linear solve each
+    iterations = info["linear_solves"]["solves"]
     cpu = max(c["solve"] for c in info["cpu"])
-    return {"newton": newton, "unknowns": info["unknowns"], "cpu": cpu / newton,
-            "wall": info["timings"]["solve"] / newton}
+    return {"newton": [s.iterations for s in result.steps], "iterations": iterations, "unknowns": info["unknowns"],
+            "cpu": cpu / iterations, "wall": info["timings"]["solve"] / iterations}
 
 
 def main():
@@ -61,7 +64,7 @@ def main():
         return
     for v in VARIANTS:
         out = {"ranks": comm.getSize(), "size": args.size, "variant": v, "unknowns": rounds[0][v]["unknowns"],
-               "newton": rounds[0][v]["newton"], "rounds": args.rounds}
+               "newton": rounds[0][v]["newton"], "iterations": rounds[0][v]["iterations"], "rounds": args.rounds}
         for key in ("cpu", "wall"):
             out[f"{key}_per_iteration"] = float(np.median([r[v][key] for r in rounds]))
             out[f"{key}_ratio_to_none"] = float(np.median([r[v][key] / r["none"][key] for r in rounds]))

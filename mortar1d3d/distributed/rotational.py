@@ -32,6 +32,7 @@ from .petsc import Entries, coo_matrix, gather_vector, petsc, summed_vector
 from .system import owned_beam_physics
 
 _EMPTY = (np.zeros(0, np.int64), np.zeros(0))
+_NO_ENTRIES = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros(0))
 
 
 def rotational_parts(model, ops, part, numbering, comm):
@@ -191,9 +192,8 @@ class RotationalPart:
     def finish(self, state, lam, tangent):
         """This rank's forces (system index, values), tangent triplets, and for the penalty of the
         mortar constraint the local rows of G (and of the forces' G, fourc) for :meth:`tangent`."""
-        empty = (np.zeros(0, np.int64),) * 2 + (np.zeros(0),)
         if state is None:
-            return _EMPTY, empty, None
+            return _EMPTY, _NO_ENTRIES, None
         g, r, Gm, K_lam, Gf = self.rc.linearised(state, lam, tangent)
         cols = self.system_columns
         f_idx, f_val = [cols], [r]
@@ -228,8 +228,7 @@ class RotationalPart:
         from every rank's rows of G (collective; None for the other enforcements)."""
         if self._moments is None:
             return None
-        empty = (np.zeros(0, np.int64),) * 2 + (np.zeros(0),)
-        parts = G if G is not None else [empty]
+        parts = G if G is not None else [_NO_ENTRIES]
         Gm = coo_matrix(self.comm, *parts[0], self.row_sizes, self.system_sizes)
         weighted = Gm.copy()
         w = weighted.createVecLeft()
@@ -237,7 +236,7 @@ class RotationalPart:
         w.setArray(self.weight[first: first + self.row_sizes[0]])
         weighted.diagonalScale(L=w)
         # (decided by the scene, the same on every rank: a collective call or none)
-        left = coo_matrix(self.comm, *(parts[1] if G is not None and len(G) > 1 else empty), self.row_sizes,
+        left = coo_matrix(self.comm, *(parts[1] if len(parts) > 1 else _NO_ENTRIES), self.row_sizes,
                           self.system_sizes) if self.fourc else Gm
         K = left.transposeMatMult(weighted)
         for m in {id(x): x for x in (Gm, weighted, left, w)}.values():

@@ -470,8 +470,9 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     for p, f in zip(rotational, first_multiplier):
         p.bind(layout, physics, f)
     clock("stiffness")
-    served, dependent = None, None
-    if lagrange:
+    served, dependent, dropped = None, None, ()
+    multipliers = lagrange or model.rotational_lagrange
+    if multipliers:
         # the serial check of dependent multiplier rows, on rank 0 (same rows, same warning, same
         # SceneError); the other ranks learn which multipliers are left out
         served = _served_model(model, ops, numbering, comm)
@@ -485,10 +486,15 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
         found = comm.tompi4py().bcast(found, root=0)
         if isinstance(found, SceneError):
             raise SceneError(str(found))
+        if model.rotational_lagrange and len(found):
+            # their least-norm λ is a projection along the state-dependent rotational rows: not the
+            # fixed one that rank 0 applies to the gathered states
+            raise SceneError("coupling.rotational: dependent multiplier rows (the warning above) are not "
+                             "distributed yet with rotational multipliers; use backend = \"serial\"")
         dropped = found
     system = DistributedSystem(model, physics, layout, coupling, physics.body_forces(model._body_loads.values),
                                _linear_solver(model, layout, comm, coupling, kappa_rows), comm,
-                               dropped=dropped if lagrange else (), rotational=rotational)
+                               dropped=dropped, rotational=rotational)
     if system.solver.method == "aux":
         from .auxiliary import follow_matrix
         system.solver.auxiliary["follow"] = follow_matrix(model, ops, kappa, numbering, layout, part, comm,
@@ -550,7 +556,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     if weighted is not None:
         weighted.destroy()
     info_solve = system.last_linear_info or {}
-    if not lagrange:        # (with multipliers made before the solve)
+    if not multipliers:        # (with multipliers made before the solve)
         served = _served_model(model, ops, numbering, comm)
     info = {"ranks": size, "unknowns": system.n_unknowns, "owned": np.diff(layout.ranges).tolist(),
             "iterations": info_solve.get("iterations"),
@@ -591,7 +597,11 @@ def _dependent_rows(served):
     finds them (:meth:`~mortar1d3d.model.model.Model._dependent_multipliers`: the constraint rows on
     the free displacement unknowns, in the unknowns' basis; it warns, or raises SceneError)."""
     n = served.n_displacement_dofs
-    B = served.constraint_matrix
+    # the rotational multipliers' rows at the reference state (the serial model checks them in its
+    # first linear solve, at the first iterate)
+    B = sp.vstack(([served.constraint_matrix] if served.lagrange else [])
+                  + [g.rotational.reference_rows()[g.rotational.coupled_rows] for g in served.groups
+                     if g.rotational is not None and g.rotational.enforcement == "lagrange"], format="csr")
     if served.basis:
         B = B @ served.basis.matrix_T(n)
     free = served.free[served.free < n]

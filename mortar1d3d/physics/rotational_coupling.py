@@ -246,20 +246,25 @@ class RotationalCoupling:
             out[self.coupled_rows] = multipliers
             return out.reshape(-1, 3)
         if linear:
-            if getattr(self, "_reference_rows", None) is None:
-                n_rot = self.beam.n_rotation_nodes
-                self._reference_rows = self._linearise(np.zeros(self.X.size), np.zeros((n_rot, 3)),
-                                                       lambda g: np.zeros_like(g), True)[2]
             d = np.zeros(self.n_dofs)
             d[:self.X.size] = u_solid
             psi = np.asarray(psi, dtype=float).ravel()
             d[self.rotation_offset: self.rotation_offset + psi.size] = psi
-            gap = (self._reference_rows @ d).reshape(-1, 3)
+            gap = (self.reference_rows() @ d).reshape(-1, 3)
             if self.constraint_type == "gauss_point":
                 gap = self.Phi @ gap
         else:
             gap = self.weighted_gap(u_solid, psi)
         return self.penalty * self.kappa_inverse[:, None] * gap
+
+    def reference_rows(self):
+        """The constraint's linearisation ``G`` at the reference state (3 n_rows, n_dofs, csr; the
+        rows of :attr:`rows`), computed once."""
+        if getattr(self, "_reference_rows", None) is None:
+            n_rot = self.beam.n_rotation_nodes
+            self._reference_rows = self._linearise(np.zeros(self.X.size), np.zeros((n_rot, 3)),
+                                                   lambda g: np.zeros_like(g), True)[2]
+        return self._reference_rows
 
     def energy(self, u_solid, psi):
         """Penalty energy ``ε/2 Σ_j κ_j⁻¹ |g_j|²`` (gauss_point: ``ε/2 Σ_p w_p |ψ_p|²``)."""
