@@ -240,18 +240,14 @@ def test_solve_and_command_line_with_the_petsc_backend():
     assert (path / "out" / "parallel" / "result.pvd").exists() and (path / "out" / "parallel" / "beams_0002.pvtu").exists()
 
 
-def test_unsupported_features_name_their_key():
-    import tomllib
+def test_a_scene_without_solid_names_its_key():
     from mortar1d3d.scene import SceneError
-    data = tomllib.loads((ROOT / "examples" / "scenes" / "rebar_cantilever.toml").read_text())
-    data["beams"][0].update(model="simo_reissner", section={"E": 200e9, "nu": 0.3, "radius": 0.01})
-    data["analysis"]["backend"] = "petsc"
-    rotational = {**data, "coupling": {**data["coupling"], "rotational": {}}}
-    with pytest.raises(SceneError, match=r"^coupling\.rotational: not distributed yet"):
-        m13.solve(m13.Scene.from_dict(rotational))
-    data["dirichlet"][1]["twist"] = True
-    with pytest.raises(SceneError, match=r"^dirichlet\[1\]\.twist: twist supports are not distributed yet"):
-        m13.solve(m13.Scene.from_dict(data))
+    scene = m13.Scene(beams=[{"curve": {"line": [[0, 0, 0], [1, 0, 0]]}, "elements": 2, "model": "torsion_free",
+                              "section": {"E": 1.0, "radius": 0.01}}],
+                      dirichlet=[{"on": "beam:0:start", "clamp": True}],
+                      analysis={"kinematics": "linear", "backend": "petsc"})
+    with pytest.raises(SceneError, match=r"^solid: the PETSc backend needs a solid"):
+        m13.solve(scene)
 
 
 # --------------------------------------------------------------------------------------------
@@ -264,11 +260,11 @@ ALL_ON_RANK_0 = ("ranks 1.. own nothing", lambda solid, beams, n: (
 PARTS = [("metis", None), NO_BEAM_ON_RANK_0, ALL_ON_RANK_0]
 
 
-def _compare(serial, make, check):
+def _compare(serial, make, check, partitions=PARTS):
     """Solve ``make()`` on PETSc with each partition of PARTS; rank 0 computes ``check(serial, result)``
     (a dict of named errors or flags), which every rank then asserts (decided together)."""
     from mortar1d3d.distributed.solve import solve_distributed
-    for label, parts in PARTS:
+    for label, parts in partitions:
         result = solve_distributed(make(), comm=COMM, parts=parts)
         outcome = check(serial, result) if RANK == 0 else None
         assert RANK == 0 or result is None
@@ -1051,13 +1047,14 @@ def _simo_reissner_rebar(support="rotation", enforcement="penalty"):
     """The rebar cantilever with a ``simo_reissner`` rebar (penalty 100 E, why:
     test_newton_iterates_equal_the_serial_ones): its start held in position and rotation
     (``rotation = [0, 0, 0]``), or clamped (position, the tangent's direction in its rotated frame,
-    the triad); a straight fibre tied by position only would have a free twist."""
+    the triad), or in position and twist only (``twist = true``: bending rotations free); a straight
+    fibre tied by position only would have a free twist."""
     import tomllib
     data = tomllib.loads((ROOT / "examples" / "scenes" / "rebar_cantilever.toml").read_text())
     data["coupling"]["penalty"] = 3e12
     data["coupling"]["enforcement"] = enforcement
     data["beams"][0].update(model="simo_reissner", section={"E": 200e9, "nu": 0.3, "radius": 0.01})
-    data["dirichlet"][1]["rotation" if support == "rotation" else "clamp"] = [0.0, 0.0, 0.0] if support == "rotation" else True
+    data["dirichlet"][1][support] = [0.0, 0.0, 0.0] if support == "rotation" else True
 
     def scene(**analysis):
         data["analysis"] = {"kinematics": "nonlinear", "steps": 2, "solver": "direct", **analysis}
@@ -1086,11 +1083,14 @@ def _rotations_check(serial, result):
 
 
 @pytest.mark.parametrize("kinematics, support", [("linear", "rotation"), ("nonlinear", "rotation"),
-                                                 ("nonlinear", "clamp")])
+                                                 ("nonlinear", "clamp"), ("linear", "twist"), ("nonlinear", "twist")])
 def test_simo_reissner_rebar_equals_the_serial_run(kinematics, support):
     """A simo_reissner rebar on PETSc (MUMPS): rotation nodes (the elements' middle nodes among
     them) numbered per rank, each rank's owned elements evaluated with their rotations, the
-    multiplicative update on each rank's rotation nodes, rotation supports and clamps: the serial
+    multiplicative update on each rank's rotation nodes, rotation supports, clamps and twist
+    supports (only the twist held: the start's rotation unknowns total rotation vectors in its frame,
+    updated additively, the residual and tangent through the change of variables of
+    Model._twist_jacobian on the rank that owns the node): the serial
     displacements and rotation vectors to 1e-10, reactions to 1e-8, the same Newton iterations,
     for the three partitions."""
     make = _simo_reissner_rebar(support)
@@ -1165,3 +1165,80 @@ def test_parallel_vtu_of_simo_reissner_beams():
         assert found["timesteps"] == found["serial_timesteps"] == [0.0, 0.5, 1.0], label
         assert max(found[f] for f in fields[:-2]) <= 1e-10, (label, {f: found[f] for f in fields})
         assert max(found["n"], found["m"]) <= 1e-8, (label, found["n"], found["m"])
+
+
+# --------------------------------------------------------------------------------------------
+# the rotational coupling of simo_reissner beams (coupling.rotational)
+# --------------------------------------------------------------------------------------------
+def _twisted_fibre(enforcement="penalty", **rotational):
+    """examples/scenes/twisted_fibre.toml (a fibre on the axis of a block twisted at its free end,
+    its cross-sections tied to the block by the rotational coupling) with the rotational coupling
+    enforced by ``enforcement``, the positional penalty at 100 E (why:
+    test_newton_iterates_equal_the_serial_ones), MUMPS."""
+    import tomllib
+    data = tomllib.loads((ROOT / "examples" / "scenes" / "twisted_fibre.toml").read_text())
+    data["coupling"]["penalty"] = 5e9
+    data["coupling"]["rotational"].update(enforcement=enforcement, **rotational)
+
+    def scene(**analysis):
+        data["analysis"] = {"kinematics": "nonlinear", "steps": 2, "solver": "direct", **analysis}
+        return m13.Scene.from_dict(data)
+    return scene
+
+
+def _line_moment_check(serial, result):
+    """:func:`_rotations_check` and the line moments; the reactions (the block's clamp takes a pure
+    torque: its resultant force is zero but for round-off) relative to one end load, 1.5 kN."""
+    return {**_rotations_check(serial, result),
+            "reactions": float(np.abs(np.array(result.reactions) - np.array(serial.reactions)).max() / 1500.0),
+            "line_moment": float(np.abs(result.line_moment - serial.line_moment).max()
+                                 / np.abs(serial.line_moment).max())}
+
+
+#: the beams cut into SIZE consecutive pieces, one per rank (every LM node between two pieces has
+#: parts on two ranks), the solid as METIS cuts it
+BEAMS_CUT = ("beams cut over every rank", lambda solid, beams, n: (
+    partition(solid, beams, n, "metis").solid_part, [np.arange(b.n_elements) * n // b.n_elements for b in beams]))
+
+
+@pytest.mark.parametrize("enforcement, kinematics, options", [
+    ("penalty", "linear", {}), ("penalty", "nonlinear", {}), ("lagrange", "linear", {}),
+    ("lagrange", "nonlinear", {}), ("penalty", "nonlinear", {"lm": "line2", "forces": "fourc"}),
+    ("penalty", "nonlinear", {"constraint": "gauss_point"})])
+def test_rotational_coupling_equals_the_serial_run(enforcement, kinematics, options):
+    """The twisted fibre on PETSc: each rank evaluates the rotational coupling of its owned beam
+    elements with the serial kernels, the LM nodes a cut beam shares are summed over the ranks
+    (penalty: the line moments from the summed gaps, ε Gᵀ κ⁻¹ G by PETSc; Lagrange: the multipliers
+    numbered with their LM nodes' ranks). Displacements, rotation vectors and multipliers of every
+    step equal the serial ones to 1e-10, the line moments to 1e-8, the same Newton iterations,
+    for the three partitions (one with a rank owning no beam element)."""
+    make = _twisted_fibre(enforcement, **options)
+    serial = m13.solve(make(kinematics=kinematics))
+    # the coupling acts: the fibre turns with the block and carries a moment
+    assert np.abs(serial.z[serial.model.groups[0].rotations.slice]).max() > 1e-2
+    assert np.abs(serial.line_moment).max() > 1e2
+    assert (len(serial.z) > serial.model.n_displacement_dofs) == (enforcement == "lagrange")
+    for label, out in _compare(serial, lambda: make(kinematics=kinematics, backend="petsc"), _line_moment_check,
+                               PARTS + [BEAMS_CUT]):
+        assert out["ranks"] == SIZE
+        assert out["iterations"] == [s.iterations for s in serial.steps], (label, out)
+        assert max(out["positions"], out["rotations"], out["multipliers"]) <= 1e-10, (label, out)
+        assert out["reactions"] <= 1e-8, (label, out)
+        assert out["line_moment"] <= 1e-8, (label, out)
+
+
+def test_rotational_coupling_with_gmres_and_the_penalty_preconditioner():
+    """``solver = "auto"`` on PETSc takes GMRES with the auxiliary-space sweep for the rotational
+    penalty (the rotation unknowns in the beam block; the tangent is not symmetric): the serial
+    direct run's Newton iterations or one more per step, its states to the Newton tolerance."""
+    make = _twisted_fibre("penalty")
+    serial = m13.solve(make())
+
+    def check(serial, result):
+        return {**_line_moment_check(serial, result), "ksp": result.distributed["ksp"],
+                "pc": result.distributed["pc"]}
+
+    out = dict(_compare(serial, lambda: make(solver="auto", backend="petsc"), check))["metis"]
+    assert (out["ksp"], out["pc"]) == ("gmres", "python"), out
+    assert all(0 <= a - b <= 1 for a, b in zip(out["iterations"], [s.iterations for s in serial.steps])), out
+    assert max(out["positions"], out["rotations"]) <= 1e-6, out

@@ -134,15 +134,7 @@ def local_operators(solid, beams, partition, numbering, rank, group=0, integrati
     sub_solid, solid_nodes = solid_submesh(solid, reach)
     ops = assemble_mortar(sub_beams, sub_solid, integration=integration, n_gauss=n_gauss, lm=lm,
                           search_points=search_points)
-    # local LM node → serial LM node: beam nodes by their serial id, interior ones by their element
-    lm_type = multiplier_type(lm)
-    local_index, n_lm_local = lm_numbering(sub_beams, lm_type)
-    lm_serial = np.empty(n_lm_local, dtype=np.int64)
-    lm_serial[:sub_beams.n_nodes] = beam_nodes
-    n_int = lm_type.n_interior
-    if n_int:
-        lm_serial[sub_beams.n_nodes:] = (beams.n_nodes + n_int * owned[:, None] + np.arange(n_int)[None, :]).ravel()
-    lm_new = numbering.lm[group].new_of_old[lm_serial]
+    lm_new = numbering.lm[group].new_of_old[serial_lm_nodes(sub_beams, beam_nodes, owned, beams.n_nodes, lm)]
     per_node = beams.n_centreline_dofs // beams.n_nodes
     r, c, v = _triplets(ops.D)
     D = (3 * lm_new[r // 3] + r % 3, per_node * numbering.beams[group].new_of_old[beam_nodes[c // per_node]]
@@ -150,6 +142,20 @@ def local_operators(solid, beams, partition, numbering, rank, group=0, integrati
     r, c, v = _triplets(ops.M)
     M = (3 * lm_new[r // 3] + r % 3, 3 * numbering.solid.new_of_old[solid_nodes[c // 3]] + c % 3, v)
     return LocalOperators(D, M, (lm_new, ops.kappa), ops, owned, reach, sub_beams, sub_solid, beam_nodes, solid_nodes)
+
+
+def serial_lm_nodes(sub_beams, beam_nodes, owned, n_nodes, lm):
+    """Serial LM node of every LM node of the multiplier type ``lm`` on a rank's beam sub-mesh
+    (:func:`beam_submesh` of the elements ``owned``, its nodes ``beam_nodes``; ``n_nodes``: the
+    group's): beam nodes by their serial id, interior ones by their element."""
+    lm_type = multiplier_type(lm)
+    n_lm_local = lm_numbering(sub_beams, lm_type)[1]
+    lm_serial = np.empty(n_lm_local, dtype=np.int64)
+    lm_serial[:sub_beams.n_nodes] = beam_nodes
+    n_int = lm_type.n_interior
+    if n_int:
+        lm_serial[sub_beams.n_nodes:] = (n_nodes + n_int * owned[:, None] + np.arange(n_int)[None, :]).ravel()
+    return lm_serial
 
 
 @dataclass

@@ -75,6 +75,14 @@ def node_owner(elements, element_part, n_nodes):
     return owner
 
 
+def lm_renumbering(node_owner, element_part, lm, n_parts):
+    """LM nodes of the multiplier type ``lm`` on one beam group in rank-major order: the beam's
+    nodes (``node_owner``: their ranks), then the interior LM nodes of each element (its rank,
+    ``element_part``), as :func:`~mortar1d3d.mortar.assemble.lm_numbering` numbers them."""
+    n_int = multiplier_type(lm).n_interior
+    return Renumbering.from_owner(np.concatenate([node_owner, np.repeat(element_part, n_int)]), n_parts)
+
+
 @dataclass(frozen=True)
 class Numbering:
     """The rank-major numbering of a partitioned model.
@@ -104,13 +112,11 @@ class Numbering:
         n = partition.n_parts
         solid_num = Renumbering.from_owner(node_owner(solid.connectivity, partition.solid_part, solid.n_nodes), n)
         beams, lms, rotations = [], [], []
-        n_int = multiplier_type(lm).n_interior
         types = [None] * len(beam_meshes) if beam_types is None else list(beam_types)
         for mesh, part, kind in zip(beam_meshes, partition.beam_part, types):
             owner = node_owner(mesh.elements, part, mesh.n_nodes)
             beams.append(Renumbering.from_owner(owner, n))
-            # LM nodes: the beam's (end) nodes, then n_int interior ones per element
-            lms.append(Renumbering.from_owner(np.concatenate([owner, np.repeat(part, n_int)]), n))
+            lms.append(lm_renumbering(owner, part, lm, n))
             table = None if kind is None else kind.rotation_nodes(mesh)
             rotations.append(None if table is None or table.shape[1] == 0 else Renumbering.from_owner(
                 node_owner(table, part, kind.n_rotation_nodes(mesh)), n))

@@ -35,6 +35,7 @@ from ..scene import SceneError
 from .assemble import assemble_distributed
 from .numbering import Numbering
 from .partition import partition
+from .rotational import rotational_parts
 from .petsc import coo_matrix, gather_vector, petsc, summed_vector
 
 
@@ -106,11 +107,6 @@ class SystemLayout:
 def _unsupported(model):
     """SceneError naming the key of the first feature this slice does not distribute."""
     sc = model.scene
-    if sc.coupled and sc.coupling.get("rotational") is not None:
-        return "coupling.rotational: not distributed yet; use backend = \"serial\""
-    for i, d in enumerate(sc.dirichlet):
-        if d.get("twist"):
-            return f"dirichlet[{i}].twist: twist supports are not distributed yet; use backend = \"serial\""
     if sc.solid is None:
         return "solid: the PETSc backend needs a solid"
     return None
@@ -342,7 +338,8 @@ def _linear_solver(model, layout, comm, coupling=None, kappa=None):
     from .linear import LinearSolver
     rank = comm.getRank()
     solver = model.scene.analysis["solver"]
-    if solver == "direct" or (model.lagrange and solver == "auto"):
+    if solver == "direct" or ((model.lagrange or model.rotational_lagrange) and solver == "auto"):
+        # (rotational multipliers: MUMPS only, as the serial model takes its direct solver only)
         return LinearSolver("mumps")
     n = model.n_displacement_dofs
     owned = layout.owned_serial(rank)
@@ -352,8 +349,10 @@ def _linear_solver(model, layout, comm, coupling=None, kappa=None):
     if not model.lagrange:
         # follower loads and beams with rotations (or 4C's beam3eb) make the tangent of a nonlinear
         # analysis non-symmetric: GMRES instead of CG
+        rot = model.scene.coupling.get("rotational") if model.scene.coupled else None
         symmetric = not (model.pressures or model.moments) and (
-            model.linear or all(g.type.symmetric_tangent for g in model.groups))
+            model.linear or all(g.type.symmetric_tangent for g in model.groups)) and (
+            rot is None or (model.linear and rot["forces"] == "variational"))
         if penalty_preconditioner() == "aux" and model.scene.coupled and model.groups and model.solid_mesh is not None:
             # the beams' unknowns follow each rank's solid ones in its range
             from .auxiliary import FOLLOW_SETTINGS, follow_choice
@@ -447,11 +446,17 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     layout = SystemLayout.of(numbering, model.dofmap, [g.type.dofs_per_node for g in model.groups])
     clock("partition")
     ops, coupling, lagrange, kappa_rows, weighted, lm_rows = [], None, model.lagrange, None, None, None
+    rotational, first_multiplier = [], []
     if scene.coupled:
         ops, kappa = _group_operators(model, part, numbering, comm)
+        # the rotational coupling's parts; its multipliers follow the positional ones
+        rotational, rotational_owners = rotational_parts(model, ops, part, numbering, comm)
+        maps, owners = _multipliers(model, numbering, kappa) if lagrange else ([], np.zeros(0, np.int64))
+        if len(owners) + len(rotational_owners):
+            layout = layout.with_multipliers(np.concatenate([owners, rotational_owners]))
+        first_multiplier = model.n_displacement_dofs + len(owners) + np.cumsum(
+            [0] + [p.n_multipliers for p in rotational[:-1]], dtype=np.int64)
         if lagrange:
-            maps, owners = _multipliers(model, numbering, kappa)
-            layout = layout.with_multipliers(owners)
             coupling = _saddle_matrix(model, ops, numbering, layout, maps, comm)
             kappa_rows = np.concatenate([np.repeat(k[coupled_nodes(k)], 3) for k in kappa])
             # λ of the output: the multipliers of the state (−1: an LM row without one)
@@ -462,11 +467,16 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
             coupling, weighted, lm_rows = _penalty_matrix(model, ops, numbering, layout, comm)
     clock("coupling")
     physics = OwnedPhysics(model, part, layout, rank)         # in the numbering of all unknowns
+    physics.read_also(np.concatenate([np.zeros(0, np.int64)] + [p.reads(f) for p, f in zip(rotational,
+                                                                                          first_multiplier)]))
+    for p, f in zip(rotational, first_multiplier):
+        p.bind(layout, physics, f)
     clock("stiffness")
     # the serial model on rank 0 from the gathered operators, before any solve: its preparation runs
     # the serial checks of the supports (rigid-body and zero-energy modes), which stop every rank
-    served, dependent = _served_model(model, ops, numbering, comm), None
-    if lagrange:
+    served, dependent, dropped = _served_model(model, ops, numbering, comm), None, ()
+    multipliers = lagrange or model.rotational_lagrange
+    if multipliers:
         # the serial check of dependent multiplier rows, on rank 0 (same rows, same warning, same
         # SceneError); the other ranks learn which multipliers are left out
         found = None
@@ -476,10 +486,16 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
                 found = dependent.rows
             except SceneError as exc:
                 found = exc
-        dropped = _raise_together(comm, found)
+        found = _raise_together(comm, found)
+        if model.rotational_lagrange and len(found):
+            # their least-norm λ is a projection along the state-dependent rotational rows: not the
+            # fixed one that rank 0 applies to the gathered states
+            raise SceneError("coupling.rotational: dependent multiplier rows (the warning above) are not "
+                             "distributed yet with rotational multipliers; use backend = \"serial\"")
+        dropped = found
     system = DistributedSystem(model, physics, layout, coupling, physics.body_forces(model._body_loads.values),
                                _linear_solver(model, layout, comm, coupling, kappa_rows), comm,
-                               dropped=dropped if lagrange else ())
+                               dropped=dropped, rotational=rotational)
     if system.solver.method == "aux":
         from .auxiliary import beam_solve_rows, follow_matrix
         system.solver.auxiliary["follow"] = follow_matrix(model, ops, kappa, numbering, layout, part, comm,
@@ -507,6 +523,8 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
         # the kept preconditioner (the sweep, its GAMG, its tangents) and E, also after a failed solve
         stage.pop()
         system.solver.close()
+        for p in rotational:
+            p.close()
         if system.solver.auxiliary:
             system.solver.auxiliary["follow"].destroy()
     clock("solve")
@@ -599,7 +617,11 @@ def _dependent_rows(served):
     finds them (:meth:`~mortar1d3d.model.model.Model._dependent_multipliers`: the constraint rows on
     the free displacement unknowns, in the unknowns' basis; it warns, or raises SceneError)."""
     n = served.n_displacement_dofs
-    B = served.constraint_matrix
+    # the rotational multipliers' rows at the reference state (the serial model checks them in its
+    # first linear solve, at the first iterate)
+    B = sp.vstack(([served.constraint_matrix] if served.lagrange else [])
+                  + [g.rotational.reference_rows()[g.rotational.coupled_rows] for g in served.groups
+                     if g.rotational is not None and g.rotational.enforcement == "lagrange"], format="csr")
     if served.basis:
         B = B @ served.basis.matrix_T(n)
     free = served.free[served.free < n]

@@ -45,6 +45,26 @@ def _entry_of_elements(g):
     return entry
 
 
+def owned_beam_physics(model, k, owned):
+    """The physics of the beam elements ``owned`` (ascending) of group ``k`` on a mesh of their
+    own: ``(mesh, its nodes' serial ids, physics, serial rotation nodes)``. A group with rotations
+    gets the serial reference triads and rules of its rotation nodes (the sub-mesh's nodes, then its
+    elements' middle nodes: the sub-mesh's rotation nodes in their order); otherwise the last is
+    None, and everything is None without elements."""
+    g = model.groups[k]
+    mesh, nodes = beam_submesh(g.mesh, owned)
+    if mesh is None:
+        return None, nodes, None, None
+    specs = [model.scene.beams[e] for e in _entry_of_elements(g)[owned]]
+    sections = [(1, spec["section"]) for spec in specs]
+    if not g.rotations.size:
+        return mesh, nodes, g.type.make_physics(mesh, sections), None
+    rotation_nodes = np.concatenate([nodes, g.mesh.n_nodes + owned])
+    return mesh, nodes, g.type.make_physics(mesh, sections, g.triads[rotation_nodes],
+                                            [spec.get("force_rule") for spec in specs],
+                                            [spec.get("virtual_spins") for spec in specs]), rotation_nodes
+
+
 class OwnedPhysics:
     """The solid and beam physics of one rank's owned elements, with their unknowns in the system numbering.
 
@@ -91,36 +111,40 @@ class OwnedPhysics:
         self.framed = {}
         for k, g in enumerate(model.groups):
             owned = part.owned_beams(rank, k)
-            mesh, nodes = beam_submesh(g.mesh, owned)
+            mesh, nodes, physics, rotation_nodes = owned_beam_physics(model, k, owned)
             if mesh is None:
                 continue
             entries = _entry_of_elements(g)[owned]
-            specs = [model.scene.beams[e] for e in entries]
-            sections = [(1, spec["section"]) for spec in specs]
             per_node = g.type.dofs_per_node
             serial = (g.dofs.start + per_node * nodes[:, None] + np.arange(per_node)[None, :]).ravel()
-            if g.rotations.size:
-                # the serial reference triads and rules of the rank's rotation nodes: its mesh nodes,
-                # then its elements' middle nodes (the sub-mesh's rotation nodes in their order)
-                rotation_nodes = np.concatenate([nodes, g.mesh.n_nodes + owned])
-                physics = _Framed(g.type.make_physics(mesh, sections, g.triads[rotation_nodes],
-                                                      [spec.get("force_rule") for spec in specs],
-                                                      [spec.get("virtual_spins") for spec in specs]))
+            if rotation_nodes is not None:
+                physics = _Framed(physics)
                 serial = np.concatenate([serial, g.rotations.dofs(rotation_nodes, [0, 1, 2])])
                 self.framed[k] = physics
-            else:
-                physics = g.type.make_physics(mesh, sections)
             self.parts.append((physics, serial, layout.of_serial[serial]))
             self.beams.append((k, owned, entries, mesh, len(self.parts) - 1))
+        self._unindexed = (self.parts, [(reference[dofs], moment, system, dofs) for dofs, moment, system in self.moments],
+                           self.beams, [])
+        self.read_also(np.zeros(0, np.int64))
+
+    def read_also(self, serial):
+        """Adds the serial unknowns ``serial`` to those each evaluation reads (:attr:`needed`), for
+        a term evaluated beside this physics (the rotational coupling: the solid nodes of the
+        elements its beams reach, its multipliers); before the system's ghost update is made."""
+        parts, moments, beams, extra = self._unindexed
+        extra.append(np.asarray(serial, dtype=np.int64))
         #: the serial unknowns this rank's evaluation reads (sorted): the displacements of its owned
-        #: elements' nodes and of the end-moment nodes; `evaluate` takes them in this order
-        self.needed = np.unique(np.concatenate([serial for _, serial, _ in self.parts]
-                                               + [dofs for dofs, _, _ in self.moments] + [np.zeros(0, np.int64)]))
-        self.parts = [(physics, serial, system, np.searchsorted(self.needed, serial))
-                      for physics, serial, system in self.parts]
-        self.moments = [(reference[dofs], moment, system, np.searchsorted(self.needed, dofs))
-                        for dofs, moment, system in self.moments]
-        self.beams = [(k, owned, entries, mesh, self.parts[i]) for k, owned, entries, mesh, i in self.beams]
+        #: elements' nodes and of the end-moment nodes (and what `read_also` added); `evaluate`
+        #: takes them in this order
+        self.needed = np.unique(np.concatenate([serial for _, serial, _ in parts] + [dofs for *_, dofs in moments]
+                                               + extra))
+        self.parts = [(physics, serial, system, self.place(serial)) for physics, serial, system in parts]
+        self.moments = [(reference, moment, system, self.place(dofs)) for reference, moment, system, dofs in moments]
+        self.beams = [(k, owned, entries, mesh, self.parts[i]) for k, owned, entries, mesh, i in beams]
+
+    def place(self, serial):
+        """The places of the serial unknowns ``serial`` in :attr:`needed` (they must be there)."""
+        return np.searchsorted(self.needed, serial)
 
     def solid_displacement(self, d):
         """(n_owned_solid_nodes, 3) displacements of the owned solid elements' nodes, from ``d`` (:attr:`needed` order)."""
@@ -220,9 +244,11 @@ class DistributedSystem:
     (``Tᵀ r``, ``Tᵀ K T``) with ``T`` a distributed matrix of the rotated triplets.
     """
 
-    def __init__(self, model, physics, layout, coupling, body, solver, comm, dropped=()):
+    def __init__(self, model, physics, layout, coupling, body, solver, comm, dropped=(), rotational=()):
         PETSc = petsc()
         self.model, self.physics, self.layout, self.coupling = model, physics, layout, coupling
+        #: the rotational coupling's parts (:class:`~.rotational.RotationalPart`), bound to this layout
+        self.rotational = list(rotational)
         self.solver, self.comm = solver, comm
         self.rank = comm.getRank()
         self.n = model.n_displacement_dofs
@@ -263,11 +289,17 @@ class DistributedSystem:
         leading = self.owned_serial < len(reference)
         self._reference[leading] = reference[self.owned_serial[leading]]
         # the rotation nodes this rank owns, per group: the places of their three unknowns in its part
+        # twist supports (Model._twist_jacobian): the first places of the held rotation triplets this
+        # rank owns; their unknowns are total rotation vectors in their frames, updated additively
+        self._twist_any = bool(model.twist_starts.size)
+        twist = layout.of_serial[model.twist_starts]
+        self._twist = twist[(twist >= first) & (twist < first + self.sizes[0])] - first
         self._spins = []
         for k, b in enumerate(model.dofmap.rotations):
-            mine = np.flatnonzero((self.owned_serial >= b.start) & (self.owned_serial < b.stop))
+            mine = np.flatnonzero((self.owned_serial >= b.start) & (self.owned_serial < b.stop)).reshape(-1, 3)
+            mine = mine[~np.isin(mine[:, 0], self._twist)]
             if len(mine):
-                self._spins.append((physics.framed[k], mine.reshape(-1, 3)))
+                self._spins.append((physics.framed[k], mine))
         self.last_linear_info = None
         #: over all linear solves so far: their count, KSP iterations, preconditioner set-up and
         #: solve wall seconds (this rank's clock; the set-up is collective)
@@ -354,17 +386,30 @@ class DistributedSystem:
         d = self.ghosted(x)
         try:
             (f_idx, f_val), K = self.physics.evaluate(d, tangent, t)
+            states = [part.start(d) for part in self.rotational]
         except (FloatingPointError, ValueError, ArithmeticError) as exc:
             failed = str(exc)
-        # one rank's failure is every rank's (the Newton loop must take the same branch everywhere)
-        messages = [m for m in self.comm.tompi4py().allgather(failed) if m]
-        if messages:
-            x.destroy()
-            raise ArithmeticError(messages[0])
+        self._agree(failed, x)
+        rows_of_G = []
+        if self.rotational:
+            # the rotational coupling: the line moments of the LM nodes (collective), then each
+            # rank finishes its points (docs: mortar1d3d.distributed.rotational)
+            moments = [part.exchange(state, d) for part, state in zip(self.rotational, states)]
+            try:
+                for part, state, lam in zip(self.rotational, states, moments):
+                    (fi, fv), Kr, G = part.finish(state, lam, tangent)
+                    f_idx, f_val = np.concatenate([f_idx, fi]), np.concatenate([f_val, fv])
+                    if tangent:
+                        K = tuple(np.concatenate([a, b]) for a, b in zip(K, Kr))
+                    rows_of_G.append(G)
+            except (FloatingPointError, ValueError, ArithmeticError) as exc:
+                failed = str(exc)
+            self._agree(failed, x)
         r = summed_vector(self.comm, f_idx, f_val, self.sizes)
         r.axpy(-t, self.load)
         if self.coupling is not None:
             r.axpy(1.0, self.coupling * x)
+        twist = self._twist_residual(x, r, tangent) if self._twist_any else None
         x.destroy()
         if self.rotation is not None:
             physical, r = r, r.duplicate()
@@ -377,6 +422,13 @@ class DistributedSystem:
         A = coo_matrix(self.comm, *K, self.sizes, self.sizes, block_size=self.solver.block_size)
         if self.coupling is not None:
             A.axpy(1.0, self.coupling, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        for part, G in zip(self.rotational, rows_of_G):
+            Kr = part.tangent(G)
+            if Kr is not None:
+                A.axpy(1.0, Kr, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+                Kr.destroy()
+        if twist is not None:
+            A = self._twist_tangent(A, twist)
         if self.rotation is not None:
             physical, A = A, A.PtAP(self.rotation)
             physical.destroy()
@@ -385,6 +437,47 @@ class DistributedSystem:
             self.last_tangent.destroy()
         self.last_tangent = A
         return self.last_residual, A
+
+    def _twist_residual(self, x, r, tangent):
+        """The twist supports' change of variables on the residual (as ``Model._twist_jacobian``,
+        each rank on the held triplets it owns): ``r ← Dᵀ r`` in place, D the identity but for the
+        left Jacobian T(ψ) on those triplets. Returns their blocks (T, E) for :meth:`_twist_tangent`."""
+        from ..model.model import twist_blocks
+        blocks = twist_blocks(x.getArray(), r.getArray(), self._twist, tangent)
+        values = r.getArray().copy()
+        for s, (T, _) in zip(self._twist, blocks):
+            values[s:s + 3] = T.reshape(3, 3).T @ values[s:s + 3]
+        r.setArray(values)
+        return blocks
+
+    def _twist_tangent(self, A, blocks):
+        """``Dᵀ A D + E`` (``Model._twist_jacobian``) of the twist supports' blocks (collective)."""
+        PETSc = petsc()
+        first = int(self.layout.ranges[self.rank])
+        keep = np.ones(self.sizes[0], dtype=bool)
+        rows, cols, D_vals, E_vals = [], [], [], []
+        for s, (T, E) in zip(self._twist, blocks):
+            keep[s:s + 3] = False
+            rows.append(first + np.repeat(np.arange(s, s + 3), 3)), cols.append(first + np.tile(np.arange(s, s + 3), 3))
+            D_vals.append(T), E_vals.append(E)
+        diagonal = first + np.flatnonzero(keep)
+        D = coo_matrix(self.comm, np.concatenate([diagonal] + rows), np.concatenate([diagonal] + cols),
+                       np.concatenate([np.ones(len(diagonal))] + D_vals), self.sizes, self.sizes)
+        E = coo_matrix(self.comm, _cat(rows, np.int64), _cat(cols, np.int64), _cat(E_vals, float), self.sizes,
+                       self.sizes)
+        physical, A = A, A.PtAP(D)
+        A.axpy(1.0, E, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        for m in (physical, D, E):
+            m.destroy()
+        return A
+
+    def _agree(self, failed, x):
+        """One rank's failure is every rank's (the Newton loop must take the same branch everywhere):
+        raises ArithmeticError on every rank if ``failed`` (a message or None) is set on any."""
+        messages = [m for m in self.comm.tompi4py().allgather(failed) if m]
+        if messages:
+            x.destroy()
+            raise ArithmeticError(messages[0])
 
     def free_block(self, K):
         """The tangent on the free unknowns: ``K`` itself (the supports are removed in :meth:`solve_linear`)."""

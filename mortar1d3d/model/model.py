@@ -34,6 +34,27 @@ DEFAULT_PENALTY_FACTOR = 1e3     # ε = 1e3 E_solid when the scene gives no pena
 PENALTY_ROUNDOFF_LIMIT = 1e8     # ε / E_solid above which round-off beats the penalty error (AccuracyWarning)
 
 
+def twist_blocks(d, r, starts, tangent):
+    """The blocks of the twist supports' change of variables (:meth:`Model._twist_jacobian`) at
+    the rotation triplets starting at ``starts`` of ``d`` (total rotation vectors ψ) and ``r``
+    (their residual in spins): per triplet ``T(ψ)`` (the left Jacobian, δθ = T δψ) and, with
+    ``tangent``, ``E`` with ``E[:, j] = (∂T/∂ψ_j)ᵀ r``, each as 9 values row by row (E None
+    without ``tangent``)."""
+    from ..physics.rotations import jacobian, jacobian_derivative_transpose
+    T, E, work = np.empty((3, 3)), np.empty((3, 3)), np.empty(9)
+    out = []
+    for s in starts:
+        psi = np.ascontiguousarray(d[s:s + 3])
+        jacobian(psi, T)
+        if tangent:
+            u, col = np.ascontiguousarray(r[s:s + 3]), np.empty(3)
+            for j in range(3):
+                jacobian_derivative_transpose(psi, np.eye(3)[j], u, col, work)
+                E[:, j] = col
+        out.append((T.ravel().copy(), E.ravel().copy() if tangent else None))
+    return out
+
+
 class Model:
     """The physics of a built scene: supports, loads, solid and beam models, coupling.
 
@@ -184,26 +205,18 @@ class Model:
         vectors ψ (additive) instead of spins: ``δθ = T(ψ) δψ`` (left Jacobian), so ``r ← Dᵀ r`` and
         ``K ← Dᵀ K D + E`` with ``D`` the identity but for ``T(ψ)`` on those triplets and
         ``E[:, j] = (∂T/∂ψ_j)ᵀ r`` on their diagonal blocks (the rows' own dependence on ψ)."""
-        from ..physics.rotations import jacobian, jacobian_derivative_transpose
         n_all = len(r)
         rows, cols, vals = [np.arange(n_all)], [np.arange(n_all)], [np.ones(n_all)]
         keep = np.ones(n_all, dtype=bool)
-        T, E, work = np.empty((3, 3)), np.empty((3, 3)), np.empty(9)
         extra = []
-        for s in self.twist_starts:
-            psi = np.ascontiguousarray(d[s:s + 3])
-            jacobian(psi, T)
+        for s, (T, E) in zip(self.twist_starts, twist_blocks(d, r, self.twist_starts, K is not None)):
             keep[s:s + 3] = False
             block = (np.repeat(np.arange(s, s + 3), 3), np.tile(np.arange(s, s + 3), 3))
             rows.append(block[0])
             cols.append(block[1])
-            vals.append(T.ravel().copy())
+            vals.append(T)
             if K is not None:
-                u, col = np.ascontiguousarray(r[s:s + 3]), np.empty(3)
-                for j in range(3):
-                    jacobian_derivative_transpose(psi, np.eye(3)[j], u, col, work)
-                    E[:, j] = col
-                extra.append((block, E.ravel().copy()))
+                extra.append((block, E))
         rows[0], cols[0], vals[0] = rows[0][keep], cols[0][keep], vals[0][keep]
         D = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n_all, n_all))
         if K is not None:

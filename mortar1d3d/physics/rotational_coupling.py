@@ -246,20 +246,25 @@ class RotationalCoupling:
             out[self.coupled_rows] = multipliers
             return out.reshape(-1, 3)
         if linear:
-            if getattr(self, "_reference_rows", None) is None:
-                n_rot = self.beam.n_rotation_nodes
-                self._reference_rows = self._linearise(np.zeros(self.X.size), np.zeros((n_rot, 3)),
-                                                       lambda g: np.zeros_like(g), True)[2]
             d = np.zeros(self.n_dofs)
             d[:self.X.size] = u_solid
             psi = np.asarray(psi, dtype=float).ravel()
             d[self.rotation_offset: self.rotation_offset + psi.size] = psi
-            gap = (self._reference_rows @ d).reshape(-1, 3)
+            gap = (self.reference_rows() @ d).reshape(-1, 3)
             if self.constraint_type == "gauss_point":
                 gap = self.Phi @ gap
         else:
             gap = self.weighted_gap(u_solid, psi)
         return self.penalty * self.kappa_inverse[:, None] * gap
+
+    def reference_rows(self):
+        """The constraint's linearisation ``G`` at the reference state (3 n_rows, n_dofs, csr; the
+        rows of :attr:`rows`), computed once."""
+        if getattr(self, "_reference_rows", None) is None:
+            n_rot = self.beam.n_rotation_nodes
+            self._reference_rows = self._linearise(np.zeros(self.X.size), np.zeros((n_rot, 3)),
+                                                   lambda g: np.zeros_like(g), True)[2]
+        return self._reference_rows
 
     def energy(self, u_solid, psi):
         """Penalty energy ``ε/2 Σ_j κ_j⁻¹ |g_j|²`` (gauss_point: ``ε/2 Σ_p w_p |ψ_p|²``)."""
@@ -273,12 +278,25 @@ class RotationalCoupling:
         csr). Rows: the LM nodes (mortar) or the points (gauss_point), :attr:`rows`. Last, the
         rows of the forces' own Jacobians ``Σ_p R_jp w_p Jf_p`` (``G`` itself for variational forces;
         with ``forces="fourc"`` ``r`` and ``λᵀ ∂²g`` are those of 4C's forces)."""
+        state = self.point_state(u_solid, psi)
+        return self.linearised(state, moments(state[-1]), tangent)
+
+    def point_state(self, u_solid, psi):
+        """The first half of :meth:`_linearise`: the points' relative rotations and Jacobians at
+        ``(u_solid, psi)``, and last the weighted gaps ``g`` (n_rows, 3). A caller that sums ``g``
+        with other parts of the same rows (the same LM node on two processes) forms the line
+        moments from the sum and hands them to :meth:`linearised`."""
         self.n_evaluations += 1
         x, triads, psi_p, J18 = self._run(u_solid, psi, True)
         J = self._local_jacobian(J18)
         cols = self._columns()
         g = np.asarray(self.rows @ (self.weight[:, None] * psi_p))
-        lam_j = moments(g)
+        return x, triads, psi_p, J, cols, g
+
+    def linearised(self, state, lam_j, tangent):
+        """The second half of :meth:`_linearise`, with the line moments ``lam_j`` (n_rows, 3) of
+        the rows: what :meth:`_linearise` returns."""
+        x, triads, psi_p, J, cols, g = state
         lam_p = np.asarray(self.rows.T @ lam_j)                                      # (n_pts, 3)
         used = cols >= 0
         Jf = J
@@ -336,11 +354,15 @@ class RotationalCoupling:
         _, r, Gm, K_lam, Gf = self._linearise(u_solid, psi, lambda g: self.penalty * kinv[:, None] * g, tangent)
         if not tangent:
             return r, None
-        # ε Gᵀ κ⁻¹ G, plus the geometric part of the constraint's second derivative (fourc forces:
-        # their rows Gf instead of the left G, and their own second part)
-        K = self.penalty * (Gf.T @ sp.diags(np.repeat(kinv, 3)) @ Gm)
+        return r, self.penalty_tangent(Gm, K_lam, Gf)
+
+    def penalty_tangent(self, Gm, K_lam, Gf):
+        """The penalty's tangent from what :meth:`linearised` returns: ε Gᵀ κ⁻¹ G, plus the
+        geometric part of the constraint's second derivative (fourc forces: their rows Gf instead
+        of the left G, and their own second part)."""
+        K = self.penalty * (Gf.T @ sp.diags(np.repeat(self.rows_kappa_inverse, 3)) @ Gm)
         K = K + K_lam
-        return r, K.tocsr()
+        return K.tocsr()
 
     def constraint(self, u_solid, psi, multipliers, tangent=True):
         """Lagrange: the multipliers' forces, the constraint rows and their linearisation.
