@@ -175,8 +175,7 @@ def segment_point_counts(seg_beam, seg_solid, seg_start, seg_end, gx, codes, con
                 out[3] += 1
                 continue
             r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], s0, s1, s2, mid + half * gx[q], H, dH)
-            if q == 0:
-                pr.linear_parameters(code, linear, s, r0, r1, r2, xi)
+            pr.linear_parameters(code, linear, s, r0, r1, r2, xi)
             converged, its = newton_counted(code, X, r0, r1, r2, solid_h[s], xi, trial, N, dN)
             out[1] += its
             if not (converged and solid.is_inside(code, xi, loose)):
@@ -223,6 +222,9 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                     continue
                 if k == 0:
                     pr.linear_parameters(code, linear, s, r0, r1, r2, xi)
+                else:
+                    for i in range(3):
+                        xi[i] = xi_s[k - 1, i] + dxi_s[k - 1, i] * (eta_s[k] - eta_s[k - 1])
                 out[2] += 1
                 converged, its = newton_counted(code, X, r0, r1, r2, h, xi, trial, N, dN)
                 out[3] += its

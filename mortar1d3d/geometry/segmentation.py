@@ -257,7 +257,12 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
                     dxi_s[k, i] = linear[s, i, 0] * d0 + linear[s, i, 1] * d1 + linear[s, i, 2] * d2
                 continue
             if k == 0:
-                linear_parameters(code, linear, s, r0, r1, r2, xi)    # else: from the centre
+                linear_parameters(code, linear, s, r0, r1, r2, xi)
+            elif ok[k - 1]:
+                # the previous sample's tangent predicts this one: ξ + dξ/dη Δη (after a failed
+                # sample, xi holds the centre)
+                for i in range(3):
+                    xi[i] = xi_s[k - 1, i] + dxi_s[k - 1, i] * (eta_s[k] - eta_s[k - 1])
             start[:] = xi
             ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
             if not (ok[k] and (solid.is_inside(code, xi, PARAMETER_TOL)
