@@ -12,7 +12,7 @@ from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL,
 from .._schedule import claim, new_claims, workers
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
-from ..elements.solid import hex8, hex27, tet10
+from ..elements.solid import hex8, hex27, nurbs27, tet10
 from .linalg import inverse3, norm3, solve3
 from .search import in_hull
 from .rational import (centre_point, normalise_coefficients, rational_coefficients, rational_curvature_bound,
@@ -33,12 +33,13 @@ _BACKTRACKS = 8
 _ROUND_OFF = 4 * 2.220446049250313e-16
 
 
-#: the codes of the trilinear hexahedron and of the quadratic hexahedron and tetrahedron, whose map
-#: and Jacobian skip the registry's dispatch (the common cases of the Newton path): the same shape
-#: functions, sums over a fixed node count, the same bits
+#: the codes of the trilinear hexahedron, of the quadratic hexahedron and tetrahedron and of the
+#: rational triquadratic Bézier hexahedron, whose map and Jacobian skip the registry's dispatch (the
+#: common cases of the Newton path): the same shape functions, sums over a fixed node count, the same bits
 _HEX8 = hex8.DESCRIPTOR.code
 _HEX27 = hex27.DESCRIPTOR.code
 _TET10 = tet10.DESCRIPTOR.code
+_NURBS27 = nurbs27.DESCRIPTOR.code
 
 
 @njit_inline
@@ -74,6 +75,8 @@ def _map_other(code, X, xi, N):
     if code == _TET10:
         tet10.shape(xi, N)
         return _node_sum(X, N, 10)
+    if code == _NURBS27:
+        return nurbs27.rational_map(X, xi, N)
     if solid.RATIONAL[code]:
         solid.rational_shape(code, xi, X, N)
     else:
@@ -120,6 +123,8 @@ def _jacobian_other(code, X, xi, N, dN):
     if code == _TET10:
         tet10.deriv(xi, dN)
         return _gradient_sum(X, dN, 10)
+    if code == _NURBS27:
+        return nurbs27.rational_jacobian(X, xi, N, dN)
     if solid.RATIONAL[code]:
         solid.rational_deriv(code, xi, X, N, dN)
     else:

@@ -13,7 +13,7 @@ NURBS patches become meshes of these elements in :mod:`mortar1d3d.nurbs.mesh`.
 """
 import numpy as np
 
-from ..._config import njit
+from ..._config import njit, njit_inline
 from ...quadrature import hexahedron_rule
 from .bezier_hex import rational_descriptor, tensor_bernstein, tensor_bernstein_gradients
 from .hex_family import QUADRATIC_LATTICE, QUADRATIC_NODES, triquadratic_bernstein_matrix
@@ -38,3 +38,83 @@ def deriv(xi, dN):
 
 
 DESCRIPTOR = rational_descriptor("nurbs27", 6, DEGREE, QUADRATIC_NODES, hexahedron_rule(3))
+
+
+# The Newton path of a NURBS mesh (map and Jacobian, every iteration) without the general path's
+# costs: the registry's dispatch, four arrays allocated per Jacobian by the degree-p Bernstein
+# kernels, and the separate passes of the rational quotient. The 1D values stay in tuples
+# (registers), as in hex27; the products, the sums over the 27 nodes and the quotient are those of
+# ``shape``/``deriv`` and dispatch.rational_shape / rational_deriv, in the same order: the same bits.
+@njit_inline
+def _bernstein2(x):
+    """The quadratic Bernstein polynomials on [-1, 1] at ``x`` and their derivatives (two 3-tuples): the
+    values of :func:`.bezier_hex.bernstein` with p = 2, the same operations (2 s t as s t + t s)."""
+    t = 0.5 * (1.0 + x)
+    s = 1.0 - t
+    return (s * s, s * t + t * s, t * t), (-1.0 * s, 1.0 * (s - t), 1.0 * t)
+
+
+@njit_inline
+def rational_map(X, xi, N):
+    """x(ξ) = Σ_a R_a X_a, R_a = w_a B_a / W, of an element with local control points ``X[:, :3]`` and
+    weights ``X[:, 3]``; ``N`` receives R_a. Returns (x0, x1, x2)."""
+    u, _ = _bernstein2(xi[0])
+    v, _ = _bernstein2(xi[1])
+    w, _ = _bernstein2(xi[2])
+    W = 0.0
+    for a in range(27):
+        n = u[LATTICE[a, 0]] * v[LATTICE[a, 1]] * w[LATTICE[a, 2]] * X[a, 3]
+        N[a] = n
+        W += n
+    inv = 1.0 / W
+    x0 = x1 = x2 = 0.0
+    for a in range(27):
+        n = N[a] * inv
+        N[a] = n
+        x0 += n * X[a, 0]
+        x1 += n * X[a, 1]
+        x2 += n * X[a, 2]
+    return x0, x1, x2
+
+
+@njit_inline
+def rational_jacobian(X, xi, N, dN):
+    """J[i, k] = ∂x_i/∂ξ_k of :func:`rational_map` as a 9-tuple, row by row; ``N`` receives R_a, ``dN``
+    ∂R_a/∂ξ = (w_a ∂B_a - R_a ∂W) / W."""
+    u, du = _bernstein2(xi[0])
+    v, dv = _bernstein2(xi[1])
+    w, dw = _bernstein2(xi[2])
+    W = W0 = W1 = W2 = 0.0
+    for a in range(27):
+        l0, l1, l2 = LATTICE[a, 0], LATTICE[a, 1], LATTICE[a, 2]
+        weight = X[a, 3]
+        n = u[l0] * v[l1] * w[l2] * weight
+        g0 = du[l0] * v[l1] * w[l2] * weight
+        g1 = u[l0] * dv[l1] * w[l2] * weight
+        g2 = u[l0] * v[l1] * dw[l2] * weight
+        N[a] = n
+        dN[a, 0], dN[a, 1], dN[a, 2] = g0, g1, g2
+        W += n
+        W0 += g0
+        W1 += g1
+        W2 += g2
+    inv = 1.0 / W
+    j00 = j01 = j02 = j10 = j11 = j12 = j20 = j21 = j22 = 0.0
+    for a in range(27):
+        n = N[a] * inv
+        N[a] = n
+        d0 = (dN[a, 0] - n * W0) * inv
+        d1 = (dN[a, 1] - n * W1) * inv
+        d2 = (dN[a, 2] - n * W2) * inv
+        dN[a, 0], dN[a, 1], dN[a, 2] = d0, d1, d2
+        x0, x1, x2 = X[a, 0], X[a, 1], X[a, 2]
+        j00 += x0 * d0
+        j01 += x0 * d1
+        j02 += x0 * d2
+        j10 += x1 * d0
+        j11 += x1 * d1
+        j12 += x1 * d2
+        j20 += x2 * d0
+        j21 += x2 * d1
+        j22 += x2 * d2
+    return j00, j01, j02, j10, j11, j12, j20, j21, j22
