@@ -479,14 +479,26 @@ def locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stac
     within ``_NEAR_BOUNDARY`` of a face (polished before the inside test), or outside the
     certified box (the subdivision search decides). On INSIDE or OUTSIDE ``trial`` holds the
     residual p - x(ξ), as after the common case (one evaluation of the map, on this rare path only)."""
-    status = _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged)
+    status = _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged, True)
     if status != NOT_CONVERGED:
         store_residual(code, X, p0, p1, p2, xi, trial, N)
     return status
 
 
 @njit
-def _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged):
+def locate_outside(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack):
+    """:func:`locate_point` of a point known to lie outside the element, beyond a plane of its hull
+    (:func:`.search.in_hull` False): the same Newton solves and the same ξ, without the subdivision
+    search, which could only prove again that p has no preimage within ``tol`` of the element (the
+    hull's margin lies far beyond what ``tol`` reaches). OUTSIDE (``xi`` a solution outside) or
+    NOT_CONVERGED; ``trial`` is left as scratch, not as the residual."""
+    converged = (linear_parameters(code, table, s, p0, p1, p2, xi)
+                 and project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) == CONVERGED)
+    return _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged, False)
+
+
+@njit
+def _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged, search):
     if not converged:
         solid.centre(code, xi)
         converged = project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) == CONVERGED
@@ -499,7 +511,7 @@ def _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, sta
         if certified_outside(code, table, s, xi):
             return OUTSIDE
     o0, o1, o2 = xi[0], xi[1], xi[2]
-    if search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN) == INSIDE:
+    if search and search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN) == INSIDE:
         return INSIDE
     if converged:
         xi[0], xi[1], xi[2] = o0, o1, o2
