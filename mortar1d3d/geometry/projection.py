@@ -76,7 +76,8 @@ def _map_other(code, X, xi, N):
         tet10.shape(xi, N)
         return _node_sum(X, N, 10)
     if code == _NURBS27:
-        return nurbs27.rational_map(X, xi, N)
+        nurbs27.rational_shape(X, xi, N)
+        return _node_sum(X, N, 27)
     if solid.RATIONAL[code]:
         solid.rational_shape(code, xi, X, N)
     else:
@@ -124,7 +125,8 @@ def _jacobian_other(code, X, xi, N, dN):
         tet10.deriv(xi, dN)
         return _gradient_sum(X, dN, 10)
     if code == _NURBS27:
-        return nurbs27.rational_jacobian(X, xi, N, dN)
+        nurbs27.rational_deriv(X, xi, N, dN)
+        return _gradient_sum(X, dN, 27)
     if solid.RATIONAL[code]:
         solid.rational_deriv(code, xi, X, N, dN)
     else:

@@ -44,7 +44,8 @@ DESCRIPTOR = rational_descriptor("nurbs27", 6, DEGREE, QUADRATIC_NODES, hexahedr
 # costs: the registry's dispatch, four arrays allocated per Jacobian by the degree-p Bernstein
 # kernels, and the separate passes of the rational quotient. The 1D values stay in tuples
 # (registers), as in hex27; the products, the sums over the 27 nodes and the quotient are those of
-# ``shape``/``deriv`` and dispatch.rational_shape / rational_deriv, in the same order: the same bits.
+# ``shape``/``deriv`` and dispatch.rational_shape / rational_deriv, in the same order: the same bits
+# (the node sums are projection's, as for every type).
 @njit_inline
 def _bernstein2(x):
     """The quadratic Bernstein polynomials on [-1, 1] at ``x`` and their derivatives (two 3-tuples): the
@@ -55,9 +56,8 @@ def _bernstein2(x):
 
 
 @njit_inline
-def rational_map(X, xi, N):
-    """x(ξ) = Σ_a R_a X_a, R_a = w_a B_a / W, of an element with local control points ``X[:, :3]`` and
-    weights ``X[:, 3]``; ``N`` receives R_a. Returns (x0, x1, x2)."""
+def rational_shape(X, xi, N):
+    """R_a = w_a B_a / W at ``xi`` into ``N`` (27,), weights in ``X[:, 3]``."""
     u, _ = _bernstein2(xi[0])
     v, _ = _bernstein2(xi[1])
     w, _ = _bernstein2(xi[2])
@@ -67,20 +67,14 @@ def rational_map(X, xi, N):
         N[a] = n
         W += n
     inv = 1.0 / W
-    x0 = x1 = x2 = 0.0
     for a in range(27):
-        n = N[a] * inv
-        N[a] = n
-        x0 += n * X[a, 0]
-        x1 += n * X[a, 1]
-        x2 += n * X[a, 2]
-    return x0, x1, x2
+        N[a] *= inv
 
 
 @njit_inline
-def rational_jacobian(X, xi, N, dN):
-    """J[i, k] = ∂x_i/∂ξ_k of :func:`rational_map` as a 9-tuple, row by row; ``N`` receives R_a, ``dN``
-    ∂R_a/∂ξ = (w_a ∂B_a - R_a ∂W) / W."""
+def rational_deriv(X, xi, N, dN):
+    """∂R_a/∂ξ = (w_a ∂B_a - R_a ∂W) / W at ``xi`` into ``dN`` (27, 3), R_a into ``N``; weights in
+    ``X[:, 3]``."""
     u, du = _bernstein2(xi[0])
     v, dv = _bernstein2(xi[1])
     w, dw = _bernstein2(xi[2])
@@ -99,22 +93,9 @@ def rational_jacobian(X, xi, N, dN):
         W1 += g1
         W2 += g2
     inv = 1.0 / W
-    j00 = j01 = j02 = j10 = j11 = j12 = j20 = j21 = j22 = 0.0
     for a in range(27):
         n = N[a] * inv
         N[a] = n
-        d0 = (dN[a, 0] - n * W0) * inv
-        d1 = (dN[a, 1] - n * W1) * inv
-        d2 = (dN[a, 2] - n * W2) * inv
-        dN[a, 0], dN[a, 1], dN[a, 2] = d0, d1, d2
-        x0, x1, x2 = X[a, 0], X[a, 1], X[a, 2]
-        j00 += x0 * d0
-        j01 += x0 * d1
-        j02 += x0 * d2
-        j10 += x1 * d0
-        j11 += x1 * d1
-        j12 += x1 * d2
-        j20 += x2 * d0
-        j21 += x2 * d1
-        j22 += x2 * d2
-    return j00, j01, j02, j10, j11, j12, j20, j21, j22
+        dN[a, 0] = (dN[a, 0] - n * W0) * inv
+        dN[a, 1] = (dN[a, 1] - n * W1) * inv
+        dN[a, 2] = (dN[a, 2] - n * W2) * inv
