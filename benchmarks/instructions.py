@@ -73,15 +73,16 @@ def _child(args):
     numba.set_num_threads(1)
     beams, solid = m13.generate.fibre_cube(args.n, args.fibres, args.n)
     if args.element == "nurbs27":
-        # newton_path.py's nurbs27 scene: the NURBS pipe of nurbs_throughput.py with its helices
-        # (--n, --fibres and --distort do not apply)
+        # newton_path.py's nurbs27 scene: the NURBS pipe of nurbs_throughput.py (384 elements) with 40
+        # helices (--n, --fibres, --distort do not apply); mortar1d3d is already the checkout's
         sys.path.insert(0, str(HERE.parent))
         from nurbs_throughput import helices, meshes
         beams, solid = helices(40), meshes((2, 24, 8))[0]
+        args.distort = 0.0
     elif args.element != "hexahedron":
         # the same cube as quadratic elements (as newton_path.py's hex27 and tet10 scenes)
         solid = m13.generate.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (args.n,) * 3, element=args.element)
-    if args.distort and args.element != "nurbs27":
+    if args.distort:
         solid = m13.generate.distort(solid, args.distort, seed=1)
     m13.assemble_mortar(beams, solid, integration=args.integration, n_gauss=4)
     call = _stage_call(m13, beams, solid, args)
@@ -148,8 +149,8 @@ def main(argv=None):
                         help="move interior solid nodes by up to A times the element size (0: regular)")
     parser.add_argument("--n", type=int, default=10, help="solid elements per edge (default 10)")
     parser.add_argument("--element", default="hexahedron", choices=("hexahedron", "hexahedron27", "tetra10", "nurbs27"),
-                        help="solid element type of the cube (default hexahedron: fibre_cube's own mesh); "
-                             "nurbs27: newton_path.py's NURBS pipe scene instead of the cube")
+                        help="solid element type of the cube (default hexahedron: fibre_cube's own mesh); nurbs27: "
+                             "newton_path.py's NURBS pipe with 40 helices instead of the cube")
     parser.add_argument("--fibres", type=int, default=200)
     parser.add_argument("--stage", default="call", choices=("call", "search", "points"),
                         help="count whole assemble_mortar calls (default) or one stage of element-based "
@@ -183,9 +184,9 @@ def main(argv=None):
         per_call = {k: (more[k] - base[k]) / args.calls for k in PARTS}
         counts.append(per_call)
         what = f"{args.integration} call" if args.stage == "call" else f"'{args.stage}' stage"
-        print(f"{package}: {sum(per_call.values()):.4e} instructions per {what} "
-              f"(fibre_cube({args.n}, {args.fibres}, {args.n}), {args.element}, distort {args.distort}, n_gauss 4, "
-              f"1 thread): "
+        scene = ("NURBS pipe, 40 helices" if args.element == "nurbs27"
+                 else f"fibre_cube({args.n}, {args.fibres}, {args.n}), {args.element}, distort {args.distort}")
+        print(f"{package}: {sum(per_call.values()):.4e} instructions per {what} ({scene}, n_gauss 4, 1 thread): "
               + ", ".join(f"{k} {v:.4e}" for k, v in per_call.items()), flush=True)
     for package, c in zip(packages[1:], counts[1:]):
         print(f"{package.name} / {packages[0].name}: total {sum(c.values()) / sum(counts[0].values()):.4f}, "

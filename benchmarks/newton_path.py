@@ -175,8 +175,7 @@ def segment_point_counts(seg_beam, seg_solid, seg_start, seg_end, gx, codes, con
                 out[3] += 1
                 continue
             r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], s0, s1, s2, mid + half * gx[q], H, dH)
-            if q == 0:
-                pr.linear_parameters(code, linear, s, r0, r1, r2, xi)
+            pr.linear_parameters(code, linear, s, r0, r1, r2, xi)
             converged, its = newton_counted(code, X, r0, r1, r2, solid_h[s], xi, trial, N, dN)
             out[1] += its
             if not (converged and solid.is_inside(code, xi, loose)):
@@ -187,12 +186,12 @@ def segment_point_counts(seg_beam, seg_solid, seg_start, seg_end, gx, codes, con
 
 
 @njit
-def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, linear, beam_code, Q,
+def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, linear, hull, beam_code, Q,
                     lengths, beam_origin, beam_boxes, S, out):
     """The crossing search's samples, counted: out = [pairs, pairs searched (a face in reach), sample
     projections, their Newton iterations, sample fallbacks, face-Newton starts at sign changes of the
-    cubic model, touch starts]. Starts from the deflated cubic (a sample exactly on a face) and the
-    mirror start after a touch are not counted (both rare)."""
+    cubic model, touch starts, fallbacks beyond a hull plane (no subdivision search)]. Starts from the
+    deflated cubic (a sample exactly on a face) and the mirror start after a touch are not counted (both rare)."""
     C = np.empty((solid.MAX_CONTROL, 3))
     reach = np.empty(solid.MAX_FACES, dtype=np.bool_)
     X, N, dN, H, dH, xi, trial = pr.point_buffers()
@@ -223,12 +222,17 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                     continue
                 if k == 0:
                     pr.linear_parameters(code, linear, s, r0, r1, r2, xi)
+                else:
+                    for i in range(3):
+                        xi[i] = xi_s[k - 1, i] + dxi_s[k - 1, i] * (eta_s[k] - eta_s[k - 1])
                 out[2] += 1
                 converged, its = newton_counted(code, X, r0, r1, r2, h, xi, trial, N, dN)
                 out[3] += its
                 if not (converged and (solid.is_inside(code, xi, PARAMETER_TOL)
                                        or pr.certified_outside(code, linear, s, xi))):
                     out[4] += 1
+                    # the library skips the subdivision search beyond a hull plane (the same ξ)
+                    out[7] += not in_hull(hull, s, r0, r1, r2)
                     pr.locate_point(code, X, r0, r1, r2, h, PARAMETER_TOL, linear, s, xi, trial, N, dN, a, stack)
                 xi_s[k] = xi
                 j00, j01, j02, j10, j11, j12, j20, j21, j22 = pr.jacobian(code, X, xi, N, dN)
@@ -339,13 +343,14 @@ def main(argv=None):
     print(f"segment-based points: {out[0]} ({len(tiled[0])} segments, {len(tiled[0]) / len(pairs):.2f} per beam "
           f"element); Newton iterations per point {out[1] / max(out[0] - out[3], 1):.3f} (warm start), fallbacks "
           f"{out[2]}, affine {out[3]}")
-    out = np.zeros(7, dtype=np.int64)
-    crossing_counts(ctx.pair_offsets, ctx.pair_solid, *args_ctx, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths,
+    out = np.zeros(8, dtype=np.int64)
+    crossing_counts(ctx.pair_offsets, ctx.pair_solid, *args_ctx, ctx.linear, hull, ctx.beam_code, ctx.Q, ctx.lengths,
                     ctx.beam_origin, ctx.beam_boxes, SEARCH_POINTS, out)
     found = int(crossing[2].sum())
     print(f"crossing search: {out[0]} pairs, {out[1]} searched ({out[1] / len(pairs):.2f} per beam element); "
           f"per searched pair: {out[2] / max(out[1], 1):.2f} sample projections "
-          f"({out[3] / max(out[2], 1):.3f} Newton iterations each, {out[4]} fallbacks in all), face-Newton starts "
+          f"({out[3] / max(out[2], 1):.3f} Newton iterations each, {out[4]} fallbacks in all, {out[7]} of them "
+          f"beyond a hull plane: no subdivision search), face-Newton starts "
           f"{out[5] / max(out[1], 1):.3f} at sign changes + {out[6] / max(out[1], 1):.3f} at touches, crossings found "
           f"{found / max(out[1], 1):.3f}")
     return rates

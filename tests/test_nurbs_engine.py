@@ -151,3 +151,44 @@ def test_validity_of_rational_elements():
     assert jacobian_validity(NURBS27, Y, h[:1], W[:1])[0] == FOLDED
     with pytest.raises(m13.MeshError, match="weights"):
         m13.SolidMesh(bm.solid.points, {"nurbs27": bm.solid.connectivity[:, :27]})
+
+
+def test_nurbs27_newton_kernels_give_the_bits_of_the_general_rational_path():
+    """The map and Jacobian the Newton path uses on a nurbs27 (``projection.map_point`` / ``jacobian``:
+    the type's own fused degree-2 kernels) equal, bit for bit, the general path: the registry's
+    Bernstein shape functions and derivatives, the rational quotient of ``dispatch.rational_shape`` /
+    ``rational_deriv`` and the sums over the nodes in node order. Random control points and weights
+    (0.3 to 3), ξ inside, on and beyond the reference cube."""
+    from mortar1d3d.elements.solid import dispatch
+    from mortar1d3d.geometry import projection as pr
+
+    code = NURBS27.code
+    rng = np.random.default_rng(11)
+    X, N, dN, _, _, _, _ = pr.point_buffers()
+    N_ref, dN_ref = np.empty_like(N), np.empty_like(dN)
+    differ = 0
+    for _ in range(20):
+        X[:27, :3] = NURBS27.reference_nodes + rng.uniform(-0.3, 0.3, (27, 3))
+        X[:27, 3] = rng.uniform(0.3, 3.0, 27)
+        for xi in np.concatenate([rng.uniform(-1.3, 1.3, (10, 3)), [[-1.0, 1.0, 0.0], [1.0, 1.0, 1.0]]]):
+            x = pr.map_point(code, X, xi, N)
+            dispatch.rational_shape(code, xi, X, N_ref)
+            ref = [0.0, 0.0, 0.0]
+            for a in range(27):
+                for i in range(3):
+                    ref[i] += N_ref[a] * X[a, i]
+            assert x == tuple(ref)
+            np.testing.assert_array_equal(N[:27], N_ref[:27])
+            J = pr.jacobian(code, X, xi, N, dN)
+            dispatch.rational_deriv(code, xi, X, N_ref, dN_ref)
+            ref = [0.0] * 9
+            for a in range(27):
+                for i in range(3):
+                    for k in range(3):
+                        ref[3 * i + k] += X[a, i] * dN_ref[a, k]
+            assert J == tuple(ref)
+            np.testing.assert_array_equal(dN[:27], dN_ref[:27])
+            # the weights matter (the comparison is not that of the polynomial map Σ B_a X_a)
+            dispatch.shape(code, xi, N_ref)
+            differ += not np.allclose(x, N_ref[:27] @ X[:27, :3], rtol=1e-6, atol=0.0)
+    assert differ >= 200        # every random ξ (at a corner, and here on an edge, R_a = B_a)

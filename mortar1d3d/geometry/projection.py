@@ -13,7 +13,7 @@ from .._schedule import claim, new_claims, workers
 from .._unlinked import unlinked
 from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
-from ..elements.solid import hex8, hex27, tet10
+from ..elements.solid import hex8, hex27, nurbs27, tet10
 from .linalg import inverse3, norm3, solve3
 from .search import in_hull
 from .rational import (centre_point, normalise_coefficients, rational_coefficients, rational_curvature_bound,
@@ -34,12 +34,13 @@ _BACKTRACKS = 8
 _ROUND_OFF = 4 * 2.220446049250313e-16
 
 
-#: the codes of the trilinear hexahedron and of the quadratic hexahedron and tetrahedron, whose map
-#: and Jacobian skip the registry's dispatch (the common cases of the Newton path): the same shape
-#: functions, sums over a fixed node count, the same bits
+#: the codes of the trilinear hexahedron, of the quadratic hexahedron and tetrahedron and of the
+#: rational triquadratic Bézier hexahedron, whose map and Jacobian skip the registry's dispatch (the
+#: common cases of the Newton path): the same shape functions, sums over a fixed node count, the same bits
 _HEX8 = hex8.DESCRIPTOR.code
 _HEX27 = hex27.DESCRIPTOR.code
 _TET10 = tet10.DESCRIPTOR.code
+_NURBS27 = nurbs27.DESCRIPTOR.code
 
 
 @njit_inline
@@ -75,6 +76,9 @@ def _map_other(code, X, xi, N):
     if code == _TET10:
         tet10.shape(xi, N)
         return _node_sum(X, N, 10)
+    if code == _NURBS27:
+        nurbs27.rational_shape(X, xi, N)
+        return _node_sum(X, N, 27)
     if solid.RATIONAL[code]:
         solid.rational_shape(code, xi, X, N)
     else:
@@ -121,6 +125,9 @@ def _jacobian_other(code, X, xi, N, dN):
     if code == _TET10:
         tet10.deriv(xi, dN)
         return _gradient_sum(X, dN, 10)
+    if code == _NURBS27:
+        nurbs27.rational_deriv(X, xi, N, dN)
+        return _gradient_sum(X, dN, 27)
     if solid.RATIONAL[code]:
         solid.rational_deriv(code, xi, X, N, dN)
     else:
@@ -475,7 +482,7 @@ def locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stac
     within ``_NEAR_BOUNDARY`` of a face (polished before the inside test), or outside the
     certified box (the subdivision search decides). On INSIDE or OUTSIDE ``trial`` holds the
     residual p - x(ξ), as after the common case (one evaluation of the map, on this rare path only)."""
-    status = _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged)
+    status = _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged, True)
     if status != NOT_CONVERGED:
         store_residual(code, X, p0, p1, p2, xi, trial, N)
     return status
@@ -486,7 +493,19 @@ _locate_rare_call = unlinked(locate_rare)
 
 
 @njit
-def _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged):
+def locate_outside(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack):
+    """:func:`locate_point` of a point known to lie outside the element, beyond a plane of its hull
+    (:func:`.search.in_hull` False): the same Newton solves and the same ξ, without the subdivision
+    search, which could only prove again that p has no preimage within ``tol`` of the element (the
+    hull's margin lies far beyond what ``tol`` reaches). OUTSIDE (``xi`` a solution outside) or
+    NOT_CONVERGED; ``trial`` is left as scratch, not as the residual."""
+    converged = (linear_parameters(code, table, s, p0, p1, p2, xi)
+                 and project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) == CONVERGED)
+    return _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged, False)
+
+
+@njit
+def _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged, search):
     if not converged:
         solid.centre(code, xi)
         converged = project_point(code, X, p0, p1, p2, h, xi, trial, N, dN) == CONVERGED
@@ -499,7 +518,7 @@ def _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, sta
         if certified_outside(code, table, s, xi):
             return OUTSIDE
     o0, o1, o2 = xi[0], xi[1], xi[2]
-    if search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN) == INSIDE:
+    if search and search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN) == INSIDE:
         return INSIDE
     if converged:
         xi[0], xi[1], xi[2] = o0, o1, o2

@@ -37,8 +37,9 @@ from .beam import beam_point, beams_affine
 from .intersection import face_coordinates, intersect_face
 from .linalg import norm3, solve3
 from .projection import (ANY_CANDIDATE, CONVERGED, NOT_CONVERGED, certified_outside, first_containing, is_affine,
-                         jacobian, linear_parameters, load_element, locate_point, point_buffers, project_point,
-                         search_buffers)
+                         jacobian, linear_parameters, load_element, locate_outside, locate_point, point_buffers,
+                         project_point, search_buffers)
+from .search import in_hull
 
 _NEAR_FACE = 0.1     # min |g| of the cubic model below this fraction of its variation: try a touch there
 _SCAN = 8            # points per sample interval at which the cubic model of g is scanned
@@ -82,7 +83,7 @@ def pair_crossings(ctx, pair_beam, pair_solid, search_points):
     # a straight beam element in an affine solid element has face functions linear in η: their roots
     # are the sign changes between samples, with no touch or double crossing to look for
     straight = beams_affine(ctx.beam_code, ctx.Q, ctx.lengths)
-    args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.linear, ctx.beam_code, ctx.Q,
+    args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.linear, ctx.hull, ctx.beam_code, ctx.Q,
             ctx.lengths, ctx.beam_origin, ctx.beam_boxes, straight, search_points)
     full = crossings_capacity(search_points)
     width = min(_FIRST_CAPACITY, full)
@@ -195,7 +196,7 @@ def _faces_in_reach(code, X, h, box, origin, C, reach):
 
 
 @njit_parallel
-def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear,
+def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear, hull,
                     beam_code, Q, lengths, beam_origin, beam_boxes, straight, search_points, out_eta, out_face,
                     out_count, no_face, overflow, workers):
     n_pairs = pair_beam.shape[0]
@@ -217,14 +218,14 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
         begin, stop = claim(claims, n_pairs, worker)
         while begin < stop:
             _pair_crossings_chunk_call(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h,
-                                       linear, beam_code, Q, lengths, beam_origin, beam_boxes, straight, out_eta,
+                                       linear, hull, beam_code, Q, lengths, beam_origin, beam_boxes, straight, out_eta,
                                        out_face, out_count, no_face, overflow, X, xi, S, C, reach, eta_s, H, dH, start,
                                        ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z)
             begin, stop = claim(claims, n_pairs, worker)
 
 
 @njit
-def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear,
+def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear, hull,
                           beam_code, Q, lengths, beam_origin, beam_boxes, straight, out_eta, out_face, out_count,
                           no_face, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok, trial, N, dN, a, stack, xi_s,
                           dxi_s, g, dg, z):
@@ -257,16 +258,26 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
                     dxi_s[k, i] = linear[s, i, 0] * d0 + linear[s, i, 1] * d1 + linear[s, i, 2] * d2
                 continue
             if k == 0:
-                linear_parameters(code, linear, s, r0, r1, r2, xi)    # else: from the centre
+                linear_parameters(code, linear, s, r0, r1, r2, xi)
+            elif ok[k - 1]:
+                # the previous sample's tangent predicts this one: ξ + dξ/dη Δη (after a failed
+                # sample, xi holds the centre)
+                for i in range(3):
+                    xi[i] = xi_s[k - 1, i] + dxi_s[k - 1, i] * (eta_s[k] - eta_s[k - 1])
             start[:] = xi
             ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
             if not (ok[k] and (solid.is_inside(code, xi, PARAMETER_TOL)
                                or certified_outside(code, linear, s, xi))):
                 # the warm start may have followed a branch of the map folded outside a
-                # curved element: locate the sample for certain
+                # curved element: locate the sample for certain (a sample beyond a hull plane has
+                # no preimage inside: the same Newton solves without the subdivision search)
                 start[:] = xi
-                status = locate_point(code, X, r0, r1, r2, h, PARAMETER_TOL, linear, s, xi, trial, N, dN,
-                                      a, stack)
+                if in_hull(hull, s, r0, r1, r2):
+                    status = locate_point(code, X, r0, r1, r2, h, PARAMETER_TOL, linear, s, xi, trial, N, dN,
+                                          a, stack)
+                else:
+                    status = locate_outside(code, X, r0, r1, r2, h, PARAMETER_TOL, linear, s, xi, trial, N, dN,
+                                            a, stack)
                 ok[k] = status != NOT_CONVERGED
                 if not ok[k]:
                     xi[:] = start

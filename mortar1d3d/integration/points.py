@@ -92,11 +92,10 @@ def _segment_points_chunk(beam_code, begin, stop, seg_beam, seg_solid, seg_start
                         xi[k] = x
                         status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
                         continue
-                    # warm start from the previous point of the segment (the first from the
-                    # linearised estimate); if that does not end inside, locate the point for
-                    # certain (a curved element's map folds outside it: Newton may take that branch)
-                    if q == 0:
-                        linear_parameters(code, linear, s, r0, r1, r2, x)
+                    # start from the linearised estimate (closer than the previous point: fewer Newton
+                    # iterations); if that does not end inside, locate the point for certain (a curved
+                    # element's map folds outside it: Newton may take that branch)
+                    linear_parameters(code, linear, s, r0, r1, r2, x)
                     if not (project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) == CONVERGED
                             and solid.is_inside(code, x, loose)):
                         status[k] = locate_point(code, X, r0, r1, r2, solid_h[s], loose, linear, s, x, trial, N, dN,

@@ -13,7 +13,7 @@ NURBS patches become meshes of these elements in :mod:`mortar1d3d.nurbs.mesh`.
 """
 import numpy as np
 
-from ..._config import njit
+from ..._config import njit, njit_inline
 from ...quadrature import hexahedron_rule
 from .bezier_hex import rational_descriptor, tensor_bernstein, tensor_bernstein_gradients
 from .hex_family import QUADRATIC_LATTICE, QUADRATIC_NODES, triquadratic_bernstein_matrix
@@ -38,3 +38,64 @@ def deriv(xi, dN):
 
 
 DESCRIPTOR = rational_descriptor("nurbs27", 6, DEGREE, QUADRATIC_NODES, hexahedron_rule(3))
+
+
+# The Newton path of a NURBS mesh (map and Jacobian, every iteration) without the general path's
+# costs: the registry's dispatch, four arrays allocated per Jacobian by the degree-p Bernstein
+# kernels, and the separate passes of the rational quotient. The 1D values stay in tuples
+# (registers), as in hex27; the products, the sums over the 27 nodes and the quotient are those of
+# ``shape``/``deriv`` and dispatch.rational_shape / rational_deriv, in the same order: the same bits
+# (the node sums are projection's, as for every type).
+@njit_inline
+def _bernstein2(x):
+    """The quadratic Bernstein polynomials on [-1, 1] at ``x`` and their derivatives (two 3-tuples): the
+    values of :func:`.bezier_hex.bernstein` with p = 2, the same operations (2 s t as s t + t s)."""
+    t = 0.5 * (1.0 + x)
+    s = 1.0 - t
+    return (s * s, s * t + t * s, t * t), (-1.0 * s, 1.0 * (s - t), 1.0 * t)
+
+
+@njit_inline
+def rational_shape(X, xi, N):
+    """R_a = w_a B_a / W at ``xi`` into ``N`` (27,), weights in ``X[:, 3]``."""
+    u, _ = _bernstein2(xi[0])
+    v, _ = _bernstein2(xi[1])
+    w, _ = _bernstein2(xi[2])
+    W = 0.0
+    for a in range(27):
+        n = u[LATTICE[a, 0]] * v[LATTICE[a, 1]] * w[LATTICE[a, 2]] * X[a, 3]
+        N[a] = n
+        W += n
+    inv = 1.0 / W
+    for a in range(27):
+        N[a] *= inv
+
+
+@njit_inline
+def rational_deriv(X, xi, N, dN):
+    """∂R_a/∂ξ = (w_a ∂B_a - R_a ∂W) / W at ``xi`` into ``dN`` (27, 3), R_a into ``N``; weights in
+    ``X[:, 3]``."""
+    u, du = _bernstein2(xi[0])
+    v, dv = _bernstein2(xi[1])
+    w, dw = _bernstein2(xi[2])
+    W = W0 = W1 = W2 = 0.0
+    for a in range(27):
+        l0, l1, l2 = LATTICE[a, 0], LATTICE[a, 1], LATTICE[a, 2]
+        weight = X[a, 3]
+        n = u[l0] * v[l1] * w[l2] * weight
+        g0 = du[l0] * v[l1] * w[l2] * weight
+        g1 = u[l0] * dv[l1] * w[l2] * weight
+        g2 = u[l0] * v[l1] * dw[l2] * weight
+        N[a] = n
+        dN[a, 0], dN[a, 1], dN[a, 2] = g0, g1, g2
+        W += n
+        W0 += g0
+        W1 += g1
+        W2 += g2
+    inv = 1.0 / W
+    for a in range(27):
+        n = N[a] * inv
+        N[a] = n
+        dN[a, 0] = (dN[a, 0] - n * W0) * inv
+        dN[a, 1] = (dN[a, 1] - n * W1) * inv
+        dN[a, 2] = (dN[a, 2] - n * W2) * inv
