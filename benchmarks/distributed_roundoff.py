@@ -14,6 +14,7 @@ Run it under MPI (it prints from rank 0; the serial runs are repeated on every r
 
     mpiexec -n 1 python benchmarks/distributed_roundoff.py
     mpiexec -n 2 python benchmarks/distributed_roundoff.py
+    mpiexec -n 2 python benchmarks/distributed_roundoff.py --scene examples/scenes/reinforced_pipe.toml
 """
 import json
 import tomllib
@@ -32,10 +33,16 @@ SCENE = Path(__file__).resolve().parents[1] / "examples" / "scenes" / "rebar_can
 
 
 def rebar(penalty, **analysis):
+    """The scene file (the rebar cantilever, or ``--scene``) at the given penalty, direct solvers;
+    a nonlinear scene in 4 load steps."""
     data = tomllib.loads(SCENE.read_text())
     data["coupling"]["penalty"] = penalty
-    data["analysis"].update({"steps": 4, "solver": "direct", **analysis})
-    return m13.Scene.from_dict(data)
+    if data.get("analysis", {}).get("kinematics", "linear") == "nonlinear":
+        analysis = {"steps": 4, **analysis}
+    else:
+        analysis.pop("rtol", None)
+    data.setdefault("analysis", {}).update({"solver": "direct", **analysis})
+    return m13.Scene.from_dict(data, base_dir=SCENE.parent)
 
 
 def difference(a, b):
@@ -68,11 +75,18 @@ def colamd(run):
         serial_linear.factorize = original
 
 
-def main():
+def main(argv=None):
+    import argparse
+    global SCENE
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--scene", type=Path, default=SCENE,
+                        help="a scene file with a solid and penalty coupling (default: the rebar cantilever)")
+    SCENE = parser.parse_args(argv).scene.resolve()
+    E = tomllib.loads(SCENE.read_text())["solid"]["material"]["E"]
     comm = petsc().COMM_WORLD
     rows = []
     for factor in (100.0, 1000.0):
-        penalty = factor * 30e9
+        penalty = factor * E
         row = {"ranks": comm.getSize(), "penalty_over_E": factor}
         for rtol in (1e-8, 1e-12):
             serial = m13.solve(rebar(penalty, rtol=rtol))
