@@ -32,17 +32,17 @@ from mortar1d3d.distributed.solve import solve_distributed
 SCENE = Path(__file__).resolve().parents[1] / "examples" / "scenes" / "rebar_cantilever.toml"
 
 
-def rebar(penalty, **analysis):
-    """The scene file (the rebar cantilever, or ``--scene``) at the given penalty, direct solvers;
-    a nonlinear scene in 4 load steps."""
-    data = tomllib.loads(SCENE.read_text())
+def scene_at(path, penalty, **analysis):
+    """The scene file ``path`` (the rebar cantilever, or ``--scene``) at the given penalty, direct
+    solvers; a nonlinear scene in 4 load steps."""
+    data = tomllib.loads(path.read_text())
     data["coupling"]["penalty"] = penalty
     if data.get("analysis", {}).get("kinematics", "linear") == "nonlinear":
         analysis = {"steps": 4, **analysis}
     else:
         analysis.pop("rtol", None)
     data.setdefault("analysis", {}).update({"solver": "direct", **analysis})
-    return m13.Scene.from_dict(data, base_dir=SCENE.parent)
+    return m13.Scene.from_dict(data, base_dir=path.parent)
 
 
 def difference(a, b):
@@ -77,29 +77,28 @@ def colamd(run):
 
 def main(argv=None):
     import argparse
-    global SCENE
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--scene", type=Path, default=SCENE,
                         help="a scene file with a solid and penalty coupling (default: the rebar cantilever)")
-    SCENE = parser.parse_args(argv).scene.resolve()
-    E = tomllib.loads(SCENE.read_text())["solid"]["material"]["E"]
+    path = parser.parse_args(argv).scene.resolve()
+    E = tomllib.loads(path.read_text())["solid"]["material"]["E"]
     comm = petsc().COMM_WORLD
     rows = []
     for factor in (100.0, 1000.0):
         penalty = factor * E
         row = {"ranks": comm.getSize(), "penalty_over_E": factor}
         for rtol in (1e-8, 1e-12):
-            serial = m13.solve(rebar(penalty, rtol=rtol))
-            dist = solve_distributed(rebar(penalty, rtol=rtol, backend="petsc"), comm=comm)
+            serial = m13.solve(scene_at(path, penalty, rtol=rtol))
+            dist = solve_distributed(scene_at(path, penalty, rtol=rtol, backend="petsc"), comm=comm)
             if dist is not None:
                 row[f"petsc_vs_serial_rtol_{rtol:g}"] = difference(dist, serial)
                 row[f"iterations_rtol_{rtol:g}"] = [[s.iterations for s in r.steps] for r in (serial, dist)]
                 row[f"final_residual_rtol_{rtol:g}"] = max(s.residuals[-1] / s.residuals[0] for s in dist.steps)
-        serial = m13.solve(rebar(penalty))
-        dist = refined(lambda: solve_distributed(rebar(penalty, backend="petsc"), comm=comm))
+        serial = m13.solve(scene_at(path, penalty))
+        dist = refined(lambda: solve_distributed(scene_at(path, penalty, backend="petsc"), comm=comm))
         if dist is not None:
             row["petsc_refined_vs_serial"] = difference(dist, serial)
-        row["serial_colamd_vs_serial"] = difference(colamd(lambda: m13.solve(rebar(penalty))), serial)
+        row["serial_colamd_vs_serial"] = difference(colamd(lambda: m13.solve(scene_at(path, penalty))), serial)
         rows.append(row)
     if comm.getRank() == 0:
         for row in rows:
