@@ -5,6 +5,7 @@ Every test here is collective: ``make test-mpi`` runs this file under ``mpiexec 
 (one rank) when the ``mpi`` extra is installed and skips it with the reason otherwise. The
 serial results are computed on every rank and compared after the renumbering.
 """
+import importlib
 import importlib.util
 import warnings
 from pathlib import Path
@@ -15,6 +16,7 @@ import scipy.sparse as sp
 
 import mortar1d3d as m13
 from mortar1d3d.distributed import available
+from mortar1d3d.errors import MissingPackageError
 
 if not available():
     pytest.skip("the mpi extra (mpi4py, petsc4py, pymetis) is not installed: pip install -e \".[mpi]\" with "
@@ -124,6 +126,54 @@ def test_partition_rejects_bad_ranks():
                   beam_part=[np.zeros(beams.n_elements, np.int64)])
     with pytest.raises(ValueError, match="method must be one of"):
         partition(solid, [beams], 2, "spectral")
+
+
+def test_every_rank_takes_rank_0s_metis_partition(monkeypatch):
+    """METIS may cut one graph differently on two nodes (another build): rank 0's cut is the one
+    every rank uses. Here METIS is made to answer differently on every rank."""
+    partition_module = importlib.import_module("mortar1d3d.distributed.partition")
+    from mortar1d3d.distributed.solve import _agreed_partition
+    solid, beams, _ = _cube()
+    honest = partition_module._metis
+
+    def rank_dependent(*args):
+        solid_part, beam_part = honest(*args)
+        n = args[-1]
+        return (solid_part + RANK) % n, [(p + RANK) % n for p in beam_part]
+
+    monkeypatch.setattr(partition_module, "_metis", rank_dependent)
+    part = _agreed_partition(solid, [beams], COMM, "metis")
+    mpi = COMM.tompi4py()
+    first = mpi.bcast(part.solid_part, root=0)
+    first_beams = mpi.bcast(part.beam_part[0], root=0)
+    np.testing.assert_array_equal(part.solid_part, first)
+    np.testing.assert_array_equal(part.beam_part[0], first_beams)
+    if SIZE > 1:
+        np.testing.assert_array_equal(first, honest(solid, [beams], [partition_module.candidate_pairs(solid, beams)],
+                                                    partition_module._node_neighbours(solid.connectivity, solid.n_nodes),
+                                                    SIZE)[0])
+        assert part.method == "metis"
+        # the measured quality is that of the cut every rank holds
+        assert part.stats == mpi.bcast(part.stats, root=0)
+
+
+def test_a_partition_error_on_rank_0_stops_every_rank(monkeypatch):
+    partition_module = importlib.import_module("mortar1d3d.distributed.partition")
+    from mortar1d3d.distributed.solve import _agreed_partition
+    solid, beams, _ = _cube()
+    honest = partition_module._metis
+
+    def fails_on_rank_0(*args):
+        if RANK == 0:
+            raise MissingPackageError("pymetis is missing on rank 0")
+        return honest(*args)
+
+    monkeypatch.setattr(partition_module, "_metis", fails_on_rank_0)
+    if SIZE == 1:     # one part needs no METIS
+        assert not _agreed_partition(solid, [beams], COMM, "metis").solid_part.any()
+        return
+    with pytest.raises(MissingPackageError, match="pymetis is missing on rank 0"):
+        _agreed_partition(solid, [beams], COMM, "metis")
 
 
 # --------------------------------------------------------------------------------------------

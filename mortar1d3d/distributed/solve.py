@@ -437,7 +437,7 @@ def solve_distributed(scene, *, progress=False, comm=None, method="metis", parts
     clock("setup")
     beam_meshes = [g.mesh for g in model.groups]
     if parts is None:
-        part = partition(model.solid_mesh, beam_meshes, size, method)
+        part = _agreed_partition(model.solid_mesh, beam_meshes, comm, method)
     else:
         solid_part, beam_part = parts(model.solid_mesh, beam_meshes, size)
         part = partition(model.solid_mesh, beam_meshes, size, solid_part=solid_part, beam_part=beam_part)
@@ -602,6 +602,36 @@ def _served_model(model, ops, numbering, comm):
             served = exc
     _raise_together(comm, served if isinstance(served, SceneError) else None)
     return served
+
+
+def _agreed_partition(solid, beam_meshes, comm, method):
+    """The partition, computed by METIS on rank 0 only and sent to every rank.
+
+    Every rank must hold the same owners: ranks that disagree would number the unknowns
+    differently and add entries to rows nobody owns, or wait for each other forever. The
+    geometric partition is plain array arithmetic on the same input, but METIS is another
+    library whose result may differ between builds or machines of one cluster; so rank 0 cuts
+    the graph and broadcasts the owner arrays (one integer per element). An error on rank 0
+    (pymetis missing there) is raised on every rank.
+    """
+    size = comm.getSize()
+    if size == 1 or method != "metis":
+        return partition(solid, beam_meshes, size, method)
+    part, owners = None, None
+    if comm.getRank() == 0:
+        try:
+            part = partition(solid, beam_meshes, size, method)
+            owners = (part.solid_part, part.beam_part)
+        except Exception as exc:      # sent to every rank and raised there
+            owners = exc
+    owners = comm.tompi4py().bcast(owners, root=0)
+    if isinstance(owners, Exception):
+        raise owners
+    if part is not None:
+        return part
+    part = partition(solid, beam_meshes, size, solid_part=owners[0], beam_part=owners[1])
+    part.method = method
+    return part
 
 
 def _raise_together(comm, found):
