@@ -55,8 +55,13 @@ def owned_beam_physics(model, k, owned):
     mesh, nodes = beam_submesh(g.mesh, owned)
     if mesh is None:
         return None, nodes, None, None
-    specs = [model.scene.beams[e] for e in _entry_of_elements(g)[owned]]
-    sections = [(1, spec["section"]) for spec in specs]
+    # one (count, section) per run of consecutive owned elements of one scene entry, as the serial
+    # model passes one per entry (not one per element: a Python list per element at set-up)
+    entry = _entry_of_elements(g)[owned]
+    starts = np.flatnonzero(np.r_[True, entry[1:] != entry[:-1]])
+    counts = np.diff(np.r_[starts, len(entry)])
+    specs = [model.scene.beams[e] for e in entry[starts]]
+    sections = [(int(n), spec["section"]) for n, spec in zip(counts, specs)]
     if not g.rotations.size:
         return mesh, nodes, g.type.make_physics(mesh, sections), None
     rotation_nodes = np.concatenate([nodes, g.mesh.n_nodes + owned])
