@@ -26,7 +26,12 @@ log(time) over log(size) is fitted by least squares; 1 means cost proportional t
   Prints the time per iteration and per unknown, and the slope. The coupling operators (the
   mortar assembly) are built once in ``Model.prepare`` and are not part of the iteration.
   ``--profile TOP`` profiles one more call per size (cProfile) and prints the TOP functions by
-  their own time. ``--enforcement lagrange`` runs the same scene with Lagrange multipliers (the
+  their own time. ``--stages`` also prints, per size, the work per unknown (solid elements,
+  tangent entries: a cube of n³ elements has (n+1)³ nodes, so the elements per unknown rise with
+  n) and the CPU seconds (user + system, medians over the rounds; steadier than wall seconds on a
+  shared machine) of the call, of the solid's element kernel alone (into a tangent-sized array
+  already in use) per element, of the rest per unknown, and of the first touch of a new
+  tangent-sized array, then the slopes of each over its own size. ``--enforcement lagrange`` runs the same scene with Lagrange multipliers (the
   unknowns then include them, and the Jacobian is the saddle-point matrix).
 
 Peak memory (``ru_maxrss`` of the process) is printed at the end. On this shared machine the
