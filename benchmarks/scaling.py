@@ -26,7 +26,12 @@ log(time) over log(size) is fitted by least squares; 1 means cost proportional t
   Prints the time per iteration and per unknown, and the slope. The coupling operators (the
   mortar assembly) are built once in ``Model.prepare`` and are not part of the iteration.
   ``--profile TOP`` profiles one more call per size (cProfile) and prints the TOP functions by
-  their own time. ``--enforcement lagrange`` runs the same scene with Lagrange multipliers (the
+  their own time. ``--stages`` also prints, per size, the work per unknown (solid elements,
+  tangent entries: a cube of n³ elements has (n+1)³ nodes, so the elements per unknown rise with
+  n) and the CPU seconds (user + system, medians over the rounds; steadier than wall seconds on a
+  shared machine) of the call, of the solid's element kernel alone (into a tangent-sized array
+  already in use) per element, of the rest per unknown, and of the first touch of a new
+  tangent-sized array, then the slopes of each over its own size. ``--enforcement lagrange`` runs the same scene with Lagrange multipliers (the
   unknowns then include them, and the Jacobian is the saddle-point matrix).
 
 Peak memory (``ru_maxrss`` of the process) is printed at the end. On this shared machine the
@@ -36,6 +41,7 @@ import argparse
 import os
 import resource
 import sys
+import time
 import warnings
 from pathlib import Path
 
@@ -162,14 +168,45 @@ def _profile(call, top):
           flush=True)
 
 
-def newton(unknowns, rounds, profile=0, enforcement="penalty"):
+def _cpu(call):
+    """CPU seconds (user + system) of ``call()``, and its result."""
+    t = time.process_time()
+    out = call()
+    return time.process_time() - t, out
+
+
+def _newton_stages(model, z, rounds):
+    """CPU seconds (medians over ``rounds``) of a call and of its parts that depend on the size
+    of the tangent: the solid's element kernel adding into a tangent-sized array already in use
+    (zeroed before, untimed), and the first touch of a new such array (allocation and the
+    operating system's zeroing of its pages)."""
+    pattern = model._tangent_pattern
+    solid = model.solid_physics
+    n_solid = 3 * model.n_solid_nodes
+    d = model.basis.to_physical(z[:model.n_displacement_dofs])[:n_solid]
+    positions = pattern._positions[0]             # the solid's block is the first one
+    data = np.zeros(pattern._nnz)
+
+    def pages():
+        fresh = np.zeros(pattern._nnz)
+        fresh[::512] = 0.0                        # one write per 4 KiB page
+    cpu = {"call": [], "kernel": [], "pages": []}
+    for _ in range(rounds):
+        cpu["call"].append(_cpu(lambda: model.residual(z, 1.0, tangent=True))[0])
+        data.fill(0.0)
+        cpu["kernel"].append(_cpu(lambda: solid.add_tangent_into(d, data, positions))[0])
+        cpu["pages"].append(_cpu(pages)[0])
+    return {k: float(np.median(v)) for k, v in cpu.items()}, solid.mesh.n_elements, pattern._nnz
+
+
+def newton(unknowns, rounds, profile=0, enforcement="penalty", stages=False):
     print(f"newton: Model.residual(z, t, tangent=True) of fibre_cube(n, n²/4, n/2), Saint Venant–Kirchhoff, "
           f"torsion-free fibres, {enforcement}; 1 thread; median over {rounds} rounds")
     print(f"{'n':>4}{'unknowns':>11}{'time s':>9}{'us/unknown':>12}{'/control':>10}{'nnz(K)':>12}")
     model = Model(build(newton_scene(2, enforcement)))       # compile before timing
     model.prepare()
     model.residual(np.zeros(model.n_unknowns), 1.0)
-    sizes, ratios = [], []
+    sizes, ratios, work = [], [], []
     rng = np.random.default_rng(1)
     for target in unknowns:
         n = 2
@@ -195,8 +232,22 @@ def newton(unknowns, rounds, profile=0, enforcement="penalty"):
         print(f"{n:>4}{size:>11}{t:>9.3f}{1e6 * t / size:>12.2f}{ratio:>10.3g}{nnz:>12}", flush=True)
         if profile:
             _profile(lambda: model.residual(z, 1.0, tangent=True), profile)
+        if stages:
+            cpu, elements, entries = _newton_stages(model, z, rounds)
+            work.append((size, elements, entries, cpu))
+            print(f"      solid elements per unknown {elements / size:.4f}, tangent entries per unknown "
+                  f"{entries / size:.1f}; CPU us per unknown: call {1e6 * cpu['call'] / size:.3f}, solid kernel "
+                  f"{1e6 * cpu['kernel'] / size:.3f} ({1e6 * cpu['kernel'] / elements:.2f} per element, "
+                  f"{1e9 * cpu['kernel'] / entries:.1f} ns per entry), rest {1e6 * (cpu['call'] - cpu['kernel']) / size:.3f}"
+                  f"; fresh pages of the tangent {1e6 * cpu['pages'] / size:.3f}", flush=True)
         del model
     print(f"slope of log(time/control) over log(unknowns): {slope(sizes, ratios):.3f}")
+    if stages and len(work) > 1:
+        size, elements, entries = (np.array([w[i] for w in work], float) for i in range(3))
+        call, kernel = (np.array([w[3][k] for w in work]) for k in ("call", "kernel"))
+        print(f"slopes of CPU seconds: call over unknowns {slope(size, call):.3f}, solid elements over unknowns "
+              f"{slope(size, elements):.3f}, tangent entries over unknowns {slope(size, entries):.3f}, solid kernel "
+              f"over solid elements {slope(elements, kernel):.3f}, rest over unknowns {slope(size, call - kernel):.3f}")
     record("scaling_newton", enforcement=enforcement, unknowns=[int(u) for u in sizes], per_control=ratios,
            slope=slope(sizes, ratios))
 
@@ -214,7 +265,9 @@ def main(argv=None):
                              "functions by own time")
     parser.add_argument("--stages", action="store_true",
                         help="assembly: also print the time per integration point of each stage of the call "
-                             "(search, segmentation, integration points, assembly, csr)")
+                             "(search, segmentation, integration points, assembly, csr); newton: also print the "
+                             "work per unknown (solid elements, tangent entries) and the CPU seconds of the call, "
+                             "of the solid's element kernel and of the tangent's fresh pages, with their slopes")
     parser.add_argument("--order", choices=["generated", "morton"], default="generated",
                         help="assembly: the fibres in fibre_cube's (random) order, or renumbered in the Morton "
                              "order of their midpoints (memory locality of the solid's data)")
@@ -228,7 +281,7 @@ def main(argv=None):
     if "assembly" in args.part:
         assembly(args.points, args.rounds, args.stages, args.order)
     if "newton" in args.part:
-        newton(args.unknowns, args.rounds, args.profile, args.enforcement)
+        newton(args.unknowns, args.rounds, args.profile, args.enforcement, args.stages)
     print(f"peak memory {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20:.2f} GB; "
           f"load average {os.getloadavg()[0]:.2f}")
 

@@ -100,6 +100,34 @@ def test_shared_pattern_is_read_only():
         K.indices[0] = 1
 
 
+def test_dropped_results_are_refilled_held_ones_are_never_touched():
+    rng = np.random.default_rng(6)
+    n, blocks, constant = _scene_blocks(rng)
+    pattern = TangentPattern(n)
+
+    def new_values():
+        for B, _ in blocks:
+            B.data[:] = 1.0 + rng.random(B.nnz)                       # no cancellation: the result shares data
+        return pattern.assemble(blocks, constant), _scipy_sum(n, blocks, constant)
+
+    K1, ref1 = new_values()
+    K2, ref2 = new_values()                                           # K1 held: a new array, K1 unchanged
+    assert pattern.n_recycled == 0 and K2.data is not K1.data
+    _assert_same(K1, ref1)
+    memory = K2.data.__array_interface__["data"][0]
+    del K1, K2
+    K3, ref3 = new_values()                                           # K2 dropped: its array refilled from zero
+    assert pattern.n_recycled == 1 and K3.data.__array_interface__["data"][0] == memory
+    _assert_same(K3, ref3)
+    view = K3.data[:5]
+    held = view.copy()
+    del K3
+    K4, ref4 = new_values()                                           # a view of K3's values still held
+    assert pattern.n_recycled == 1
+    assert np.array_equal(view, held)
+    _assert_same(K4, ref4)
+
+
 @pytest.mark.parametrize("beam_model", ["torsion_free", "simo_reissner"])
 def test_model_tangent_equals_block_sum(beam_model):
     """Solid + beams + penalty coupling: the model's tangent is the blocks plus the coupling stiffness."""

@@ -21,7 +21,21 @@ value; read-only pattern arrays, like the solid's, by memory address) makes the 
 fixed. The union and the positions are built with one byte per entry for the patterns and a
 binary search per entry (:func:`~mortar1d3d.physics.assembly_graph.pattern_positions`), so the
 build needs little more memory than the tangent itself.
+
+The ``data`` array of a result is recycled by the next call once no one holds it any more (the
+caller dropped the previous tangent, and with it every view of its values): it is set to zero and
+filled again, instead of a new array being allocated. Above a few tens of MB (the tangent of 1e5
+unknowns has 62 MB of values) every new array is fresh memory from the operating system, whose
+pages are faulted in and zeroed one by one during the first writes: at 1e6 unknowns that cost
+about a tenth of an iteration, and is what made the cost per unknown grow with the size. A
+tangent that is still held (by the caller, a solver, a view of its data) is never touched: the
+next result then gets a new array. :func:`~mortar1d3d.solvers.newton.solve_load_steps` drops
+its tangent after each linear solve for this reason. The price: the pattern keeps the last
+result's values alive after the caller has dropped them (625 MB at 1e6 unknowns), until the next
+call or until the pattern itself goes.
 """
+import sys
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -112,6 +126,19 @@ class TangentPattern:
         self.n = int(n)
         self._signature = None
         self.n_builds = 0
+        self.n_recycled = 0
+        self._spare = None              # the data array of the last result (module docstring)
+
+    def _data(self):
+        """A zeroed data array for the next result: the last result's, if no one else holds it."""
+        spare, self._spare = self._spare, None
+        # references to spare: this name and getrefcount's argument; one more is a holder
+        if spare is not None and spare.shape == (self._nnz,) and sys.getrefcount(spare) == 2:
+            spare.fill(0.0)
+            self.n_recycled += 1
+            return spare
+        del spare
+        return np.zeros(self._nnz)
 
     @staticmethod
     def _layout(blocks, constant, subtract):
@@ -197,7 +224,7 @@ class TangentPattern:
         else:
             # equal patterns: keep the caller's arrays, so the next call compares memory addresses
             self._signature = [(shape, indptr, indices) for shape, indptr, indices in layout]
-        data = np.zeros(self._nnz)
+        data = self._data()
         for (K, _), positions in zip(blocks, self._positions):
             if isinstance(K, FilledBlock):
                 K.fill(data, positions)
@@ -208,6 +235,7 @@ class TangentPattern:
                 add_at_positions(data, positions, K.data)
         for (K, _, scale), positions in zip(subtract, self._subtract_positions):
             subtract_at_positions(data, positions, K.data, scale)
+        self._spare = data
         if zeros == "keep_constant" and self._protected is not None and has_zero(data):
             keep = (data != 0.0) | self._protected
             counts = np.concatenate([[0], np.cumsum(keep)])

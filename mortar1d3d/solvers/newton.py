@@ -176,6 +176,9 @@ def _newton_step(system, z, t, rtol, increment_rtol, max_iterations, divergence)
             dz = system.solve_linear(_free_block(system, K), -r[free], z[free], rtol=linear_rtol)
         except Exception as exc:  # a singular or unsolvable tangent ends this attempt
             raise _StepFailed(f"the linear solve failed: {exc}") from None
+        # not needed any more: dropped before the next evaluation, which can then refill its
+        # values' memory instead of allocating new (mortar1d3d.model.tangent)
+        K = None
         note = (getattr(system, "last_linear_info", None) or {}).get("note")
         if note and note not in notes:
             notes.append(note)
