@@ -154,3 +154,43 @@ def test_a_caller_of_an_unlinked_caller_compiled_after_a_cache_load(tmp_path):
     assert (second["value"], second["misses"]) == (expected, 1)
     third = run("outer")                                     # outer loaded: its hook registers leaf
     assert (third["value"], third["misses"], third["hits"]) == (expected, 0, 1)
+
+
+MAP_RUN = textwrap.dedent("""
+    import json, re
+    import numpy as np
+    from mortar1d3d.elements.solid import dispatch, hex8, hex27
+    from mortar1d3d.geometry import projection as pr
+    out = {}
+    for module in (hex8, hex27):
+        code = module.DESCRIPTOR.code
+        # the reference nodes moved by a fixed, smooth map: x = 2 ξ + 0.1 ξ0 ξ1 (a curved element)
+        ref = dispatch.REFERENCE_NODES[code, : dispatch.N_NODES[code]]
+        X = np.zeros((dispatch.MAX_NODES, 4))
+        X[: len(ref), :3] = 2.0 * ref
+        X[: len(ref), 2] += 0.1 * ref[:, 0] * ref[:, 1]
+        xi = np.array([0.3, -0.2, 0.4])
+        trial = np.zeros(3)
+        pr.store_residual(code, X, 0.0, 0.0, 0.0, xi, trial, np.empty(dispatch.MAX_NODES))
+        out[module.__name__] = (-trial).tolist()
+    ir = "".join(pr.store_residual.inspect_llvm().values())
+    out["defined"] = sorted(set(re.findall(r"define [^@]*@\\"?([^\\"(]*)", ir)))
+    out["declared"] = sorted(set(re.findall(r"declare [^@]*@\\"?([^\\"(]*)", ir)))
+    print(json.dumps(out))
+""")
+
+
+def test_the_other_types_map_is_called_through_a_symbol(tmp_path):
+    """``projection.map_point`` (inlined into every function evaluating the map) writes out hex8 and
+    calls every other type's map through a symbol: the caller's module declares it, defines none of
+    the other types' code, and the map is still x(ξ) of the element (here x = 2ξ + 0.1 ξ0 ξ1 e_2,
+    which both hex8 and hex27 interpolate exactly)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(ROOT))
+    done = subprocess.run([sys.executable, "-c", MAP_RUN], env=env, cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    out = json.loads(done.stdout.strip().splitlines()[-1])
+    for name in ("mortar1d3d.elements.solid.hex8", "mortar1d3d.elements.solid.hex27"):
+        assert out[name] == pytest.approx([0.6, -0.4, 0.8 + 0.1 * 0.3 * -0.2], abs=1e-14)
+    assert any("_map_other" in name for name in out["declared"])
+    assert not any("_map_other" in name or "hex27" in name or "tet10" in name or "nurbs27" in name
+                   for name in out["defined"])

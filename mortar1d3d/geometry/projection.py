@@ -64,7 +64,7 @@ def map_point(code, X, xi, N):
     if code == _HEX8:
         hex8.shape(xi, N)
         return _node_sum(X, N, 8)
-    return _map_other(code, X, xi, N)
+    return _map_other_call(code, X, xi, N)
 
 
 @njit
@@ -84,6 +84,12 @@ def _map_other(code, X, xi, N):
     else:
         solid.shape(code, xi, N)
     return _node_sum(X, N, solid.n_nodes(code))
+
+
+#: called through a symbol (see mortar1d3d._unlinked): every function that evaluates the map holds a
+#: declaration, not the other types' shape functions, which LLVM would otherwise optimise again in
+#: each of them and in each of their callers
+_map_other_call = unlinked(_map_other)
 
 
 @njit_inline
@@ -113,7 +119,7 @@ def jacobian(code, X, xi, N, dN):
     if code == _HEX8:
         hex8.deriv(xi, dN)
         return _gradient_sum(X, dN, 8)
-    return _jacobian_other(code, X, xi, N, dN)
+    return _jacobian_other_call(code, X, xi, N, dN)
 
 
 @njit
@@ -133,6 +139,10 @@ def _jacobian_other(code, X, xi, N, dN):
     else:
         solid.deriv(code, xi, dN)
     return _gradient_sum(X, dN, solid.n_nodes(code))
+
+
+#: called through a symbol, as :func:`_map_other`
+_jacobian_other_call = unlinked(_jacobian_other)
 
 
 @njit
