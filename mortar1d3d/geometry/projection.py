@@ -71,11 +71,9 @@ def map_point(code, X, xi, N):
 def _map_other(code, X, xi, N):
     """:func:`map_point` of every type but hex8."""
     if code == _HEX27:
-        hex27.shape(xi, N)
-        return _node_sum(X, N, 27)
+        return hex27.map_nodes(X, xi)
     if code == _TET10:
-        tet10.shape(xi, N)
-        return _node_sum(X, N, 10)
+        return tet10.map_nodes(X, xi)
     if code == _NURBS27:
         nurbs27.rational_shape(X, xi, N)
         return _node_sum(X, N, 27)
@@ -120,11 +118,9 @@ def jacobian(code, X, xi, N, dN):
 def _jacobian_other(code, X, xi, N, dN):
     """:func:`jacobian` of every type but hex8."""
     if code == _HEX27:
-        hex27.deriv(xi, dN)
-        return _gradient_sum(X, dN, 27)
+        return hex27.jacobian_nodes(X, xi)
     if code == _TET10:
-        tet10.deriv(xi, dN)
-        return _gradient_sum(X, dN, 10)
+        return tet10.jacobian_nodes(X, xi)
     if code == _NURBS27:
         nurbs27.rational_deriv(X, xi, N, dN)
         return _gradient_sum(X, dN, 27)
