@@ -36,7 +36,9 @@ _ROUND_OFF = 4 * 2.220446049250313e-16
 
 #: the codes of the trilinear hexahedron, of the quadratic hexahedron and tetrahedron and of the
 #: rational triquadratic Bézier hexahedron, whose map and Jacobian skip the registry's dispatch (the
-#: common cases of the Newton path): the same shape functions, sums over a fixed node count, the same bits
+#: common cases of the Newton path): hex8 and nurbs27 with the same shape functions and sums over a fixed
+#: node count (the same bits); hex27 and tet10 with contractions of their nodes that never form the
+#: shape functions (``map_nodes``, ``jacobian_nodes`` of their modules: equal to round-off)
 _HEX8 = hex8.DESCRIPTOR.code
 _HEX27 = hex27.DESCRIPTOR.code
 _TET10 = tet10.DESCRIPTOR.code
