@@ -570,6 +570,48 @@ def test_tet10_closed_form():
                                                     L[0] * L[3], L[1] * L[3], L[2] * L[3]]), atol=1e-16)
 
 
+@pytest.mark.parametrize("name", ["hexahedron27", "tetra10"])
+def test_newton_kernels_equal_the_node_sums(name):
+    """The map and Jacobian the Newton path uses on hex27 and tet10 (``projection.map_point`` /
+    ``jacobian``: the types' own contractions, which never form the shape functions) equal
+    Σ_a N_a X_a and Σ_a X_a ⊗ ∇N_a of the registry's shape functions to round-off, on random
+    curved elements, at ξ inside and beyond the element (the Newton iterates go there); and they
+    reproduce a quadratic map x(ξ) (in both types' spaces) with its gradient exactly up to round-off."""
+    from mortar1d3d.geometry import projection as pr
+
+    d = descriptor(name)
+    n = d.n_nodes
+    rng = np.random.default_rng(27)
+    X, N, dN, _, _, _, _ = pr.point_buffers()
+    N_ref, dN_ref = np.empty(n), np.empty((n, 3))
+    for _ in range(20):
+        X[:n, :3] = d.reference_nodes + rng.uniform(-0.3, 0.3, (n, 3))
+        X[:n, :3] -= X[0, :3]           # local coordinates, node 0 at the origin, as the kernels get them
+        scale = np.abs(X[:n, :3]).max()
+        for xi in rng.uniform(-1.5, 1.5, (10, 3)):
+            dispatch.shape(d.code, xi, N_ref)
+            dispatch.deriv(d.code, xi, dN_ref)
+            np.testing.assert_allclose(pr.map_point(d.code, X, xi, N), N_ref @ X[:n, :3], rtol=0,
+                                       atol=1e-14 * scale)
+            np.testing.assert_allclose(np.reshape(pr.jacobian(d.code, X, xi, N, dN), (3, 3)), X[:n, :3].T @ dN_ref,
+                                       rtol=0, atol=1e-14 * scale)
+
+    # x(ξ) = (1 + ξ0 ξ1, ξ2² - 2 ξ0, 3 ξ1 + ξ0 ξ2): quadratic with only mixed and pure squares that both
+    # spaces hold; nodes x(ξ_a) reproduce it and its gradient
+    def f(z):
+        return np.array([1 + z[0] * z[1], z[2] ** 2 - 2 * z[0], 3 * z[1] + z[0] * z[2]])
+
+    def grad(z):
+        return np.array([[z[1], z[0], 0.0], [-2.0, 0.0, 2 * z[2]], [z[2], 3.0, z[0]]])
+
+    for a in range(n):
+        X[a, :3] = f(d.reference_nodes[a])
+    for xi in rng.uniform(-1.0, 1.0, (10, 3)):
+        np.testing.assert_allclose(pr.map_point(d.code, X, xi, N), f(xi), rtol=0, atol=1e-14)
+        np.testing.assert_allclose(np.reshape(pr.jacobian(d.code, X, xi, N, dN), (3, 3)), grad(xi), rtol=0,
+                                   atol=1e-14)
+
+
 # --------------------------------------------------------------------------------------------
 # Lagrange multiplier functions
 # --------------------------------------------------------------------------------------------

@@ -36,7 +36,9 @@ _ROUND_OFF = 4 * 2.220446049250313e-16
 
 #: the codes of the trilinear hexahedron, of the quadratic hexahedron and tetrahedron and of the
 #: rational triquadratic Bézier hexahedron, whose map and Jacobian skip the registry's dispatch (the
-#: common cases of the Newton path): the same shape functions, sums over a fixed node count, the same bits
+#: common cases of the Newton path): hex8 and nurbs27 with the same shape functions and sums over a fixed
+#: node count (the same bits); hex27 and tet10 with contractions of their nodes that never form the
+#: shape functions (``map_nodes``, ``jacobian_nodes`` of their modules: equal to round-off)
 _HEX8 = hex8.DESCRIPTOR.code
 _HEX27 = hex27.DESCRIPTOR.code
 _TET10 = tet10.DESCRIPTOR.code
@@ -71,11 +73,9 @@ def map_point(code, X, xi, N):
 def _map_other(code, X, xi, N):
     """:func:`map_point` of every type but hex8."""
     if code == _HEX27:
-        hex27.shape(xi, N)
-        return _node_sum(X, N, 27)
+        return hex27.map_nodes(X, xi)
     if code == _TET10:
-        tet10.shape(xi, N)
-        return _node_sum(X, N, 10)
+        return tet10.map_nodes(X, xi)
     if code == _NURBS27:
         nurbs27.rational_shape(X, xi, N)
         return _node_sum(X, N, 27)
@@ -126,11 +126,9 @@ def jacobian(code, X, xi, N, dN):
 def _jacobian_other(code, X, xi, N, dN):
     """:func:`jacobian` of every type but hex8."""
     if code == _HEX27:
-        hex27.deriv(xi, dN)
-        return _gradient_sum(X, dN, 27)
+        return hex27.jacobian_nodes(X, xi)
     if code == _TET10:
-        tet10.deriv(xi, dN)
-        return _gradient_sum(X, dN, 10)
+        return tet10.jacobian_nodes(X, xi)
     if code == _NURBS27:
         nurbs27.rational_deriv(X, xi, N, dN)
         return _gradient_sum(X, dN, 27)
