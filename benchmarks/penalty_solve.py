@@ -1,7 +1,7 @@
 """Linear solve of the penalty system of ``fibre_cube(n, 1000, 20)`` against the solid it sits in.
 
     python benchmarks/penalty_solve.py --n 20 40 [--direct 20] [--plain 10] [--schur 20 40] [--penalty-factor 1e3] [--profile]
-                                       [--repeat 3] [--aux 0:0 1:0.02:1e-3:f]
+                                       [--repeat 3] [--aux 0:0 1:0.02:1e-3:f 1:0.02:1e-3:f:sparsify=1e-3:compensation=abs]
 
 The system is the linearised model (solid: linear elastic E = 1e9, ν = 0.3, clamped at x = 0,
 traction on x = 1; 1000 torsion-free fibres E = 2e11, radius 3 mm; mortar penalty ε =
@@ -17,11 +17,17 @@ memory of the process so far. Solvers: ``solid`` (the solid alone), ``aux<k>-<θ
 preconditioner, what ``solver = "amg"``/``"auto"`` runs for penalty-coupled beams, with ``k`` Jacobi
 steps on its prolongation and strength threshold ``θ`` in its AMG, ``--aux k:θ[:drop[:f]] ...``:
 the default ``1:0.02:1e-3:f`` is the preconditioner's default, ``0:0`` its settings before the smoothed prolongation (``LUMPED``),
-``LUMPED``), ``amg`` (CG +
+``LUMPED``; further ``:key=value`` fields: ``sparsify=δ`` builds its AMG from ``A_aux`` without the 3x3
+blocks below ``δ`` of their diagonal blocks, ``compensation=none|abs|signed`` what they leave on the
+diagonal (``drop_weak_blocks``), ``sparsify_scope=smoother`` only the finest level's smoother on it), ``amg`` (CG +
 smoothed aggregation on the whole matrix, the path before the auxiliary space; ``--plain``, slow
 at large ε), ``schur`` (CG on the solid's Schur complement with the auxiliary space's V-cycle,
 ``--schur``, ``schur<k>-<θ>``) and ``direct`` (SuperLU, ``--direct``). ``--profile`` adds where the auxiliary-space
-set-up and its applications spent their time (:attr:`AuxiliarySpacePreconditioner.timings`).
+set-up and its applications spent their time (:attr:`AuxiliarySpacePreconditioner.timings`) and, for
+every AMG hierarchy (the solid alone's, the auxiliary space's), its levels, operator complexity
+(entries of all levels over the finest's), entries per row of the finest level (scalar rows, 3x3
+blocks counted as 9 entries) and the size of the coarsest; for the auxiliary space also the entries
+per row of ``A_aux`` itself.
 The 1-minute load average is printed with every row: wall times on a shared machine are only
 comparable at the same load; ``--repeat k`` keeps the fastest of k solves of each system.
 """
@@ -39,7 +45,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))     # measure this 
 import mortar1d3d as m13  # noqa: E402
 from _record import record  # noqa: E402
 from mortar1d3d.model import Model  # noqa: E402
-from mortar1d3d.solvers.linear import AuxiliarySpacePreconditioner, solve_linear  # noqa: E402
+from mortar1d3d.solvers.linear import AuxiliarySpacePreconditioner, LinearSolverError, solve_linear  # noqa: E402
 
 
 def system(n, penalty_factor, fibres=True):
@@ -63,12 +69,29 @@ def system(n, penalty_factor, fibres=True):
     return model, A, b, time.perf_counter() - start
 
 
+def aux_variant(spec):
+    """``K:THETA[:DROP[:f]][:key=value...]`` of ``--aux`` as (k, θ, drop, filter, {key: value}):
+    keyword arguments of :class:`AuxiliarySpacePreconditioner` (``sparsify`` a float, ``compensation``)."""
+    fields = spec.split(":")
+    plain = [f for f in fields if "=" not in f] + ["0", ""]
+    extra = {key: float(value) if key == "sparsify" else value
+             for key, value in (f.split("=", 1) for f in fields if "=" in f)}
+    return int(plain[0]), float(plain[1]), float(plain[2]), plain[3] == "f", extra
+
+
+def hierarchy(ml):
+    """One line on an AMG hierarchy: levels, operator complexity, the finest and coarsest levels."""
+    fine, coarse = ml.levels[0].A, ml.levels[-1].A
+    return (f"AMG: {len(ml.levels)} levels, operator complexity {ml.operator_complexity():.2f}, finest "
+            f"{fine.shape[0]} rows / {fine.nnz / fine.shape[0]:.1f} entries per row, coarsest {coarse.shape[0]} rows")
+
+
 def peak_memory_gb():
     """Peak resident memory of this process so far (Linux: ru_maxrss in KiB)."""
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
 
 
-def run(A, b, rtol, options, split, profile):
+def run(A, b, rtol, maxiter, options, split, profile):
     """One timed solve: (x, info) with ``cpu_time``, ``load``, ``memory`` added (and ``timings``
     of the auxiliary space with ``profile``). ``options["smoothing"]`` (aux and schur): ``(k, θ, drop, filter)``,
     the auxiliary space is built here with those settings."""
@@ -77,17 +100,25 @@ def run(A, b, rtol, options, split, profile):
     options = dict(options)
     smoothing = options.pop("smoothing", None)
     if smoothing is not None:
-        smoothing, theta, drop, filt = smoothing
+        smoothing, theta, drop, filt, extra = smoothing
         t = time.perf_counter()
         R_solid = options["near_nullspace"][split["solid"]]
         options = dict(options, preconditioner=AuxiliarySpacePreconditioner(
             A, split["solid"], split["beam"], split["prolongation"], R_solid, block_size=3,
-            smoothing=smoothing, theta=theta, drop=drop, filter_entries=filt))
+            smoothing=smoothing, theta=theta, drop=drop, filter_entries=filt, **extra))
         setup = time.perf_counter() - t
-    x, info = solve_linear(A, b, rtol=rtol, maxiter=2000, **options)
+    x, info = solve_linear(A, b, rtol=rtol, maxiter=maxiter, **options)
     info["setup_time"] += setup
     if profile:
-        info["timings"] = options["preconditioner"].timings
+        pre = info["preconditioner"]
+        if smoothing is None:
+            info["hierarchy"] = hierarchy(pre)
+        else:
+            info["timings"] = pre.timings
+            sparse = pre.sparse_auxiliary
+            info["hierarchy"] = (f"A_aux {pre.auxiliary.nnz / pre.auxiliary.shape[0]:.1f} entries per row"
+                                 + ("" if sparse is None else f", sparsified {sparse.nnz / sparse.shape[0]:.1f}")
+                                 + "; " + hierarchy(pre.amg))
     info["cpu_time"] = time.process_time() - cpu
     info["load"] = os.getloadavg()[0]
     info["memory"] = peak_memory_gb()
@@ -109,6 +140,8 @@ def main(argv=None):
                              "preconditioner's defaults; 0:0 is AuxiliarySpacePreconditioner.LUMPED")
     parser.add_argument("--penalty-factor", type=float, default=1e3)
     parser.add_argument("--rtol", type=float, default=1e-8)
+    parser.add_argument("--maxiter", type=int, default=2000,
+                        help="CG iterations before a solver's row says it did not converge")
     parser.add_argument("--profile", action="store_true", help="print where the auxiliary space spends its time")
     parser.add_argument("--repeat", type=int, default=1,
                         help="solve each system this many times and keep the fastest (CPU seconds) run")
@@ -127,14 +160,14 @@ def main(argv=None):
         R = model.rigid_body_modes()[model.free]
         split = model._follow_split()
         sizes = f"{n:3d} {len(split['solid']):7d} {len(split['beam']):7d} {t_asm:6.1f}"
-        variants = [(int(v.split(":")[0]), float(v.split(":")[1]), float((v.split(":") + ["0"])[2]),
-                     (v.split(":") + ["", "", "", ""])[3] == "f") for v in args.aux]
+        variants = [aux_variant(v) for v in args.aux]
         for method in ("aux", "schur") if n in args.schur else ("aux",):
-            for k, theta, drop, filt in variants:
-                runs.append((f"{method}{k}-{theta:g}" + (f"-{drop:g}" if drop else "") + ("f" if filt else ""),
-                             sizes, A, b,
-                             dict(method=method, near_nullspace=R, block_size=3, smoothing=(k, theta, drop, filt),
-                                  **split)))
+            for k, theta, drop, filt, extra in variants:
+                runs.append((f"{method}{k}-{theta:g}" + (f"-{drop:g}" if drop else "") + ("f" if filt else "")
+                             + "".join(f"-{value:g}" if isinstance(value, float) else f"-{value}"
+                                       for value in extra.values()), sizes, A, b,
+                             dict(method=method, near_nullspace=R, block_size=3,
+                                  smoothing=(k, theta, drop, filt, extra), **split)))
         if n in args.plain:
             runs.append(("amg", sizes, A, b, dict(method="amg", near_nullspace=R, block_size=3)))
         if n in args.direct:
@@ -143,10 +176,16 @@ def main(argv=None):
         for name, sizes, A, b, kw in runs:
             best = None
             for _ in range(args.repeat):
-                x, info = run(A, b, args.rtol, kw, split, args.profile and name.startswith("aux"))
+                try:
+                    x, info = run(A, b, args.rtol, args.maxiter, kw, split,
+                                  args.profile and name.startswith(("aux", "solid")))
+                except LinearSolverError as error:      # a variant that does not converge: say so, go on
+                    print(f"{sizes} {name:>12} did not converge: {str(error).split('. Try')[0]}", flush=True)
+                    break
                 if best is None or info["cpu_time"] < best[1]["cpu_time"]:
                     best = (x, info)
-            results[name] = (sizes,) + best
+            if best is not None:
+                results[name] = (sizes,) + best
         x_direct = results.get("direct", (None, None))[1]
         base = results["solid"][2]
         for name, (sizes, x, info) in results.items():
@@ -164,6 +203,8 @@ def main(argv=None):
                    peak_memory_gb=info["memory"], load=info["load"])
             if "timings" in info:
                 print("      " + ", ".join(f"{k} {v:.2f} s" for k, v in info["timings"].items()), flush=True)
+            if "hierarchy" in info:
+                print("      " + info["hierarchy"], flush=True)
 
 
 if __name__ == "__main__":

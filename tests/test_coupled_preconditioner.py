@@ -287,3 +287,78 @@ def test_application_is_the_symmetric_sweep_beam_aux_beam(fibre_system):
     assert np.abs(got - x).max() <= 1e-9 * np.abs(x).max()
     assert abs(q @ pre.matvec(r) - r @ pre.matvec(q)) <= 1e-10 * abs(r @ got)
     assert r @ got > 0
+
+
+def _symmetric_block_matrix(rng, nodes, symmetric_blocks):
+    """A symmetric matrix of 3x3 blocks on a random pattern, SPD by a dominant diagonal, its
+    off-diagonal blocks of sizes spread over six decades (symmetric blocks when asked)."""
+    B = np.zeros((3 * nodes, 3 * nodes))
+    for i in range(nodes):
+        for j in rng.choice(nodes, 5, replace=False):
+            if j <= i:
+                continue
+            block = rng.standard_normal((3, 3)) * 10.0 ** rng.uniform(-6, 0)
+            if symmetric_blocks:
+                block = block + block.T
+            B[3 * i:3 * i + 3, 3 * j:3 * j + 3] = block
+            B[3 * j:3 * j + 3, 3 * i:3 * i + 3] = block.T
+    B += np.diag(np.abs(B).sum(axis=1) + 1.0)
+    return B
+
+
+def test_drop_weak_blocks_keeps_the_strong_blocks_and_what_its_compensation_promises():
+    from mortar1d3d.solvers.preconditioners import drop_weak_blocks
+    rng = np.random.default_rng(3)
+    dense = _symmetric_block_matrix(rng, 40, symmetric_blocks=False)
+    A = sp.csr_matrix(dense)
+    blocks = np.linalg.norm(dense.reshape(40, 3, 40, 3), axis=(1, 3))
+    ratio = blocks / np.sqrt(np.outer(np.diag(blocks), np.diag(blocks)))
+    # δ = 0 keeps every stored block: the matrix itself
+    assert np.array_equal(drop_weak_blocks(A, 0.0).toarray(), dense)
+    delta = 1e-3
+    weak = (ratio < delta) & (blocks > 0)
+    assert 0 < weak.sum() < (blocks > 0).sum() - 40
+    kept = np.kron(~weak, np.ones((3, 3))).astype(bool)
+    for compensation in ("none", "abs", "signed"):
+        S = drop_weak_blocks(A, delta, compensation).toarray()
+        assert drop_weak_blocks(A, delta, compensation).nnz == 9 * (blocks > 0).sum() - 9 * weak.sum()
+        off = ~np.kron(np.eye(40, dtype=bool), np.ones((3, 3), dtype=bool))
+        assert np.array_equal(S[off & kept], dense[off & kept]) and not S[off & ~kept].any()
+        assert np.array_equal(S, S.T)
+    # "none": the diagonal blocks as they were; "abs": above A (S - A is positive semidefinite)
+    none = drop_weak_blocks(A, delta, "none").toarray()
+    assert np.array_equal(np.diag(none), np.diag(dense))
+    gap = drop_weak_blocks(A, delta, "abs").toarray() - dense
+    assert np.linalg.eigvalsh(gap).min() >= -1e-14 * np.abs(dense).max()
+    assert np.linalg.eigvalsh(gap).max() > 0
+    # "signed" with symmetric blocks: every translation is mapped as by A
+    dense = _symmetric_block_matrix(rng, 40, symmetric_blocks=True)
+    S = drop_weak_blocks(sp.csr_matrix(dense), delta, "signed").toarray()
+    translations = np.kron(np.ones((40, 1)), np.eye(3))
+    assert np.abs(S @ translations - dense @ translations).max() <= 1e-13 * np.abs(dense).max()
+    assert np.abs(drop_weak_blocks(sp.csr_matrix(dense), delta).toarray() @ translations
+                  - dense @ translations).max() > 1e-9
+
+
+@pytest.mark.parametrize("system", ["fibre_system", "stiff_penalty_system"])
+def test_hierarchy_of_the_sparsified_auxiliary_matrix(system, request):
+    """The AMG built from ``A_aux`` without its blocks below 3e-3 of their diagonal blocks, the
+    dropped blocks' symmetric row sums on the diagonal (the default): a finest level with fewer entries, CG on
+    the true system reaches the direct solution in the iterations of the full ``A_aux`` (+1); with
+    the absolute row sums on the diagonal instead, CG needs more. Measured: finest level 296,892 ->
+    124,344 entries, 12 / 12 / 13 iterations (fibre_system); 297,270 -> 138,870, 16 / 16 / 18 (ε = 1e4 E)."""
+    from mortar1d3d.solvers.linear import AuxiliarySpacePreconditioner, solve_linear
+    A, b, R, split = request.getfixturevalue(system)
+    s = split["solid"]
+    x_direct, _ = solve_linear(A, b, "direct")
+    counts, finest = {}, {}
+    for name, options in (("full", dict(sparsify=0.0)), ("signed", {}),
+                          ("abs", dict(sparsify=3e-3, compensation="abs"))):
+        pre = AuxiliarySpacePreconditioner(A, s, split["beam"], split["prolongation"], R[s], block_size=3, **options)
+        x, info = solve_linear(A, b, preconditioner=pre, rtol=1e-8)
+        assert info["converged"] and np.linalg.norm(b - A @ x) <= 1e-8 * np.linalg.norm(b)
+        assert np.linalg.norm(x - x_direct) <= 1e-6 * np.linalg.norm(x_direct)
+        counts[name], finest[name] = info["iterations"], pre.amg.levels[0].A.nnz
+        assert (pre.sparse_auxiliary is None) == (name == "full")
+    assert finest["signed"] == finest["abs"] < finest["full"]
+    assert counts["signed"] <= counts["full"] + 1 and counts["abs"] > counts["signed"]

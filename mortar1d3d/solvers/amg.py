@@ -2,6 +2,7 @@
 (:func:`~mortar1d3d.solvers.rigid.rigid_body_modes`) as near null space."""
 import numpy as np
 import pyamg
+import scipy.sparse as sp
 
 from ._common import check_square
 
@@ -63,7 +64,10 @@ def build_amg(A, near_nullspace=None, *, block_size=None, weighting="diagonal", 
     500 unknowns solved directly. Energy-minimising prolongation was tried: fewer iterations,
     but a setup several times slower, which does not pay off in a Newton loop.
     """
-    A = check_square(A, "A")
+    # a square BSR matrix with the blocks asked for is taken as it is (no round trip through CSR)
+    ready = (sp.issparse(A) and A.format == "bsr" and A.shape[0] == A.shape[1]
+             and A.blocksize == (_block_size(A.shape[0], block_size),) * 2)
+    A = A if ready else check_square(A, "A")
     n = A.shape[0]
     bs = _block_size(n, block_size)
     B = None
@@ -71,7 +75,7 @@ def build_amg(A, near_nullspace=None, *, block_size=None, weighting="diagonal", 
         B = np.ascontiguousarray(near_nullspace, dtype=np.float64)
         if B.ndim != 2 or B.shape[0] != n:
             raise ValueError(f"near_nullspace must have shape ({n}, k), got {B.shape}")
-    matrix = A.tobsr(blocksize=(bs, bs)) if bs > 1 else A
+    matrix = A if ready else A.tobsr(blocksize=(bs, bs)) if bs > 1 else A
     # pyamg starts its spectral-radius estimate (weighting="diagonal") from numpy's global random
     # generator: the hierarchy, and the iteration counts, changed from one process to the next.
     # A fixed seed makes the set-up repeatable; the caller's random stream is put back afterwards.
