@@ -1,8 +1,8 @@
 """Block CSR of the mortar operators in Numba, deterministic, 3×3 identity blocks expanded.
 
 Each LM row gathers its entries from the local matrices of the (beam element, solid element)
-groups that touch it, in a fixed order (beam elements ascending, groups, columns), sorts them by
-column and sums duplicates. Rows are independent (parallel) and the summation order does not
+groups that touch it, in a fixed order (beam elements ascending, groups, columns), sums the entries
+of each column in that order and sorts the distinct columns. Rows are independent (parallel) and the summation order does not
 depend on the number of threads, so neither do the resulting bits. A first pass counts each
 row's distinct columns; the second writes the expanded CSR arrays directly (no intermediate
 copy of the gathered entries: less memory to fault in).
@@ -36,8 +36,8 @@ def row_sources(lm_index, n_phi, n_rows):
 
 
 @njit_parallel
-def _count_unique(src_offsets, src, n_phi, beam_groups, width, col_table, col_row, n_cols, unique, bound, workers):
-    """Distinct columns (``unique``) and gathered entries (``bound``) of every row.
+def _count_unique(src_offsets, src, n_phi, beam_groups, width, col_table, col_row, n_cols, unique, workers):
+    """Distinct columns (``unique``) of every row.
 
     Each worker keeps a marker array over the columns (the last row that saw a column):
     counting costs one visit per entry, no sort, in any order of the rows.
@@ -50,7 +50,6 @@ def _count_unique(src_offsets, src, n_phi, beam_groups, width, col_table, col_ro
         while begin < stop:
             for r in range(begin, stop):
                 u = 0
-                n = 0
                 for t in range(src_offsets[r], src_offsets[r + 1]):
                     e = src[t] // n_phi
                     for g in range(beam_groups[e], beam_groups[e + 1]):
@@ -60,26 +59,32 @@ def _count_unique(src_offsets, src, n_phi, beam_groups, width, col_table, col_ro
                             if marker[c] != r:
                                 marker[c] = r
                                 u += 1
-                        n += width[g]
                 unique[r] = u
-                bound[r] = n
             begin, stop = claim(claims, n_rows, worker)
 
 
 @njit_parallel
 def _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row, vals, first,
-               max_bound, block, indices, data, workers):
-    """Gather, sort and sum each row, and write its ``block`` expanded copies."""
+               max_unique, n_cols, block, indices, data, workers):
+    """Gather and sum each row's entries per column, sort the columns, and write the row's ``block``
+    expanded copies.
+
+    Each column's sum runs over its entries in the gather order (beam elements ascending, groups,
+    columns: deterministic), as a stable sort of the gathered entries followed by the sums of equal
+    columns would; a marker over the columns (the column's slot in the row) merges them as they come,
+    so only the distinct columns are sorted: a row of a 27-node element type gathers several times
+    as many entries as it has columns (its beam elements' groups share nodes).
+    """
     n_rows = src_offsets.shape[0] - 1
     claims = new_claims(n_rows, workers)
     for worker in prange(workers):
-        cols = np.empty(max_bound, dtype=np.int64)
-        vs = np.empty(max_bound)
+        cols = np.empty(max_unique, dtype=np.int64)
+        vs = np.empty(max_unique)
+        slot = np.full(n_cols, -1, dtype=np.int64)
         begin, stop = claim(claims, n_rows, worker)
         while begin < stop:
             for r in range(begin, stop):
-                # gather in a fixed order (beam elements ascending, groups, columns): deterministic sums
-                n = 0
+                m = 0
                 for t in range(src_offsets[r], src_offsets[r + 1]):
                     e = src[t] // n_phi
                     j = src[t] % n_phi
@@ -87,10 +92,18 @@ def _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_tab
                         base = entry_start[g] + j * width[g]
                         row = col_row[g]
                         for q in range(width[g]):
-                            cols[n] = col_table[row, q]
-                            vs[n] = vals[base + q]
-                            n += 1
-                for i in range(1, n):                # stable insertion sort by column (short rows)
+                            c = col_table[row, q]
+                            k = slot[c]
+                            if k < 0:
+                                slot[c] = m
+                                cols[m] = c
+                                vs[m] = vals[base + q]
+                                m += 1
+                            else:
+                                vs[k] += vals[base + q]
+                for t in range(m):
+                    slot[cols[t]] = -1
+                for i in range(1, m):                # insertion sort of the distinct columns (short rows)
                     c = cols[i]
                     v = vs[i]
                     k = i - 1
@@ -100,14 +113,6 @@ def _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_tab
                         k -= 1
                     cols[k + 1] = c
                     vs[k + 1] = v
-                m = 0
-                for t in range(n):
-                    if m > 0 and cols[m - 1] == cols[t]:
-                        vs[m - 1] += vs[t]
-                    else:
-                        cols[m] = cols[t]
-                        vs[m] = vs[t]
-                        m += 1
                 for i in range(block):
                     out = block * first[r] + i * m
                     for t in range(m):
@@ -137,8 +142,7 @@ def gathered_block_csr(src_offsets, src, n_phi, beam_groups, entry_start, width,
     """
     n_rows, n_cols = shape
     unique = np.empty(n_rows, dtype=np.int64)
-    bound = np.empty(n_rows, dtype=np.int64)
-    _count_unique(src_offsets, src, n_phi, beam_groups, width, col_table, col_row, n_cols, unique, bound, workers())
+    _count_unique(src_offsets, src, n_phi, beam_groups, width, col_table, col_row, n_cols, unique, workers())
     first = np.zeros(n_rows + 1, dtype=np.int64)
     np.cumsum(unique, out=first[1:])
     nnz = int(first[-1]) * block
@@ -147,7 +151,7 @@ def gathered_block_csr(src_offsets, src, n_phi, beam_groups, entry_start, width,
     indptr, indices, data = carve((block * n_rows + 1, index_type), (nnz, index_type), (nnz, np.float64))
     _block_indptr(first, unique, block, indptr)
     _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row, vals, first,
-               max(1, int(bound.max())) if n_rows else 1, block, indices, data, workers())
+               max(1, int(unique.max())) if n_rows else 1, n_cols, block, indices, data, workers())
     return _attach_csr(data, indices, indptr, (block * n_rows, block * n_cols))
 
 

@@ -46,6 +46,17 @@ DESCRIPTOR = rational_descriptor("nurbs27", 6, DEGREE, QUADRATIC_NODES, hexahedr
 # (registers), as in hex27; the products, the sums over the 27 nodes and the quotient are those of
 # ``shape``/``deriv`` and dispatch.rational_shape / rational_deriv, in the same order: the same bits
 # (the node sums are projection's, as for every type).
+#
+# The products are formed over the lattice (i, j, k) in loops of three, which the compiler unrolls
+# into straight code (constant tuple indices, the node index a constant of NODE); read in node order
+# a, the tuples' runtime indices LATTICE[a] would be branches per factor. The partial products
+# u_i v_j (and du_i v_j, u_i dv_j) are shared by the three nodes of a lattice line: the same values,
+# as a product is evaluated left to right. The sums over the nodes then run in node order, as before.
+#: node index a of lattice position (i, j, k): NODE[LATTICE[a, 0], LATTICE[a, 1], LATTICE[a, 2]] = a
+NODE = np.empty((3, 3, 3), dtype=np.int64)
+NODE[LATTICE[:, 0], LATTICE[:, 1], LATTICE[:, 2]] = np.arange(27)
+
+
 @njit_inline
 def _bernstein2(x):
     """The quadratic Bernstein polynomials on [-1, 1] at ``x`` and their derivatives (two 3-tuples): the
@@ -56,19 +67,29 @@ def _bernstein2(x):
 
 
 @njit_inline
+def _normalise(N):
+    """R_a = N_a / W, W = Σ_a N_a (node order), over the 27 nodes of ``N``."""
+    W = 0.0
+    for a in range(27):
+        W += N[a]
+    inv = 1.0 / W
+    for a in range(27):
+        N[a] *= inv
+
+
+@njit_inline
 def rational_shape(X, xi, N):
     """R_a = w_a B_a / W at ``xi`` into ``N`` (27,), weights in ``X[:, 3]``."""
     u, _ = _bernstein2(xi[0])
     v, _ = _bernstein2(xi[1])
     w, _ = _bernstein2(xi[2])
-    W = 0.0
-    for a in range(27):
-        n = u[LATTICE[a, 0]] * v[LATTICE[a, 1]] * w[LATTICE[a, 2]] * X[a, 3]
-        N[a] = n
-        W += n
-    inv = 1.0 / W
-    for a in range(27):
-        N[a] *= inv
+    for i in range(3):
+        for j in range(3):
+            uv = u[i] * v[j]
+            for k in range(3):
+                a = NODE[i, j, k]
+                N[a] = uv * w[k] * X[a, 3]
+    _normalise(N)
 
 
 @njit_inline
@@ -78,20 +99,24 @@ def rational_deriv(X, xi, N, dN):
     u, du = _bernstein2(xi[0])
     v, dv = _bernstein2(xi[1])
     w, dw = _bernstein2(xi[2])
+    for i in range(3):
+        for j in range(3):
+            uv = u[i] * v[j]
+            duv = du[i] * v[j]
+            udv = u[i] * dv[j]
+            for k in range(3):
+                a = NODE[i, j, k]
+                weight = X[a, 3]
+                N[a] = uv * w[k] * weight
+                dN[a, 0] = duv * w[k] * weight
+                dN[a, 1] = udv * w[k] * weight
+                dN[a, 2] = uv * dw[k] * weight
     W = W0 = W1 = W2 = 0.0
     for a in range(27):
-        l0, l1, l2 = LATTICE[a, 0], LATTICE[a, 1], LATTICE[a, 2]
-        weight = X[a, 3]
-        n = u[l0] * v[l1] * w[l2] * weight
-        g0 = du[l0] * v[l1] * w[l2] * weight
-        g1 = u[l0] * dv[l1] * w[l2] * weight
-        g2 = u[l0] * v[l1] * dw[l2] * weight
-        N[a] = n
-        dN[a, 0], dN[a, 1], dN[a, 2] = g0, g1, g2
-        W += n
-        W0 += g0
-        W1 += g1
-        W2 += g2
+        W += N[a]
+        W0 += dN[a, 0]
+        W1 += dN[a, 1]
+        W2 += dN[a, 2]
     inv = 1.0 / W
     for a in range(27):
         n = N[a] * inv
