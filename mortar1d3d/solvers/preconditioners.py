@@ -55,7 +55,10 @@ class AuxiliarySpacePreconditioner:
     LUMPED : dict
         The settings before the smoothed prolongation (CHANGELOG, 2026-11-27) (``smoothing=0, theta=0, drop=0, filter_entries=False,
         sparsify=0``): the lumped follow operator as it is and AMG on every entry of ``A_aux``. The Lagrange block
-        preconditioner (:func:`~mortar1d3d.solvers.saddle.solve_saddle`) still uses them.
+        preconditioner (:func:`~mortar1d3d.solvers.saddle.solve_saddle`) still uses them, with
+        ``sparsify=SPARSIFY``.
+    SPARSIFY : float
+        The default δ of ``sparsify``.
     auxiliary : scipy.sparse.csr_matrix, (n_s, n_s)
         ``A_aux = Eᵀ A E`` with ``E = [I; P]`` (solid rows, then beam rows), ``P`` the smoothed
         prolongation.
@@ -150,9 +153,11 @@ class AuxiliarySpacePreconditioner:
     #: the settings before the smoothed prolongation (the lumped follow operator as it is, AMG with θ = 0): pass as
     #: ``AuxiliarySpacePreconditioner(..., **AuxiliarySpacePreconditioner.LUMPED)``
     LUMPED = dict(smoothing=0, theta=0.0, drop=0.0, filter_entries=False, sparsify=0.0)
+    #: the default δ of ``sparsify`` (the penalty path; the Lagrange block preconditioner with LUMPED)
+    SPARSIFY = 3e-3
 
     def __init__(self, A, solid, beam, prolongation, near_nullspace=None, *, block_size=None, smoothing=1,
-                 theta=0.02, drop=1e-3, filter_entries=True, sparsify=3e-3, compensation="signed", sparsify_scope="hierarchy"):
+                 theta=0.02, drop=1e-3, filter_entries=True, sparsify=SPARSIFY, compensation="signed", sparsify_scope="hierarchy"):
         start = time.perf_counter()
         A = check_square(A, "A")
         n = A.shape[0]
