@@ -377,6 +377,36 @@ def test_saddle_block_and_direct_agree(which, request):
     assert np.linalg.norm(prob["K"] @ x_d + prob["B"].T @ lam_d - prob["b"]) <= 1e-10 * np.linalg.norm(prob["b"])
 
 
+def test_saddle_block_primal_is_the_sparsified_auxiliary_space(medium, monkeypatch):
+    """The block solver's primal block with the prolongation: the auxiliary space with the lumped
+    follow operator and its AMG built from the sparsified A_aux (as the penalty path); the block
+    solve still reaches the direct solution."""
+    from mortar1d3d.solvers import saddle
+    made = []
+
+    class Recording(saddle.AuxiliarySpacePreconditioner):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            made.append(self)
+
+    monkeypatch.setattr(saddle, "AuxiliarySpacePreconditioner", Recording)
+    c = _constraint_rhs(medium)
+    args = (medium["K"], medium["B"], medium["kappa"], medium["b"], c)
+    kw = dict(solid=medium["solid"], beam=medium["beam"])
+    x_d, lam_d, _ = solve_saddle(*args, "direct", **kw)
+    x_b, lam_b, info = solve_saddle(*args, "block", near_nullspace=medium["R"], prolongation=follow_prolongation(medium),
+                                    **kw)
+    assert info["converged"] and len(made) == 1
+    aux = made[0]
+    assert aux.sparse_auxiliary is not None
+    sparse, full = sp.csr_matrix(aux.sparse_auxiliary), sp.csr_matrix(aux.auxiliary)
+    sparse.eliminate_zeros(), full.eliminate_zeros()
+    assert sparse.nnz < full.nnz
+    # the finest level of the hierarchy is the sparsified matrix
+    assert abs(sp.csr_matrix(aux.amg.levels[0].A) - sparse).max() == 0.0
+    assert _rel(x_b, x_d) < 1e-8 and _rel(lam_b, lam_d) < 1e-8
+
+
 def test_saddle_iterations_bounded_under_refinement():
     counts = []
     for cells in [(12, 6, 6), (24, 12, 12)]:          # 1785 and 12207 free DOF
