@@ -136,7 +136,10 @@ def test_every_rank_takes_rank_0s_metis_partition(monkeypatch):
     solid, beams, _ = _cube()
     honest = partition_module._metis
 
+    calls = []
+
     def rank_dependent(*args):
+        calls.append(RANK)
         solid_part, beam_part = honest(*args)
         n = args[-1]
         return (solid_part + RANK) % n, [(p + RANK) % n for p in beam_part]
@@ -155,6 +158,10 @@ def test_every_rank_takes_rank_0s_metis_partition(monkeypatch):
         assert part.method == "metis"
         # the measured quality is that of the cut every rank holds
         assert part.stats == mpi.bcast(part.stats, root=0)
+    # METIS ran on rank 0 only (one part needs none)
+    assert calls == ([0] if RANK == 0 and SIZE > 1 else [])
+    if SIZE == 1:
+        assert not part.solid_part.any() and not part.beam_part[0].any()
 
 
 def test_a_partition_error_on_rank_0_stops_every_rank(monkeypatch):

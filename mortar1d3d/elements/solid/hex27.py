@@ -5,17 +5,13 @@ Nodes 0-19 as in ``hex20``; face centres 20-25 on the faces ξ=-1, ξ=+1, η=-1,
 polynomials through -1, 0, +1.
 """
 
-import numpy as np
-
 from ..._config import njit, njit_inline
 from ...quadrature import hexahedron_rule
 from ..descriptor import SolidElementType
-from .hex_family import HEXAHEDRON, QUADRATIC_LATTICE, QUADRATIC_NODES, triquadratic_bernstein_matrix
+from .hex_family import (HEXAHEDRON, QUADRATIC_LATTICE, QUADRATIC_LATTICE_NODE as LATTICE_NODE, QUADRATIC_NODES,
+                         triquadratic_bernstein_matrix)
 
 REFERENCE_NODES = QUADRATIC_NODES
-#: the node at lattice position (i, j, k) (3, 3, 3): the inverse of QUADRATIC_LATTICE
-LATTICE_NODE = np.empty((3, 3, 3), dtype=np.int64)
-LATTICE_NODE[QUADRATIC_LATTICE[:, 0], QUADRATIC_LATTICE[:, 1], QUADRATIC_LATTICE[:, 2]] = np.arange(27)
 
 
 @njit_inline

@@ -155,6 +155,9 @@ QUADRATIC_NODES = np.array([
 ], dtype=np.float64)
 #: lattice index (0, 1, 2) <-> coordinate (-1, 0, +1) of every node of QUADRATIC_NODES, per direction
 QUADRATIC_LATTICE = (QUADRATIC_NODES + 1).astype(np.int64)
+#: the node at lattice position (i, j, k) (3, 3, 3): the inverse of QUADRATIC_LATTICE
+QUADRATIC_LATTICE_NODE = np.empty((3, 3, 3), dtype=np.int64)
+QUADRATIC_LATTICE_NODE[QUADRATIC_LATTICE[:, 0], QUADRATIC_LATTICE[:, 1], QUADRATIC_LATTICE[:, 2]] = np.arange(27)
 
 
 @njit

@@ -16,7 +16,7 @@ import numpy as np
 from ..._config import njit, njit_inline
 from ...quadrature import hexahedron_rule
 from .bezier_hex import rational_descriptor, tensor_bernstein, tensor_bernstein_gradients
-from .hex_family import QUADRATIC_LATTICE, QUADRATIC_NODES, triquadratic_bernstein_matrix
+from .hex_family import QUADRATIC_LATTICE, QUADRATIC_LATTICE_NODE, QUADRATIC_NODES, triquadratic_bernstein_matrix
 
 DEGREE = 2
 #: lattice index (0, 1, 2) per direction of every node
@@ -53,8 +53,7 @@ DESCRIPTOR = rational_descriptor("nurbs27", 6, DEGREE, QUADRATIC_NODES, hexahedr
 # u_i v_j (and du_i v_j, u_i dv_j) are shared by the three nodes of a lattice line: the same values,
 # as a product is evaluated left to right. The sums over the nodes then run in node order, as before.
 #: node index a of lattice position (i, j, k): NODE[LATTICE[a, 0], LATTICE[a, 1], LATTICE[a, 2]] = a
-NODE = np.empty((3, 3, 3), dtype=np.int64)
-NODE[LATTICE[:, 0], LATTICE[:, 1], LATTICE[:, 2]] = np.arange(27)
+NODE = QUADRATIC_LATTICE_NODE
 
 
 @njit_inline
