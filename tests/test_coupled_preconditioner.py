@@ -172,6 +172,36 @@ def test_smoothed_prolongation_of_tiny_beam_blocks(n):
     assert np.allclose(got, P - (A_bs + A @ P) / (rho * d)[:, None], rtol=1e-14, atol=1e-15)
 
 
+def test_drop_weak_entries_against_its_definition():
+    """Entries below ``drop`` times the largest magnitude of their row go (one equal to it stays), and
+    so do stored zeros; an empty row and a row of one tiny entry are left as they are; the kept
+    entries are the input's, bit for bit."""
+    from mortar1d3d.solvers.preconditioners import drop_weak_entries
+    data = np.array([4.0, -1e-4, 2e-3, 0.0, -3.0, 3e-3, -2.9e-3, 1e-300])
+    indices = np.array([0, 1, 3, 2, 0, 1, 2, 3])
+    indptr = np.array([0, 3, 4, 4, 7, 8])       # row 1 a stored zero, row 2 empty
+    P = sp.csr_matrix((data, indices, indptr), shape=(5, 4))
+    expected = np.zeros((5, 4))
+    expected[0, 0], expected[3, 0], expected[3, 1], expected[4, 3] = 4.0, -3.0, 3e-3, 1e-300
+    got = drop_weak_entries(P, 1e-3)
+    assert got.nnz == 4 and np.array_equal(got.toarray(), expected)
+
+
+def test_auxiliary_matrix_is_the_galerkin_product():
+    """``auxiliary_matrix`` (one sparse product) against ``Eᵀ A E`` formed densely, ``E = [I; P]``."""
+    from mortar1d3d.solvers.preconditioners import auxiliary_matrix
+    rng = np.random.default_rng(5)
+    n_s, n_b = 12, 9
+    G = sp.random(n_s + n_b, n_s + n_b, density=0.3, random_state=rng)
+    A = (G @ G.T + sp.identity(n_s + n_b)).tocsr()
+    P = sp.random(n_b, n_s, density=0.4, random_state=rng, format="csr")
+    E = np.vstack([np.eye(n_s), P.toarray()])
+    expected = E.T @ A.toarray() @ E
+    got = auxiliary_matrix(A[:n_s, :n_s], A[n_s:, :n_s].tocsr(), A[:n_s, n_s:].tocsr(), A[n_s:, n_s:].tocsr(), P)
+    assert got.format == "csr" and got.shape == (n_s, n_s)
+    assert np.abs(got.toarray() - expected).max() <= 1e-14 * np.abs(expected).max()
+
+
 def test_smoothed_prolongation_keeps_translations_and_approaches_the_beams_response(fibre_system):
     """One Jacobi step of ``P`` towards ``−A_BB⁻¹ A_BS`` (the beams' response to a solid motion, with
     which ``Eᵀ A E`` would be the Schur complement): a rigid translation, which the lumped operator

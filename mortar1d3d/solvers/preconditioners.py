@@ -49,6 +49,9 @@ class AuxiliarySpacePreconditioner:
         ``"hierarchy"``: the whole AMG hierarchy is built from the sparsified ``A_aux``;
         ``"smoother"``: the hierarchy (and the finest residual) from ``A_aux``, only the
         finest level's Gauss–Seidel sweeps on the sparsified matrix.
+    keep_auxiliary : bool
+        Keep ``A_aux`` itself (:attr:`auxiliary`) when the hierarchy is built from the sparsified
+        matrix (nothing uses it then; by default its memory is released after the sparsification).
 
     Attributes
     ----------
@@ -59,9 +62,12 @@ class AuxiliarySpacePreconditioner:
         ``sparsify=SPARSIFY``.
     SPARSIFY : float
         The default δ of ``sparsify``.
-    auxiliary : scipy.sparse.csr_matrix, (n_s, n_s)
+    auxiliary : scipy.sparse.csr_matrix, (n_s, n_s), or None
         ``A_aux = Eᵀ A E`` with ``E = [I; P]`` (solid rows, then beam rows), ``P`` the smoothed
-        prolongation.
+        prolongation (:func:`auxiliary_matrix`); None when the hierarchy was built from the
+        sparsified matrix and ``keep_auxiliary`` is false.
+    auxiliary_nnz : int
+        Stored entries of ``A_aux`` (also when it is not kept).
     prolongation : (n_b, n_s) scipy.sparse.csr_matrix
         That ``P``.
     sparse_auxiliary : scipy.sparse.bsr_matrix or None
@@ -118,7 +124,9 @@ class AuxiliarySpacePreconditioner:
     1e-3, 36 at 1e-2, n = 20), and so does leaving them out (``"none"``: 12 at 1e-4, 16 at 3e-3);
     smoothing only the finest
     level on the sparse matrix (``sparsify_scope="smoother"``) keeps the iterations but not the
-    set-up's Galerkin product on the full matrix, and saved nothing at n = 20.
+    set-up's Galerkin product on the full matrix, and saved nothing at n = 20. ``A_aux`` is formed
+    by one sparse product (:func:`auxiliary_matrix`) and released once its sparsified form exists
+    (``keep_auxiliary``), since neither the V-cycle nor CG uses it.
 
     **The smoothed prolongation** (the default since 2026-11-27). ``A_aux − S = eᵀ A_BB e`` with
     ``S`` the solid's Schur complement and ``e = P + A_BB⁻¹ A_BS`` the defect of ``P`` against the
@@ -157,7 +165,8 @@ class AuxiliarySpacePreconditioner:
     SPARSIFY = 3e-3
 
     def __init__(self, A, solid, beam, prolongation, near_nullspace=None, *, block_size=None, smoothing=1,
-                 theta=0.02, drop=1e-3, filter_entries=True, sparsify=SPARSIFY, compensation="signed", sparsify_scope="hierarchy"):
+                 theta=0.02, drop=1e-3, filter_entries=True, sparsify=SPARSIFY, compensation="signed", sparsify_scope="hierarchy",
+                 keep_auxiliary=False):
         start = time.perf_counter()
         A = check_square(A, "A")
         n = A.shape[0]
@@ -187,26 +196,24 @@ class AuxiliarySpacePreconditioner:
         P = smooth_prolongation(A_bb, self.A_bs, prolongation.tocsr(), smoothing, drop)
         smoothing_time = time.perf_counter() - t
         self.smoothing = smoothing
-        # Eᵀ A E with E = [I; P], without forming E: the beams' part (a few entries per solid DOF near
-        # a beam) summed first, then added to the solid block once (each sum of sparse matrices
-        # merges all their entries, and A_SS is the largest)
-        cross = (self.A_sb @ P).tocsr()
-        beams = cross + cross.T + P.T @ (A_bb @ P)
-        del cross
+        if sparsify > 0 and sparsify_scope not in ("hierarchy", "smoother"):
+            raise ValueError(f"sparsify_scope must be 'hierarchy' or 'smoother', got {sparsify_scope!r}")
         A_ss = A[self._s, self._s] if isinstance(self._s, slice) else A[self._s][:, self._s]
-        self.auxiliary = (A_ss + beams).tocsr()
-        del A_ss, beams
+        auxiliary = auxiliary_matrix(A_ss, self.A_bs, self.A_sb, A_bb, P)
+        del A_ss
+        self.auxiliary_nnz = auxiliary.nnz
         self.prolongation = P
         self.timings = {"prolongation smoothing": smoothing_time,
                         "auxiliary matrix": time.perf_counter() - start - smoothing_time}
         t = time.perf_counter()
-        hierarchy_matrix = sparse = self.auxiliary
+        hierarchy_matrix = sparse = auxiliary
         if sparsify > 0:
-            if sparsify_scope not in ("hierarchy", "smoother"):
-                raise ValueError(f"sparsify_scope must be 'hierarchy' or 'smoother', got {sparsify_scope!r}")
-            sparse = drop_weak_blocks(self.auxiliary, sparsify, compensation, _block_size(n_s, block_size))
+            sparse = drop_weak_blocks(auxiliary, sparsify, compensation, _block_size(n_s, block_size))
             if sparsify_scope == "hierarchy":
                 hierarchy_matrix = sparse
+                if not keep_auxiliary:          # nothing uses A_aux itself any more: its memory goes now
+                    auxiliary = None
+        self.auxiliary = auxiliary
         # "local" weighting: the spectral-radius estimate of the default took up to a third of the AMG
         # setup of fibre_cube(40) (CPU 14-18 s against 12.4 s, loaded machine), same 33 CG iterations
         self.amg = build_amg(hierarchy_matrix, null, block_size=block_size, weighting="local",
@@ -284,29 +291,63 @@ def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
     """
     if steps == 0 or A_bb.shape[0] == 0:
         return P
+    A_bb = A_bb.tocsr()
     d = A_bb.diagonal()
-    scale = sp.diags(1.0 / np.sqrt(d))
-    scaled = (scale @ A_bb @ scale).tocsr()
+    scale = 1.0 / np.sqrt(d)
+    # D^-1/2 A_BB D^-1/2 by scaling the entries (two products with diagonal matrices cost two sparse
+    # matrix products)
+    scaled = sp.csr_matrix((_row_scaled(A_bb, scale) * scale[A_bb.indices], A_bb.indices, A_bb.indptr),
+                           shape=A_bb.shape)
     # scaled has a unit diagonal, so its λ_max is at least 1: a Lanczos start that misses the top of
     # the spectrum (an invariant subspace of the ones vector) cannot make ω blow up
     rho = max(largest_eigenvalue(scaled), 1.0)
-    jacobi = sp.diags(1.0 / (rho * d))
+    del scaled
+    jacobi = 1.0 / (rho * d)
     for _ in range(steps):
-        P = (P - jacobi @ (A_bs + A_bb @ P)).tocsr()
+        step = (A_bs + A_bb @ P).tocsr()
+        step.data = _row_scaled(step, jacobi)
+        P = (P - step).tocsr()
     if drop > 0:
         P = drop_weak_entries(P, drop)
     return P
 
 
+def auxiliary_matrix(A_ss, A_bs, A_sb, A_bb, P):
+    """``A_aux = Eᵀ A E = A_SS + A_SB P + Pᵀ (A_BS + A_BB P)`` with ``E = [I; P]`` (CSR, ``n_s x n_s``).
+
+    One sparse product ``[I  Pᵀ  A_SB] [A_SS; W; P]``, ``W = A_BS + A_BB P``, whose output is
+    ``A_aux`` itself: summing the three products ``A_SB P``, its transpose and ``Pᵀ A_BB P`` and
+    then ``A_SS`` made and merged five matrices of ``A_aux``'s size (36M entries at n = 40 of
+    ``fibre_cube(n, 1000, 20)``), which cost more than the products (CPU s of this step at n = 40:
+    benchmarks/README.md, "Forming A_aux in one product"). Equal to that sum up to round-off
+    (the products are summed in another order), so symmetric up to round-off.
+    """
+    W = (A_bs + A_bb @ P).tocsr()
+    left = sp.hstack([sp.identity(A_ss.shape[0], format="csr"), P.T.tocsr(), A_sb], format="csr")
+    right = sp.vstack([A_ss, W, P], format="csr")
+    del W
+    return (left @ right).tocsr()
+
+
 def drop_weak_entries(P, drop):
     """``P`` (CSR) without the entries below ``drop`` times the largest magnitude of their row
     (stored zeros removed); also the PETSc sweep's rule (:mod:`mortar1d3d.distributed.auxiliary`)."""
-    size = np.abs(P)
-    largest = size.max(axis=1).toarray().ravel()
-    keep = size.data >= drop * np.repeat(largest, np.diff(P.indptr))
-    P = sp.csr_matrix((P.data * keep, P.indices, P.indptr), shape=P.shape)
-    P.eliminate_zeros()
-    return P
+    size = np.abs(P.data)
+    counts = np.diff(P.indptr)
+    filled = counts > 0
+    largest = np.zeros(P.shape[0])
+    if size.size:       # the largest magnitude of every non-empty row (reduceat over their starts)
+        largest[filled] = np.maximum.reduceat(size, P.indptr[:-1][filled])
+    keep = (size >= drop * np.repeat(largest, counts)) & (size > 0)
+    rows = np.repeat(np.arange(P.shape[0]), counts)[keep]
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=P.shape[0]))])
+    return sp.csr_matrix((P.data[keep], P.indices[keep], indptr), shape=P.shape)
+
+
+def _row_scaled(A, factor):
+    """The entries of the CSR matrix ``A`` times ``factor`` of their row (``diag(factor) @ A``
+    without a sparse product)."""
+    return np.repeat(factor, np.diff(A.indptr)) * A.data
 
 
 def _smooth_finest_with(ml, matrix):
@@ -345,21 +386,23 @@ def drop_weak_blocks(A, delta, compensation="none", block_size=3):
     own = np.zeros(nodes)
     own[rows[diagonal]] = norms[diagonal]
     keep = diagonal | (norms >= delta * np.sqrt(own[rows] * own[B.indices]))
-    dropped = ~keep
-    data = B.data.copy()
-    if compensation != "none":
+    del norms
+    dropped = np.flatnonzero(~keep)
+    data, kept_rows = B.data[keep], rows[keep]      # copies of the kept blocks only
+    if compensation != "none" and len(dropped):
         # the dropped blocks summed per block row (a sparse product: no unbuffered scatter)
-        by_row = sp.csr_matrix((np.ones(dropped.sum()), (rows[dropped], np.arange(dropped.sum()))),
-                               shape=(nodes, dropped.sum()))
-        where = np.flatnonzero(diagonal)
+        by_row = sp.csr_matrix((np.ones(len(dropped)), (rows[dropped], np.arange(len(dropped)))),
+                               shape=(nodes, len(dropped)))
+        where = np.flatnonzero(diagonal[keep])      # the diagonal blocks among the kept ones
+        at = kept_rows[where]
         if compensation == "abs":
             sums = by_row @ np.abs(B.data[dropped]).sum(axis=2)
-            data[where] += sums[rows[where]][:, :, None] * np.eye(k)
+            data[where] += sums[at][:, :, None] * np.eye(k)
         else:
             sums = (by_row @ B.data[dropped].reshape(-1, k * k)).reshape(-1, k, k)
-            data[where] += 0.5 * (sums[rows[where]] + sums[rows[where]].transpose(0, 2, 1))
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(rows[keep], minlength=nodes))])
-    return sp.bsr_matrix((data[keep], B.indices[keep], indptr), shape=B.shape)
+            data[where] += 0.5 * (sums[at] + sums[at].transpose(0, 2, 1))
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(kept_rows, minlength=nodes))])
+    return sp.bsr_matrix((data, B.indices[keep], indptr), shape=B.shape)
 
 
 def _contiguous(index):
