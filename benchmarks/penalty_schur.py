@@ -51,7 +51,8 @@ def main(argv=None):
         R = model.rigid_body_modes()[model.free]
         for smoothing, theta in [(k, t) for k in args.smoothing for t in args.theta]:
             pre = AuxiliarySpacePreconditioner(A, solid, split["beam"], split["prolongation"], R[solid],
-                                               block_size=3, smoothing=smoothing, theta=theta)
+                                               block_size=3, smoothing=smoothing, theta=theta,
+                                               keep_auxiliary=True)
             S = SchurComplement(pre)
             operator = spla.LinearOperator(S.shape, matvec=S.matvec, dtype=float)
             rhs = S.rhs(b)
@@ -70,7 +71,7 @@ def main(argv=None):
                 lu = factorize(pre.auxiliary, symmetric_positive=True)
                 cpu = time.process_time() - cpu
                 exact = iterations(lu.solve)
-            print(f"{args.n:3d} {factor:7.0e} {smoothing:6d} {theta:6.3f} {pre.auxiliary.nnz:10d} {exact:>15} "
+            print(f"{args.n:3d} {factor:7.0e} {smoothing:6d} {theta:6.3f} {pre.auxiliary_nnz:10d} {exact:>15} "
                   f"{iterations(pre._cycle.matvec):11d} {pre.amg.levels[-1].A.shape[0]:7d} {cpu:12.1f} "
                   f"{os.getloadavg()[0]:5.1f}", flush=True)
 
