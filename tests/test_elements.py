@@ -887,3 +887,16 @@ def test_sparse_control_and_monomial_tables_give_the_dense_sums_bit_for_bit(name
     start = dispatch.MONOMIAL_SPARSE_START[code]
     rows = dispatch.MONOMIAL_ROWS[start: start + n + 1]
     assert rows[-1] - rows[0] == np.count_nonzero(block)
+
+
+@pytest.mark.parametrize("name", sorted(dispatch.SOLID_ELEMENTS))
+def test_curved_monomials_are_those_of_degree_two_and_more_in_order(name):
+    """The derivative bounds of the one-to-one certificate and the point search sum over
+    ``CURVED_MONOMIALS``: every monomial of total degree >= 2, ascending (the order, hence the bits,
+    of the loop over all monomials that skipped the others), with its degree."""
+    d = dispatch.SOLID_ELEMENTS[name]
+    degree = np.asarray(d.monomials).sum(axis=1)
+    count = dispatch.N_CURVED[d.code]
+    np.testing.assert_array_equal(dispatch.CURVED_MONOMIALS[d.code, :count], np.flatnonzero(degree >= 2))
+    np.testing.assert_array_equal(dispatch.CURVED_DEGREE[d.code, :count], degree[degree >= 2])
+    assert count == {"hexahedron": 4, "tetra": 0, "tetra10": 6, "hexahedron27": 23}.get(name, count)

@@ -223,11 +223,10 @@ def injectivity_bound(code, a, L, radius):
     rho = 0.0
     for i in range(3):
         row = 0.0
-        for k in range(solid.n_nodes(code)):
-            degree = solid.MONOMIALS[code, k, 0] + solid.MONOMIALS[code, k, 1] + solid.MONOMIALS[code, k, 2]
-            if degree >= 2:
-                b = L[i, 0] * a[k, 0] + L[i, 1] * a[k, 1] + L[i, 2] * a[k, 2]
-                row += degree * radius ** (degree - 1) * abs(b)
+        for q in range(solid.N_CURVED[code]):
+            k, degree = solid.CURVED_MONOMIALS[code, q], solid.CURVED_DEGREE[code, q]
+            b = L[i, 0] * a[k, 0] + L[i, 1] * a[k, 1] + L[i, 2] * a[k, 2]
+            row += degree * radius ** (degree - 1) * abs(b)
         rho = max(rho, row)
     return rho
 
@@ -241,10 +240,9 @@ def curvature_bound(code, a, radius):
     K = 0.0
     for i in range(3):
         row = 0.0
-        for k in range(solid.n_nodes(code)):
-            degree = solid.MONOMIALS[code, k, 0] + solid.MONOMIALS[code, k, 1] + solid.MONOMIALS[code, k, 2]
-            if degree >= 2:
-                row += degree * (degree - 1) * radius ** (degree - 2) * abs(a[k, i])
+        for q in range(solid.N_CURVED[code]):
+            k, degree = solid.CURVED_MONOMIALS[code, q], solid.CURVED_DEGREE[code, q]
+            row += degree * (degree - 1) * radius ** (degree - 2) * abs(a[k, i])
         K = max(K, row)
     return K
 

@@ -205,6 +205,24 @@ def _monomial_tables():
 #: row-major, at ``TO_MONOMIAL[MONOMIAL_START[c]:]``: entry (k, b) is ``TO_MONOMIAL[MONOMIAL_START[c] + k n + b]``),
 #: the centre, the parameter box (lower, upper corner) and the max-norm radius of the element about its centre
 MONOMIALS, TO_MONOMIAL, MONOMIAL_START, CENTRE, PARAMETER_BOX, RADIUS = _monomial_tables()
+def _curved_monomials():
+    """Per code: the number of monomials of total degree >= 2, their indices k (ascending) and degrees."""
+    count = np.zeros(_N_CODES, dtype=np.int64)
+    index = np.zeros((_N_CODES, MAX_NODES), dtype=np.int64)
+    degree = np.zeros((_N_CODES, MAX_NODES), dtype=np.int64)
+    for c, d in BY_CODE.items():
+        total = np.asarray(d.monomials).sum(axis=1)
+        curved = np.flatnonzero(total >= 2)
+        count[c] = len(curved)
+        index[c, : len(curved)] = curved
+        degree[c, : len(curved)] = total[curved]
+    return count, index, degree
+
+
+#: per code: the monomials y^α with |α| >= 2 (the ones that bend the map, over which the derivative
+#: bounds of :mod:`mortar1d3d.geometry.projection` sum): their number, indices k in ascending order
+#: and degrees |α| (tet10: 6 of 10, hex27: 23 of 27)
+N_CURVED, CURVED_MONOMIALS, CURVED_DEGREE = _curved_monomials()
 #: the nonzero entries of the polynomial types' ``TO_MONOMIAL`` blocks (:func:`_sparse_rows`; rational types:
 #: none, their coefficients are those of :func:`mortar1d3d.geometry.rational.rational_coefficients`), for
 #: :func:`monomial_coefficients` (hex27: 216 of 729 entries, tet10: 43 of 100)
