@@ -1,10 +1,14 @@
 """The parts of the search stage (the kernel input of ``assemble_mortar``) timed one by one.
 
     .venv/bin/python benchmarks/search_parts.py [--package CHECKOUT] [--repeats 40] [--n 20] [--fibres 1000]
+                                                [--scene cube|hex8|hex27|tet10]
 
-Scene ``fibre_cube(n, fibres, 20)`` (the benchmark cube by default), 1 thread. Prints the best of
+Scene ``fibre_cube(n, fibres, 20)`` (the benchmark cube by default, undistorted), or with ``--scene`` one
+of ``newton_path.py``'s distorted cubes (hex8, hex27, tet10), 1 thread. Prints the best of
 ``--repeats`` calls of each part in ms: the solid frames (boxes, sizes, origins), the linearised
-maps, the beam frames (coefficients and boxes) and the candidate pairs. The ``search`` stage of
+maps (with the one-to-one certificates of curved elements), the beam frames (coefficients and
+boxes), the candidate pairs, and, where the checkout has them, the hull planes and the pairs they
+drop (``solid_hulls``, ``hull_pairs``). The ``search`` stage of
 ``throughput.py`` is their sum; this says which part moved. To compare two versions run it
 alternately with ``--package`` naming each checkout (as ``throughput.py``); the best of many calls
 moves little with the machine's load, but alternate the runs anyway.
@@ -44,9 +48,16 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=40)
     parser.add_argument("--n", type=int, default=20)
     parser.add_argument("--fibres", type=int, default=1000)
+    parser.add_argument("--scene", default="cube", choices=("cube", "hex8", "hex27", "tet10"),
+                        help="cube: fibre_cube as generated (default); the others: newton_path.py's scenes "
+                             "(distorted by 0.1 cells)")
     args = parser.parse_args(argv)
     numba.set_num_threads(1)
-    beams, solid = m13.generate.fibre_cube(args.n, args.fibres, 20)
+    if args.scene == "cube":
+        beams, solid = m13.generate.fibre_cube(args.n, args.fibres, 20)
+    else:
+        from newton_path import scene
+        beams, solid = scene(args.scene, args.n, args.fibres, 0.1)
     points = getattr(solid, "kernel_points", solid.points)      # older checkouts: no weights column
     boxes, size, origin = search.solid_frames(solid)
     table = np.empty((solid.n_elements, 5, 3))
@@ -58,8 +69,16 @@ def main(argv=None):
         "beam_frames": lambda: search.beam_frames(beams),
         "candidate_pairs": lambda: search.find_candidate_pairs(beam_boxes, boxes),
     }
-    print(f"package {m13.__file__.rsplit('/', 2)[0]}: fibre_cube({args.n}, {args.fibres}, 20), 1 thread, "
-          f"best of {args.repeats} calls [ms]")
+    if hasattr(search, "solid_hulls"):
+        hull = search.solid_hulls(points, solid.connectivity, solid.element_codes, origin, size)
+        Q, beam_origin, beam_boxes, _ = search.beam_frames(beams)
+        offsets, pair_solid = search.find_candidate_pairs(beam_boxes, boxes)
+        parts["solid_hulls"] = lambda: search.solid_hulls(points, solid.connectivity, solid.element_codes, origin,
+                                                          size)
+        parts["hull_pairs"] = lambda: search.hull_pairs(offsets, pair_solid, hull, origin, beams.element_type.code, Q,
+                                                        beams.lengths, beam_origin, beam_boxes)
+    print(f"package {m13.__file__.rsplit('/', 2)[0]}: scene {args.scene}, fibre_cube({args.n}, {args.fibres}, 20), "
+          f"{solid.n_elements} solid elements, 1 thread, best of {args.repeats} calls [ms]")
     for name, call in parts.items():
         print(f"  {name:16s} {best_ms(call, args.repeats):8.3f}")
 

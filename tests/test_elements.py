@@ -844,3 +844,62 @@ def test_dispatch_tables_stay_cachable():
         vandermonde = np.prod(y[:, None, :] ** d.monomials[None, :, :], axis=2)
         values = dispatch.SOLID_MODULES[d.name].NODE_VALUES if d.rational else np.eye(n)
         assert np.abs(vandermonde @ block - values).max() < 1e-9 * max(1.0, np.abs(block).max())
+
+
+def _dense_rows_skipping_zeros(matrix, X):
+    """Σ_b M[k, b] X[b, :3] row by row, b ascending, zero entries skipped: the sums the kernels made
+    before their matrices were stored sparse (Python floats: the same IEEE operations)."""
+    out = np.zeros((matrix.shape[0], 3))
+    for k in range(matrix.shape[0]):
+        for i in range(3):
+            v = 0.0
+            for b in range(matrix.shape[1]):
+                if matrix[k, b] != 0.0:
+                    v += matrix[k, b] * X[b, i]
+            out[k, i] = v
+    return out
+
+
+@pytest.mark.parametrize("name", sorted(dispatch.SOLID_ELEMENTS))
+def test_sparse_control_and_monomial_tables_give_the_dense_sums_bit_for_bit(name):
+    """control_points and monomial_coefficients sum only the stored nonzero entries of the bounding and
+    monomial matrices: the same terms in the same order as the dense loops that skipped zeros, so the
+    same bits (boxes, hull planes, sizes h and the one-to-one certificates do not move). The sparse
+    rows hold exactly the nonzero entries."""
+    d = dispatch.SOLID_ELEMENTS[name]
+    n, code = d.n_nodes, d.code
+    X = np.random.default_rng(code).standard_normal((dispatch.MAX_NODES, 4)) * 10.0 ** np.arange(-3, 1)[None, :]
+    C = np.full((dispatch.MAX_CONTROL, 3), np.nan)
+    count = dispatch.control_points(code, X, C)
+    expected = X[:n, :3] if dispatch.CONTROL_IS_NODES[code] else _dense_rows_skipping_zeros(d.bounding_matrix, X)
+    assert count == len(expected)
+    assert np.array_equal(C[:count], expected)
+    if not dispatch.CONTROL_IS_NODES[code]:
+        start = dispatch.CONTROL_START[code]
+        rows = dispatch.CONTROL_ROWS[start: start + count + 1]
+        assert rows[-1] - rows[0] == np.count_nonzero(d.bounding_matrix) < d.bounding_matrix.size
+        # the figures the docs quote: nonzero entries of the control and monomial matrices (of 729, of 100)
+        entries = (rows[-1] - rows[0], np.count_nonzero(dispatch.TO_MONOMIAL[dispatch.MONOMIAL_START[code]:][: n * n]))
+        assert entries == {"hexahedron27": (125, 216), "tetra10": (22, 43)}.get(name, entries)
+    if d.rational:
+        return
+    block = dispatch.TO_MONOMIAL[dispatch.MONOMIAL_START[code]:][: n * n].reshape(n, n)
+    a = np.full((dispatch.MAX_NODES, 4), np.nan)
+    dispatch.monomial_coefficients(code, X, a)
+    assert np.array_equal(a[:n, :3], _dense_rows_skipping_zeros(block, X))
+    start = dispatch.MONOMIAL_SPARSE_START[code]
+    rows = dispatch.MONOMIAL_ROWS[start: start + n + 1]
+    assert rows[-1] - rows[0] == np.count_nonzero(block)
+
+
+@pytest.mark.parametrize("name", sorted(dispatch.SOLID_ELEMENTS))
+def test_curved_monomials_are_those_of_degree_two_and_more_in_order(name):
+    """The derivative bounds of the one-to-one certificate and the point search sum over
+    ``CURVED_MONOMIALS``: every monomial of total degree >= 2, ascending (the order, hence the bits,
+    of the loop over all monomials that skipped the others), with its degree."""
+    d = dispatch.SOLID_ELEMENTS[name]
+    degree = np.asarray(d.monomials).sum(axis=1)
+    count = dispatch.N_CURVED[d.code]
+    np.testing.assert_array_equal(dispatch.CURVED_MONOMIALS[d.code, :count], np.flatnonzero(degree >= 2))
+    np.testing.assert_array_equal(dispatch.CURVED_DEGREE[d.code, :count], degree[degree >= 2])
+    assert count == {"hexahedron": 4, "tetra": 0, "tetra10": 6, "hexahedron27": 23}.get(name, count)

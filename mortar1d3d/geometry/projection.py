@@ -213,22 +213,6 @@ def load_element(points, conn, element, code, origin, X):
 
 
 @njit
-def monomial_coefficients(code, X, a):
-    """Coefficients ``a[k]`` (3,) of the map x(ξ) = Σ_k a_k y^{α_k}, y = ξ - ξ_c, of local nodes ``X``."""
-    n = solid.n_nodes(code)
-    start = solid.MONOMIAL_START[code]
-    for k in range(n):
-        a0 = a1 = a2 = 0.0
-        for b in range(n):
-            w = solid.TO_MONOMIAL[start + k * n + b]
-            if w != 0.0:
-                a0 += w * X[b, 0]
-                a1 += w * X[b, 1]
-                a2 += w * X[b, 2]
-        a[k, 0], a[k, 1], a[k, 2] = a0, a1, a2
-
-
-@njit
 def injectivity_bound(code, a, L, radius):
     """ρ >= sup ‖L J(ξ) - I‖∞ over the box |ξ - ξ_c|∞ <= ``radius``, for L = J(ξ_c)⁻¹.
 
@@ -239,11 +223,10 @@ def injectivity_bound(code, a, L, radius):
     rho = 0.0
     for i in range(3):
         row = 0.0
-        for k in range(solid.n_nodes(code)):
-            degree = solid.MONOMIALS[code, k, 0] + solid.MONOMIALS[code, k, 1] + solid.MONOMIALS[code, k, 2]
-            if degree >= 2:
-                b = L[i, 0] * a[k, 0] + L[i, 1] * a[k, 1] + L[i, 2] * a[k, 2]
-                row += degree * radius ** (degree - 1) * abs(b)
+        for q in range(solid.N_CURVED[code]):
+            k, degree = solid.CURVED_MONOMIALS[code, q], solid.CURVED_DEGREE[code, q]
+            b = L[i, 0] * a[k, 0] + L[i, 1] * a[k, 1] + L[i, 2] * a[k, 2]
+            row += degree * radius ** (degree - 1) * abs(b)
         rho = max(rho, row)
     return rho
 
@@ -257,10 +240,9 @@ def curvature_bound(code, a, radius):
     K = 0.0
     for i in range(3):
         row = 0.0
-        for k in range(solid.n_nodes(code)):
-            degree = solid.MONOMIALS[code, k, 0] + solid.MONOMIALS[code, k, 1] + solid.MONOMIALS[code, k, 2]
-            if degree >= 2:
-                row += degree * (degree - 1) * radius ** (degree - 2) * abs(a[k, i])
+        for q in range(solid.N_CURVED[code]):
+            k, degree = solid.CURVED_MONOMIALS[code, q], solid.CURVED_DEGREE[code, q]
+            row += degree * (degree - 1) * radius ** (degree - 2) * abs(a[k, i])
         K = max(K, row)
     return K
 
@@ -289,7 +271,7 @@ def certified_margin(code, X, L, a):
             if rational_curvature_bound(code, a, c0, c1, c2, reach) * reach < 1.0:
                 return delta
         return -1.0
-    monomial_coefficients(code, X, a)
+    solid.monomial_coefficients(code, X, a)
     for delta in _CERTIFIED_MARGINS:
         if injectivity_bound(code, a, L, solid.RADIUS[code] + delta) < 1.0:
             return delta
@@ -352,7 +334,7 @@ def search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN):
         b = np.empty((solid.MAX_NODES, 4))        # the coefficients of z = L (x - x(m)) per box
         L = np.empty((3, 3))
     else:
-        monomial_coefficients(code, X, a)
+        solid.monomial_coefficients(code, X, a)
     c0, c1, c2 = solid.CENTRE[code, 0], solid.CENTRE[code, 1], solid.CENTRE[code, 2]
     lo = solid.PARAMETER_BOX[code, 0]
     hi = solid.PARAMETER_BOX[code, 1]

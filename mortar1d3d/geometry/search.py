@@ -238,10 +238,12 @@ def _cell_total(box, cell_offsets, lower, inv_cell, dims, lo, hi):
 
 
 @njit
-def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, lo, hi, out):
+def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, lo, hi, out, seen, stamp):
     """Sorted unique solid elements overlapping ``box``, written to the front of ``out``.
 
-    ``out`` must hold :func:`_cell_total` entries (it is the work space too). Returns the count.
+    ``out`` must hold :func:`_cell_total` entries. ``seen`` (one entry per solid element) marks the
+    elements met so far with ``stamp``, unique to this box (the beam element): an element whose box
+    covers several of the grid cells is tested and listed once. Returns the count.
     """
     if not _cell_range(box, lower, inv_cell, dims, lo, hi):
         return 0
@@ -252,16 +254,14 @@ def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, di
                 c = (i * dims[1] + j) * dims[2] + k
                 for q in range(cell_offsets[c], cell_offsets[c + 1]):
                     s = cell_ids[q]
+                    if seen[s] == stamp:
+                        continue
+                    seen[s] = stamp
                     if _overlap(box, solid_boxes[s]):
                         out[n] = s
                         n += 1
     out[:n].sort()
-    m = 0
-    for q in range(n):
-        if q == 0 or out[q] != out[m - 1]:
-            out[m] = out[q]
-            m += 1
-    return m
+    return n
 
 
 #: called once per beam element through a symbol, not compiled into _find_pairs' parallel body and
@@ -291,11 +291,12 @@ def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell
     for worker in prange(workers):
         lo = np.empty(3, dtype=np.int64)
         hi = np.empty(3, dtype=np.int64)
+        seen = np.full(solid_boxes.shape[0], -1, dtype=np.int64)
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             for e in range(begin, stop):
                 counts[e + 1] = _candidates_of_call(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell,
-                                                    dims, lo, hi, work[room[e]:room[e + 1]])
+                                                    dims, lo, hi, work[room[e]:room[e + 1]], seen, e)
             begin, stop = claim(claims, n_beam, worker)
     offsets = np.cumsum(counts)
     solids = np.empty(offsets[-1], dtype=np.int64)

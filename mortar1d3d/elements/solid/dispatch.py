@@ -137,6 +137,31 @@ def _control_tables():
 #: not their nodes only), whether it is the identity (linear and rational Bézier elements: the control
 #: points are the nodes), control points of each face and their number
 N_CONTROL, CONTROL_MATRIX, CONTROL_IS_NODES, FACE_CONTROL, N_FACE_CONTROL = _control_tables()
+
+
+def _sparse_rows(blocks):
+    """The nonzero entries of one matrix per code, row by row and in column order within a row (the
+    terms a dense row sum that skips zeros adds, in its order): per code the index of its first row
+    pointer, the row pointers (row k of code c: entries ``rows[start[c] + k]`` up to
+    ``rows[start[c] + k + 1]``), and every entry's column and value."""
+    start = np.zeros(len(blocks), dtype=np.int64)
+    rows, columns, values = [], [], []
+    for c, block in enumerate(blocks):
+        start[c] = len(rows)
+        for row in block:
+            rows.append(len(columns))
+            nonzero = np.flatnonzero(row != 0.0)
+            columns.extend(nonzero)
+            values.extend(row[nonzero])
+        rows.append(len(columns))
+    return start, np.array(rows, dtype=np.int64), np.array(columns, dtype=np.int64), np.array(values)
+
+
+#: the bounding matrices' nonzero entries (:func:`_sparse_rows`; identity types: none): what
+#: :func:`control_points` sums, without testing the zeros of a quadratic type's matrix (hex27: 125
+#: nonzero entries of 729, tet10: 22 of 100)
+CONTROL_START, CONTROL_ROWS, CONTROL_COLUMNS, CONTROL_VALUES = _sparse_rows(
+    [np.zeros((0, 0)) if CONTROL_IS_NODES[c] else BY_CODE[c].bounding_matrix for c in range(_N_CODES)])
 #: the most control points of any type (the size of a buffer for :func:`control_points`)
 MAX_CONTROL = int(N_CONTROL.max())
 
@@ -180,6 +205,31 @@ def _monomial_tables():
 #: row-major, at ``TO_MONOMIAL[MONOMIAL_START[c]:]``: entry (k, b) is ``TO_MONOMIAL[MONOMIAL_START[c] + k n + b]``),
 #: the centre, the parameter box (lower, upper corner) and the max-norm radius of the element about its centre
 MONOMIALS, TO_MONOMIAL, MONOMIAL_START, CENTRE, PARAMETER_BOX, RADIUS = _monomial_tables()
+def _curved_monomials():
+    """Per code: the number of monomials of total degree >= 2, their indices k (ascending) and degrees."""
+    count = np.zeros(_N_CODES, dtype=np.int64)
+    index = np.zeros((_N_CODES, MAX_NODES), dtype=np.int64)
+    degree = np.zeros((_N_CODES, MAX_NODES), dtype=np.int64)
+    for c, d in BY_CODE.items():
+        total = np.asarray(d.monomials).sum(axis=1)
+        curved = np.flatnonzero(total >= 2)
+        count[c] = len(curved)
+        index[c, : len(curved)] = curved
+        degree[c, : len(curved)] = total[curved]
+    return count, index, degree
+
+
+#: per code: the monomials y^α with |α| >= 2 (the ones that bend the map, over which the derivative
+#: bounds of :mod:`mortar1d3d.geometry.projection` sum): their number, indices k in ascending order
+#: and degrees |α| (tet10: 6 of 10, hex27: 23 of 27)
+N_CURVED, CURVED_MONOMIALS, CURVED_DEGREE = _curved_monomials()
+#: the nonzero entries of the polynomial types' ``TO_MONOMIAL`` blocks (:func:`_sparse_rows`; rational types:
+#: none, their coefficients are those of :func:`mortar1d3d.geometry.rational.rational_coefficients`), for
+#: :func:`monomial_coefficients` (hex27: 216 of 729 entries, tet10: 43 of 100)
+MONOMIAL_SPARSE_START, MONOMIAL_ROWS, MONOMIAL_COLUMNS, MONOMIAL_VALUES = _sparse_rows(
+    [np.zeros((0, 0)) if BY_CODE[c].rational
+     else TO_MONOMIAL[MONOMIAL_START[c]: MONOMIAL_START[c] + BY_CODE[c].n_nodes ** 2].reshape(BY_CODE[c].n_nodes, -1)
+     for c in range(_N_CODES)])
 
 
 def solid_element(name):
@@ -277,16 +327,31 @@ def control_points(code, X, C):
         for a in range(n):
             C[a, 0], C[a, 1], C[a, 2] = X[a, 0], X[a, 1], X[a, 2]
         return n
+    _sparse_product(CONTROL_START[code], CONTROL_ROWS, CONTROL_COLUMNS, CONTROL_VALUES, n, X, C)
+    return n
+
+
+@njit
+def monomial_coefficients(code, X, a):
+    """Coefficients ``a[k]`` (3,) of the map x(ξ) = Σ_k a_k y^{α_k}, y = ξ - ξ_c, of a polynomial type's
+    local nodes ``X``: ``TO_MONOMIAL``'s block times ``X``, its nonzero terms only."""
+    _sparse_product(MONOMIAL_SPARSE_START[code], MONOMIAL_ROWS, MONOMIAL_COLUMNS, MONOMIAL_VALUES, N_NODES[code],
+                    X, a)
+
+
+@njit_inline
+def _sparse_product(start, rows, columns, values, n, X, out):
+    """out[k, :3] = Σ_b M[k, b] X[b, :3] for the first ``n`` rows of a matrix of :func:`_sparse_rows` (its rows
+    from ``start``): the nonzero terms in column order, so the sums of a dense loop that skips zeros."""
     for k in range(n):
         v0 = v1 = v2 = 0.0
-        for a in range(N_NODES[code]):
-            w = CONTROL_MATRIX[code, k, a]
-            if w != 0.0:
-                v0 += w * X[a, 0]
-                v1 += w * X[a, 1]
-                v2 += w * X[a, 2]
-        C[k, 0], C[k, 1], C[k, 2] = v0, v1, v2
-    return n
+        for q in range(rows[start + k], rows[start + k + 1]):
+            b = columns[q]
+            w = values[q]
+            v0 += w * X[b, 0]
+            v1 += w * X[b, 1]
+            v2 += w * X[b, 2]
+        out[k, 0], out[k, 1], out[k, 2] = v0, v1, v2
 
 
 @njit
