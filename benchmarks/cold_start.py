@@ -23,6 +23,10 @@ LLVM split by what it does (parsing the IR text, function passes, linking the ca
 module passes, machine code), and saving to and looking up the on-disk cache. Recording adds a
 little to the wall time.
 
+``--summarise A.json B.json [--group NAME=PATTERN,...]`` compiles nothing: it prints the own
+compile time of earlier dumps by module, side by side, and the totals of named groups of
+functions (e.g. ``--group rare=search_inside,locate_rare``).
+
 ``--what element``: ``import mortar1d3d`` and the first element-based assembly of the same scene
 alone (what a user of element-based integration waits for on a first run).
 
@@ -208,6 +212,39 @@ def _child(code, env, root, show):
             "in_process_s": own}
 
 
+def summarise(dumps, groups=()):
+    """Own compile CPU seconds (LLVM part) by module of every ``--dump`` file, side by side, and of
+    each group of functions named by a ``NAME=PATTERN[,PATTERN...]`` (a function is in the group when
+    its dotted name contains one of the patterns); nothing is compiled."""
+    import collections
+    import json
+
+    tables = []
+    for dump in dumps:
+        rows = json.loads(Path(dump).read_text())
+        by_module = collections.defaultdict(lambda: [0.0, 0.0, 0])
+        by_group = collections.defaultdict(lambda: [0.0, 0.0, 0])
+        for row in rows:
+            module = row["function"].rsplit(".", 1)[0]
+            if not module.startswith("mortar1d3d."):
+                module = "Numba's own implementations"
+            for key, table in [(module, by_module)] + [
+                    (name, by_group) for name, patterns in groups if any(p in row["function"] for p in patterns)]:
+                table[key][0] += row["own_cpu_seconds"]
+                table[key][1] += row["own_llvm_seconds"]
+                table[key][2] += 1
+        total = [sum(r["own_cpu_seconds"] for r in rows), sum(r["own_llvm_seconds"] for r in rows), len(rows)]
+        tables.append((by_module, by_group, total))
+    header = " | ".join(Path(d).name for d in dumps)
+    print(f"own compile CPU s (LLVM part, compilations) per dump: {header}")
+    modules = sorted({m for t in tables for m in t[0]}, key=lambda m: -max(t[0][m][0] for t in tables))
+    for label, rows in [("all", [t[2] for t in tables])] + \
+            [(f"group {name}", [t[1][name] for t in tables]) for name, _ in groups] + \
+            [(m, [t[0][m] for t in tables]) for m in modules]:
+        cells = " | ".join(f"{cpu:6.2f} ({llvm:5.2f}, {n:3d})" for cpu, llvm, n in rows)
+        print(f"  {cells}  {label}")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--package", default=str(Path(__file__).resolve().parents[1]), metavar="CHECKOUT",
@@ -223,7 +260,14 @@ def main(argv=None):
                              "populated one, every run is a warm start")
     parser.add_argument("--dump", metavar="JSON",
                         help="with --kernels: write every compilation (function, own time, argument types) to JSON")
+    parser.add_argument("--summarise", nargs="+", metavar="JSON",
+                        help="print the own compile time by module of earlier --dump files (side by side) and exit")
+    parser.add_argument("--group", action="append", default=[], metavar="NAME=PATTERN[,PATTERN]",
+                        help="with --summarise: also the total of the functions whose name contains a pattern")
     args = parser.parse_args(argv)
+    if args.summarise:
+        summarise(args.summarise, [(g.split("=", 1)[0], g.split("=", 1)[1].split(",")) for g in args.group])
+        return
     root = Path(args.package).resolve()
     if not (root / "mortar1d3d" / "__init__.py").is_file():
         parser.error(f"--package: no mortar1d3d package in {root}")
