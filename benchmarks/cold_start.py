@@ -17,7 +17,15 @@ on a loaded machine), the part of it Numba spent holding the LLVM lock (optimisa
 code), the number of type signatures each was compiled for, and the sum over all functions,
 which is the time spent compiling. ``--dump FILE`` writes every compilation (function, own CPU
 and LLVM seconds, argument types) as JSON, e.g. to find functions compiled for several
-signatures. Recording adds a little to the wall time.
+signatures. It then lists the own CPU time by stage: each of Numba's compiler passes
+(``nopython_type_inference``, ``native_lowering``, ...; without the compilations nested in them),
+LLVM split by what it does (parsing the IR text, function passes, linking the callees' modules,
+module passes, machine code), and saving to and looking up the on-disk cache. Recording adds a
+little to the wall time.
+
+``--summarise A.json B.json [--group NAME=PATTERN,...]`` compiles nothing: it prints the own
+compile time of earlier dumps by module, side by side, and the totals of named groups of
+functions (e.g. ``--group rare=search_inside,locate_rare``).
 
 ``--what element``: ``import mortar1d3d`` and the first element-based assembly of the same scene
 alone (what a user of element-based integration waits for on a first run).
@@ -64,7 +72,21 @@ assert ELEMENT_CODE != STARTUP_CODE
 RECORDER_CODE = """
 import atexit, collections, time
 from numba.core import event as _event
+from numba.core import caching as _caching
 _spans = []
+# own CPU seconds by stage: every compiler pass by name, LLVM (the outermost holds of Numba's LLVM
+# lock), saving to and loading from the on-disk cache, and the rest of a compilation (dispatcher)
+_stages = collections.defaultdict(float)
+_frames = []   # open frames: [kind, name, start, nested]; a frame's own time excludes nested frames
+def _push(kind, name):
+    _frames.append([kind, name, time.process_time(), 0.0])
+def _pop():
+    kind, name, start, nested = _frames.pop()
+    total = time.process_time() - start
+    if _frames:
+        _frames[-1][3] += total
+    _stages[name] += total - nested
+    return total
 class _Listener(_event.Listener):
     # per open compilation: its start (CPU seconds of the process), the CPU seconds of the
     # compilations nested in it and its own CPU seconds holding the LLVM lock
@@ -72,7 +94,9 @@ class _Listener(_event.Listener):
         self.stack = []
     def on_start(self, ev):
         self.stack.append([time.process_time(), 0.0, 0.0])
+        _push("compile", "rest of a compilation (dispatcher, outside the passes)")
     def on_end(self, ev):
+        _pop()
         start, nested, llvm = self.stack.pop()
         total = time.process_time() - start
         if self.stack:
@@ -82,6 +106,11 @@ class _Listener(_event.Listener):
         module = getattr(getattr(d, "py_func", None), "__module__", "?")
         _spans.append((module + "." + name, total - nested, llvm, str(ev.data.get("args"))))
 _compiles = _Listener()
+class _PassListener(_event.Listener):
+    def on_start(self, ev):
+        _push("pass", "pass " + ev.data["name"].split(" [")[0])
+    def on_end(self, ev):
+        _pop()
 class _LLVMListener(_event.Listener):
     # the outermost holds of the LLVM lock (optimisation, machine code), given to the innermost
     # open compilation: the one whose library is being finalised
@@ -91,12 +120,47 @@ class _LLVMListener(_event.Listener):
         self.depth += 1
         if self.depth == 1:
             self.start = time.process_time()
+            # inside a timed LLVM call (below) the time stays with that call's stage
+            self.pushed = not (_frames and _frames[-1][1].startswith("LLVM: "))
+            if self.pushed:
+                _push("llvm", "LLVM: other calls (Numba's LLVM lock held)")
     def on_end(self, ev):
         self.depth -= 1
-        if self.depth == 0 and _compiles.stack:
-            _compiles.stack[-1][2] += time.process_time() - self.start
+        if self.depth == 0:
+            if self.pushed:
+                _pop()
+            if _compiles.stack:
+                _compiles.stack[-1][2] += time.process_time() - self.start
+def _timed(method, name):
+    def wrapper(*args, **kwargs):
+        _push("cache", name)
+        try:
+            return method(*args, **kwargs)
+        finally:
+            _pop()
+    return wrapper
+_caching.Cache.save_overload = _timed(_caching.Cache.save_overload, "saving to the on-disk cache")
+_caching.Cache.load_overload = _timed(_caching.Cache.load_overload, "looking up (loading from) the on-disk cache")
+# the LLVM lock's time split by what LLVM does (the lock is also held by these calls, inside them)
+from llvmlite import binding as _ll
+from llvmlite.binding import newpassmanagers as _npm
+from numba.core import codegen as _codegen
+_ll.parse_assembly = _timed(_ll.parse_assembly, "LLVM: parsing IR text")
+_ll.ModuleRef.link_in = _timed(_ll.ModuleRef.link_in, "LLVM: linking callees' modules (link_in, clone)")
+_ll.ModuleRef.clone = _timed(_ll.ModuleRef.clone, "LLVM: linking callees' modules (link_in, clone)")
+_npm.FunctionPassManager.run = _timed(_npm.NewPassManager.run, "LLVM: function passes (per function, when lowered)")
+_npm.ModulePassManager.run = _timed(_npm.NewPassManager.run, "LLVM: module passes (after linking: inlining, optimisation)")
+_codegen.JitEngine.finalize_object = _timed(_codegen.JitEngine.finalize_object, "LLVM: machine code (MCJIT)")
+_codegen.JitEngine.get_function_address = _timed(_codegen.JitEngine.get_function_address, "LLVM: machine code (MCJIT)")
+_codegen.JitEngine.get_global_value_address = _timed(_codegen.JitEngine.get_global_value_address,
+                                                     "LLVM: machine code (MCJIT)")
+_codegen.JitEngine.add_module = _timed(_codegen.JitEngine.add_module, "LLVM: machine code (MCJIT)")
+_ll.TargetMachine.emit_object = _timed(_ll.TargetMachine.emit_object, "LLVM: machine code (MCJIT)")
+_ll.ModuleRef.__str__ = _timed(_ll.ModuleRef.__str__, "LLVM: printing and verifying IR")
+_ll.ModuleRef.verify = _timed(_ll.ModuleRef.verify, "LLVM: printing and verifying IR")
 _event.register("numba:llvm_lock", _LLVMListener())
 _event.register("numba:compile", _compiles)
+_event.register("numba:run_pass", _PassListener())
 def _report():
     own = collections.defaultdict(float)
     own_llvm = collections.defaultdict(float)
@@ -118,6 +182,11 @@ def _report():
     for name, t in top:
         print(f"  {t:7.2f} s  {100 * t / total:5.1f} %  LLVM {own_llvm[name]:6.2f} s  x{count[name]}  {name}",
               flush=True)
+    staged = sum(_stages.values())
+    print(f"by stage (own CPU s; {staged:.1f} s in all, compiling and the cache; stages above 0.1 s):", flush=True)
+    for name, t in sorted(_stages.items(), key=lambda kv: -kv[1]):
+        if t >= 0.1:
+            print(f"  {t:7.2f} s  {100 * t / staged:5.1f} %  {name}", flush=True)
 atexit.register(_report)
 """
 
@@ -143,6 +212,39 @@ def _child(code, env, root, show):
             "in_process_s": own}
 
 
+def summarise(dumps, groups=()):
+    """Own compile CPU seconds (LLVM part) by module of every ``--dump`` file, side by side, and of
+    each group of functions named by a ``NAME=PATTERN[,PATTERN...]`` (a function is in the group when
+    its dotted name contains one of the patterns); nothing is compiled."""
+    import collections
+    import json
+
+    tables = []
+    for dump in dumps:
+        rows = json.loads(Path(dump).read_text())
+        by_module = collections.defaultdict(lambda: [0.0, 0.0, 0])
+        by_group = collections.defaultdict(lambda: [0.0, 0.0, 0])
+        for row in rows:
+            module = row["function"].rsplit(".", 1)[0]
+            if not module.startswith("mortar1d3d."):
+                module = "Numba's own implementations"
+            for key, table in [(module, by_module)] + [
+                    (name, by_group) for name, patterns in groups if any(p in row["function"] for p in patterns)]:
+                table[key][0] += row["own_cpu_seconds"]
+                table[key][1] += row["own_llvm_seconds"]
+                table[key][2] += 1
+        total = [sum(r["own_cpu_seconds"] for r in rows), sum(r["own_llvm_seconds"] for r in rows), len(rows)]
+        tables.append((by_module, by_group, total))
+    header = " | ".join(Path(d).name for d in dumps)
+    print(f"own compile CPU s (LLVM part, compilations) per dump: {header}")
+    modules = sorted({m for t in tables for m in t[0]}, key=lambda m: -max(t[0][m][0] for t in tables))
+    for label, rows in [("all", [t[2] for t in tables])] + \
+            [(f"group {name}", [t[1][name] for t in tables]) for name, _ in groups] + \
+            [(m, [t[0][m] for t in tables]) for m in modules]:
+        cells = " | ".join(f"{cpu:6.2f} ({llvm:5.2f}, {n:3d})" for cpu, llvm, n in rows)
+        print(f"  {cells}  {label}")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--package", default=str(Path(__file__).resolve().parents[1]), metavar="CHECKOUT",
@@ -158,7 +260,14 @@ def main(argv=None):
                              "populated one, every run is a warm start")
     parser.add_argument("--dump", metavar="JSON",
                         help="with --kernels: write every compilation (function, own time, argument types) to JSON")
+    parser.add_argument("--summarise", nargs="+", metavar="JSON",
+                        help="print the own compile time by module of earlier --dump files (side by side) and exit")
+    parser.add_argument("--group", action="append", default=[], metavar="NAME=PATTERN[,PATTERN]",
+                        help="with --summarise: also the total of the functions whose name contains a pattern")
     args = parser.parse_args(argv)
+    if args.summarise:
+        summarise(args.summarise, [(g.split("=", 1)[0], g.split("=", 1)[1].split(",")) for g in args.group])
+        return
     root = Path(args.package).resolve()
     if not (root / "mortar1d3d" / "__init__.py").is_file():
         parser.error(f"--package: no mortar1d3d package in {root}")

@@ -671,22 +671,31 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
         xc = np.empty(3)
         begin, stop = claim(claims, n, worker)
         while begin < stop:
-            for s in range(begin, stop):
-                code = codes[s]
-                load_element(points, conn, s, code, solid_origin, X)
-                solid.centre(code, xc)
-                table[s, 3, 0], table[s, 3, 1], table[s, 3, 2] = map_point(code, X, xc, N)
-                table[s, 4, 1] = table[s, 4, 2] = 0.0
-                if _affine_inverse_call(code, X, solid_h[s], EXACT_AFFINE_TOL, table[s, :3]):
-                    table[s, 4, 0] = 1.0
-                    continue
-                j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xc, N, dN)
-                if inverse3(j00, j01, j02, j10, j11, j12, j20, j21, j22, table[s, :3]) > 0.0:
-                    table[s, 4, 0] = 0.0
-                    table[s, 4, 1] = _certified_margin_call(code, X, table[s, :3], a)
-                else:
-                    table[s, :, :] = np.nan
+            _linear_maps_chunk_call(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, a, xc)
             begin, stop = claim(claims, n, worker)
+
+
+@njit
+def _linear_maps_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, a, xc):
+    for s in range(begin, stop):
+        code = codes[s]
+        load_element(points, conn, s, code, solid_origin, X)
+        solid.centre(code, xc)
+        table[s, 3, 0], table[s, 3, 1], table[s, 3, 2] = map_point(code, X, xc, N)
+        table[s, 4, 1] = table[s, 4, 2] = 0.0
+        if _affine_inverse_call(code, X, solid_h[s], EXACT_AFFINE_TOL, table[s, :3]):
+            table[s, 4, 0] = 1.0
+            continue
+        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xc, N, dN)
+        if inverse3(j00, j01, j02, j10, j11, j12, j20, j21, j22, table[s, :3]) > 0.0:
+            table[s, 4, 0] = 0.0
+            table[s, 4, 1] = _certified_margin_call(code, X, table[s, :3], a)
+        else:
+            table[s, :, :] = np.nan
+
+
+#: the loop body of :func:`linear_maps` (per claimed chunk), optimised once: called through a symbol
+_linear_maps_chunk_call = unlinked(_linear_maps_chunk)
 
 
 @njit

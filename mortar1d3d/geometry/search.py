@@ -100,15 +100,25 @@ def _solid_boxes(points, conn, codes, padding, boxes, size, origin, workers):
         C = np.empty((MAX_CONTROL, 3))
         begin, stop = claim(claims, conn.shape[0], worker)
         while begin < stop:
-            for s in range(begin, stop):
-                code = codes[s]
-                for a in range(N_NODES[code]):
-                    for i in range(3):
-                        X[a, i] = points[conn[s, a], i]
-                origin[s, 0], origin[s, 1], origin[s, 2] = X[0, 0], X[0, 1], X[0, 2]
-                _hull_box(C, control_points(code, X, C), boxes[s])
-                size[s] = _finish_box(boxes[s], padding)
+            _solid_boxes_chunk_call(begin, stop, points, conn, codes, padding, boxes, size, origin, X, C)
             begin, stop = claim(claims, conn.shape[0], worker)
+
+
+@njit
+def _solid_boxes_chunk(begin, stop, points, conn, codes, padding, boxes, size, origin, X, C):
+    for s in range(begin, stop):
+        code = codes[s]
+        for a in range(N_NODES[code]):
+            for i in range(3):
+                X[a, i] = points[conn[s, a], i]
+        origin[s, 0], origin[s, 1], origin[s, 2] = X[0, 0], X[0, 1], X[0, 2]
+        _hull_box(C, control_points(code, X, C), boxes[s])
+        size[s] = _finish_box(boxes[s], padding)
+
+
+#: the loop bodies of the search's prange kernels (per claimed chunk or part), optimised once: called
+#: through a symbol, not compiled into each parallel body and its kernel again (see mortar1d3d._unlinked)
+_solid_boxes_chunk_call = unlinked(_solid_boxes_chunk)
 
 
 @njit_parallel
@@ -188,6 +198,9 @@ def _bin_part(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, ids):
                         counts[part, c] += 1
 
 
+_bin_part_call = unlinked(_bin_part)
+
+
 @njit_parallel
 def _bin_solids(solid_boxes, lower, inv_cell, dims, n_parts):
     """CSR (offsets, ids) of the solid elements whose box covers each grid cell, ids ascending.
@@ -199,7 +212,7 @@ def _bin_solids(solid_boxes, lower, inv_cell, dims, n_parts):
     n_cells = dims[0] * dims[1] * dims[2]
     counts = np.zeros((n_parts, n_cells), dtype=np.int64)
     for part in prange(n_parts):
-        _bin_part(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, np.empty(0, dtype=np.int64))
+        _bin_part_call(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, np.empty(0, dtype=np.int64))
     offsets = np.empty(n_cells + 1, dtype=np.int64)
     total = 0
     for c in range(n_cells):           # counts become each part's first slot in cell c
@@ -211,7 +224,7 @@ def _bin_solids(solid_boxes, lower, inv_cell, dims, n_parts):
     offsets[n_cells] = total
     ids = np.empty(total, dtype=np.int64)
     for part in prange(n_parts):
-        _bin_part(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, ids)
+        _bin_part_call(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, ids)
     return offsets, ids
 
 
@@ -281,8 +294,7 @@ def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell
         hi = np.empty(3, dtype=np.int64)
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
-            for e in range(begin, stop):
-                bound[e + 1] = _cell_total(beam_boxes[e], cell_offsets, lower, inv_cell, dims, lo, hi)
+            _cell_totals_chunk_call(begin, stop, beam_boxes, cell_offsets, lower, inv_cell, dims, lo, hi, bound)
             begin, stop = claim(claims, n_beam, worker)
     room = np.cumsum(bound)
     work = np.empty(room[-1], dtype=np.int64)
@@ -294,9 +306,8 @@ def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell
         seen = np.full(solid_boxes.shape[0], -1, dtype=np.int64)
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
-            for e in range(begin, stop):
-                counts[e + 1] = _candidates_of_call(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell,
-                                                    dims, lo, hi, work[room[e]:room[e + 1]], seen, e)
+            _candidates_chunk_call(begin, stop, beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims,
+                                   lo, hi, work, room, counts, seen)
             begin, stop = claim(claims, n_beam, worker)
     offsets = np.cumsum(counts)
     solids = np.empty(offsets[-1], dtype=np.int64)
@@ -304,11 +315,35 @@ def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell
     for worker in prange(workers):
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
-            for e in range(begin, stop):
-                for q in range(counts[e + 1]):
-                    solids[offsets[e] + q] = work[room[e] + q]
+            _pack_chunk_call(begin, stop, counts, offsets, room, work, solids)
             begin, stop = claim(claims, n_beam, worker)
     return offsets, solids
+
+
+@njit
+def _cell_totals_chunk(begin, stop, beam_boxes, cell_offsets, lower, inv_cell, dims, lo, hi, bound):
+    for e in range(begin, stop):
+        bound[e + 1] = _cell_total(beam_boxes[e], cell_offsets, lower, inv_cell, dims, lo, hi)
+
+
+@njit
+def _candidates_chunk(begin, stop, beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, lo, hi, work,
+                      room, counts, seen):
+    for e in range(begin, stop):
+        counts[e + 1] = _candidates_of_call(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell,
+                                            dims, lo, hi, work[room[e]:room[e + 1]], seen, e)
+
+
+@njit
+def _pack_chunk(begin, stop, counts, offsets, room, work, solids):
+    for e in range(begin, stop):
+        for q in range(counts[e + 1]):
+            solids[offsets[e] + q] = work[room[e] + q]
+
+
+_cell_totals_chunk_call = unlinked(_cell_totals_chunk)
+_candidates_chunk_call = unlinked(_candidates_chunk)
+_pack_chunk_call = unlinked(_pack_chunk)
 
 
 @njit
@@ -424,28 +459,36 @@ def _solid_hulls(points, conn, codes, solid_origin, solid_h, margin, hull, worke
         C = np.empty((MAX_CONTROL, 3))
         begin, stop = claim(claims, n, worker)
         while begin < stop:
-            for s in range(begin, stop):
-                code = codes[s]
-                if not HULL_TEST[code]:
-                    for f in range(hull.shape[1]):
-                        for i in range(4):
-                            hull[s, f, i] = 0.0     # no bound
-                    continue
-                spread = 1.0
-                if RATIONAL[code] and points.shape[1] > 3:
-                    lo = hi = points[conn[s, 0], 3]
-                    for a in range(1, N_NODES[code]):
-                        lo = min(lo, points[conn[s, a], 3])
-                        hi = max(hi, points[conn[s, a], 3])
-                    spread = (hi / lo) ** 2
-                big = 0.0
-                for a in range(N_NODES[code]):
-                    for i in range(3):
-                        X[a, i] = points[conn[s, a], i] - solid_origin[s, i]
-                        big = max(big, abs(points[conn[s, a], i]))
-                # round-off of the coordinates far from the origin (the kernels shift points between frames)
-                hull_planes(code, X, C, margin * solid_h[s] * spread + _SHIFT_ROUND_OFF * big, hull[s])
+            _solid_hulls_chunk_call(begin, stop, points, conn, codes, solid_origin, solid_h, margin, hull, X, C)
             begin, stop = claim(claims, n, worker)
+
+
+@njit
+def _solid_hulls_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, margin, hull, X, C):
+    for s in range(begin, stop):
+        code = codes[s]
+        if not HULL_TEST[code]:
+            for f in range(hull.shape[1]):
+                for i in range(4):
+                    hull[s, f, i] = 0.0     # no bound
+            continue
+        spread = 1.0
+        if RATIONAL[code] and points.shape[1] > 3:
+            lo = hi = points[conn[s, 0], 3]
+            for a in range(1, N_NODES[code]):
+                lo = min(lo, points[conn[s, a], 3])
+                hi = max(hi, points[conn[s, a], 3])
+            spread = (hi / lo) ** 2
+        big = 0.0
+        for a in range(N_NODES[code]):
+            for i in range(3):
+                X[a, i] = points[conn[s, a], i] - solid_origin[s, i]
+                big = max(big, abs(points[conn[s, a], i]))
+        # round-off of the coordinates far from the origin (the kernels shift points between frames)
+        hull_planes(code, X, C, margin * solid_h[s] * spread + _SHIFT_ROUND_OFF * big, hull[s])
+
+
+_solid_hulls_chunk_call = unlinked(_solid_hulls_chunk)
 
 
 def solid_hulls(points, conn, codes, solid_origin, solid_h, margin=HULL_MARGIN):

@@ -264,14 +264,14 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
                 # sample, xi holds the centre)
                 for i in range(3):
                     xi[i] = xi_s[k - 1, i] + dxi_s[k - 1, i] * (eta_s[k] - eta_s[k - 1])
-            start[:] = xi
+            start[0], start[1], start[2] = xi[0], xi[1], xi[2]
             ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
             if not (ok[k] and (solid.is_inside(code, xi, PARAMETER_TOL)
                                or certified_outside(code, linear, s, xi))):
                 # the warm start may have followed a branch of the map folded outside a
                 # curved element: locate the sample for certain (a sample beyond a hull plane has
                 # no preimage inside: the same Newton solves without the subdivision search)
-                start[:] = xi
+                start[0], start[1], start[2] = xi[0], xi[1], xi[2]
                 if in_hull(hull, s, r0, r1, r2):
                     status = locate_point(code, X, r0, r1, r2, h, PARAMETER_TOL, linear, s, xi, trial, N, dN,
                                           a, stack)
@@ -280,14 +280,14 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
                                             a, stack)
                 ok[k] = status != NOT_CONVERGED
                 if not ok[k]:
-                    xi[:] = start
+                    xi[0], xi[1], xi[2] = start[0], start[1], start[2]
             if ok[k]:
-                xi_s[k] = xi
+                xi_s[k, 0], xi_s[k, 1], xi_s[k, 2] = xi[0], xi[1], xi[2]
                 j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, N, dN)
                 det, dxi_s[k, 0], dxi_s[k, 1], dxi_s[k, 2] = solve3(j00, j01, j02, j10, j11, j12, j20, j21,
                                                                    j22, d0, d1, d2)
             else:
-                xi_s[k] = start
+                xi_s[k, 0], xi_s[k, 1], xi_s[k, 2] = start[0], start[1], start[2]
                 dxi_s[k] = 0.0
                 solid.centre(code, xi)
         faces = solid.faces(code)

@@ -89,7 +89,7 @@ def _segment_points_chunk(beam_code, begin, stop, seg_beam, seg_solid, seg_start
                     position[k, 2] = r2 + solid_origin[s, 2]
                     if affine:
                         linear_parameters(code, linear, s, r0, r1, r2, x)
-                        xi[k] = x
+                        xi[k, 0], xi[k, 1], xi[k, 2] = x[0], x[1], x[2]
                         status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
                         continue
                     # start from the linearised estimate (closer than the previous point: fewer Newton
@@ -102,11 +102,11 @@ def _segment_points_chunk(beam_code, begin, stop, seg_beam, seg_solid, seg_start
                                                  a, stack)
                         if status[k] == NOT_CONVERGED:
                             solid.centre(code, x)
-                            xi[k] = x
+                            xi[k, 0], xi[k, 1], xi[k, 2] = x[0], x[1], x[2]
                             continue
                     # the residual of x is in trial (project_point or locate_point left it there)
                     polish_residual(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN)
-                    xi[k] = x
+                    xi[k, 0], xi[k, 1], xi[k, 2] = x[0], x[1], x[2]
                     # a segment lies in its element: a point clearly outside means a missed
                     # crossing; it is reported, not hidden
                     status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
@@ -168,7 +168,7 @@ def _element_points_chunk(beam_code, begin, stop, pair_offsets, pair_solid, gx, 
                                    r2 + (beam_origin[e, 2] - solid_origin[s, 2]), solid_h[s], x, trial, N, dN)
                         owner[k] = s
                         status[k] = POINT_INSIDE
-                        xi[k] = x
+                        xi[k, 0], xi[k, 1], xi[k, 2] = x[0], x[1], x[2]
 
 
 #: called once per chunk through a symbol, not compiled into the kernel again (see mortar1d3d._unlinked)

@@ -14,6 +14,7 @@ from numba import prange
 from .._config import CHUNK, njit, njit_parallel
 from .._memory import carve
 from .._schedule import claim, n_chunks, new_claims, workers
+from .._unlinked import unlinked
 
 
 @njit
@@ -83,42 +84,55 @@ def _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_tab
         slot = np.full(n_cols, -1, dtype=np.int64)
         begin, stop = claim(claims, n_rows, worker)
         while begin < stop:
-            for r in range(begin, stop):
-                m = 0
-                for t in range(src_offsets[r], src_offsets[r + 1]):
-                    e = src[t] // n_phi
-                    j = src[t] % n_phi
-                    for g in range(beam_groups[e], beam_groups[e + 1]):
-                        base = entry_start[g] + j * width[g]
-                        row = col_row[g]
-                        for q in range(width[g]):
-                            c = col_table[row, q]
-                            k = slot[c]
-                            if k < 0:
-                                slot[c] = m
-                                cols[m] = c
-                                vs[m] = vals[base + q]
-                                m += 1
-                            else:
-                                vs[k] += vals[base + q]
-                for t in range(m):
-                    slot[cols[t]] = -1
-                for i in range(1, m):                # insertion sort of the distinct columns (short rows)
-                    c = cols[i]
-                    v = vs[i]
-                    k = i - 1
-                    while k >= 0 and cols[k] > c:
-                        cols[k + 1] = cols[k]
-                        vs[k + 1] = vs[k]
-                        k -= 1
-                    cols[k + 1] = c
-                    vs[k + 1] = v
-                for i in range(block):
-                    out = block * first[r] + i * m
-                    for t in range(m):
-                        indices[out + t] = block * cols[t] + i
-                        data[out + t] = vs[t]
+            _fill_rows_chunk_call(begin, stop, src_offsets, src, n_phi, beam_groups, entry_start, width, col_table,
+                                  col_row, vals, first, block, indices, data, cols, vs, slot)
             begin, stop = claim(claims, n_rows, worker)
+
+
+@njit
+def _fill_rows_chunk(begin, stop, src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row, vals,
+                     first, block, indices, data, cols, vs, slot):
+    """The rows ``begin:stop`` of :func:`_fill_rows` (its loop body per claimed chunk; ``cols``, ``vs`` and
+    ``slot`` the worker's buffers, ``slot`` all -1 on entry and on return)."""
+    for r in range(begin, stop):
+        m = 0
+        for t in range(src_offsets[r], src_offsets[r + 1]):
+            e = src[t] // n_phi
+            j = src[t] % n_phi
+            for g in range(beam_groups[e], beam_groups[e + 1]):
+                base = entry_start[g] + j * width[g]
+                row = col_row[g]
+                for q in range(width[g]):
+                    c = col_table[row, q]
+                    k = slot[c]
+                    if k < 0:
+                        slot[c] = m
+                        cols[m] = c
+                        vs[m] = vals[base + q]
+                        m += 1
+                    else:
+                        vs[k] += vals[base + q]
+        for t in range(m):
+            slot[cols[t]] = -1
+        for i in range(1, m):                # insertion sort of the distinct columns (short rows)
+            c = cols[i]
+            v = vs[i]
+            k = i - 1
+            while k >= 0 and cols[k] > c:
+                cols[k + 1] = cols[k]
+                vs[k + 1] = vs[k]
+                k -= 1
+            cols[k + 1] = c
+            vs[k + 1] = v
+        for i in range(block):
+            out = block * first[r] + i * m
+            for t in range(m):
+                indices[out + t] = block * cols[t] + i
+                data[out + t] = vs[t]
+
+
+#: the loop body of :func:`_fill_rows` (per claimed chunk), optimised once: called through a symbol
+_fill_rows_chunk_call = unlinked(_fill_rows_chunk)
 
 
 @njit_parallel
