@@ -2,13 +2,15 @@
 
     .venv/bin/python benchmarks/newton_path.py [--scene hex8|hex27|tet10|nurbs27] [--n 20] [--fibres 1000]
                                                [--distort 0.1] [--repeats 5] [--package CHECKOUT]
+                                           [--helices 40]
 
 Scenes (n_gauss 4, search_points 6, 1 thread, as ``make bench``): ``hex8`` is the distorted benchmark
 cube (``fibre_cube(n, fibres, 20)``, interior nodes moved by up to ``--distort`` cells,
 ``generate.distort`` seed 1); ``hex27`` and ``tet10`` the same cube of n³ cells as quadratic
 elements, moved the same way (curved edges: no element is affine); ``nurbs27`` the NURBS pipe of
 ``nurbs_throughput.py`` with its helices (another geometry: compare its points per second, not its
-counts).
+counts; ``--helices`` other than its 40 sizes the call, to see what part of its cost does not grow
+with the points: ``targets.py`` always runs 40).
 
 Printed:
 
@@ -57,12 +59,12 @@ N_GAUSS = 4
 SEARCH_POINTS = 6
 
 
-def scene(name, n, fibres, amplitude):
+def scene(name, n, fibres, amplitude, n_helices=40):
     """(beams, solid) of the named scene (see the module docstring)."""
     if name == "nurbs27":
         sys.path.insert(0, str(_package_root(None) / "benchmarks"))
         from nurbs_throughput import helices, meshes
-        return helices(40), meshes((2, 24, 8))[0]
+        return helices(n_helices), meshes((2, 24, 8))[0]
     beams, cube = m13.generate.fibre_cube(n, fibres, 20)
     element = {"hex8": "hexahedron", "hex27": "hexahedron27", "tet10": "tetra10"}[name]
     if element != "hexahedron":
@@ -278,9 +280,10 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--package", help="checkout whose package is measured (default: this one)")
     parser.add_argument("--no-counts", action="store_true", help="times only")
+    parser.add_argument("--helices", type=int, default=40, help="helices of the nurbs27 scene (default 40)")
     args = parser.parse_args(argv)
     numba.set_num_threads(1)
-    beams, solid_mesh = scene(args.scene, args.n, args.fibres, args.distort)
+    beams, solid_mesh = scene(args.scene, args.n, args.fibres, args.distort, args.helices)
     print(f"package {m13.__file__.rsplit('/', 2)[0]}; scene {args.scene}: {solid_mesh.n_elements} solid elements, "
           f"{beams.n_elements} beam elements, n_gauss {N_GAUSS}, 1 thread, median of {args.repeats} calls")
 
