@@ -2,13 +2,15 @@
 
     .venv/bin/python benchmarks/newton_path.py [--scene hex8|hex27|tet10|nurbs27] [--n 20] [--fibres 1000]
                                                [--distort 0.1] [--repeats 5] [--package CHECKOUT]
+                                           [--helices 40]
 
 Scenes (n_gauss 4, search_points 6, 1 thread, as ``make bench``): ``hex8`` is the distorted benchmark
 cube (``fibre_cube(n, fibres, 20)``, interior nodes moved by up to ``--distort`` cells,
 ``generate.distort`` seed 1); ``hex27`` and ``tet10`` the same cube of n³ cells as quadratic
 elements, moved the same way (curved edges: no element is affine); ``nurbs27`` the NURBS pipe of
 ``nurbs_throughput.py`` with its helices (another geometry: compare its points per second, not its
-counts).
+counts; ``--helices`` other than its 40 sizes the call, to see what part of its cost does not grow
+with the points: ``targets.py`` always runs 40).
 
 Printed:
 
@@ -57,12 +59,12 @@ N_GAUSS = 4
 SEARCH_POINTS = 6
 
 
-def scene(name, n, fibres, amplitude):
+def scene(name, n, fibres, amplitude, n_helices=40):
     """(beams, solid) of the named scene (see the module docstring)."""
     if name == "nurbs27":
         sys.path.insert(0, str(_package_root(None) / "benchmarks"))
         from nurbs_throughput import helices, meshes
-        return helices(40), meshes((2, 24, 8))[0]
+        return helices(n_helices), meshes((2, 24, 8))[0]
     beams, cube = m13.generate.fibre_cube(n, fibres, 20)
     element = {"hex8": "hexahedron", "hex27": "hexahedron27", "tet10": "tetra10"}[name]
     if element != "hexahedron":
@@ -231,9 +233,13 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                 if not (converged and (solid.is_inside(code, xi, PARAMETER_TOL)
                                        or pr.certified_outside(code, linear, s, xi))):
                     out[4] += 1
-                    # the library skips the subdivision search beyond a hull plane (the same ξ)
-                    out[7] += not in_hull(hull, s, r0, r1, r2)
-                    pr.locate_point(code, X, r0, r1, r2, h, PARAMETER_TOL, linear, s, xi, trial, N, dN, a, stack)
+                    beyond = not in_hull(hull, s, r0, r1, r2)
+                    out[7] += beyond
+                    # beyond a hull plane the library keeps a converged warm start (as here) and
+                    # otherwise skips the subdivision search (the same ξ as locate_point)
+                    if not (beyond and converged):
+                        pr.locate_point(code, X, r0, r1, r2, h, PARAMETER_TOL, linear, s, xi, trial, N, dN, a,
+                                        stack)
                 xi_s[k] = xi
                 j00, j01, j02, j10, j11, j12, j20, j21, j22 = pr.jacobian(code, X, xi, N, dN)
                 _, dxi_s[k, 0], dxi_s[k, 1], dxi_s[k, 2] = solve3(j00, j01, j02, j10, j11, j12, j20, j21, j22,
@@ -278,9 +284,10 @@ def main(argv=None):
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--package", help="checkout whose package is measured (default: this one)")
     parser.add_argument("--no-counts", action="store_true", help="times only")
+    parser.add_argument("--helices", type=int, default=40, help="helices of the nurbs27 scene (default 40)")
     args = parser.parse_args(argv)
     numba.set_num_threads(1)
-    beams, solid_mesh = scene(args.scene, args.n, args.fibres, args.distort)
+    beams, solid_mesh = scene(args.scene, args.n, args.fibres, args.distort, args.helices)
     print(f"package {m13.__file__.rsplit('/', 2)[0]}; scene {args.scene}: {solid_mesh.n_elements} solid elements, "
           f"{beams.n_elements} beam elements, n_gauss {N_GAUSS}, 1 thread, median of {args.repeats} calls")
 
@@ -350,7 +357,7 @@ def main(argv=None):
     print(f"crossing search: {out[0]} pairs, {out[1]} searched ({out[1] / len(pairs):.2f} per beam element); "
           f"per searched pair: {out[2] / max(out[1], 1):.2f} sample projections "
           f"({out[3] / max(out[2], 1):.3f} Newton iterations each, {out[4]} fallbacks in all, {out[7]} of them "
-          f"beyond a hull plane: no subdivision search), face-Newton starts "
+          f"beyond a hull plane: the warm start kept if it converged, else no subdivision search), face-Newton starts "
           f"{out[5] / max(out[1], 1):.3f} at sign changes + {out[6] / max(out[1], 1):.3f} at touches, crossings found "
           f"{found / max(out[1], 1):.3f}")
     return rates

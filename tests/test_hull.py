@@ -144,9 +144,13 @@ def _mixed_beams():
 
 
 @pytest.mark.parametrize("element", ["tetra10", "hexahedron27", "mixed"])
-def test_operators_are_the_same_bits_without_the_planes(element, monkeypatch):
-    """Planes or none: the same operators to the bit. ``mixed``: hex8 (no planes, zero rows) and tet10
-    (planes) in one mesh, so that the per-type choice is tested where both kinds meet."""
+def test_operators_are_the_same_without_the_planes(element, monkeypatch):
+    """Planes or none: the same operators. Element-based to the bit; segment-based the same segments,
+    points and CSR structure with values equal to round-off (a crossing-search sample beyond a
+    plane keeps its warm-started Newton solution, which without planes is solved again from the
+    linearised map: the face-Newton starts differ at the Newton tolerance, the crossings they
+    converge to by round-off). ``mixed``: hex8 (no planes, zero rows) and tet10 (planes) in one
+    mesh, so that the per-type choice is tested where both kinds meet."""
     if element == "mixed":
         beams, solid = _mixed_beams(), _mixed_mesh()
         hull, _, _ = hulls(solid)
@@ -165,16 +169,30 @@ def test_operators_are_the_same_bits_without_the_planes(element, monkeypatch):
             results[planes, integration] = ops
     for integration in ("element", "segment"):
         a, b = results["hull", integration], results["none", integration]
+        exact = integration == "element"
+
+        def same(x, y, scale, what):
+            if exact:
+                assert np.asarray(x).tobytes() == np.asarray(y).tobytes(), (integration, what)
+            else:
+                np.testing.assert_allclose(x, y, rtol=0.0, atol=1e-14 * scale, err_msg=f"{integration} {what}")
+
         # the planes drop pairs (tetrahedra: most of the boxes' overlaps), and nothing else changes
         assert a.diagnostics["candidate_pairs"] < b.diagnostics["candidate_pairs"]
         for name in ("D", "M"):
             x, y = getattr(a, name).tocsr(), getattr(b, name).tocsr()
             np.testing.assert_array_equal(x.indptr, y.indptr)
             np.testing.assert_array_equal(x.indices, y.indices)
-            assert x.data.tobytes() == y.data.tobytes(), (integration, name)
-        assert a.kappa.tobytes() == b.kappa.tobytes()
-        assert a.segments.tobytes() == b.segments.tobytes()
+            same(x.data, y.data, np.abs(y.data).max(), name)
+        same(a.kappa, b.kappa, np.abs(b.kappa).max(), "kappa")
+        for field in ("beam_element", "solid_element"):
+            np.testing.assert_array_equal(a.segments[field], b.segments[field])
+        for field in ("eta_start", "eta_end"):
+            same(a.segments[field], b.segments[field], 1.0, field)
         # the beams run through both kinds of elements (else the mixed case would test one kind)
         assert len(set(solid.element_codes[a.segments["solid_element"]].tolist())) == len(set(solid.element_codes))
         for field, values in a.point_fields.items():
-            assert np.asarray(values).tobytes() == np.asarray(b.point_fields[field]).tobytes(), field
+            if np.asarray(values).dtype.kind in "iub":
+                np.testing.assert_array_equal(values, b.point_fields[field], err_msg=field)
+            else:
+                same(values, b.point_fields[field], max(1.0, np.abs(b.point_fields[field]).max()), field)

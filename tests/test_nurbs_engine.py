@@ -153,12 +153,12 @@ def test_validity_of_rational_elements():
         m13.SolidMesh(bm.solid.points, {"nurbs27": bm.solid.connectivity[:, :27]})
 
 
-def test_nurbs27_newton_kernels_give_the_bits_of_the_general_rational_path():
+def test_nurbs27_newton_kernels_equal_the_general_rational_path_to_round_off():
     """The map and Jacobian the Newton path uses on a nurbs27 (``projection.map_point`` / ``jacobian``:
-    the type's own fused degree-2 kernels) equal, bit for bit, the general path: the registry's
-    Bernstein shape functions and derivatives, the rational quotient of ``dispatch.rational_shape`` /
-    ``rational_deriv`` and the sums over the nodes in node order. Random control points and weights
-    (0.3 to 3), ξ inside, on and beyond the reference cube."""
+    the type's homogeneous tensor contractions ``nurbs27.map_nodes`` / ``jacobian_nodes``) equal the
+    general path to round-off: the registry's Bernstein shape functions and derivatives, the rational
+    quotient of ``dispatch.rational_shape`` / ``rational_deriv`` and the sums over the nodes. Random
+    control points and weights (0.3 to 3), ξ inside, on and beyond the reference cube."""
     from mortar1d3d.elements.solid import dispatch
     from mortar1d3d.geometry import projection as pr
 
@@ -166,29 +166,51 @@ def test_nurbs27_newton_kernels_give_the_bits_of_the_general_rational_path():
     rng = np.random.default_rng(11)
     X, N, dN, _, _, _, _ = pr.point_buffers()
     N_ref, dN_ref = np.empty_like(N), np.empty_like(dN)
-    differ = 0
+    differ = exact = 0
+    worst_x = worst_J = 0.0
     for _ in range(20):
         X[:27, :3] = NURBS27.reference_nodes + rng.uniform(-0.3, 0.3, (27, 3))
         X[:27, 3] = rng.uniform(0.3, 3.0, 27)
         for xi in np.concatenate([rng.uniform(-1.3, 1.3, (10, 3)), [[-1.0, 1.0, 0.0], [1.0, 1.0, 1.0]]]):
-            x = pr.map_point(code, X, xi, N)
+            x = np.array(pr.map_point(code, X, xi, N))
             dispatch.rational_shape(code, xi, X, N_ref)
-            ref = [0.0, 0.0, 0.0]
-            for a in range(27):
-                for i in range(3):
-                    ref[i] += N_ref[a] * X[a, i]
-            assert x == tuple(ref)
-            np.testing.assert_array_equal(N[:27], N_ref[:27])
-            J = pr.jacobian(code, X, xi, N, dN)
+            ref = N_ref[:27] @ X[:27, :3]
+            worst_x = max(worst_x, np.abs(x - ref).max() / np.abs(ref).max())
+            exact += np.array_equal(x, ref)
+            J = np.array(pr.jacobian(code, X, xi, N, dN)).reshape(3, 3)
             dispatch.rational_deriv(code, xi, X, N_ref, dN_ref)
-            ref = [0.0] * 9
-            for a in range(27):
-                for i in range(3):
-                    for k in range(3):
-                        ref[3 * i + k] += X[a, i] * dN_ref[a, k]
-            assert J == tuple(ref)
-            np.testing.assert_array_equal(dN[:27], dN_ref[:27])
+            J_ref = X[:27, :3].T @ dN_ref[:27]
+            worst_J = max(worst_J, np.abs(J - J_ref).max() / np.abs(J_ref).max())
             # the weights matter (the comparison is not that of the polynomial map Σ B_a X_a)
             dispatch.shape(code, xi, N_ref)
             differ += not np.allclose(x, N_ref[:27] @ X[:27, :3], rtol=1e-6, atol=0.0)
+    assert worst_x < 4e-15 and worst_J < 1e-13, (worst_x, worst_J)
+    assert exact < 240          # another association of the sums: not the same bits everywhere
     assert differ >= 200        # every random ξ (at a corner, and here on an edge, R_a = B_a)
+
+
+def test_nurbs27_newton_kernels_on_the_exact_cylinder():
+    """On one span of an exact hollow-cylinder sector (90°, radii 0.1 / 0.2, height 0.3) the Newton
+    path's map puts every ξ at radius 0.1 + 0.05 (ξ_0 + 1) and height 0.15 (ξ_2 + 1), and its Jacobian
+    has the closed-form columns: ∂x/∂ξ_0 = 0.05 e_r, ∂x/∂ξ_2 = 0.15 e_z, ∂x/∂ξ_1 along e_θ (orthogonal
+    to e_r and e_z), counter-clockwise."""
+    from mortar1d3d.geometry import projection as pr
+
+    solid = sector().solid
+    X, N, dN, _, _, _, _ = pr.point_buffers()
+    X[:27] = solid.kernel_points[solid.cells["nurbs27"][0]]
+    rng = np.random.default_rng(5)
+    for xi in np.concatenate([rng.uniform(-1.0, 1.0, (50, 3)), [[-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]]]):
+        x = np.array(pr.map_point(NURBS27.code, X, xi, N))
+        r = np.hypot(x[0], x[1])
+        e_r = np.array([x[0], x[1], 0.0]) / r
+        assert abs(r - (0.1 + 0.05 * (xi[0] + 1.0))) < 1e-15
+        assert abs(x[2] - 0.15 * (xi[2] + 1.0)) < 1e-15
+        assert x[0] >= -1e-15 and x[1] >= -1e-15         # in the first quadrant
+        J = np.array(pr.jacobian(NURBS27.code, X, xi, N, dN)).reshape(3, 3)
+        np.testing.assert_allclose(J[:, 0], 0.05 * e_r, rtol=0.0, atol=1e-15)
+        np.testing.assert_allclose(J[:, 2], [0.0, 0.0, 0.15], rtol=0.0, atol=1e-15)
+        assert abs(J[:, 1] @ e_r) < 1e-15 and abs(J[2, 1]) < 1e-15
+        # counter-clockwise, r π/4 per unit ξ_1 on average over the span (the rational parametrisation's
+        # speed varies about it)
+        assert 0.5 * r * np.pi / 4 < np.cross(e_r, J[:, 1])[2] < 2.0 * r * np.pi / 4

@@ -36,8 +36,8 @@ _ROUND_OFF = 4 * 2.220446049250313e-16
 
 #: the codes of the trilinear hexahedron, of the quadratic hexahedron and tetrahedron and of the
 #: rational triquadratic Bézier hexahedron, whose map and Jacobian skip the registry's dispatch (the
-#: common cases of the Newton path): hex8 and nurbs27 with the same shape functions and sums over a fixed
-#: node count (the same bits); hex27 and tet10 with contractions of their nodes that never form the
+#: common cases of the Newton path): hex8 with the same shape functions and sums over a fixed node
+#: count (the same bits); hex27, tet10 and nurbs27 with contractions of their nodes that never form the
 #: shape functions (``map_nodes``, ``jacobian_nodes`` of their modules: equal to round-off)
 _HEX8 = hex8.DESCRIPTOR.code
 _HEX27 = hex27.DESCRIPTOR.code
@@ -60,9 +60,10 @@ def _node_sum(X, N, n):
 def map_point(code, X, xi, N):
     """x(ξ) = Σ_a N_a(ξ) X_a for element type ``code`` with local nodes ``X``; returns (x0, x1, x2).
 
-    Rational types take their node weights from ``X[:, 3]`` (``N`` then holds R_a). Inlined into
-    its callers with the trilinear hexahedron's case written out (no call, so no reference counting
-    of the three array arguments per evaluation); every other type goes on in :func:`_map_other`."""
+    Rational types take their node weights from ``X[:, 3]`` (``N`` then holds R_a, except for nurbs27,
+    whose map never forms it). Inlined into its callers with the trilinear hexahedron's case written
+    out (no call, so no reference counting of the three array arguments per evaluation); every other
+    type goes on in :func:`_map_other`."""
     if code == _HEX8:
         hex8.shape(xi, N)
         return _node_sum(X, N, 8)
@@ -77,8 +78,7 @@ def _map_other(code, X, xi, N):
     if code == _TET10:
         return tet10.map_nodes(X, xi)
     if code == _NURBS27:
-        nurbs27.rational_shape(X, xi, N)
-        return _node_sum(X, N, 27)
+        return nurbs27.map_nodes(X, xi)
     if solid.RATIONAL[code]:
         solid.rational_shape(code, xi, X, N)
     else:
@@ -113,8 +113,8 @@ def _gradient_sum(X, dN, n):
 
 @njit_inline
 def jacobian(code, X, xi, N, dN):
-    """J[i, k] = ∂x_i/∂ξ_k as a 9-tuple, row by row. ``N`` is scratch: a rational type leaves R_a(ξ)
-    there (polynomial types do not touch it). Inlined as :func:`map_point`; the other types go on in
+    """J[i, k] = ∂x_i/∂ξ_k as a 9-tuple, row by row. ``N`` is scratch: a rational type but nurbs27 leaves
+    R_a(ξ) there (the others do not touch it). Inlined as :func:`map_point`; the other types go on in
     :func:`_jacobian_other`."""
     if code == _HEX8:
         hex8.deriv(xi, dN)
@@ -130,8 +130,7 @@ def _jacobian_other(code, X, xi, N, dN):
     if code == _TET10:
         return tet10.jacobian_nodes(X, xi)
     if code == _NURBS27:
-        nurbs27.rational_deriv(X, xi, N, dN)
-        return _gradient_sum(X, dN, 27)
+        return nurbs27.jacobian_nodes(X, xi)
     if solid.RATIONAL[code]:
         solid.rational_deriv(code, xi, X, N, dN)
     else:
