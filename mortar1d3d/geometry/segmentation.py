@@ -308,7 +308,8 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
             for k in range(S):
                 if not ok[k]:
                     # the projection failed here: start on the face centre
-                    start[:] = solid.FACE_CENTROIDS[code, f]
+                    for i in range(3):      # element by element: an array assignment compiles Numba's
+                        start[i] = solid.FACE_CENTROIDS[code, f, i]   # shape-mismatch message
                     eta = _try_crossing(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s[k],
                                         start[0], start[1], start[2], z, xi, N, dN, H, dH)
                     count = _record(eta, f, out_eta, out_face, p, count, overflow)

@@ -132,7 +132,9 @@ def _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam,
                 F[0, 0], F[0, 1], F[0, 2] = h00, h01, h02
                 F[1, 0], F[1, 1], F[1, 2] = h10, h11, h12
                 F[2, 0], F[2, 1], F[2, 2] = h20, h21, h22
-                Cv[:, :] = C0
+                for i in range(6):      # element by element: an array assignment compiles Numba's
+                    for j in range(6):  # shape-mismatch message
+                        Cv[i, j] = C0[i, j]
                 W += add_fibres(fibre_data, fibre_lo, fibre_hi, F, True, P, Cv)
         else:
             F[0, 0] = 1.0 + h00
