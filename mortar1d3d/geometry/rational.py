@@ -26,19 +26,19 @@ from ..elements.solid import dispatch as solid
 @njit
 def rational_coefficients(code, X, a):
     """Monomial coefficients about ξ_c of X̃ (``a[k, :3]``) and W (``a[k, 3]``) of a rational element with
-    local control points ``X[:, :3]`` and weights ``X[:, 3]``."""
-    n = solid.n_nodes(code)
-    start = solid.MONOMIAL_START[code]
-    for k in range(n):
+    local control points ``X[:, :3]`` and weights ``X[:, 3]``: ``TO_MONOMIAL``'s block times (w X, w), its
+    nonzero terms only (the sparse rows of :func:`~mortar1d3d.elements.solid.dispatch.monomial_coefficients`)."""
+    rows = solid.MONOMIAL_ROWS
+    start = solid.MONOMIAL_SPARSE_START[code]
+    for k in range(solid.n_nodes(code)):
         a0 = a1 = a2 = a3 = 0.0
-        for b in range(n):
-            t = solid.TO_MONOMIAL[start + k * n + b]
-            if t != 0.0:
-                w = t * X[b, 3]
-                a0 += w * X[b, 0]
-                a1 += w * X[b, 1]
-                a2 += w * X[b, 2]
-                a3 += w
+        for q in range(rows[start + k], rows[start + k + 1]):
+            b = solid.MONOMIAL_COLUMNS[q]
+            w = solid.MONOMIAL_VALUES[q] * X[b, 3]
+            a0 += w * X[b, 0]
+            a1 += w * X[b, 1]
+            a2 += w * X[b, 2]
+            a3 += w
         a[k, 0], a[k, 1], a[k, 2], a[k, 3] = a0, a1, a2, a3
 
 

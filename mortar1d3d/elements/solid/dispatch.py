@@ -223,12 +223,11 @@ def _curved_monomials():
 #: bounds of :mod:`mortar1d3d.geometry.projection` sum): their number, indices k in ascending order
 #: and degrees |α| (tet10: 6 of 10, hex27: 23 of 27)
 N_CURVED, CURVED_MONOMIALS, CURVED_DEGREE = _curved_monomials()
-#: the nonzero entries of the polynomial types' ``TO_MONOMIAL`` blocks (:func:`_sparse_rows`; rational types:
-#: none, their coefficients are those of :func:`mortar1d3d.geometry.rational.rational_coefficients`), for
-#: :func:`monomial_coefficients` (hex27: 216 of 729 entries, tet10: 43 of 100)
+#: the nonzero entries of every type's ``TO_MONOMIAL`` block (:func:`_sparse_rows`), for
+#: :func:`monomial_coefficients` and, with the weights, :func:`mortar1d3d.geometry.rational.rational_coefficients`
+#: (hex27 and nurbs27: 216 of 729 entries, tet10: 43 of 100)
 MONOMIAL_SPARSE_START, MONOMIAL_ROWS, MONOMIAL_COLUMNS, MONOMIAL_VALUES = _sparse_rows(
-    [np.zeros((0, 0)) if BY_CODE[c].rational
-     else TO_MONOMIAL[MONOMIAL_START[c]: MONOMIAL_START[c] + BY_CODE[c].n_nodes ** 2].reshape(BY_CODE[c].n_nodes, -1)
+    [TO_MONOMIAL[MONOMIAL_START[c]: MONOMIAL_START[c] + BY_CODE[c].n_nodes ** 2].reshape(BY_CODE[c].n_nodes, -1)
      for c in range(_N_CODES)])
 
 
