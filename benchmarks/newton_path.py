@@ -20,7 +20,9 @@ Printed:
    (``check_tiling``) and the points of the segments (``segment_points``).
 2. **Counts**, from a counting copy of the kernels' decisions (this script's kernels, built from the
    library's own Newton step, inside tests and locators; the library's kernels hold no counters):
-   candidate pairs per beam element, element-based candidates tested per point (box test passed,
+   candidate pairs per beam element, the one-to-one certificates the library's kernels computed
+   (element- and segment-based: a checkout that computes them on first use), element-based
+   candidates tested per point (box test passed,
    and how many of those a hull plane rejects before Newton), Newton projections and iterations, points that needed the rare path (restart from the centre,
    face polish, subdivision search); for the segments: Newton iterations of the warm-started
    integration points and their fallbacks; for the crossing search: pairs searched, sample
@@ -52,11 +54,21 @@ from mortar1d3d.geometry.beam import beam_point  # noqa: E402
 from mortar1d3d.geometry.context import KernelInput  # noqa: E402
 from mortar1d3d.geometry.linalg import norm3, solve3  # noqa: E402
 from mortar1d3d.geometry import segmentation as sg  # noqa: E402
-from mortar1d3d.integration.points import segment_points  # noqa: E402
+from mortar1d3d.integration.points import element_points, segment_points  # noqa: E402
 from mortar1d3d.quadrature import gauss_legendre  # noqa: E402
 
 N_GAUSS = 4
 SEARCH_POINTS = 6
+#: a checkout whose linear maps leave the one-to-one certificates to their first use marks them so
+PENDING = getattr(pr, "PENDING_CERTIFICATE", None)
+
+if PENDING is not None:
+    certified_outside = pr.certified_outside
+else:
+    @njit
+    def certified_outside(code, linear, s, xi, X, a):
+        """An older checkout's certificate test (the margins computed beforehand, for every element)."""
+        return pr.certified_outside(code, linear, s, xi)
 
 
 def scene(name, n, fibres, amplitude, n_helices=40):
@@ -145,7 +157,7 @@ def element_counts(ctx_pairs, pair_solid, gx, codes, conn, points, solid_origin,
                     if solid.is_inside(code, xi, PARAMETER_TOL):
                         out[5] += 1
                         break
-                    if pr.certified_outside(code, linear, s, xi):
+                    if certified_outside(code, linear, s, xi, X, a):
                         continue
                 out[4] += 1
                 if pr.locate_rare(code, X, x0, x1, x2, solid_h[s], PARAMETER_TOL, linear, s, xi, trial, N, dN, a,
@@ -231,7 +243,7 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                 converged, its = newton_counted(code, X, r0, r1, r2, h, xi, trial, N, dN)
                 out[3] += its
                 if not (converged and (solid.is_inside(code, xi, PARAMETER_TOL)
-                                       or pr.certified_outside(code, linear, s, xi))):
+                                       or certified_outside(code, linear, s, xi, X, a))):
                     out[4] += 1
                     beyond = not in_hull(hull, s, r0, r1, r2)
                     out[7] += beyond
@@ -333,6 +345,15 @@ def main(argv=None):
 
     pairs = np.diff(ctx.pair_offsets)
     print(f"candidate pairs per beam element: mean {pairs.mean():.2f}, max {pairs.max()}")
+    if PENDING is not None:
+        # the library's own kernels, on contexts of their own: the element-based points, and the segmentation's
+        # parts above (ctx); a certificate is computed once, where a decision needs it
+        ctx_element = KernelInput(beams, solid_mesh)
+        element_points(ctx_element, N_GAUSS)
+        curved = ctx.linear[:, 4, 0] == 0.0
+        print(f"one-to-one certificates computed, of {curved.sum()} curved elements: element-based "
+              f"{(ctx_element.linear[curved, 4, 1] != PENDING).sum()}, segment-based "
+              f"{(ctx.linear[curved, 4, 1] != PENDING).sum()}")
     gx, _ = gauss_legendre(N_GAUSS)
     args_ctx = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h)
     out = np.zeros(8, dtype=np.int64)

@@ -6,12 +6,13 @@
 Scene ``fibre_cube(n, fibres, 20)`` (the benchmark cube by default, undistorted), or with ``--scene`` one
 of ``newton_path.py``'s distorted cubes (hex8, hex27, tet10), 1 thread. Prints the best of
 ``--repeats`` calls of each part in ms: the solid frames (boxes, sizes, origins), the linearised
-maps (with the one-to-one certificates of curved elements), the beam frames (coefficients and
-boxes), the candidate pairs, and, where the checkout has them, the hull planes and the pairs they
-drop (``solid_hulls``, ``hull_pairs``). The ``search`` stage of
-``throughput.py`` is their sum; this says which part moved. To compare two versions run it
-alternately with ``--package`` naming each checkout (as ``throughput.py``); the best of many calls
-moves little with the machine's load, but alternate the runs anyway.
+maps (with the one-to-one certificates of curved elements, in checkouts that compute them there
+rather than on first use), the beam frames (coefficients and boxes), the candidate pairs, and,
+where the checkout has them, the hull planes and the pairs they drop (``solid_hulls``,
+``hull_pairs``), and their sum. The ``search`` stage of ``throughput.py`` is about that sum; this
+says which part moved. To compare two versions run it alternately with ``--package`` naming each
+checkout (as ``throughput.py``); the best of many calls moves little with the machine's load, but
+alternate the runs anyway.
 """
 import argparse
 import sys
@@ -79,8 +80,12 @@ def main(argv=None):
                                                         beams.lengths, beam_origin, beam_boxes)
     print(f"package {m13.__file__.rsplit('/', 2)[0]}: scene {args.scene}, fibre_cube({args.n}, {args.fibres}, 20), "
           f"{solid.n_elements} solid elements, 1 thread, best of {args.repeats} calls [ms]")
+    total = 0.0
     for name, call in parts.items():
-        print(f"  {name:16s} {best_ms(call, args.repeats):8.3f}")
+        best = best_ms(call, args.repeats)
+        total += best
+        print(f"  {name:16s} {best:8.3f}")
+    print(f"  {'sum':16s} {total:8.3f}")
 
 
 if __name__ == "__main__":

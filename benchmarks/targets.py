@@ -1,7 +1,12 @@
 """The speed targets of issue 22, each with its figure, its ratio to the target and the command behind it.
 
     .venv/bin/python benchmarks/targets.py [--quick] [--large] [--items 1 2 3 4] [--rounds 2]
+                                           [--package CHECKOUT] [--out FILE]
     make bench-targets            # the same; QUICK=1 for --quick
+
+``--package CHECKOUT`` measures another checkout's package with this checkout's scripts (passed on to
+``throughput.py``, ``newton_path.py``, ``cold_start.py`` and ``scaling.py``; the solves of item 3 take
+no ``--package``): run it alternately for two checkouts, each with its own ``--out``, to compare them.
 
 Runs the project's own benchmark scripts, one child process each (the commands are printed as
 they start, with their time when they end, and each child's output is kept in
@@ -83,8 +88,13 @@ TARGETS = [
 ]
 
 
-def steps(items, quick=False, large=False, rounds=2):
-    """The child commands to run: (name, item, script, arguments, extra environment)."""
+#: the child scripts that measure another checkout's package with ``--package CHECKOUT``
+TAKES_PACKAGE = ("throughput.py", "newton_path.py", "cold_start.py", "scaling.py")
+
+
+def steps(items, quick=False, large=False, rounds=2, package=None):
+    """The child commands to run: (name, item, script, arguments, extra environment); with ``package``
+    (a checkout), ``--package package`` in the arguments of the scripts that take it."""
     repeats = "3" if quick else "5"
     out = []
     if 1 in items:
@@ -108,6 +118,9 @@ def steps(items, quick=False, large=False, rounds=2):
         unknowns = ["1e4", "1e5"] if quick else ["1e4", "1e5", "1e6"]
         out.append(("scaling", 4, "scaling.py", ["--points", *points, "--unknowns", *unknowns], {}))
         out.append(("throughput_straight", 4, "throughput.py", ["--repeats", repeats], {}))
+    if package:
+        out = [(name, item, script, [*arguments, "--package", package] if script in TAKES_PACKAGE else arguments, extra)
+               for name, item, script, arguments, extra in out]
     return out
 
 
@@ -209,15 +222,21 @@ def main(argv=None):
                         help="also the 1M-unknown penalty solve and assembly at 1e7 points (~30 min more, 11 GB)")
     parser.add_argument("--rounds", type=int, default=2, help="rounds of the four newton_path scenes")
     parser.add_argument("--out", default=str(RESULTS / "targets.json"))
+    parser.add_argument("--package", metavar="CHECKOUT",
+                        help="measure the package of this checkout (with this checkout's scripts; the steps whose "
+                             "script takes no --package, items 3, measure this checkout's package and say so)")
     args = parser.parse_args(argv)
 
     logs = RESULTS / "targets"
     logs.mkdir(parents=True, exist_ok=True)
-    plan = steps(set(args.items), args.quick, args.large, args.rounds)
+    plan = steps(set(args.items), args.quick, args.large, args.rounds,
+                 str(Path(args.package).resolve()) if args.package else None)
     records = []
     load = [os.getloadavg()[0]]
     t_all = time.perf_counter()
     for k, (name, item, script, child_args, extra) in enumerate(plan, 1):
+        if args.package and script not in TAKES_PACKAGE:
+            print(f"(benchmarks/{script} takes no --package: it measures this checkout's package)")
         command = [sys.executable, str(HERE / script), *child_args]
         print(f"[{k}/{len(plan)}] item {item}: benchmarks/{script} {' '.join(child_args)} ...", end=" ", flush=True)
         with tempfile.NamedTemporaryFile(prefix="m13-targets-", suffix=".jsonl", delete=False) as f:

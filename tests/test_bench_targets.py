@@ -97,6 +97,18 @@ def test_steps_quick_and_large():
     assert "1e7" in next(s[3] for s in large if s[0] == "scaling")
 
 
+def test_steps_pass_a_checkout_to_the_scripts_that_take_it():
+    plan = targets.steps({1, 2, 3, 4}, rounds=1, package="/tmp/other")
+    plain = targets.steps({1, 2, 3, 4}, rounds=1)
+    assert [s[0] for s in plan] == [s[0] for s in plain]
+    for (name, _, script, arguments, _), (_, _, _, before, _) in zip(plan, plain):
+        if script in ("throughput.py", "newton_path.py", "cold_start.py", "scaling.py"):
+            assert arguments == [*before, "--package", "/tmp/other"], name
+        else:
+            assert arguments == before, name          # the solves of item 3 take no --package
+    assert any(s[2] == "penalty_solve.py" for s in plan)
+
+
 def test_record_appends_json_lines_only_when_asked(tmp_path, monkeypatch):
     from _record import ENV, read, record
     path = tmp_path / "r.jsonl"

@@ -174,3 +174,38 @@ def test_validity_bound_agrees_with_dense_sampling(name):
     assert np.all(outcome[bad] != VALID)
     if d.degree == 2:
         assert bad.any() and (~bad).any()           # both kinds are exercised
+
+
+@pytest.mark.parametrize("name", ["hexahedron", "hexahedron27", "tetra10"])
+def test_certificates_computed_on_first_use_give_the_margins_computed_beforehand(name):
+    """``linear_maps`` leaves every curved element's one-to-one certificate pending; the first ξ within
+    the largest certified box makes ``certified_outside`` compute it: the margin ``certified_margin``
+    gives, stored, and every answer (before and after it is stored) the one that margin gives. A ξ
+    beyond that box is answered without computing it."""
+    from mortar1d3d.elements.solid.dispatch import CENTRE, MAX_NODES, RADIUS
+    from mortar1d3d.geometry.projection import (PENDING_CERTIFICATE, certified_margin, certified_outside,
+                                                load_element, search_buffers)
+    solid = m13.generate.distort(m13.generate.box((0, 0, 0), (1, 1, 1), (3, 3, 3), name), 0.2, seed=2)
+    _, h, origin = solid_frames(solid)
+    table = np.empty((solid.n_elements, 5, 3))
+    linear_maps(solid.kernel_points, solid.connectivity, solid.element_codes, origin, h, table, 1)
+    curved = np.flatnonzero(table[:, 4, 0] == 0.0)
+    assert len(curved) == solid.n_elements and (table[curved, 4, 1] == PENDING_CERTIFICATE).all()
+    X = np.empty((MAX_NODES, 4))
+    a, _ = search_buffers()
+    rng = np.random.default_rng(5)
+    margins = []
+    for s in curved:
+        code = int(solid.element_codes[s])
+        load_element(solid.kernel_points, solid.connectivity, s, code, origin, X)
+        eager = certified_margin(code, X, table[s, :3].copy(), a)
+        margins.append(eager)
+        centre, radius = CENTRE[code], RADIUS[code]
+        beyond = centre + (radius + 1.0) * 1.01 * rng.choice([-1.0, 1.0], 3)
+        assert not certified_outside(code, table, s, beyond, X, a)
+        assert table[s, 4, 1] == PENDING_CERTIFICATE                  # nothing computed for it
+        for xi in centre + (radius + 1.0) * rng.uniform(-1.0, 1.0, (30, 3)):
+            reach = np.abs(xi - centre).max() - radius
+            assert certified_outside(code, table, s, xi, X, a) == (eager >= 0.0 and reach <= eager)
+            assert table[s, 4, 1] == eager
+    assert len(set(margins)) > 1            # elements with different margins (or none) are exercised

@@ -2,9 +2,11 @@
 
 A :class:`KernelInput` is built once per ``assemble_mortar`` call, in the reference
 configuration, from a :class:`~mortar1d3d.mesh.BeamMesh` and a :class:`~mortar1d3d.mesh.SolidMesh`.
-The stages that follow read it and never change it: the segmentation
-(:mod:`~mortar1d3d.geometry.segmentation`), the integration points
-(:mod:`~mortar1d3d.integration.points`) and the assembly (:mod:`~mortar1d3d.mortar.assemble`).
+The stages that follow read it: the segmentation (:mod:`~mortar1d3d.geometry.segmentation`), the
+integration points (:mod:`~mortar1d3d.integration.points`) and the assembly
+(:mod:`~mortar1d3d.mortar.assemble`). They change nothing in it but the one-to-one certificates of
+``linear``, each computed the first time a decision needs it (the same value whichever stage or
+worker computes it).
 Kernels take its arrays one by one (Numba compiles for arrays, not for this class).
 """
 import numpy as np
@@ -45,7 +47,8 @@ class KernelInput:
         (zero rows, no bound, for the types whose descriptor sets ``hull_test`` False: hex8).
     linear : (n, 5, 3) float64
         Each element's map linearised at its centre and inverted (exact for affine elements):
-        the table of :func:`~mortar1d3d.geometry.projection.linear_maps`.
+        the table of :func:`~mortar1d3d.geometry.projection.linear_maps`, whose certificate entries
+        the kernels fill on first use (:func:`~mortar1d3d.geometry.projection.certified_outside`).
     Q : (m, 4, 3) float64
         Centreline coefficients of ``r(η) = Σ H_k q_k`` relative to ``beam_origin`` (positions
         relative, tangents as they are; unused rows zero).

@@ -277,16 +277,38 @@ def certified_margin(code, X, L, a):
     return -1.0
 
 
+#: computed once per element, on the rare calls that need it: through a symbol, not compiled into every
+#: kernel that inlines locate_point (see mortar1d3d._unlinked)
+_certified_margin_call = unlinked(certified_margin)
+#: ``table[s, 4, 1]`` of an element whose certificate :func:`linear_maps` left to its first use (see
+#: :func:`certified_outside`)
+PENDING_CERTIFICATE = -2.0
+
+
 @njit
-def certified_outside(code, table, s, xi):
+def certified_outside(code, table, s, xi, X, a):
     """Whether a solution ξ of x(ξ) = p outside element s proves that p lies outside it.
 
     True when ξ lies in the box on which the map is one-to-one (:func:`certified_margin`, stored
     in ``table[s, 4, 1]``): that box contains the element, and p has no other preimage in it.
+    Only a few elements ever meet such a ξ, so :func:`linear_maps` leaves the margin pending and the
+    first call that needs it computes it (``X``: the element's local nodes, ``a``: scratch of
+    :func:`search_buffers`) and stores it. Workers that meet the same element at once compute and
+    store the same value (a function of ``X`` and of the table's row), so the answer never depends
+    on which of them stored it. A ξ beyond the largest margin's box needs no certificate: False.
     """
     margin = table[s, 4, 1]
-    if not margin >= 0.0:
-        return False
+    if margin == PENDING_CERTIFICATE:
+        if not _in_certified_box(code, xi, _CERTIFIED_MARGINS[0]):
+            return False
+        margin = _certified_margin_call(code, X, table[s, :3], a)
+        table[s, 4, 1] = margin
+    return margin >= 0.0 and _in_certified_box(code, xi, margin)
+
+
+@njit_inline
+def _in_certified_box(code, xi, margin):
+    """Whether ξ lies in the box |ξ - ξ_c|∞ <= R + ``margin`` (R: the element's radius about its centre)."""
     limit = solid.RADIUS[code] + margin
     return (abs(xi[0] - solid.CENTRE[code, 0]) <= limit and abs(xi[1] - solid.CENTRE[code, 1]) <= limit
             and abs(xi[2] - solid.CENTRE[code, 2]) <= limit)
@@ -459,7 +481,7 @@ def locate_point(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, sta
     if converged and not abs(solid.outside_distance(code, xi)) <= _NEAR_BOUNDARY:
         if solid.is_inside(code, xi, tol):
             return INSIDE
-        if certified_outside(code, table, s, xi):
+        if certified_outside(code, table, s, xi, X, a):
             return OUTSIDE
     return _locate_rare_call(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stack, converged)
 
@@ -504,7 +526,7 @@ def _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, sta
             polish(code, X, p0, p1, p2, h, xi, trial, N, dN)
         if solid.is_inside(code, xi, tol):
             return INSIDE
-        if certified_outside(code, table, s, xi):
+        if certified_outside(code, table, s, xi, X, a):
             return OUTSIDE
     o0, o1, o2 = xi[0], xi[1], xi[2]
     if search and search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN) == INSIDE:
@@ -644,7 +666,6 @@ def affine_parameters(code, Ainv, x0, x1, x2, xi):
 #: called once per element through a symbol, not compiled into linear_maps' parallel body and kernel
 #: again (see mortar1d3d._unlinked)
 _affine_inverse_call = unlinked(affine_inverse)
-_certified_margin_call = unlinked(certified_margin)
 
 
 @njit_parallel
@@ -656,9 +677,11 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
     round-off (every tet4, parallelepiped hex8, straight-edged quadratic elements; L is then
     the exact inverse map and ``ξ = ξ_c + L (x - x_c)`` needs no Newton), 0 for the others (a
     Newton start close to the answer), NaN where the Jacobian at the centre is singular. Row 4,
-    column 1: the margin δ of the element's one-to-one certificate (:func:`certified_margin`; -1 if
-    none), with which a Newton solution outside the element proves a point outside
-    (:func:`certified_outside`).
+    column 1 of a curved element: ``PENDING_CERTIFICATE``, until the first Newton solution outside
+    the element that needs it replaces it with the margin δ of the element's one-to-one certificate
+    (:func:`certified_margin`; -1 if none), with which such a solution proves a point outside
+    (:func:`certified_outside`). Few elements ever need it, and it cost more than the rest of the
+    row together.
     """
     n = conn.shape[0]
     claims = new_claims(n, workers)
@@ -666,16 +689,15 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
         X = np.empty((solid.MAX_NODES, 4))
         N = np.empty(solid.MAX_NODES)
         dN = np.empty((solid.MAX_NODES, 3))
-        a = np.empty((solid.MAX_NODES, 4))
         xc = np.empty(3)
         begin, stop = claim(claims, n, worker)
         while begin < stop:
-            _linear_maps_chunk_call(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, a, xc)
+            _linear_maps_chunk_call(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, xc)
             begin, stop = claim(claims, n, worker)
 
 
 @njit
-def _linear_maps_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, a, xc):
+def _linear_maps_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, xc):
     for s in range(begin, stop):
         code = codes[s]
         load_element(points, conn, s, code, solid_origin, X)
@@ -688,7 +710,7 @@ def _linear_maps_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, 
         j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xc, N, dN)
         if inverse3(j00, j01, j02, j10, j11, j12, j20, j21, j22, table[s, :3]) > 0.0:
             table[s, 4, 0] = 0.0
-            table[s, 4, 1] = _certified_margin_call(code, X, table[s, :3], a)
+            table[s, 4, 1] = PENDING_CERTIFICATE
         else:
             table[s, :, :] = np.nan
 

@@ -36,7 +36,7 @@ from ..elements.solid import dispatch as solid
 from .beam import beam_point, beams_affine
 from .intersection import face_coordinates, intersect_face
 from .linalg import norm3, solve3
-from .projection import (ANY_CANDIDATE, CONVERGED, NOT_CONVERGED, OUTSIDE, certified_outside, first_containing,
+from .projection import (ANY_CANDIDATE, CONVERGED, NOT_CONVERGED, certified_outside, first_containing,
                          is_affine, jacobian, linear_parameters, load_element, locate_outside, locate_point,
                          point_buffers, project_point, search_buffers)
 from .search import in_hull
@@ -266,19 +266,20 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
                     xi[i] = xi_s[k - 1, i] + dxi_s[k - 1, i] * (eta_s[k] - eta_s[k - 1])
             start[0], start[1], start[2] = xi[0], xi[1], xi[2]
             ok[k] = project_point(code, X, r0, r1, r2, h, xi, trial, N, dN) == CONVERGED
+            # a sample beyond a hull plane has no preimage inside: a converged warm start is its
+            # answer (the branch the samples follow, solved once), certificate or not; the plane is
+            # tested first, so that only samples near the element need its certificate
             if not (ok[k] and (solid.is_inside(code, xi, PARAMETER_TOL)
-                               or certified_outside(code, linear, s, xi))):
+                               or (solid.HULL_TEST[code] and not in_hull(hull, s, r0, r1, r2))
+                               or certified_outside(code, linear, s, xi, X, a))):
                 # the warm start may have followed a branch of the map folded outside a
-                # curved element: locate the sample for certain. A sample beyond a hull plane has
-                # no preimage inside: a converged warm start is its answer (the branch the samples
-                # follow, solved once); without one, the Newton solves of locate_point without its
+                # curved element: locate the sample for certain. Without a converged warm start, a
+                # sample beyond a hull plane gets the Newton solves of locate_point without its
                 # subdivision search
                 start[0], start[1], start[2] = xi[0], xi[1], xi[2]
                 if in_hull(hull, s, r0, r1, r2):
                     status = locate_point(code, X, r0, r1, r2, h, PARAMETER_TOL, linear, s, xi, trial, N, dN,
                                           a, stack)
-                elif ok[k]:
-                    status = OUTSIDE
                 else:
                     status = locate_outside(code, X, r0, r1, r2, h, PARAMETER_TOL, linear, s, xi, trial, N, dN,
                                             a, stack)
