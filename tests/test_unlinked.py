@@ -181,9 +181,9 @@ MAP_RUN = textwrap.dedent("""
 
 
 def test_the_other_types_map_is_called_through_a_symbol(tmp_path):
-    """``projection.map_point`` (inlined into every function evaluating the map) writes out hex8 (and
-    nurbs27's contraction, inlined at Numba's IR level: no function of its own) and calls every other
-    type's map through a symbol: the caller's module declares it, defines none of the other types' code, and the map is still x(ξ) of the element (here x = 2ξ + 0.1 ξ0 ξ1 e_2,
+    """``projection.map_point`` (inlined into every function evaluating the map) writes out hex8 and
+    calls every other type's map through a symbol: the caller's module declares it, defines none of
+    the other types' code, and the map is still x(ξ) of the element (here x = 2ξ + 0.1 ξ0 ξ1 e_2,
     which both hex8 and hex27 interpolate exactly)."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(ROOT))
     done = subprocess.run([sys.executable, "-c", MAP_RUN], env=env, cwd=tmp_path, capture_output=True, text=True)

@@ -62,24 +62,23 @@ def map_point(code, X, xi, N):
 
     Rational types take their node weights from ``X[:, 3]`` (``N`` then holds R_a, except for nurbs27,
     whose map never forms it). Inlined into its callers with the trilinear hexahedron's case written
-    out (no call, so no reference counting of the three array arguments per evaluation), and so is
-    nurbs27's contraction (the call through the symbol cost more than the contraction itself); every
-    other type goes on in :func:`_map_other`."""
+    out (no call, so no reference counting of the three array arguments per evaluation); every other
+    type goes on in :func:`_map_other`."""
     if code == _HEX8:
         hex8.shape(xi, N)
         return _node_sum(X, N, 8)
-    if code == _NURBS27:
-        return nurbs27.map_nodes(X, xi)
     return _map_other_call(code, X, xi, N)
 
 
 @njit
 def _map_other(code, X, xi, N):
-    """:func:`map_point` of every type but hex8 and nurbs27."""
+    """:func:`map_point` of every type but hex8."""
     if code == _HEX27:
         return hex27.map_nodes(X, xi)
     if code == _TET10:
         return tet10.map_nodes(X, xi)
+    if code == _NURBS27:
+        return nurbs27.map_nodes(X, xi)
     if solid.RATIONAL[code]:
         solid.rational_shape(code, xi, X, N)
     else:
@@ -115,23 +114,23 @@ def _gradient_sum(X, dN, n):
 @njit_inline
 def jacobian(code, X, xi, N, dN):
     """J[i, k] = ∂x_i/∂ξ_k as a 9-tuple, row by row. ``N`` is scratch: a rational type but nurbs27 leaves
-    R_a(ξ) there (the others do not touch it). Inlined as :func:`map_point` (hex8 and nurbs27); the other
-    types go on in :func:`_jacobian_other`."""
+    R_a(ξ) there (the others do not touch it). Inlined as :func:`map_point`; the other types go on in
+    :func:`_jacobian_other`."""
     if code == _HEX8:
         hex8.deriv(xi, dN)
         return _gradient_sum(X, dN, 8)
-    if code == _NURBS27:
-        return nurbs27.jacobian_nodes(X, xi)
     return _jacobian_other_call(code, X, xi, N, dN)
 
 
 @njit
 def _jacobian_other(code, X, xi, N, dN):
-    """:func:`jacobian` of every type but hex8 and nurbs27."""
+    """:func:`jacobian` of every type but hex8."""
     if code == _HEX27:
         return hex27.jacobian_nodes(X, xi)
     if code == _TET10:
         return tet10.jacobian_nodes(X, xi)
+    if code == _NURBS27:
+        return nurbs27.jacobian_nodes(X, xi)
     if solid.RATIONAL[code]:
         solid.rational_deriv(code, xi, X, N, dN)
     else:
