@@ -7,6 +7,10 @@ for every integration, of a smaller cube of distorted tetra10 and hexahedron27 e
 ``newton_path.py``) for every integration, of every solid element type with curved beams and every multiplier type, and
 the solutions of the example scene and of a penalty, a Lagrange and a nonlinear solve. ``--check``
 lists every array that differs in any bit (and by how much) and exits 1 if one does.
+
+``--set nurbs`` collects instead the NURBS pipe of ``newton_path.py --scene nurbs27`` (384 ``nurbs27``
+elements, 40 helices) for every integration, ``--set all`` both; the default, ``standard``, is the
+set above. To compare another checkout's package, run this script with ``PYTHONPATH=CHECKOUT``.
 """
 import argparse
 import sys
@@ -41,8 +45,22 @@ def _result(out, key, scene):
     out[f"{key}/line_load"] = result.line_load
 
 
-def collect():
+def collect_nurbs(out):
+    """The NURBS pipe of ``newton_path.py --scene nurbs27`` (``nurbs_throughput.py``'s meshes)."""
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from nurbs_throughput import helices, meshes
+    beams, solid = helices(40), meshes((2, 24, 8))[0]
+    for integration in ("element", "segment", "auto"):
+        _operators(out, f"nurbs27-pipe-{integration}", beams, solid, integration=integration, n_gauss=4)
+    return out
+
+
+def collect(which="standard"):
     out = {}
+    if which in ("nurbs", "all"):
+        collect_nurbs(out)
+        if which == "nurbs":
+            return out
     beams, solid = m13.generate.fibre_cube(20, 1000, 20)
     curved, _ = m13.generate.fibre_cube(20, 1000, 20, curved=True)
     distorted = m13.generate.distort(solid, 0.1, seed=1)
@@ -92,10 +110,13 @@ def main(argv=None):
     group = parser.add_mutually_exclusive_group(required=True)
     group.add_argument("--write", metavar="FILE", help="write the arrays of this checkout")
     group.add_argument("--check", metavar="FILE", help="compare this checkout's arrays with FILE, bit for bit")
+    parser.add_argument("--set", default="standard", choices=("standard", "nurbs", "all"),
+                        help="the scenes (default: standard; nurbs: the NURBS pipe only; all: both)")
     args = parser.parse_args(argv)
+    print(f"package {m13.__file__.rsplit('/', 2)[0]}")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        current = collect()
+        current = collect(args.set)
     if args.write:
         np.savez_compressed(args.write, **current)
         print(f"wrote {len(current)} arrays to {args.write}")

@@ -214,3 +214,58 @@ def test_nurbs27_newton_kernels_on_the_exact_cylinder():
         # counter-clockwise, r π/4 per unit ξ_1 on average over the span (the rational parametrisation's
         # speed varies about it)
         assert 0.5 * r * np.pi / 4 < np.cross(e_r, J[:, 1])[2] < 2.0 * r * np.pi / 4
+
+
+@pytest.mark.parametrize("degree", [2, 3, 4])
+@pytest.mark.parametrize("jitter", [0.0, 0.2])
+def test_certificate_bound_about_the_centre_summed_by_degree(degree, jitter):
+    """The one-to-one certificate of a rational element (``projection.certified_margin``) bounds the
+    curvature about the element centre from the monomial sums per degree
+    (``rational.centre_curvature_bound``): the bound of ``rational_curvature_bound`` at m = ξ_c with
+    its terms summed by degree, equal to round-off, for radii from inside the element to beyond every
+    margin tried, on the spans of an exact pipe (24 around: certified, margins 0.5 and 1) and of the
+    same pipe with weights scaled by 0.8-1.25 (genuinely rational: no margin certified); and every
+    element gets the margin the general bound gives."""
+    from mortar1d3d.elements.solid import dispatch
+    from mortar1d3d.geometry import projection as pr
+    from mortar1d3d.geometry import rational as ra
+    from mortar1d3d.geometry.search import solid_frames
+
+    rng = np.random.default_rng(degree)
+    patch = nurbs.hollow_cylinder(0.2, 0.3, 1.0, angle=360.0, elements=(2, 24, 2), degree=degree).patches[0]
+    weights = patch.weights * rng.uniform(1.0 - jitter, 1.0 + 1.25 * jitter, patch.weights.shape)
+    weights[:, -1] = weights[:, 0]
+    mesh = nurbs.bezier_mesh(nurbs.NurbsSolid([nurbs.NurbsPatch(patch.control, weights, patch.knots,
+                                                                patch.degrees)])).solid
+    points, conn, codes = mesh.kernel_points, mesh.connectivity, mesh.element_codes
+    _, h, origin = solid_frames(mesh)
+    table = np.empty((mesh.n_elements, 5, 3))
+    pr.linear_maps(points, conn, codes, origin, h, table, 1)
+    X, a = np.empty((dispatch.MAX_NODES, 4)), np.empty((dispatch.MAX_NODES, 4))
+    worst, margins = 0.0, []
+
+    def difference(sums, code, r):
+        K = ra.rational_curvature_bound(code, a, *dispatch.CENTRE[code], r)
+        by_degree = ra.centre_curvature_bound(sums, r)
+        assert np.isfinite(K) == np.isfinite(by_degree)      # W bounded away from zero in both or neither
+        return K, abs(by_degree - K) / K if np.isfinite(K) else 0.0
+
+    for s in range(mesh.n_elements):
+        code = codes[s]
+        pr.load_element(points, conn, s, code, origin, X)
+        ra.rational_coefficients(code, X, a)
+        ra.normalise_coefficients(code, a, table[s, :3].copy(), *ra.centre_point(code, a), a)
+        sums = ra.degree_sums(code, a)
+        general = -1.0
+        for delta in (1.0, 0.5, 0.25, 0.125):
+            reach = dispatch.RADIUS[code] + delta
+            K, d = difference(sums, code, reach)
+            worst = max(worst, d)
+            if general < 0.0 and K * reach < 1.0:
+                general = delta
+        margins.append(general)
+        for r in (0.1, 0.5, 3.0):
+            worst = max(worst, difference(sums, code, r)[1])
+    assert worst < 1e-12, worst      # round-off of the sums, grown by the cancellation in W_min = c_0 - B0
+    np.testing.assert_array_equal(table[:, 4, 1], margins)
+    assert sorted(set(margins)) == ([-1.0] if jitter else [0.5, 1.0])

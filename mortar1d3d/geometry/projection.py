@@ -16,8 +16,8 @@ from ..elements.solid import dispatch as solid
 from ..elements.solid import hex8, hex27, nurbs27, tet10
 from .linalg import inverse3, norm3, solve3
 from .search import in_hull
-from .rational import (centre_point, normalise_coefficients, rational_coefficients, rational_curvature_bound,
-                       uniform_weights)
+from .rational import (centre_curvature_bound, centre_point, degree_sums, normalise_coefficients,
+                       rational_coefficients, rational_curvature_bound, uniform_weights)
 
 CONVERGED = 0
 FAILED = 1
@@ -258,16 +258,17 @@ def certified_margin(code, X, L, a):
 
     ``L`` (3, 3) is J(ξ_c)⁻¹; ``a`` receives the monomial coefficients (scratch). A rational
     element: ‖L J(ξ) - I‖∞ <= K_z |ξ - ξ_c|∞ with K_z the curvature bound of z = L (x - x_c)
-    (:func:`.rational.normalise_coefficients`, :func:`.rational.rational_curvature_bound`).
+    (:func:`.rational.normalise_coefficients`, :func:`.rational.centre_curvature_bound`: the bound of
+    :func:`.rational.rational_curvature_bound` about the centre, summed by degree).
     """
     if solid.RATIONAL[code]:
         rational_coefficients(code, X, a)
         x0, x1, x2 = centre_point(code, a)
         normalise_coefficients(code, a, L, x0, x1, x2, a)
-        c0, c1, c2 = solid.CENTRE[code, 0], solid.CENTRE[code, 1], solid.CENTRE[code, 2]
+        sums = degree_sums(code, a)
         for delta in _CERTIFIED_MARGINS:
             reach = solid.RADIUS[code] + delta
-            if rational_curvature_bound(code, a, c0, c1, c2, reach) * reach < 1.0:
+            if centre_curvature_bound(sums, reach) * reach < 1.0:
                 return delta
         return -1.0
     solid.monomial_coefficients(code, X, a)

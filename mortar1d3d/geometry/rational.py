@@ -92,6 +92,61 @@ def rational_curvature_bound(code, a, m0, m1, m2, r):
     return K
 
 
+#: the largest total degree |α| of a monomial of any element type (triquadratic: 6)
+MAX_DEGREE = int(solid.MONOMIALS.sum(axis=-1).max())
+
+
+@njit
+def degree_sums(code, a):
+    """(MAX_DEGREE + 1, 4): row d >= 1 the sums Σ_{|α| = d} |c_α| of every column of ``a``
+    (:func:`rational_coefficients`), row 0 the constant terms c_0.
+
+    About the centre (y = 0) the bounds of :func:`rational_curvature_bound` depend on the
+    coefficients only through these sums (B0 = Σ_d S_d ρ^d, ...): one pass over the monomials
+    serves every radius (:func:`centre_curvature_bound`).
+    """
+    sums = np.zeros((MAX_DEGREE + 1, 4))
+    for k in range(solid.n_nodes(code)):
+        degree = solid.MONOMIALS[code, k, 0] + solid.MONOMIALS[code, k, 1] + solid.MONOMIALS[code, k, 2]
+        for column in range(4):
+            sums[degree, column] += a[k, column] if degree == 0 else abs(a[k, column])
+    return sums
+
+
+@njit
+def _degree_bounds(sums, column, radius):
+    """B0, B1, B2 of :func:`_bounds` on |y|∞ <= radius from the degree sums of ``column``."""
+    b0 = b1 = b2 = 0.0
+    for degree in range(1, MAX_DEGREE + 1):
+        c = sums[degree, column]
+        b0 += c * radius ** degree
+        b1 += c * degree * radius ** (degree - 1)
+        if degree >= 2:
+            b2 += c * degree * (degree - 1) * radius ** (degree - 2)
+    return b0, b1, b2
+
+
+@njit
+def centre_curvature_bound(sums, r):
+    """:func:`rational_curvature_bound` about the centre (m = ξ_c) from :func:`degree_sums`: the same
+    bounds, their terms summed by degree (equal up to round-off), without a pass over the
+    monomials per radius. What the one-to-one certificate of every element needs
+    (:func:`~.projection.certified_margin`, a few radii per element)."""
+    w0, w1, w2 = _degree_bounds(sums, 3, r)
+    wc = sums[0, 3]
+    w_min = max(wc - w0, wc - r * w1)
+    if not w_min > 0.0:
+        return np.inf
+    K = 0.0
+    for i in range(3):
+        b0, b1, b2 = _degree_bounds(sums, i, r)
+        c = abs(sums[0, i])
+        a0 = min(b0 + c, c + r * b1) / w_min
+        a1 = (b1 + a0 * w1) / w_min
+        K = max(K, (b2 + 2.0 * a1 * w1 + a0 * w2) / w_min)
+    return K
+
+
 @njit
 def centre_point(code, a):
     """x(ξ_c) = X̃(ξ_c) / W(ξ_c) from the coefficients of :func:`rational_coefficients` (their constant terms)."""
