@@ -11,8 +11,6 @@ from pathlib import Path
 
 import numba
 
-from ._refprune import propagate_as_raise
-
 
 #: subpackages without kernels, whose edits cannot change a compiled kernel (they only call the
 #: kernels and no kernel module imports from them; tests/test_config.py checks both): left out of
@@ -124,10 +122,6 @@ def announce_compilation(stream=None):
 #: Options shared by all kernels. ``fastmath`` stays off: the geometry relies on IEEE
 #: comparisons (inside tests, merging tolerances) and bit-identical results across threads.
 JIT_OPTIONS = dict(cache=True, nogil=True, fastmath=False, error_model="numpy")
-
-# before any kernel compiles: the reference counting of array arguments is pruned across calls
-# between the package's kernels too (see mortar1d3d._refprune)
-propagate_as_raise()
 
 njit = numba.njit(**JIT_OPTIONS)
 njit_parallel = numba.njit(parallel=True, **JIT_OPTIONS)
