@@ -15,7 +15,7 @@ one call, free of the import, the scene generation and the warm-up. It prints th
 every checkout, split into the compiled kernels (code valgrind sees without a name), the Python
 interpreter, numpy/scipy and the rest, and each checkout's ratios to the first one.
 
-``--atomics`` counts executed atomic instructions instead (valgrind's "global bus events",
+``--atomics`` also counts the executed atomic instructions (valgrind's "global bus events",
 ``--collect-bus=yes``: every ``lock``-prefixed instruction), split the same way. In the kernels these
 are the reference counting of arrays passed to compiled calls that Numba could not prune
 (``benchmarks/atomics.py`` shows where they sit in the code): each costs tens of cycles, but counts
@@ -133,19 +133,19 @@ def _by_object(path, event="Ir"):
 PARTS = ("kernels", "python", "numpy/scipy", "other")
 
 
-def _count(package, args, calls, event="Ir"):
-    """Instructions (or atomic instructions, ``event`` "Ge") executed by a child that makes ``calls``
-    extra calls: {part: count}."""
+def _count(package, args, calls):
+    """Instructions executed by a child that makes ``calls`` extra calls: {"Ir": {part: count}}, and with
+    ``--atomics`` the atomic instructions too ({"Ge": {part: count}})."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "callgrind.out"
-        cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", f"--collect-bus={'yes' if event == 'Ge' else 'no'}",
+        cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", f"--collect-bus={'yes' if args.atomics else 'no'}",
                sys.executable, str(HERE), "--child", "--package", str(package), "--integration",
                args.integration, "--distort", str(args.distort), "--n", str(args.n), "--fibres",
                str(args.fibres), "--element", args.element, "--stage", args.stage, "--child-calls", str(calls)]
         done = subprocess.run(cmd, env=_environment(package, args), capture_output=True, text=True)
         if done.returncode != 0:
             raise SystemExit(f"child failed ({package}, {calls} calls):\n{done.stderr[-2000:]}")
-        return _by_object(out, event)
+        return {event: _by_object(out, event) for event in (("Ir", "Ge") if args.atomics else ("Ir",))}
 
 
 def main(argv=None):
@@ -167,7 +167,7 @@ def main(argv=None):
     parser.add_argument("--cache", default=str(Path(tempfile.gettempdir()) / "mortar1d3d-callgrind-cache"),
                         help="kernel cache of the children (default: in the temporary directory)")
     parser.add_argument("--atomics", action="store_true",
-                        help="count the executed atomic (lock-prefixed) instructions instead: callgrind's global "
+                        help="count the executed atomic (lock-prefixed) instructions too: callgrind's global "
                              "bus events, e.g. the reference counting of arrays passed to compiled calls")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--child-calls", type=int, default=0, help=argparse.SUPPRESS)
@@ -182,28 +182,34 @@ def main(argv=None):
         subprocess.run([sys.executable, str(HERE), "--child", "--package", str(package), "--integration",
                         args.integration, "--distort", str(args.distort), "--n", str(args.n), "--fibres",
                         str(args.fibres), "--element", args.element], check=True, env=_environment(package, args))
-        event = "Ge" if args.atomics else "Ir"
-        base = _count(package, args, 0, event)
-        more = _count(package, args, args.calls, event)
-        if any(more[k] < base[k] for k in ("kernels",)) or sum(more.values()) < sum(base.values()):
+        base = _count(package, args, 0)
+        more = _count(package, args, args.calls)
+        if any(more["Ir"][k] < base["Ir"][k] for k in ("kernels",)) or sum(more["Ir"].values()) < sum(base["Ir"].values()):
             # a kernel the first run under valgrind did not find in the cache was compiled there
             # (seen right after a checkout's cache was filled); both counts again, now warm
             print(f"{package}: the counted runs compiled a kernel; counting again", flush=True)
-            base = _count(package, args, 0, event)
-            more = _count(package, args, args.calls, event)
-            if sum(more.values()) < sum(base.values()):
+            base = _count(package, args, 0)
+            more = _count(package, args, args.calls)
+            if sum(more["Ir"].values()) < sum(base["Ir"].values()):
                 raise SystemExit(f"{package}: counts still inconsistent (compilation inside the counted runs?)")
-        per_call = {k: (more[k] - base[k]) / args.calls for k in PARTS}
+        per_call = {event: {k: (more[event][k] - base[event][k]) / args.calls for k in PARTS} for event in base}
         counts.append(per_call)
         what = f"{args.integration} call" if args.stage == "call" else f"'{args.stage}' stage"
         scene = ("NURBS pipe, 40 helices" if args.element == "nurbs27"
                  else f"fibre_cube({args.n}, {args.fibres}, {args.n}), {args.element}, distort {args.distort}")
-        print(f"{package}: {sum(per_call.values()):.4e} {'atomic instructions' if args.atomics else 'instructions'} per {what} ({scene}, n_gauss 4, 1 thread): "
-              + ", ".join(f"{k} {v:.4e}" for k, v in per_call.items()), flush=True)
+        for event, name in (("Ir", "instructions"), ("Ge", "atomic instructions")):
+            if event in per_call:
+                print(f"{package}: {sum(per_call[event].values()):.4e} {name} per {what} ({scene}, n_gauss 4, "
+                      "1 thread): " + ", ".join(f"{k} {v:.4e}" for k, v in per_call[event].items()), flush=True)
     for package, c in zip(packages[1:], counts[1:]):
-        print(f"{package.name} / {packages[0].name}: total {sum(c.values()) / sum(counts[0].values()):.4f}, "
-              + ", ".join(f"{k} {c[k] / counts[0][k]:.4f}" for k in PARTS if counts[0][k]))
-
+        for event, name in (("Ir", "instructions"), ("Ge", "atomic instructions")):
+            if event not in c:
+                continue
+            first, this = counts[0][event], c[event]
+            total = sum(first.values())
+            print(f"{package.name} / {packages[0].name}, {name}: total "
+                  + (f"{sum(this.values()) / total:.4f}" if total else "-") + ", "
+                  + ", ".join(f"{k} {this[k] / first[k]:.4f}" for k in PARTS if first[k]))
 
 if __name__ == "__main__":
     main()
