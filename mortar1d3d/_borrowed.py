@@ -3,10 +3,11 @@
 Every compiled function increments the reference count of each array it receives when it starts
 and decrements it at its end (``NRT_incref`` / ``NRT_decref`` on the array's memory-info
 pointer: an atomic read-modify-write each, tens of cycles), unless Numba's reference-count pruning
-pass removes the pair. It does not where the function calls another one that LLVM does not inline
+pass removes the pair. It cannot where the function calls another one that LLVM does not inline
 (an error returned by the callee leaves the function without the decrement, so the pass cannot
-prove the pair redundant) or where its control flow is too tangled: on the Newton path of the
-integration points about 60 atomic operations per point remained (``benchmarks/atomics.py``).
+prove the pair redundant) nor where LLVM merged the decrements of several paths: on the Newton path
+of the integration points about 60 atomic operations per point remained (``benchmarks/atomics.py``
+shows where, ``benchmarks/instructions.py --atomics`` counts them).
 
 Both runtime functions skip a null memory-info pointer, so an array whose pointer is null is
 passed down any number of calls without one atomic operation (a call and a comparison each
