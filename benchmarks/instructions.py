@@ -3,7 +3,7 @@
     .venv/bin/python benchmarks/instructions.py [--package CHECKOUT ...] [--integration segment]
                                                 [--stage call|search|points] [--distort 0.1]
                                                 [--n 10] [--fibres 200] [--calls 3]
-                                                [--element hexahedron|hexahedron27|tetra10|nurbs27]
+                                                [--element hexahedron|hexahedron27|tetra10|nurbs27] [--atomics]
 
 On a shared, noisy machine seconds move by ±10 % from one run to the next; the number of executed
 instructions does not (callgrind counts them on a simulated CPU, whatever else the machine does).
@@ -14,6 +14,12 @@ child with no extra call is counted too. The difference divided by ``--calls`` i
 one call, free of the import, the scene generation and the warm-up. It prints the count of
 every checkout, split into the compiled kernels (code valgrind sees without a name), the Python
 interpreter, numpy/scipy and the rest, and each checkout's ratios to the first one.
+
+``--atomics`` also counts the executed atomic instructions (valgrind's "global bus events",
+``--collect-bus=yes``: every ``lock``-prefixed instruction), split the same way. In the kernels these
+are the reference counting of arrays passed to compiled calls that Numba could not prune
+(``benchmarks/atomics.py`` shows where they sit in the code): each costs tens of cycles, but counts
+as one instruction above.
 
 Counts say whether a version *does more work*. Two versions with equal counts and different
 times differ in how the CPU runs the same work (code layout, branch prediction, memory), which
@@ -106,10 +112,11 @@ TARGET = "haswell"
 TARGET_FEATURES = "+sse2,+sse3,+ssse3,+sse4.1,+sse4.2,+popcnt,+avx,+avx2,+fma,+bmi,+bmi2,+lzcnt,+movbe,+f16c,+cx16"
 
 
-def _by_object(path):
-    """Instructions of a callgrind output per object: "kernels" (Numba's code, which valgrind sees
-    without a name), "python" (the interpreter), "numpy/scipy" and "other" (libc, LLVM, ...)."""
-    text = subprocess.run(["callgrind_annotate", "--inclusive=no", "--threshold=100", str(path)],
+def _by_object(path, event="Ir"):
+    """Instructions (``event`` "Ir"; "Ge": atomic instructions, see ``--atomics``) of a callgrind output
+    per object: "kernels" (Numba's code, which valgrind sees without a name), "python" (the
+    interpreter), "numpy/scipy" and "other" (libc, LLVM, ...)."""
+    text = subprocess.run(["callgrind_annotate", "--inclusive=no", "--threshold=100", f"--show={event}", str(path)],
                           capture_output=True, text=True, check=True).stdout
     parts = dict.fromkeys(PARTS, 0)
     for line in text.splitlines():
@@ -127,17 +134,18 @@ PARTS = ("kernels", "python", "numpy/scipy", "other")
 
 
 def _count(package, args, calls):
-    """Instructions executed by a child that makes ``calls`` extra calls: {part: count}."""
+    """Instructions executed by a child that makes ``calls`` extra calls: {"Ir": {part: count}}, and with
+    ``--atomics`` the atomic instructions too ({"Ge": {part: count}})."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "callgrind.out"
-        cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
+        cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", f"--collect-bus={'yes' if args.atomics else 'no'}",
                sys.executable, str(HERE), "--child", "--package", str(package), "--integration",
                args.integration, "--distort", str(args.distort), "--n", str(args.n), "--fibres",
                str(args.fibres), "--element", args.element, "--stage", args.stage, "--child-calls", str(calls)]
         done = subprocess.run(cmd, env=_environment(package, args), capture_output=True, text=True)
         if done.returncode != 0:
             raise SystemExit(f"child failed ({package}, {calls} calls):\n{done.stderr[-2000:]}")
-        return _by_object(out)
+        return {event: _by_object(out, event) for event in (("Ir", "Ge") if args.atomics else ("Ir",))}
 
 
 def main(argv=None):
@@ -158,6 +166,9 @@ def main(argv=None):
     parser.add_argument("--calls", type=int, default=3, help="counted calls (default 3)")
     parser.add_argument("--cache", default=str(Path(tempfile.gettempdir()) / "mortar1d3d-callgrind-cache"),
                         help="kernel cache of the children (default: in the temporary directory)")
+    parser.add_argument("--atomics", action="store_true",
+                        help="count the executed atomic (lock-prefixed) instructions too: callgrind's global "
+                             "bus events, e.g. the reference counting of arrays passed to compiled calls")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--child-calls", type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -173,25 +184,32 @@ def main(argv=None):
                         str(args.fibres), "--element", args.element], check=True, env=_environment(package, args))
         base = _count(package, args, 0)
         more = _count(package, args, args.calls)
-        if any(more[k] < base[k] for k in ("kernels",)) or sum(more.values()) < sum(base.values()):
+        if any(more["Ir"][k] < base["Ir"][k] for k in ("kernels",)) or sum(more["Ir"].values()) < sum(base["Ir"].values()):
             # a kernel the first run under valgrind did not find in the cache was compiled there
             # (seen right after a checkout's cache was filled); both counts again, now warm
             print(f"{package}: the counted runs compiled a kernel; counting again", flush=True)
             base = _count(package, args, 0)
             more = _count(package, args, args.calls)
-            if sum(more.values()) < sum(base.values()):
+            if sum(more["Ir"].values()) < sum(base["Ir"].values()):
                 raise SystemExit(f"{package}: counts still inconsistent (compilation inside the counted runs?)")
-        per_call = {k: (more[k] - base[k]) / args.calls for k in PARTS}
+        per_call = {event: {k: (more[event][k] - base[event][k]) / args.calls for k in PARTS} for event in base}
         counts.append(per_call)
         what = f"{args.integration} call" if args.stage == "call" else f"'{args.stage}' stage"
         scene = ("NURBS pipe, 40 helices" if args.element == "nurbs27"
                  else f"fibre_cube({args.n}, {args.fibres}, {args.n}), {args.element}, distort {args.distort}")
-        print(f"{package}: {sum(per_call.values()):.4e} instructions per {what} ({scene}, n_gauss 4, 1 thread): "
-              + ", ".join(f"{k} {v:.4e}" for k, v in per_call.items()), flush=True)
+        for event, name in (("Ir", "instructions"), ("Ge", "atomic instructions")):
+            if event in per_call:
+                print(f"{package}: {sum(per_call[event].values()):.4e} {name} per {what} ({scene}, n_gauss 4, "
+                      "1 thread): " + ", ".join(f"{k} {v:.4e}" for k, v in per_call[event].items()), flush=True)
     for package, c in zip(packages[1:], counts[1:]):
-        print(f"{package.name} / {packages[0].name}: total {sum(c.values()) / sum(counts[0].values()):.4f}, "
-              + ", ".join(f"{k} {c[k] / counts[0][k]:.4f}" for k in PARTS if counts[0][k]))
-
+        for event, name in (("Ir", "instructions"), ("Ge", "atomic instructions")):
+            if event not in c:
+                continue
+            first, this = counts[0][event], c[event]
+            total = sum(first.values())
+            print(f"{package.name} / {packages[0].name}, {name}: total "
+                  + (f"{sum(this.values()) / total:.4f}" if total else "-") + ", "
+                  + ", ".join(f"{k} {this[k] / first[k]:.4f}" for k in PARTS if first[k]))
 
 if __name__ == "__main__":
     main()

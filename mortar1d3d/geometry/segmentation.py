@@ -28,6 +28,7 @@ search points, or bisection of the owner along η), for the one fallback loop of
 import numpy as np
 from numba import prange
 
+from .._borrowed import borrowed
 from .._config import MERGE_TOL, PARAMETER_TOL, SEGMENT_OWNER_TOL, TOUCH_TOL, njit, njit_parallel
 from .._memory import carve
 from .._unlinked import unlinked
@@ -229,6 +230,14 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
                           beam_code, Q, lengths, beam_origin, beam_boxes, straight, out_eta, out_face, out_count,
                           no_face, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok, trial, N, dN, a, stack, xi_s,
                           dxi_s, g, dg, z):
+    # the caller holds every array for this call: the calls below pass them without reference
+    # counting (see mortar1d3d._borrowed)
+    (pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear, hull, Q, lengths, beam_origin,
+        beam_boxes, straight, out_eta, out_face, out_count, no_face, overflow, X, xi, S, C, reach, eta_s, H, dH,
+        start, ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z) = borrowed(pair_beam, pair_solid, codes, conn,
+        points, solid_origin, solid_h, linear, hull, Q, lengths, beam_origin, beam_boxes, straight, out_eta,
+        out_face, out_count, no_face, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok, trial, N, dN, a, stack,
+        xi_s, dxi_s, g, dg, z)
     for p in range(begin, stop):
         e = pair_beam[p]
         s = pair_solid[p]
@@ -495,6 +504,14 @@ def _tile_chunk(begin, stop, pair_offsets, pair_solid, crossing_eta, crossing_fa
                 points, solid_origin, solid_h, solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin,
                 seg_offsets, seg_solid, seg_start, seg_end, seg_count, cuts, reach, H, dH, touch, owners, X, xi, trial,
                 N, dN, a, stack):
+    # the caller holds every array for this call: the calls below pass them without reference
+    # counting (see mortar1d3d._borrowed)
+    (pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes, conn, points, solid_origin,
+        solid_h, solid_boxes, hull, linear, Q, lengths, beam_origin, seg_offsets, seg_solid, seg_start, seg_end,
+        seg_count, cuts, reach, H, dH, touch, owners, X, xi, trial, N, dN, a, stack) = borrowed(pair_offsets,
+        pair_solid, crossing_eta, crossing_face, crossing_count, codes, conn, points, solid_origin, solid_h,
+        solid_boxes, hull, linear, Q, lengths, beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count,
+        cuts, reach, H, dH, touch, owners, X, xi, trial, N, dN, a, stack)
     for e in range(begin, stop):
         p0 = pair_offsets[e]
         p1 = pair_offsets[e + 1]
@@ -671,6 +688,13 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
 def _check_tiling_chunk(begin, stop, seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, pair_solid,
                         codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear, beam_code, Q, lengths,
                         beam_origin, certain, bad, H, dH, loose, X, xi, trial, N, dN, a_buf, stack):
+    # the caller holds every array for this call: the calls below pass them without reference
+    # counting (see mortar1d3d._borrowed)
+    (seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, pair_solid, codes, conn, points,
+        solid_origin, solid_h, solid_boxes, hull, linear, Q, lengths, beam_origin, certain, bad, H, dH, X, xi,
+        trial, N, dN, a_buf, stack) = borrowed(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets,
+        pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear, Q, lengths, beam_origin,
+        certain, bad, H, dH, X, xi, trial, N, dN, a_buf, stack)
     for e in range(begin, stop):
         p0 = pair_offsets[e]
         p1 = pair_offsets[e + 1]

@@ -18,6 +18,7 @@ the projection. Only the set of points differs (docs/conventions.md §1):
 import numpy as np
 from numba import literal_unroll, prange
 
+from .._borrowed import borrowed
 from .._config import PARAMETER_TOL, njit, njit_parallel
 from .._memory import carve
 from .._unlinked import unlinked
@@ -62,6 +63,12 @@ def _segment_points_chunk(beam_code, begin, stop, seg_beam, seg_solid, seg_start
                           codes, conn, points, solid_origin, solid_h, linear, Q, lengths, beam_origin, eta,
                           xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack):
     # segments begin..stop; the beam type is chosen once here (see search._beam_frames_chunk)
+    # the caller holds every array for this call: the calls per point below pass them without
+    # reference counting (see mortar1d3d._borrowed)
+    (seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, codes, conn, points, solid_origin, solid_h, linear,
+     Q, lengths, beam_origin, eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack) = borrowed(
+        seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, codes, conn, points, solid_origin, solid_h, linear,
+        Q, lengths, beam_origin, eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack)
     loose = 1e3 * PARAMETER_TOL
     for kb in literal_unroll(BEAM_CODES):
         if kb == beam_code:
@@ -139,6 +146,13 @@ def _element_points_chunk(beam_code, begin, stop, pair_offsets, pair_solid, gx, 
                           solid_origin, solid_h, solid_boxes, hull, linear, Q, lengths, beam_origin, beam, owner,
                           eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack):
     # beam elements begin..stop; the beam type is chosen once here (see search._beam_frames_chunk)
+    # the caller holds every array for this call: the calls per point below pass them without
+    # reference counting (see mortar1d3d._borrowed)
+    (pair_offsets, pair_solid, gx, gw, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear, Q,
+     lengths, beam_origin, beam, owner, eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a,
+     stack) = borrowed(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid_origin, solid_h, solid_boxes, hull,
+                       linear, Q, lengths, beam_origin, beam, owner, eta, xi, weight, position, status, X, N, dN, H,
+                       dH, x, trial, a, stack)
     n_gauss = gx.shape[0]
     tol = PARAMETER_TOL
     for kb in literal_unroll(BEAM_CODES):
