@@ -262,20 +262,30 @@ def certified_margin(code, X, L, a):
     (:func:`.rational.normalise_coefficients`, :func:`.rational.rational_curvature_bound`).
     """
     if solid.RATIONAL[code]:
-        rational_coefficients(code, X, a)
-        x0, x1, x2 = centre_point(code, a)
-        normalise_coefficients(code, a, L, x0, x1, x2, a)
-        c0, c1, c2 = solid.CENTRE[code, 0], solid.CENTRE[code, 1], solid.CENTRE[code, 2]
-        for delta in _CERTIFIED_MARGINS:
-            reach = solid.RADIUS[code] + delta
-            if rational_curvature_bound(code, a, c0, c1, c2, reach) * reach < 1.0:
-                return delta
-        return -1.0
+        return _rational_margin_call(code, X, L, a)
     solid.monomial_coefficients(code, X, a)
     for delta in _CERTIFIED_MARGINS:
         if injectivity_bound(code, a, L, solid.RADIUS[code] + delta) < 1.0:
             return delta
     return -1.0
+
+
+@njit
+def _rational_margin(code, X, L, a):
+    """:func:`certified_margin` of a rational type."""
+    rational_coefficients(code, X, a)
+    x0, x1, x2 = centre_point(code, a)
+    normalise_coefficients(code, a, L, x0, x1, x2, a)
+    c0, c1, c2 = solid.CENTRE[code, 0], solid.CENTRE[code, 1], solid.CENTRE[code, 2]
+    for delta in _CERTIFIED_MARGINS:
+        reach = solid.RADIUS[code] + delta
+        if rational_curvature_bound(code, a, c0, c1, c2, reach) * reach < 1.0:
+            return delta
+    return -1.0
+
+
+#: lazily through a symbol (once per element): compiled when a scene first has a rational element
+_rational_margin_call = unlinked(_rational_margin, returns=types.float64)
 
 
 @njit

@@ -485,10 +485,12 @@ def _solid_hulls_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, 
                 X[a, i] = points[conn[s, a], i] - solid_origin[s, i]
                 big = max(big, abs(points[conn[s, a], i]))
         # round-off of the coordinates far from the origin (the kernels shift points between frames)
-        hull_planes(code, X, C, margin * solid_h[s] * spread + _SHIFT_ROUND_OFF * big, hull[s])
+        _hull_planes_call(code, X, C, margin * solid_h[s] * spread + _SHIFT_ROUND_OFF * big, hull[s])
 
 
 _solid_hulls_chunk_call = unlinked(_solid_hulls_chunk)
+#: lazily through a symbol (once per element): a mesh of types without hull planes (hex8) never compiles it
+_hull_planes_call = unlinked(hull_planes, returns=types.none)
 
 
 def solid_hulls(points, conn, codes, solid_origin, solid_h, margin=HULL_MARGIN):
