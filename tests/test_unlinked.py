@@ -335,3 +335,39 @@ def test_a_lazy_callee_of_the_wrong_type_raises_instead_of_being_called(tmp_path
     out = _lazy_run(tmp_path, 2.0, 0, "wrong")
     assert "could not be compiled" in out["raised"]
     assert len(out["failed"]) == 1 and "returns float64" in out["failed"][0]
+
+
+SCENE_RUN = textwrap.dedent("""
+    import json
+    import mortar1d3d as m
+    from mortar1d3d.elements.solid import registry
+    from mortar1d3d.elements.beam import registry as beams
+    from mortar1d3d.geometry import projection, search
+    from mortar1d3d.integration import points
+    b, s = m.generate.fibre_cube(3, 2, 3)
+    m.assemble_mortar(b, s, integration="element")
+    print(json.dumps(dict(
+        solid_types={t.DESCRIPTOR.name: len(t.shape.signatures) + len(t.deriv.signatures)
+                     for t in registry.SOLID_TYPES},
+        other=[len(f.signatures) for f in (projection._map_other, projection._jacobian_other,
+                                           projection.locate_rare, search.hull_planes)],
+        beam_type=b.element_type.code,
+        chunks=[sorted(str(sig[0]) for sig in f.signatures)
+                for f in (points._element_points_chunk, search._beam_frames_chunk)])))
+""")
+
+
+def test_a_hex8_element_based_call_compiles_only_what_it_runs():
+    """The first element-based call of a hex8 scene with Hermite beams (the kernel cache of the test
+    run, cold or warm) neither compiles nor loads another solid type's kernels, their map and
+    Jacobian, the rare path of locating a point or the hull planes (hex8 has none), and its beam
+    loops exist for its beam type only: all are called lazily (``unlinked(..., returns=...)``)."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    done = subprocess.run([sys.executable, "-c", SCENE_RUN], env=env, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    out = json.loads(done.stdout.strip().splitlines()[-1])
+    # hex8's kernels are linked into the dispatch (compiled with it on a cold cache, not loaded on a warm one)
+    others = {name: n for name, n in out["solid_types"].items() if name != "hexahedron"}
+    assert len(others) == len(out["solid_types"]) - 1 and others == {name: 0 for name in others}
+    assert out["other"] == [0, 0, 0, 0]
+    assert out["chunks"] == [[f"Literal[int]({out['beam_type']})"]] * 2
