@@ -297,19 +297,25 @@ def unlinked(dispatcher, returns=None, cases=None):
 
 
 def _load_lazy(context, builder, fnty, symbol):
-    """The entry point in the slot ``symbol``; the resolver is called while it is empty, and the
-    caller raises if it stays empty (the callee could not be compiled)."""
+    """The entry point in the slot ``symbol`` (one load and test once the slot is filled); the
+    resolver is called while it is empty, and the caller raises if it stays empty (the callee could
+    not be compiled)."""
     module = builder.module
     slot = module.globals.get(symbol)
     if slot is None:
         slot = ir.GlobalVariable(module, fnty.as_pointer(), symbol)
         slot.linkage = "external"
-    fn = builder.load(slot)
-    with builder.if_then(cgutils.is_null(builder, fn), likely=False):
+    loaded = builder.load(slot)
+    filled = builder.block
+    with builder.if_then(cgutils.is_null(builder, loaded), likely=False):
         resolve = cgutils.get_or_insert_function(module, ir.FunctionType(ir.VoidType(), [cgutils.voidptr_t]), _RESOLVE)
         builder.call(resolve, [builder.bitcast(slot, cgutils.voidptr_t)])
-    fn = builder.load(slot)
-    with cgutils.if_unlikely(builder, cgutils.is_null(builder, fn)):
-        context.call_conv.return_user_exc(builder, RuntimeError, ("mortar1d3d: a lazily compiled kernel could not be "
-                                                                  "compiled (see mortar1d3d._unlinked.FAILED)",))
+        resolved = builder.load(slot)
+        with cgutils.if_unlikely(builder, cgutils.is_null(builder, resolved)):
+            context.call_conv.return_user_exc(builder, RuntimeError, ("mortar1d3d: a lazily compiled kernel could "
+                                                                      "not be compiled (see mortar1d3d._unlinked.FAILED)",))
+        after = builder.block
+    fn = builder.phi(loaded.type)
+    fn.add_incoming(loaded, filled)
+    fn.add_incoming(resolved, after)
     return fn
