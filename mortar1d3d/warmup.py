@@ -7,10 +7,13 @@ def warmup(verbose=False):
     assembly, CSR, point projection) and the physics (solid, torsion-free beam, truss, coupling, pressure).
 
     Kernels dispatch on integer element codes, so small scenes compile everything that later
-    scenes of any element type use. Returns the elapsed time in seconds.
+    scenes of any element type use, except what the kernels call lazily (the other element types'
+    functions, the rare path of locating a point: :mod:`mortar1d3d._unlinked`), compiled last.
+    Returns the elapsed time in seconds.
     """
     from . import generate
     from ._config import announce_compilation
+    from ._unlinked import compile_lazy
     from .model import solve
     from .geometry.projection import project_points
     from .mortar.assemble import assemble_mortar
@@ -32,6 +35,7 @@ def warmup(verbose=False):
                     dirichlet=[{"on": "solid:x_min"}],
                     load=[{"type": "pressure", "on": "solid:z_max", "value": 1e-3}],
                     analysis={"steps": 1}))
+    compile_lazy()
     elapsed = time.perf_counter() - t0
     if verbose:
         print(f"mortar1d3d kernels ready in {elapsed:.2f} s (engine {t1 - t0:.2f} s, physics {elapsed - (t1 - t0):.2f} s)")

@@ -11,6 +11,7 @@ import sys
 import textwrap
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -176,13 +177,14 @@ MAP_RUN = textwrap.dedent("""
     ir = "".join(pr.store_residual.inspect_llvm().values())
     out["defined"] = sorted(set(re.findall(r"define [^@]*@\\"?([^\\"(]*)", ir)))
     out["declared"] = sorted(set(re.findall(r"declare [^@]*@\\"?([^\\"(]*)", ir)))
+    out["slots"] = sorted(set(re.findall(r"@\\"?([^\\" ]*)\\"? = external global", ir)))
     print(json.dumps(out))
 """)
 
 
 def test_the_other_types_map_is_called_through_a_symbol(tmp_path):
     """``projection.map_point`` (inlined into every function evaluating the map) writes out hex8 and
-    calls every other type's map through a symbol: the caller's module declares it, defines none of
+    calls every other type's map through a symbol: the caller's module holds its slot, defines none of
     the other types' code, and the map is still x(ξ) of the element (here x = 2ξ + 0.1 ξ0 ξ1 e_2,
     which both hex8 and hex27 interpolate exactly)."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(ROOT))
@@ -191,6 +193,181 @@ def test_the_other_types_map_is_called_through_a_symbol(tmp_path):
     out = json.loads(done.stdout.strip().splitlines()[-1])
     for name in ("mortar1d3d.elements.solid.hex8", "mortar1d3d.elements.solid.hex27"):
         assert out[name] == pytest.approx([0.6, -0.4, 0.8 + 0.1 * 0.3 * -0.2], abs=1e-14)
-    assert any("_map_other" in name for name in out["declared"])
+    # lazily: the caller holds the slot of the other types' map, not even a declaration of its code
+    assert any("_map_other" in name for name in out["slots"])
     assert not any("_map_other" in name or "hex27" in name or "tet10" in name or "nurbs27" in name
                    for name in out["defined"])
+
+
+LAZY = textwrap.dedent("""
+    import numpy as np
+    from numba import prange, types
+    from mortar1d3d._config import njit, njit_parallel
+    from mortar1d3d._unlinked import unlinked
+
+    @njit
+    def rare(x, out):
+        out[0] = np.cos(x) * 3.0
+        return out[0] + 1.0
+
+    rare_call = unlinked(rare, returns=types.float64)
+
+    @njit_parallel
+    def kernel(a, out, limit):
+        total = np.zeros(a.shape[0])
+        for i in prange(a.shape[0]):
+            if a[i] > limit:
+                total[i] = rare_call(a[i], out[i:i + 1])
+            else:
+                total[i] = a[i]
+        return total
+
+    @njit
+    def by_type(k, x, out):
+        # k is a literal: one compiled version per value in ``cases``
+        if k == 0:
+            out[0] = x + 1.0
+        elif k == 1:
+            out[0] = x * 2.0
+        else:
+            out[0] = x - 3.0
+
+    by_type_call = unlinked(by_type, returns=types.none, cases=(0, 1, 2))
+
+    @njit
+    def typed(k, x):
+        out = np.zeros(1)
+        by_type_call(k, x, out)
+        return out[0]
+
+    @njit
+    def wrong(x):
+        return x
+
+    wrong_call = unlinked(wrong, returns=types.int64)   # declared int64, returns float64
+
+    @njit
+    def calls_wrong(x):
+        return wrong_call(x)
+""")
+
+LAZY_RUN = textwrap.dedent("""
+    import json, sys, warnings
+    warnings.simplefilter("error")
+    import numpy as np
+    import lazy_probe as p
+    from mortar1d3d import _unlinked
+    a = np.linspace(0.0, 1.0, 101)
+    out = np.zeros_like(a)
+    limit, k, then = float(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
+    total = p.kernel(a, out, limit)
+    value = p.typed(k, 0.5)
+    result = dict(total=total.tolist(), value=value,
+                  kernel_misses=sum(p.kernel.stats.cache_misses.values()),
+                  rare_signatures=len(p.rare.signatures),
+                  rare_misses=sum(p.rare.stats.cache_misses.values()),
+                  by_type=sorted(str(s[0]) for s in p.by_type.signatures),
+                  by_type_misses=sum(p.by_type.stats.cache_misses.values()))
+    if then == "compile_lazy":
+        result["compiled"] = _unlinked.compile_lazy()
+        result["rare_signatures_after"] = len(p.rare.signatures)
+        result["by_type_after"] = len(p.by_type.signatures)
+    if then == "wrong":
+        try:
+            p.calls_wrong(1.0)
+        except RuntimeError as error:
+            result["raised"] = str(error)
+        result["failed"] = list(_unlinked.FAILED.values())
+    print(json.dumps(result))
+""")
+
+
+def _lazy_run(tmp_path, limit, k, then="-"):
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
+               PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]))
+    done = subprocess.run([sys.executable, "-c", LAZY_RUN, str(limit), str(k), then], env=env, cwd=tmp_path,
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def test_a_lazy_callee_compiles_at_its_first_call_only(tmp_path):
+    """``unlinked(f, returns=...)``: compiling the caller does not compile ``f``, nor does loading the
+    cached caller in another process; the first call (from a prange thread) compiles it, a later
+    process loads it; the results are ``f``'s (the same operations, the same bits)."""
+    (tmp_path / "lazy_probe.py").write_text(LAZY)
+    a = np.linspace(0.0, 1.0, 101)
+    never = _lazy_run(tmp_path, 2.0, 1)                # no point beyond 2: rare is never called
+    assert never["total"] == a.tolist()
+    assert (never["kernel_misses"], never["rare_signatures"]) == (1, 0)
+    again = _lazy_run(tmp_path, 2.0, 1)                # the kernel from the cache: rare still not loaded
+    assert (again["kernel_misses"], again["rare_signatures"]) == (0, 0)
+    called = _lazy_run(tmp_path, 0.5, 1)               # now some points take the rare path
+    expected = np.where(a > 0.5, np.cos(a) * 3.0 + 1.0, a)
+    assert called["total"] == expected.tolist()
+    assert (called["kernel_misses"], called["rare_signatures"], called["rare_misses"]) == (0, 1, 1)
+    loaded = _lazy_run(tmp_path, 0.5, 1)               # and from the cache in the next process
+    assert loaded["total"] == expected.tolist()
+    assert (loaded["rare_signatures"], loaded["rare_misses"]) == (1, 0)
+
+
+def test_lazy_cases_compile_one_version_per_value_used(tmp_path):
+    """``cases``: one version of the callee per value of its first argument, with that argument a
+    literal, compiled when the value is first met; :func:`compile_lazy` compiles the rest."""
+    (tmp_path / "lazy_probe.py").write_text(LAZY)
+    one = _lazy_run(tmp_path, 2.0, 1)
+    assert one["value"] == 1.0 and one["by_type"] == ["Literal[int](1)"] and one["by_type_misses"] == 1
+    again = _lazy_run(tmp_path, 2.0, 1)                # the literal version is cached like any other
+    assert again["value"] == 1.0 and again["by_type_misses"] == 0
+    two = _lazy_run(tmp_path, 2.0, 2)
+    assert two["value"] == -2.5 and two["by_type"] == ["Literal[int](2)"]
+    missing = _lazy_run(tmp_path, 2.0, 7)              # a value not listed: no call
+    assert missing["value"] == 0.0 and missing["by_type"] == []
+    everything = _lazy_run(tmp_path, 2.0, 0, "compile_lazy")
+    assert everything["value"] == 1.5 and everything["by_type"] == ["Literal[int](0)"]
+    # the rare callee and the two other cases: what the callers used in this process declare
+    assert everything["compiled"] == 3
+    assert (everything["rare_signatures_after"], everything["by_type_after"]) == (1, 3)
+
+
+def test_a_lazy_callee_of_the_wrong_type_raises_instead_of_being_called(tmp_path):
+    (tmp_path / "lazy_probe.py").write_text(LAZY)
+    out = _lazy_run(tmp_path, 2.0, 0, "wrong")
+    assert "could not be compiled" in out["raised"]
+    assert len(out["failed"]) == 1 and "returns float64" in out["failed"][0]
+
+
+SCENE_RUN = textwrap.dedent("""
+    import json
+    import mortar1d3d as m
+    from mortar1d3d.elements.solid import registry
+    from mortar1d3d.elements.beam import registry as beams
+    from mortar1d3d.geometry import projection, search
+    from mortar1d3d.integration import points
+    b, s = m.generate.fibre_cube(3, 2, 3)
+    m.assemble_mortar(b, s, integration="element")
+    print(json.dumps(dict(
+        solid_types={t.DESCRIPTOR.name: len(t.shape.signatures) + len(t.deriv.signatures)
+                     for t in registry.SOLID_TYPES},
+        other=[len(f.signatures) for f in (projection._map_other, projection._jacobian_other,
+                                           projection.locate_rare, search.hull_planes)],
+        beam_type=b.element_type.code,
+        chunks=[sorted(str(sig[0]) for sig in f.signatures)
+                for f in (points._element_points_chunk, search._beam_frames_chunk)])))
+""")
+
+
+def test_a_hex8_element_based_call_compiles_only_what_it_runs():
+    """The first element-based call of a hex8 scene with Hermite beams (the kernel cache of the test
+    run, cold or warm) neither compiles nor loads another solid type's kernels, their map and
+    Jacobian, the rare path of locating a point or the hull planes (hex8 has none), and its beam
+    loops exist for its beam type only: all are called lazily (``unlinked(..., returns=...)``)."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    done = subprocess.run([sys.executable, "-c", SCENE_RUN], env=env, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    out = json.loads(done.stdout.strip().splitlines()[-1])
+    # hex8's kernels are linked into the dispatch (compiled with it on a cold cache, not loaded on a warm one)
+    others = {name: n for name, n in out["solid_types"].items() if name != "hexahedron"}
+    assert len(others) == len(out["solid_types"]) - 1 and others == {name: 0 for name in others}
+    assert out["other"] == [0, 0, 0, 0]
+    assert out["chunks"] == [[f"Literal[int]({out['beam_type']})"]] * 2

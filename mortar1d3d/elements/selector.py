@@ -19,7 +19,7 @@ from numba.extending import intrinsic
 from .._unlinked import unlinked
 
 
-def kernel_selector(registry, linked=None):
+def kernel_selector(registry, linked=None, returns=None):
     """A stand-in ``select(k, name)`` for use in njit code: the kernel ``name`` of ``registry[k]``.
 
     An intrinsic, not an ``@overload``: its value is the kernel itself (a dispatcher, which has no
@@ -31,6 +31,10 @@ def kernel_selector(registry, linked=None):
     :func:`mortar1d3d._unlinked.unlinked`: compiled once on their own, each caller holding a
     declaration. A scene of one element type then does not have the other types' code optimised
     again inside every kernel that dispatches over the registry.
+
+    ``returns``: the kernels' return types by name (``{"shape": types.none, ...}``); the unlinked
+    kernels named there are called lazily (``unlinked(kernel, returns=...)``): compiled at their
+    first call, so a scene compiles only the kernels of the types it has.
     """
     wrappers = {}
 
@@ -39,7 +43,7 @@ def kernel_selector(registry, linked=None):
         if linked is None or code in linked:
             return kernel
         if (code, name) not in wrappers:
-            wrappers[code, name] = unlinked(kernel)
+            wrappers[code, name] = unlinked(kernel, returns=(returns or {}).get(name))
             typingctx.refresh()   # the new intrinsic registered itself with the typing registry
         return wrappers[code, name]
 

@@ -24,9 +24,9 @@ def beam_point(code, Q, length, s0, s1, s2, eta, H, dH):
 
 @njit_inline
 def beam_point_of(k, Q, length, s0, s1, s2, eta, H, dH):
-    """:func:`beam_point` of the centreline type ``k`` given as a literal (inside a
-    ``literal_unroll`` loop over ``beam_functions.CODES``): its kernels are called directly,
-    without the registry's dispatch per point."""
+    """:func:`beam_point` of the centreline type ``k`` given as a literal (a function compiled per
+    beam type, e.g. through ``unlinked(..., cases=beam_functions.CODES)``, or a ``literal_unroll``
+    loop over the codes): its kernels are called directly, without the registry's dispatch per point."""
     beam_kernel(k, "shape")(eta, length, H)
     beam_kernel(k, "deriv")(eta, length, dH)
     return _combine(beam_functions.N_FUNCTIONS[k], Q, s0, s1, s2, H, dH)

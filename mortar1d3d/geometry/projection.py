@@ -6,7 +6,7 @@ distance from the global origin (docs/conventions.md §2: tolerances relative to
 All buffers come from the caller; nothing here allocates.
 """
 import numpy as np
-from numba import prange
+from numba import prange, types
 
 from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit, njit_inline, njit_parallel
 from .._schedule import claim, new_claims, workers
@@ -88,8 +88,9 @@ def _map_other(code, X, xi, N):
 
 #: called through a symbol (see mortar1d3d._unlinked): every function that evaluates the map holds a
 #: declaration, not the other types' shape functions, which LLVM would otherwise optimise again in
-#: each of them and in each of their callers
-_map_other_call = unlinked(_map_other)
+#: each of them and in each of their callers; lazily: compiled at its first call, so never for a
+#: scene of hex8 elements only
+_map_other_call = unlinked(_map_other, returns=types.UniTuple(types.float64, 3))
 
 
 @njit_inline
@@ -138,8 +139,8 @@ def _jacobian_other(code, X, xi, N, dN):
     return _gradient_sum(X, dN, solid.n_nodes(code))
 
 
-#: called through a symbol, as :func:`_map_other`
-_jacobian_other_call = unlinked(_jacobian_other)
+#: called through a symbol, lazily, as :func:`_map_other`
+_jacobian_other_call = unlinked(_jacobian_other, returns=types.UniTuple(types.float64, 9))
 
 
 @njit
@@ -262,15 +263,7 @@ def certified_margin(code, X, L, a):
     :func:`.rational.rational_curvature_bound` about the centre, summed by degree).
     """
     if solid.RATIONAL[code]:
-        rational_coefficients(code, X, a)
-        x0, x1, x2 = centre_point(code, a)
-        normalise_coefficients(code, a, L, x0, x1, x2, a)
-        sums = degree_sums(code, a)
-        for delta in _CERTIFIED_MARGINS:
-            reach = solid.RADIUS[code] + delta
-            if centre_curvature_bound(sums, reach) * reach < 1.0:
-                return delta
-        return -1.0
+        return _rational_margin_call(code, X, L, a)
     solid.monomial_coefficients(code, X, a)
     for delta in _CERTIFIED_MARGINS:
         if injectivity_bound(code, a, L, solid.RADIUS[code] + delta) < 1.0:
@@ -284,6 +277,24 @@ _certified_margin_call = unlinked(certified_margin)
 #: ``table[s, 4, 1]`` of an element whose certificate :func:`linear_maps` left to its first use (see
 #: :func:`certified_outside`)
 PENDING_CERTIFICATE = -2.0
+
+
+@njit
+def _rational_margin(code, X, L, a):
+    """:func:`certified_margin` of a rational type."""
+    rational_coefficients(code, X, a)
+    x0, x1, x2 = centre_point(code, a)
+    normalise_coefficients(code, a, L, x0, x1, x2, a)
+    sums = degree_sums(code, a)
+    for delta in _CERTIFIED_MARGINS:
+        reach = solid.RADIUS[code] + delta
+        if centre_curvature_bound(sums, reach) * reach < 1.0:
+            return delta
+    return -1.0
+
+
+#: lazily through a symbol (once per element): compiled when a scene first has a rational element
+_rational_margin_call = unlinked(_rational_margin, returns=types.float64)
 
 
 @njit
@@ -500,8 +511,9 @@ def locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, stac
     return status
 
 
-#: called through a symbol, not compiled into every loop that inlines locate_point (see mortar1d3d._unlinked)
-_locate_rare_call = unlinked(locate_rare)
+#: called through a symbol, not compiled into every loop that inlines locate_point (see mortar1d3d._unlinked),
+#: and lazily: compiled when a point first needs it
+_locate_rare_call = unlinked(locate_rare, returns=types.int64)
 
 
 @njit
@@ -530,12 +542,16 @@ def _locate_rare(code, X, p0, p1, p2, h, tol, table, s, xi, trial, N, dN, a, sta
         if certified_outside(code, table, s, xi, X, a):
             return OUTSIDE
     o0, o1, o2 = xi[0], xi[1], xi[2]
-    if search and search_inside(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN) == INSIDE:
+    if search and _search_inside_call(code, X, p0, p1, p2, h, tol, a, stack, xi, trial, N, dN) == INSIDE:
         return INSIDE
     if converged:
         xi[0], xi[1], xi[2] = o0, o1, o2
         return OUTSIDE
     return NOT_CONVERGED
+
+
+#: lazily through a symbol: :func:`locate_outside` (search False) never calls it
+_search_inside_call = unlinked(search_inside, returns=types.int64)
 
 
 @njit

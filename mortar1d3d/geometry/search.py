@@ -12,7 +12,7 @@ faces as well, and :func:`hull_pairs` drops the pairs those planes separate, the
 :func:`in_hull` makes per point.
 """
 import numpy as np
-from numba import literal_unroll, prange
+from numba import prange, types
 
 from .._config import PARAMETER_TOL, njit, njit_parallel, njit_inline
 from .._memory import carve
@@ -139,25 +139,25 @@ def _beam_frames(positions, tangents, elements, lengths, code, padding, Q, origi
 
 
 @njit
-def _beam_frames_chunk(code, begin, stop, positions, tangents, elements, lengths, padding, Q, origin, boxes, size,
+def _beam_frames_chunk(k, begin, stop, positions, tangents, elements, lengths, padding, Q, origin, boxes, size,
                        zero, ctrl, global_q):
-    # the beam type chosen once per claimed chunk, not per element: the loop below then calls its
-    # kernels directly (inlined). The choice stays out of the prange body, where a literal_unroll loop
-    # would make Numba compile the parallel loop serially.
-    for k in literal_unroll(_BEAM_CODES):
-        if k == code:
-            for e in range(begin, stop):
-                nodes = elements[e]
-                for i in range(3):
-                    origin[e, i] = positions[nodes[0], i]
-                _beam_kernel(k, "coefficients")(positions, tangents, nodes, origin[e], Q[e])
-                _beam_kernel(k, "coefficients")(positions, tangents, nodes, zero, global_q)
-                _hull_box(ctrl, _beam_kernel(k, "control_points")(global_q, lengths[e], ctrl), boxes[e])
-                size[e] = _finish_box(boxes[e], padding)
+    # k, the beam type, is a literal: this function is compiled per type (``cases`` of its call below),
+    # each calling its type's kernels directly (inlined), and only for the types a scene uses. The
+    # choice is made by the call, not by a literal_unroll loop in the prange body (which would make
+    # Numba compile the parallel loop serially).
+    for e in range(begin, stop):
+        nodes = elements[e]
+        for i in range(3):
+            origin[e, i] = positions[nodes[0], i]
+        _beam_kernel(k, "coefficients")(positions, tangents, nodes, origin[e], Q[e])
+        _beam_kernel(k, "coefficients")(positions, tangents, nodes, zero, global_q)
+        _hull_box(ctrl, _beam_kernel(k, "control_points")(global_q, lengths[e], ctrl), boxes[e])
+        size[e] = _finish_box(boxes[e], padding)
 
 
-#: called once per chunk through a symbol, not compiled into the kernel again (see mortar1d3d._unlinked)
-_beam_frames_chunk_call = unlinked(_beam_frames_chunk)
+#: called once per chunk through a symbol, not compiled into the kernel again, and compiled per beam type
+#: when a scene first uses it (see mortar1d3d._unlinked)
+_beam_frames_chunk_call = unlinked(_beam_frames_chunk, returns=types.none, cases=_BEAM_CODES)
 
 
 @njit
@@ -485,10 +485,12 @@ def _solid_hulls_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, 
                 X[a, i] = points[conn[s, a], i] - solid_origin[s, i]
                 big = max(big, abs(points[conn[s, a], i]))
         # round-off of the coordinates far from the origin (the kernels shift points between frames)
-        hull_planes(code, X, C, margin * solid_h[s] * spread + _SHIFT_ROUND_OFF * big, hull[s])
+        _hull_planes_call(code, X, C, margin * solid_h[s] * spread + _SHIFT_ROUND_OFF * big, hull[s])
 
 
 _solid_hulls_chunk_call = unlinked(_solid_hulls_chunk)
+#: lazily through a symbol (once per element): a mesh of types without hull planes (hex8) never compiles it
+_hull_planes_call = unlinked(hull_planes, returns=types.none)
 
 
 def solid_hulls(points, conn, codes, solid_origin, solid_h, margin=HULL_MARGIN):

@@ -16,7 +16,7 @@ the projection. Only the set of points differs (docs/conventions.md §1):
   the integrand is a polynomial (:func:`exact_rule_counts`).
 """
 import numpy as np
-from numba import literal_unroll, prange
+from numba import prange, types
 
 from .._borrowed import borrowed
 from .._config import PARAMETER_TOL, njit, njit_parallel
@@ -59,10 +59,10 @@ def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
 
 
 @njit
-def _segment_points_chunk(beam_code, begin, stop, seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
+def _segment_points_chunk(kb, begin, stop, seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw,
                           codes, conn, points, solid_origin, solid_h, linear, Q, lengths, beam_origin, eta,
                           xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack):
-    # segments begin..stop; the beam type is chosen once here (see search._beam_frames_chunk)
+    # segments begin..stop of beam type kb, a literal: compiled per beam type (see search._beam_frames_chunk)
     # the caller holds every array for this call: the calls per point below pass them without
     # reference counting (see mortar1d3d._borrowed)
     (seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, codes, conn, points, solid_origin, solid_h, linear,
@@ -70,57 +70,56 @@ def _segment_points_chunk(beam_code, begin, stop, seg_beam, seg_solid, seg_start
         seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, codes, conn, points, solid_origin, solid_h, linear,
         Q, lengths, beam_origin, eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack)
     loose = 1e3 * PARAMETER_TOL
-    for kb in literal_unroll(BEAM_CODES):
-        if kb == beam_code:
-            for g in range(begin, stop):
-                e = seg_beam[g]
-                s = seg_solid[g]
-                code = codes[s]
-                n_gauss = seg_points[g + 1] - seg_points[g]
-                affine = is_affine(linear, s)
-                if not affine:
-                    load_element(points, conn, s, code, solid_origin, X)
-                s0 = beam_origin[e, 0] - solid_origin[s, 0]
-                s1 = beam_origin[e, 1] - solid_origin[s, 1]
-                s2 = beam_origin[e, 2] - solid_origin[s, 2]
-                half = 0.5 * (seg_end[g] - seg_start[g])
-                mid = 0.5 * (seg_end[g] + seg_start[g])
-                solid.centre(code, x)
-                for q in range(n_gauss):
-                    k = seg_points[g] + q
-                    eta[k] = mid + half * gx[n_gauss, q]
-                    r0, r1, r2, d0, d1, d2 = beam_point_of(kb, Q[e], lengths[e], s0, s1, s2, eta[k], H, dH)
-                    weight[k] = gw[n_gauss, q] * half * norm3(d0, d1, d2)
-                    position[k, 0] = r0 + solid_origin[s, 0]
-                    position[k, 1] = r1 + solid_origin[s, 1]
-                    position[k, 2] = r2 + solid_origin[s, 2]
-                    if affine:
-                        linear_parameters(code, linear, s, r0, r1, r2, x)
-                        xi[k, 0], xi[k, 1], xi[k, 2] = x[0], x[1], x[2]
-                        status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
-                        continue
-                    # start from the linearised estimate (closer than the previous point: fewer Newton
-                    # iterations); if that does not end inside, locate the point for certain (a curved
-                    # element's map folds outside it: Newton may take that branch)
-                    linear_parameters(code, linear, s, r0, r1, r2, x)
-                    if not (project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) == CONVERGED
-                            and solid.is_inside(code, x, loose)):
-                        status[k] = locate_point(code, X, r0, r1, r2, solid_h[s], loose, linear, s, x, trial, N, dN,
-                                                 a, stack)
-                        if status[k] == NOT_CONVERGED:
-                            solid.centre(code, x)
-                            xi[k, 0], xi[k, 1], xi[k, 2] = x[0], x[1], x[2]
-                            continue
-                    # the residual of x is in trial (project_point or locate_point left it there)
-                    polish_residual(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN)
+    for g in range(begin, stop):
+        e = seg_beam[g]
+        s = seg_solid[g]
+        code = codes[s]
+        n_gauss = seg_points[g + 1] - seg_points[g]
+        affine = is_affine(linear, s)
+        if not affine:
+            load_element(points, conn, s, code, solid_origin, X)
+        s0 = beam_origin[e, 0] - solid_origin[s, 0]
+        s1 = beam_origin[e, 1] - solid_origin[s, 1]
+        s2 = beam_origin[e, 2] - solid_origin[s, 2]
+        half = 0.5 * (seg_end[g] - seg_start[g])
+        mid = 0.5 * (seg_end[g] + seg_start[g])
+        solid.centre(code, x)
+        for q in range(n_gauss):
+            k = seg_points[g] + q
+            eta[k] = mid + half * gx[n_gauss, q]
+            r0, r1, r2, d0, d1, d2 = beam_point_of(kb, Q[e], lengths[e], s0, s1, s2, eta[k], H, dH)
+            weight[k] = gw[n_gauss, q] * half * norm3(d0, d1, d2)
+            position[k, 0] = r0 + solid_origin[s, 0]
+            position[k, 1] = r1 + solid_origin[s, 1]
+            position[k, 2] = r2 + solid_origin[s, 2]
+            if affine:
+                linear_parameters(code, linear, s, r0, r1, r2, x)
+                xi[k, 0], xi[k, 1], xi[k, 2] = x[0], x[1], x[2]
+                status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
+                continue
+            # start from the linearised estimate (closer than the previous point: fewer Newton
+            # iterations); if that does not end inside, locate the point for certain (a curved
+            # element's map folds outside it: Newton may take that branch)
+            linear_parameters(code, linear, s, r0, r1, r2, x)
+            if not (project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) == CONVERGED
+                    and solid.is_inside(code, x, loose)):
+                status[k] = locate_point(code, X, r0, r1, r2, solid_h[s], loose, linear, s, x, trial, N, dN,
+                                         a, stack)
+                if status[k] == NOT_CONVERGED:
+                    solid.centre(code, x)
                     xi[k, 0], xi[k, 1], xi[k, 2] = x[0], x[1], x[2]
-                    # a segment lies in its element: a point clearly outside means a missed
-                    # crossing; it is reported, not hidden
-                    status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
+                    continue
+            # the residual of x is in trial (project_point or locate_point left it there)
+            polish_residual(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN)
+            xi[k, 0], xi[k, 1], xi[k, 2] = x[0], x[1], x[2]
+            # a segment lies in its element: a point clearly outside means a missed
+            # crossing; it is reported, not hidden
+            status[k] = INSIDE if solid.is_inside(code, x, loose) else OUTSIDE
 
 
-#: called once per chunk through a symbol, not compiled into the kernel again (see mortar1d3d._unlinked)
-_segment_points_chunk_call = unlinked(_segment_points_chunk)
+#: called once per chunk through a symbol, not compiled into the kernel again, and compiled per beam type
+#: when a scene first uses it (see mortar1d3d._unlinked)
+_segment_points_chunk_call = unlinked(_segment_points_chunk, returns=types.none, cases=BEAM_CODES)
 
 
 @njit_parallel
@@ -142,10 +141,10 @@ def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid
 
 
 @njit
-def _element_points_chunk(beam_code, begin, stop, pair_offsets, pair_solid, gx, gw, codes, conn, points,
+def _element_points_chunk(kb, begin, stop, pair_offsets, pair_solid, gx, gw, codes, conn, points,
                           solid_origin, solid_h, solid_boxes, hull, linear, Q, lengths, beam_origin, beam, owner,
                           eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a, stack):
-    # beam elements begin..stop; the beam type is chosen once here (see search._beam_frames_chunk)
+    # beam elements begin..stop of beam type kb, a literal (see search._beam_frames_chunk)
     # the caller holds every array for this call: the calls per point below pass them without
     # reference counting (see mortar1d3d._borrowed)
     (pair_offsets, pair_solid, gx, gw, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear, Q,
@@ -155,38 +154,36 @@ def _element_points_chunk(beam_code, begin, stop, pair_offsets, pair_solid, gx, 
                        dH, x, trial, a, stack)
     n_gauss = gx.shape[0]
     tol = PARAMETER_TOL
-    for kb in literal_unroll(BEAM_CODES):
-        if kb == beam_code:
-            for e in range(begin, stop):
-                for q in range(n_gauss):
-                    k = e * n_gauss + q
-                    beam[k] = e
-                    eta[k] = gx[q]
-                    r0, r1, r2, d0, d1, d2 = beam_point_of(kb, Q[e], lengths[e], 0.0, 0.0, 0.0, gx[q], H, dH)
-                    weight[k] = gw[q] * norm3(d0, d1, d2)
-                    position[k, 0] = r0 + beam_origin[e, 0]
-                    position[k, 1] = r1 + beam_origin[e, 1]
-                    position[k, 2] = r2 + beam_origin[e, 2]
-                    owner[k] = -1
-                    status[k] = POINT_UNCOUPLED
-                    # the lowest-index candidate element containing the point owns it
-                    s = first_containing(r0, r1, r2, e, pair_solid, pair_offsets[e], pair_offsets[e + 1], beam_origin,
-                                         solid_boxes, hull, codes, conn, points, solid_origin, solid_h, linear, tol,
-                                         X, x, trial, N, dN, a, stack, ANY_CANDIDATE)
-                    if s >= 0:
-                        if not is_affine(linear, s):
-                            # X still holds the owner's nodes (it was the last element tested) and
-                            # trial the residual of x (see locate_point)
-                            polish_residual(codes[s], X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
-                                   r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
-                                   r2 + (beam_origin[e, 2] - solid_origin[s, 2]), solid_h[s], x, trial, N, dN)
-                        owner[k] = s
-                        status[k] = POINT_INSIDE
-                        xi[k, 0], xi[k, 1], xi[k, 2] = x[0], x[1], x[2]
+    for e in range(begin, stop):
+        for q in range(n_gauss):
+            k = e * n_gauss + q
+            beam[k] = e
+            eta[k] = gx[q]
+            r0, r1, r2, d0, d1, d2 = beam_point_of(kb, Q[e], lengths[e], 0.0, 0.0, 0.0, gx[q], H, dH)
+            weight[k] = gw[q] * norm3(d0, d1, d2)
+            position[k, 0] = r0 + beam_origin[e, 0]
+            position[k, 1] = r1 + beam_origin[e, 1]
+            position[k, 2] = r2 + beam_origin[e, 2]
+            owner[k] = -1
+            status[k] = POINT_UNCOUPLED
+            # the lowest-index candidate element containing the point owns it
+            s = first_containing(r0, r1, r2, e, pair_solid, pair_offsets[e], pair_offsets[e + 1], beam_origin,
+                                 solid_boxes, hull, codes, conn, points, solid_origin, solid_h, linear, tol,
+                                 X, x, trial, N, dN, a, stack, ANY_CANDIDATE)
+            if s >= 0:
+                if not is_affine(linear, s):
+                    # X still holds the owner's nodes (it was the last element tested) and
+                    # trial the residual of x (see locate_point)
+                    polish_residual(codes[s], X, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
+                           r1 + (beam_origin[e, 1] - solid_origin[s, 1]),
+                           r2 + (beam_origin[e, 2] - solid_origin[s, 2]), solid_h[s], x, trial, N, dN)
+                owner[k] = s
+                status[k] = POINT_INSIDE
+                xi[k, 0], xi[k, 1], xi[k, 2] = x[0], x[1], x[2]
 
 
-#: called once per chunk through a symbol, not compiled into the kernel again (see mortar1d3d._unlinked)
-_element_points_chunk_call = unlinked(_element_points_chunk)
+#: called once per chunk through a symbol, compiled per beam type when first used, as the one above
+_element_points_chunk_call = unlinked(_element_points_chunk, returns=types.none, cases=BEAM_CODES)
 
 
 def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):

@@ -12,7 +12,7 @@ branches are unrolled over the registry's codes at compile time (:mod:`..selecto
 code as a hand-written ``if`` chain, generated from the list.
 """
 import numpy as np
-from numba import literal_unroll
+from numba import literal_unroll, types
 
 from ..._config import njit, njit_inline
 from ..selector import kernel_selector
@@ -246,8 +246,10 @@ _FAMILY_CODES = tuple(range(len(FAMILIES)))
 
 #: ``_type_kernel(k, name)``: kernel ``name`` of the type with literal code k; ``_family_kernel``
 #: likewise for families (resolved when a kernel is compiled, see :mod:`..selector`); the kernels of
-#: types other than ``LINKED_TYPES`` are called through a symbol, not compiled into the caller
-_type_kernel = kernel_selector(SOLID_TYPES, linked=tuple(SOLID_TYPES.index(m) for m in LINKED_TYPES))
+#: types other than ``LINKED_TYPES`` are called through a symbol, not compiled into the caller, and
+#: lazily: a type's kernels are compiled when a scene first evaluates an element of that type
+_type_kernel = kernel_selector(SOLID_TYPES, linked=tuple(SOLID_TYPES.index(m) for m in LINKED_TYPES),
+                               returns={"shape": types.none, "deriv": types.none})
 _family_kernel = kernel_selector(FAMILIES)
 
 

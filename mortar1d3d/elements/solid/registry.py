@@ -16,7 +16,8 @@ FAMILIES = (HEXAHEDRON, TETRAHEDRON, WEDGE)
 SOLID_TYPES = (hex8, hex20, hex27, tet4, tet10, wedge6, nurbs27, nurbs64, nurbs125)
 
 #: the types whose kernels are compiled into every kernel that dispatches over the registry (so that
-#: LLVM can inline them: the hot type); every other type's kernels are compiled once on their own and
-#: called through a symbol (:func:`mortar1d3d.elements.selector.kernel_selector`), so that a scene's
-#: first run does not optimise every registered type's code again inside each of its kernels
+#: LLVM can inline them: the hot type); every other type's kernels are compiled once on their own,
+#: when a scene first evaluates an element of that type, and called through a symbol
+#: (:func:`mortar1d3d.elements.selector.kernel_selector`, lazily): a scene's first run compiles only
+#: its own types' kernels, and a new type needs no line beyond its entry in ``SOLID_TYPES``
 LINKED_TYPES = (hex8,)
