@@ -43,8 +43,11 @@ def main(argv=None):
     parser.add_argument("--n", type=int, default=20)
     parser.add_argument("--penalty-factor", type=float, nargs="+", default=[1e2, 1e3, 1e4])
     parser.add_argument("--rtol", type=float, default=1e-8)
-    parser.add_argument("--smoothing", type=int, nargs="+", default=[0],
-                        help="Jacobi steps on the prolongation of A_aux (0: the lumped follow operator)")
+    parser.add_argument("--smoothing", type=lambda v: v if v == "harmonic" else int(v), nargs="+", default=[0],
+                        help="Jacobi steps on the prolongation of A_aux (0: the lumped follow operator), or "
+                             "'harmonic' (the beams' exact response, harmonic_prolongation)")
+    parser.add_argument("--drop", type=float, default=1e-3,
+                        help="relative drop threshold of the smoothed prolongation")
     parser.add_argument("--theta", type=float, nargs="+", default=[0.0],
                         help="strength threshold of the AMG of A_aux")
     parser.add_argument("--no-exact", action="store_true", help="skip the exact solve of A_aux")
@@ -63,7 +66,7 @@ def main(argv=None):
         R = model.rigid_body_modes()[model.free]
         for smoothing, theta in [(k, t) for k in args.smoothing for t in args.theta]:
             pre = AuxiliarySpacePreconditioner(A, solid, split["beam"], split["prolongation"], R[solid],
-                                               block_size=3, smoothing=smoothing, theta=theta,
+                                               block_size=3, smoothing=smoothing, theta=theta, drop=args.drop,
                                                keep_auxiliary=True)
             S = SchurComplement(pre)
             operator = spla.LinearOperator(S.shape, matvec=S.matvec, dtype=float)
@@ -97,7 +100,7 @@ def main(argv=None):
             if args.aux_alone:
                 alone = iterations(pre._cycle.matvec, aux, rhs,
                                    lambda x: np.linalg.norm(rhs - aux @ x) / np.linalg.norm(rhs))
-            print(f"{args.n:3d} {factor:7.0e} {smoothing:6d} {theta:6.3f} {pre.auxiliary_nnz:10d} {exact:>15} "
+            print(f"{args.n:3d} {factor:7.0e} {smoothing!s:>6} {theta:6.3f} {pre.auxiliary_nnz:10d} {exact:>15} "
                   f"{inner:>9} {iterations(pre._cycle.matvec):11d} {alone:>11} {pre.amg.levels[-1].A.shape[0]:7d} "
                   f"{cpu:12.1f} {os.getloadavg()[0]:5.1f}", flush=True)
 
