@@ -2,7 +2,7 @@
 ``S`` of ``fibre_cube(n, 1000, 20)``, preconditioned by the auxiliary matrix ``A_aux`` solved
 exactly (SuperLU) and by its AMG V-cycle, for several penalties.
 
-    python benchmarks/penalty_schur.py --n 20 --penalty-factor 1e2 1e3 1e4 [--smoothing 0 1] [--theta 0 0.02] [--no-exact]
+    python benchmarks/penalty_schur.py --n 20 --penalty-factor 1e2 1e3 1e4 [--smoothing 0 1 harmonic] [--drop 1e-3] [--theta 0 0.02] [--no-exact]
                                        [--inner-rtol 1e-10] [--aux-alone]
 
 With the beam block solved exactly, the auxiliary-space sweep of ``solver = "amg"`` is CG on

@@ -28,9 +28,13 @@ class AuxiliarySpacePreconditioner:
         Rigid-body modes of the solid DOFs, for the AMG of the auxiliary matrix.
     block_size : {None, 1, 3}
         AMG aggregation of the auxiliary (solid) matrix, see :func:`build_amg`.
-    smoothing : {0, 1, 2}
+    smoothing : {0, 1, 2, "harmonic"}
         Damped Jacobi steps that move ``prolongation`` towards the beams' response to a solid
-        motion before ``E`` is formed (:func:`smooth_prolongation`); 0 takes it as it is.
+        motion before ``E`` is formed (:func:`smooth_prolongation`); 0 takes it as it is;
+        ``"harmonic"`` takes that response itself, ``−A_BB⁻¹ A_BS`` (:func:`harmonic_prolongation`,
+        ``prolongation`` unused): fewer CG iterations at n = 40 and 66 of ``fibre_cube(n, 1000, 20)``
+        with ``theta=0.05`` (16 and 21 against 19 and 27), a costlier set-up (benchmarks/README.md,
+        "Where the growth with n comes from").
     drop : float
         After smoothing, entries of ``P`` below ``drop`` times the largest of their row are left out.
     theta : float
