@@ -15,7 +15,8 @@ loaded machine closer to the idle wall time than the wall time is), the ratios o
 CPU time and iterations to the solid alone (measured in the same run), and the peak resident
 memory of the process so far (each solver's preconditioner is released once its row is measured). Solvers: ``solid`` (the solid alone), ``aux<k>-<θ>`` (CG + auxiliary-space
 preconditioner, what ``solver = "amg"``/``"auto"`` runs for penalty-coupled beams, with ``k`` Jacobi
-steps on its prolongation and strength threshold ``θ`` in its AMG, ``--aux k:θ[:drop[:f]] ...``:
+steps on its prolongation (``harmonic``: the beams' exact response, ``harmonic_prolongation``) and strength
+threshold ``θ`` in its AMG, ``--aux k:θ[:drop[:f]] ...``:
 the default ``1:0.02:1e-3:f`` is the preconditioner's default, ``0:0`` its settings before the smoothed prolongation (``LUMPED``),
 ``LUMPED``; further ``:key=value`` fields: ``sparsify=δ`` builds its AMG from ``A_aux`` without the 3x3
 blocks below ``δ`` of their diagonal blocks, ``compensation=none|abs|signed`` what they leave on the
@@ -76,7 +77,8 @@ def aux_variant(spec):
     plain = [f for f in fields if "=" not in f] + ["0", ""]
     extra = {key: float(value) if key == "sparsify" else value
              for key, value in (f.split("=", 1) for f in fields if "=" in f)}
-    return int(plain[0]), float(plain[1]), float(plain[2]), plain[3] == "f", extra
+    steps = plain[0] if plain[0] == "harmonic" else int(plain[0])
+    return steps, float(plain[1]), float(plain[2]), plain[3] == "f", extra
 
 
 def hierarchy(ml):
@@ -137,7 +139,7 @@ def main(argv=None):
                         help="sizes n to also solve by CG on the solid's Schur complement (method 'schur')")
     parser.add_argument("--aux", nargs="+", default=["1:0.02:1e-3:f"], metavar="K:THETA[:DROP[:f]]",
                         help="auxiliary spaces to run: K Jacobi steps on the prolongation (0: the lumped "
-                             "follow operator), strength threshold THETA of its AMG, relative drop threshold "
+                             "follow operator; 'harmonic': the beams' exact response), strength threshold THETA of its AMG, relative drop threshold "
                              "of the smoothed prolongation (default 0), ':f' for the AMG's filter_entries; "
                              "one aux (and schur) row each, named aux<K>-<THETA>[-<DROP>][f]. Default: the "
                              "preconditioner's defaults; 0:0 is AuxiliarySpacePreconditioner.LUMPED")

@@ -42,14 +42,14 @@ from .dependent import DEPENDENT_ROW_TOLERANCE, DependentRows, dependent_rows
 from .direct import (BANDED_MAX_BANDWIDTH, DIRECT_MAX_DOFS, BandedCholesky, bandwidth, factorize,  # noqa: F401
                      factorize_spd_block)
 from .krylov import cg_with_fallback, raise_not_converged, roundoff_level
-from .preconditioners import AuxiliarySpacePreconditioner, drop_weak_blocks, smooth_prolongation
+from .preconditioners import AuxiliarySpacePreconditioner, drop_weak_blocks, harmonic_prolongation, smooth_prolongation
 from .rigid import rigid_body_modes
 from .schur import schur_cg
 from .saddle import (AUGMENTATION_FACTOR, AUXILIARY_AUGMENTATION_FACTOR, SADDLE_DIRECT_MAX_DOFS,
                      SaddlePreconditioner, solve_saddle)
 
 __all__ = ["LinearSolverError", "rigid_body_modes", "build_amg", "AMG_SEED", "AuxiliarySpacePreconditioner",
-           "smooth_prolongation", "drop_weak_blocks",
+           "smooth_prolongation", "harmonic_prolongation", "drop_weak_blocks",
            "solve_linear", "solve_saddle", "dependent_rows", "DependentRows", "DEPENDENT_ROW_TOLERANCE",
            "DIRECT_MAX_DOFS", "SADDLE_DIRECT_MAX_DOFS", "AUGMENTATION_FACTOR", "AUXILIARY_AUGMENTATION_FACTOR",
            "SaddlePreconditioner"]

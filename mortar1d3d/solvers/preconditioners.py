@@ -9,7 +9,7 @@ from ._common import check_square, split_dofs
 from .amg import _block_size, build_amg
 from .direct import factorize_spd_block
 
-__all__ = ["AuxiliarySpacePreconditioner", "smooth_prolongation", "drop_weak_blocks"]
+__all__ = ["AuxiliarySpacePreconditioner", "smooth_prolongation", "harmonic_prolongation", "drop_weak_blocks"]
 
 
 class AuxiliarySpacePreconditioner:
@@ -28,9 +28,13 @@ class AuxiliarySpacePreconditioner:
         Rigid-body modes of the solid DOFs, for the AMG of the auxiliary matrix.
     block_size : {None, 1, 3}
         AMG aggregation of the auxiliary (solid) matrix, see :func:`build_amg`.
-    smoothing : {0, 1, 2}
+    smoothing : {0, 1, 2, "harmonic"}
         Damped Jacobi steps that move ``prolongation`` towards the beams' response to a solid
-        motion before ``E`` is formed (:func:`smooth_prolongation`); 0 takes it as it is.
+        motion before ``E`` is formed (:func:`smooth_prolongation`); 0 takes it as it is;
+        ``"harmonic"`` takes that response itself, ``−A_BB⁻¹ A_BS`` (:func:`harmonic_prolongation`,
+        ``prolongation`` unused): fewer CG iterations at n = 40 and 66 of ``fibre_cube(n, 1000, 20)``
+        with ``theta=0.05`` (16 and 21 against 19 and 27), a costlier set-up (benchmarks/README.md,
+        "Where the growth with n comes from").
     drop : float
         After smoothing, entries of ``P`` below ``drop`` times the largest of their row are left out.
     theta : float
@@ -183,8 +187,9 @@ class AuxiliarySpacePreconditioner:
             raise ValueError(f"near_nullspace must have one row per solid DOF ({n_s}), got {null.shape}")
         # the model orders the free DOFs solid first, beams after: slices are views, no gathers
         self._s, self._b = _contiguous(self.solid), _contiguous(self.beam)
-        if smoothing not in (0, 1, 2):
-            raise ValueError(f"smoothing must be 0, 1 or 2 (Jacobi steps on the prolongation), got {smoothing!r}")
+        if smoothing not in (0, 1, 2, "harmonic"):
+            raise ValueError("smoothing must be 0, 1 or 2 (Jacobi steps on the prolongation) or 'harmonic', "
+                             f"got {smoothing!r}")
         self.A = A
         self.shape = A.shape
         beam_rows = A[self._b].tocsr()                           # rows of the beam DOFs
@@ -193,7 +198,11 @@ class AuxiliarySpacePreconditioner:
         self.A_sb = self.A_bs.T.tocsr()                          # A is symmetric
         del beam_rows
         t = time.perf_counter()
-        P = smooth_prolongation(A_bb, self.A_bs, prolongation.tocsr(), smoothing, drop)
+        self._beam_factor = factorize_spd_block(A_bb)
+        factor_time = time.perf_counter() - t
+        t = time.perf_counter()
+        P = harmonic_prolongation(A_bb, self.A_bs, drop, self._beam_factor) if smoothing == "harmonic" else \
+            smooth_prolongation(A_bb, self.A_bs, prolongation.tocsr(), smoothing, drop)
         smoothing_time = time.perf_counter() - t
         self.smoothing = smoothing
         if sparsify > 0 and sparsify_scope not in ("hierarchy", "smoother"):
@@ -204,7 +213,7 @@ class AuxiliarySpacePreconditioner:
         self.auxiliary_nnz = auxiliary.nnz
         self.prolongation = P
         self.timings = {"prolongation smoothing": smoothing_time,
-                        "auxiliary matrix": time.perf_counter() - start - smoothing_time}
+                        "auxiliary matrix": time.perf_counter() - start - smoothing_time - factor_time}
         t = time.perf_counter()
         hierarchy_matrix = sparse = auxiliary
         if sparsify > 0:
@@ -224,9 +233,7 @@ class AuxiliarySpacePreconditioner:
         self.sparse_auxiliary = sparse if sparsify > 0 else None
         self._cycle = self.amg.aspreconditioner(cycle="V")
         self.timings["amg set-up"] = time.perf_counter() - t
-        t = time.perf_counter()
-        self._beam_factor = factorize_spd_block(A_bb)
-        self.timings["beam factorisation"] = time.perf_counter() - t
+        self.timings["beam factorisation"] = factor_time
         self.timings.update({"applications": 0.0, "amg cycles": 0.0, "beam solves": 0.0})
         self.setup_time = time.perf_counter() - start
 
@@ -310,6 +317,66 @@ def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
     if drop > 0:
         P = drop_weak_entries(P, drop)
     return P
+
+
+def harmonic_prolongation(A_bb, A_bs, drop=0.0, factor=None, chunk=64):
+    """The beams' response to a solid motion, ``P = −A_BB⁻¹ A_BS``, dense along each beam.
+
+    Parameters
+    ----------
+    A_bb, A_bs : scipy.sparse matrices, (n_b, n_b) SPD and (n_b, n_s)
+        Beam block (block-diagonal: one block per beam, the connected components of its graph)
+        and beam-solid block of the penalty system.
+    drop : float
+        Entries below ``drop`` times the largest of their row are left out.
+    factor : object with ``solve``, optional
+        A factorisation of ``A_bb`` (:func:`~mortar1d3d.solvers.direct.factorize_spd_block`);
+        made here if not given.
+    chunk : int
+        Right-hand sides per solve (memory: ``n_b x chunk`` numbers).
+
+    Returns
+    -------
+    P : (n_b, n_s) scipy.sparse.csr_matrix
+
+    Notes
+    -----
+    With this ``P`` the auxiliary matrix ``Eᵀ A E`` is the solid's Schur complement ``S`` up to
+    the dropped entries (``A_BS + A_BB P = 0``). The columns are renumbered per beam: the ``l``-th
+    solid DOF a beam touches is its column ``l``, so one solve of the block-diagonal ``A_BB`` with
+    ``chunk`` right-hand sides serves the ``l``-th columns of all beams at once (as many solves as
+    the most solid DOFs one beam touches, over ``chunk``). An entry below ``drop`` times its row's
+    largest so far is dropped at once (it is below that of the whole row too).
+    """
+    from scipy.sparse.csgraph import connected_components
+    if factor is None:
+        from .direct import factorize_spd_block
+        factor = factorize_spd_block(A_bb)
+    A_bs = A_bs.tocoo()
+    n_b, n_s = A_bs.shape
+    _, beam_of = connected_components(A_bb, directed=False)
+    key = beam_of[A_bs.row].astype(np.int64) * n_s + A_bs.col
+    pairs = np.unique(key)                                  # (beam, solid DOF) pairs, beam by beam
+    first = np.searchsorted(pairs // n_s, np.arange(beam_of.max() + 2))   # each beam's first pair
+    local = np.searchsorted(pairs, key) - first[beam_of[A_bs.row]]       # column within the beam
+    touched = np.diff(first)[beam_of]                       # solid DOFs each beam row's beam touches
+    largest = np.zeros(n_b)
+    rows, cols, vals = [], [], []
+    for j in range(0, int(touched.max(initial=0)), chunk):
+        width = min(chunk, int(touched.max()) - j)
+        rhs = np.zeros((n_b, width))
+        inside = (local >= j) & (local < j + width)
+        rhs[A_bs.row[inside], local[inside] - j] = -A_bs.data[inside]
+        response = factor.solve(rhs)
+        size = np.abs(response, out=rhs)
+        np.maximum(largest, size.max(axis=1), out=largest)
+        size[j + np.arange(width) >= touched[:, None]] = 0.0     # columns past the beam's own
+        r, c = np.nonzero(size >= np.maximum(drop * largest, np.finfo(float).tiny)[:, None])
+        rows.append(r), cols.append(pairs[first[beam_of[r]] + j + c] % n_s), vals.append(response[r, c])
+    P = sp.csr_matrix((np.concatenate(vals + [np.zeros(0)]),
+                       (np.concatenate(rows + [np.zeros(0, np.int64)]), np.concatenate(cols + [np.zeros(0, np.int64)]))),
+                      shape=(n_b, n_s))
+    return drop_weak_entries(P, drop) if drop > 0 else P
 
 
 def auxiliary_matrix(A_ss, A_bs, A_sb, A_bb, P):
