@@ -4,6 +4,7 @@ import time
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
 from ._common import check_square, split_dofs
 from .amg import _block_size, build_amg
@@ -348,9 +349,7 @@ def harmonic_prolongation(A_bb, A_bs, drop=0.0, factor=None, chunk=64):
     the most solid DOFs one beam touches, over ``chunk``). An entry below ``drop`` times its row's
     largest so far is dropped at once (it is below that of the whole row too).
     """
-    from scipy.sparse.csgraph import connected_components
     if factor is None:
-        from .direct import factorize_spd_block
         factor = factorize_spd_block(A_bb)
     A_bs = A_bs.tocoo()
     n_b, n_s = A_bs.shape
@@ -360,10 +359,11 @@ def harmonic_prolongation(A_bb, A_bs, drop=0.0, factor=None, chunk=64):
     first = np.searchsorted(pairs // n_s, np.arange(beam_of.max() + 2))   # each beam's first pair
     local = np.searchsorted(pairs, key) - first[beam_of[A_bs.row]]       # column within the beam
     touched = np.diff(first)[beam_of]                       # solid DOFs each beam row's beam touches
+    most = int(touched.max(initial=0))                     # solid DOFs of the beam that touches most
     largest = np.zeros(n_b)
     rows, cols, vals = [], [], []
-    for j in range(0, int(touched.max(initial=0)), chunk):
-        width = min(chunk, int(touched.max()) - j)
+    for j in range(0, most, chunk):
+        width = min(chunk, most - j)
         rhs = np.zeros((n_b, width))
         inside = (local >= j) & (local < j + width)
         rhs[A_bs.row[inside], local[inside] - j] = -A_bs.data[inside]
