@@ -1,6 +1,6 @@
 """Cold start of a checkout's package: a fresh process, an empty kernel cache, one compile.
 
-    .venv/bin/python benchmarks/cold_start.py [--package CHECKOUT] [--what first|element|warmup] [--kernels 25]
+    .venv/bin/python benchmarks/cold_start.py [--package CHECKOUT] [--what first|element|warmup|demo] [--kernels 25]
 
 ``--what first`` (default): ``import mortar1d3d`` and the first segment- and element-based
 assembly of a tiny hex8 scene (``STARTUP_CODE`` of ``test_startup.py``); ``--what warmup``:
@@ -28,7 +28,9 @@ compile time of earlier dumps by module, side by side, and the totals of named g
 functions (e.g. ``--group rare=search_inside,locate_rare``).
 
 ``--what element``: ``import mortar1d3d`` and the first element-based assembly of the same scene
-alone (what a user of element-based integration waits for on a first run).
+alone (what a user of element-based integration waits for on a first run). ``--what demo``: the
+warm-up the demo runs before its first result, ``warmup(elements=["hexahedron"],
+integrations=["segment", "element"], physics=False)`` (the engine's kernels a hex8 scene runs).
 
 ``--warm [N]``: afterwards the same code N (default 1) more times, each in a fresh process with the
 now populated cache (the warm start: every kernel loaded, nothing compiled); their CPU seconds and
@@ -63,6 +65,11 @@ from _record import record
 from test_startup import STARTUP_CODE
 
 WARMUP_CODE = "import time; t=time.perf_counter(); import mortar1d3d as m; m.warmup(); print(time.perf_counter()-t)"
+#: what the demo (examples/fibre_cube_demo.py) compiles before its first result: the engine's
+#: kernels for hex8, both integrations, no physics
+DEMO_CODE = ("import time; t=time.perf_counter(); import mortar1d3d as m; "
+             "m.warmup(elements=['hexahedron'], integrations=['segment', 'element'], physics=False); "
+             "print(time.perf_counter()-t)")
 #: the element-based half of STARTUP_CODE alone
 ELEMENT_CODE = STARTUP_CODE.replace("m.assemble_mortar(b,s,integration='segment'); ", "")
 assert ELEMENT_CODE != STARTUP_CODE
@@ -249,7 +256,7 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--package", default=str(Path(__file__).resolve().parents[1]), metavar="CHECKOUT",
                         help="directory holding the mortar1d3d package to start (default: this checkout)")
-    parser.add_argument("--what", choices=("first", "element", "warmup"), default="first")
+    parser.add_argument("--what", choices=("first", "element", "warmup", "demo"), default="first")
     parser.add_argument("--kernels", type=int, default=0, metavar="N",
                         help="list the N functions with the largest own compile time")
     parser.add_argument("--warm", type=int, nargs="?", const=1, default=0, metavar="N",
@@ -271,7 +278,7 @@ def main(argv=None):
     root = Path(args.package).resolve()
     if not (root / "mortar1d3d" / "__init__.py").is_file():
         parser.error(f"--package: no mortar1d3d package in {root}")
-    code = {"first": STARTUP_CODE, "element": ELEMENT_CODE, "warmup": WARMUP_CODE}[args.what]
+    code = {"first": STARTUP_CODE, "element": ELEMENT_CODE, "warmup": WARMUP_CODE, "demo": DEMO_CODE}[args.what]
     if args.kernels > 0:
         dump = repr(str(Path(args.dump).resolve())) if args.dump else "None"
         code = RECORDER_CODE.replace("KERNELS", str(args.kernels)).replace("DUMP", dump) + "\n" + code

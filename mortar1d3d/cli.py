@@ -167,7 +167,12 @@ def _main(argv):
     chk.add_argument("--quiet", action="store_true", help="no progress output")
     demo = sub.add_parser("demo", help="assemble the benchmark scene, print certificates, write VTU and a plot")
     demo.add_argument("--out", default="results/demo")
-    sub.add_parser("warmup", help="compile (or load cached) kernels")
+    warm = sub.add_parser("warmup", help="compile (or load cached) kernels")
+    warm.add_argument("--elements", nargs="+", metavar="TYPE",
+                      help="only the engine's kernels for these solid element types (meshio names), e.g. hexahedron")
+    warm.add_argument("--integration", nargs="+", choices=("segment", "element", "auto"),
+                      help="with --elements: only these integrations (default: all three)")
+    warm.add_argument("--no-physics", action="store_true", help="leave out the physics (solid, beams, coupling)")
     # -- bench report (issue 5): self-contained block
     bench = sub.add_parser("bench", help="measured studies")
     bench_sub = bench.add_subparsers(dest="bench_command", required=True)
@@ -188,8 +193,15 @@ def _main(argv):
     if args.command == "check":
         return _check(args)
     if args.command == "warmup":
-        from .warmup import warmup
-        warmup(verbose=True)
+        from .warmup import INTEGRATIONS, warmup
+        if args.integration and not args.elements:
+            parser.error("warmup: --integration needs --elements")
+        try:
+            warmup(verbose=True, elements=args.elements, integrations=args.integration or INTEGRATIONS,
+                   physics=not args.no_physics)
+        except ValueError as error:
+            print(f"mortar1d3d warmup: {error}", file=sys.stderr)
+            return 2
         return 0
     example = Path(__file__).resolve().parent.parent / "examples" / "fibre_cube_demo.py"
     if not example.exists():

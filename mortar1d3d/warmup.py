@@ -1,33 +1,69 @@
 """Compile (or load from Numba's on-disk cache) every kernel by running tiny scenes."""
 import time
 
+#: the integrations :func:`warmup` runs by default
+INTEGRATIONS = ("segment", "element", "auto")
 
-def warmup(verbose=False):
-    """Touch every stage once: the mortar engine (search, segmentation, both integrations,
-    assembly, CSR, point projection) and the physics (solid, torsion-free beam, truss, coupling, pressure).
 
-    Kernels dispatch on integer element codes, so small scenes compile everything that later
-    scenes of any element type use, except what the kernels call lazily (the other element types'
-    functions, the rare path of locating a point: :mod:`mortar1d3d._unlinked`), compiled last.
+def _engine_scene(name):
+    """(beams, solid) of a tiny scene of solid element type ``name``: a fibre in a 2 x 2 x 2 box for
+    the Lagrange types, a fibre along a quarter of a hollow cylinder (rational weights) for NURBS."""
+    import numpy as np
+
+    from . import generate
+    from .elements import solid_element
+
+    element = solid_element(name)
+    beams, cube = generate.fibre_cube(2, 1, 2)
+    if name == "hexahedron":
+        return beams, cube
+    if not element.rational:
+        return beams, generate.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (2, 2, 2), element=name)
+    from . import nurbs
+
+    pipe = nurbs.hollow_cylinder(0.2, 0.3, 1.0, angle=90.0, elements=(1, 2, 2), degree=element.degree)
+    x, y = 0.25 * np.cos(np.radians(30.0)), 0.25 * np.sin(np.radians(30.0))   # inside an element, not on a face
+    return generate.straight_beams([[[x, y, 0.1], [x, y, 0.9]]], 2), nurbs.bezier_mesh(pipe).solid
+
+
+def warmup(verbose=False, elements=None, integrations=INTEGRATIONS, physics=True):
+    """Compile (or load) the kernels a run needs before the run, so that its timings hold no compile.
+
+    By default every kernel: the mortar engine (search, segmentation, both integrations, assembly,
+    CSR, point projection) on a tiny hex8 scene, the physics (solid, torsion-free beam, truss,
+    coupling, pressure) and, last, every element type's kernels and the rare paths that kernels
+    call lazily (:mod:`mortar1d3d._unlinked`).
+
+    ``elements`` (meshio names of solid element types, e.g. ``["hexahedron"]``) limits the engine
+    to tiny scenes of those types with the given ``integrations`` and leaves out the lazy callees
+    those scenes do not run: what a scene of those types compiles on its first call, paid up front.
+    A path the tiny scenes do not take (a rare fallback of locating a point, say) still compiles
+    when a later scene first takes it. ``physics=False`` leaves out the physics.
     Returns the elapsed time in seconds.
     """
-    from . import generate
     from ._config import announce_compilation
     from ._unlinked import compile_lazy
+    from .elements import solid_element
     from .model import solve
     from .geometry.projection import project_points
     from .mortar.assemble import assemble_mortar
     from .scene import Scene
 
+    names = ["hexahedron"] if elements is None else [solid_element(name).name for name in elements]
+    integrations = tuple(integrations)
+    for integration in integrations:
+        if integration not in INTEGRATIONS:
+            raise ValueError(f"warmup: unknown integration {integration!r}; known: {', '.join(INTEGRATIONS)}")
     announce_compilation()
     t0 = time.perf_counter()
-    beams, solid = generate.fibre_cube(2, 1, 2)
-    for integration in ("segment", "element", "auto"):
-        assemble_mortar(beams, solid, integration=integration, n_gauss=2)
-    project_points(solid, beams.positions, 0)
+    for name in names:
+        beams, solid = _engine_scene(name)
+        for integration in integrations:
+            assemble_mortar(beams, solid, integration=integration, n_gauss=2)
+        project_points(solid, beams.positions, 0)
     t1 = time.perf_counter()
     box = {"box": [[0, 0, 0], [1, 0.2, 0.2]], "cells": [2, 1, 1]}
-    for model, material in (("torsion_free", "neo_hooke"), ("truss", "saint_venant_kirchhoff")):
+    for model, material in (("torsion_free", "neo_hooke"), ("truss", "saint_venant_kirchhoff")) if physics else ():
         solve(Scene(solid={"mesh": box, "material": {"model": material, "E": 1.0, "nu": 0.3}},
                     beams=[{"curve": {"line": [[0.1, 0.1, 0.1], [0.9, 0.1, 0.1]]}, "elements": 2, "model": model,
                             "section": {"EA": 1.0} if model == "truss" else {"EA": 1.0, "EI": 0.01}}],
@@ -35,8 +71,11 @@ def warmup(verbose=False):
                     dirichlet=[{"on": "solid:x_min"}],
                     load=[{"type": "pressure", "on": "solid:z_max", "value": 1e-3}],
                     analysis={"steps": 1}))
-    compile_lazy()
+    if elements is None:
+        compile_lazy()
     elapsed = time.perf_counter() - t0
     if verbose:
-        print(f"mortar1d3d kernels ready in {elapsed:.2f} s (engine {t1 - t0:.2f} s, physics {elapsed - (t1 - t0):.2f} s)")
+        scope = "" if elements is None else f" for {', '.join(names)}"
+        print(f"mortar1d3d kernels{scope} ready in {elapsed:.2f} s (engine {t1 - t0:.2f} s, "
+              f"physics {elapsed - (t1 - t0):.2f} s)")
     return elapsed

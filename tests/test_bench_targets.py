@@ -31,6 +31,8 @@ RECORDS = [
     # round 0: the machine was twice as slow for everything; round 1 normal
     _newton("hex8", 0, 6.0e5, 3.0e5), _newton("hex27", 0, 2.7e5, 1.5e5), _newton("tet10", 0, 3.6e5, 1.8e5),
     _newton("hex8", 1, 1.2e6, 6.0e5), _newton("hex27", 1, 6.0e5, 2.7e5), _newton("tet10", 1, 6.0e5, 3.6e5),
+    {"kind": "cold_start", "what": "demo", "cold": {"cpu_s": 40.0, "wall_s": 45.0, "in_process_s": 44.0},
+     "warm": None},
     {"kind": "cold_start", "what": "element", "cold": {"cpu_s": 64.0, "wall_s": 70.0, "in_process_s": 69.0},
      "warm": []},
     {"kind": "cold_start", "what": "first", "cold": {"cpu_s": 110.0, "wall_s": 120.0, "in_process_s": 119.0},
@@ -67,6 +69,7 @@ def test_figures_and_verdicts():
     assert rows["element_cold"]["figure"] == 64.0 and rows["element_cold"]["ratio"] == pytest.approx(8.0)
     assert rows["first_warm"]["figure"] == 1.3 and rows["first_warm"]["met"]        # the median of three
     assert "warmup_cold" not in rows
+    assert rows["demo_cold"]["figure"] == 40.0 and rows["demo_cold"]["ratio"] == pytest.approx(1.6)
     assert rows["penalty_20_cpu"]["figure"] == 3.0 and not rows["penalty_20_cpu"]["met"]
     assert rows["penalty_20_its"]["met"]
     assert rows["lagrange_cpu"]["figure"] == pytest.approx(2.2 / 1.8) and rows["lagrange_cpu"]["met"]
