@@ -96,6 +96,67 @@ def spatially_ordered(beams, fibres):
     return m13.BeamMesh.hermite(positions[order].reshape(-1, 3), tangents[order].reshape(-1, 3), beams.elements)
 
 
+class _StageClock:
+    """Stands in for the ``time`` module of ``mortar1d3d.mortar.assemble`` during one call: each
+    ``perf_counter()`` reading (the call's stage boundaries, which fill its ``timings``) also
+    records the process's user and system CPU seconds and minor page faults at that moment."""
+
+    def __init__(self):
+        self.marks = []
+
+    def perf_counter(self):
+        usage = resource.getrusage(resource.RUSAGE_SELF)
+        t = time.perf_counter()
+        self.marks.append((t, usage.ru_utime, usage.ru_stime, usage.ru_minflt, _new_bytes()))
+        return t
+
+
+def _stage_call(call):
+    """``call()`` (an ``assemble_mortar``) with its stages' CPU seconds: the result and a dict
+    stage -> (wall, user, system seconds, minor faults). Each interval between two of the call's
+    clock readings is named by the ``timings`` entry with the same wall time (the same subtraction);
+    the interval from the last stage to the end of the call (the constraint residual and the
+    segments table) is "rest"."""
+    clock = _StageClock()
+    module = sys.modules["mortar1d3d.mortar.assemble"]
+    module.time = clock
+    try:
+        ops = call()
+    finally:
+        module.time = time
+    marks = clock.marks
+    names = {seconds: name for name, seconds in ops.timings.items() if name != "total"}
+    out = {}
+    for i in range(1, len(marks)):
+        name = names.get(marks[i][0] - marks[i - 1][0], "rest" if i == len(marks) - 1 else f"interval {i}")
+        out[name] = tuple(b - a for a, b in zip(marks[i - 1], marks[i]))
+    out["call"] = tuple(b - a for a, b in zip(marks[0], marks[-1]))
+    return ops, out
+
+
+def _new_bytes():
+    """Bytes of the new (not reused) blocks ``carve`` has made so far; NaN for a checkout without the count."""
+    from mortar1d3d import _memory
+    return getattr(_memory, "new_bytes", float("nan"))
+
+
+def _pool_bytes():
+    """GB of ``carve``'s pooled blocks (in use, unused); NaN for a checkout without ``pool_bytes``."""
+    from mortar1d3d import _memory
+    if not hasattr(_memory, "pool_bytes"):
+        return float("nan"), float("nan")
+    return tuple(b / 2**30 for b in _memory.pool_bytes())
+
+
+def _work(ops, n, fibres):
+    """The scene's own work per integration point (the same per point at every size if the cost
+    per point is to stay level)."""
+    count = ops.n_integration_points
+    return {"candidate pairs": ops.diagnostics["candidate_pairs"] / count, "groups": len(ops.segments) / count,
+            "M entries": ops.M.nnz / count, "D entries": ops.D.nnz / count, "solid elements": n ** 3 / count,
+            "beam elements": fibres * n / count}
+
+
 def assembly(points, rounds, stages=False, order="generated"):
     print(f"assembly: assemble_mortar on fibre_cube(n, fibres, n), {N_GAUSS} Gauss points, 1 thread; "
           f"median over {rounds} rounds")
@@ -111,16 +172,26 @@ def assembly(points, rounds, stages=False, order="generated"):
             if order == "morton":
                 beams = spatially_ordered(beams, fibres)
             m13.assemble_mortar(beams, solid, integration=integration, n_gauss=N_GAUSS)      # first touch
-            times, per_control = [], []
+            times, per_control, stage_cpu = [], [], []
             for _ in range(rounds):
                 c = _control()
                 faults = _faults()
-                t, ops = _timed(lambda: m13.assemble_mortar(beams, solid, integration=integration, n_gauss=N_GAUSS))
+                if stages:
+                    t0 = time.perf_counter()
+                    ops, cpu = _stage_call(lambda: m13.assemble_mortar(beams, solid, integration=integration,
+                                                                       n_gauss=N_GAUSS))
+                    t = time.perf_counter() - t0
+                    stage_cpu.append(cpu)
+                    pooled = _pool_bytes()
+                else:
+                    t, ops = _timed(lambda: m13.assemble_mortar(beams, solid, integration=integration,
+                                                                n_gauss=N_GAUSS))
                 faults = _faults() - faults
                 times.append(t)
                 per_control.append(t / c)
                 count = ops.n_integration_points
                 timings = dict(ops.timings)
+                work = _work(ops, n, fibres) if stages else None
                 del ops
             t, r = float(np.median(times)), float(np.median(per_control))
             sizes.append(count)
@@ -131,6 +202,16 @@ def assembly(points, rounds, stages=False, order="generated"):
                 print("      ns per point by stage (last round): " + ", ".join(
                     f"{name} {1e9 * seconds / count:.0f}" for name, seconds in timings.items() if name != "total")
                     + f"; page faults per 1000 points {1e3 * faults / count:.2f}", flush=True)
+                print("      work per point: " + ", ".join(f"{name} {value:.4g}" for name, value in work.items())
+                      + "; pooled blocks after the call (GiB): in use {:.2f}, unused {:.2f}".format(*pooled),
+                      flush=True)
+                print(f"      CPU ns per point by stage, user + system (medians over {rounds} rounds), "
+                      "minor faults per 1000 points, new carved blocks in bytes per point:", flush=True)
+                for name in stage_cpu[-1]:
+                    user, system, minflt, fresh = (float(np.median([c[name][k] for c in stage_cpu]))
+                                                   for k in (1, 2, 3, 4))
+                    print(f"        {name:<20}{1e9 * user / count:>8.0f} +{1e9 * system / count:>6.0f}"
+                          f"{1e3 * minflt / count:>10.2f}{fresh / count:>10.1f}", flush=True)
             del beams, solid
         print(f"{integration:<12}slope of log(time/control) over log(points): {slope(sizes, ratios):.3f}")
         record("scaling_assembly", integration=integration, points=[int(p) for p in sizes],
