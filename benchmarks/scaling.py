@@ -16,7 +16,14 @@ log(time) over log(size) is fitted by least squares; 1 means cost proportional t
   (about ten element-based integration points per solid element; each fibre is 0.3 long, the cube
   1, so its n elements are 0.3 times as long as the solid elements): n = (points / 10)^(1/3),
   fibres = points / (4 n). Prints the time per call, per
-  integration point and per control, for each size, and the slope.
+  integration point and per control, for each size, and the slope. ``--stages`` also prints, per
+  size, the wall time per point of each stage (the call's ``timings``), the scene's work per point
+  (candidate pairs, groups of points, entries of M and D, solid and beam elements: if these stay
+  level, a growth of the cost per point is a growth of the cost of the same work), the pooled
+  blocks of ``carve`` after the call (in use, unused), and per stage (medians over the rounds) the
+  user and system CPU seconds, the minor page faults and the bytes of new (not reused) carved
+  blocks, each per point: the stage boundaries are the call's own clock readings, which the
+  benchmark records with ``getrusage`` as well.
 - ``newton``: one Newton iteration's evaluation ``Model.residual(z, t, tangent=True)`` (residual
   and tangent of the solid, the beams and the penalty coupling, in the basis of the unknowns) of a
   Saint Venant–Kirchhoff cube ``fibre_cube(n, fibres, elements)`` with torsion-free fibres,
@@ -164,7 +171,7 @@ def assembly(points, rounds, stages=False, order="generated"):
     m13.assemble_mortar(*m13.generate.fibre_cube(2, 2, 2), integration="element")     # compile before timing
     m13.assemble_mortar(*m13.generate.fibre_cube(2, 2, 2), integration="segment")
     for integration in ("element", "segment"):
-        sizes, ratios = [], []
+        sizes, ratios, cpu_calls = [], [], []
         for target in points:
             n = max(2, int(round((target / 10) ** (1 / 3))))
             fibres = max(1, int(round(target / (N_GAUSS * n))))
@@ -212,8 +219,12 @@ def assembly(points, rounds, stages=False, order="generated"):
                                                    for k in (1, 2, 3, 4))
                     print(f"        {name:<20}{1e9 * user / count:>8.0f} +{1e9 * system / count:>6.0f}"
                           f"{1e3 * minflt / count:>10.2f}{fresh / count:>10.1f}", flush=True)
+                cpu_calls.append(float(np.median([c["call"][1] + c["call"][2] for c in stage_cpu])))
             del beams, solid
         print(f"{integration:<12}slope of log(time/control) over log(points): {slope(sizes, ratios):.3f}")
+        if stages and len(sizes) > 1:
+            print(f"{integration:<12}slope of log(CPU seconds, user + system) over log(points): "
+                  f"{slope(sizes, cpu_calls):.3f}")
         record("scaling_assembly", integration=integration, points=[int(p) for p in sizes],
                per_control=ratios, slope=slope(sizes, ratios))
 
@@ -346,7 +357,9 @@ def main(argv=None):
                              "functions by own time")
     parser.add_argument("--stages", action="store_true",
                         help="assembly: also print the time per integration point of each stage of the call "
-                             "(search, segmentation, integration points, assembly, csr); newton: also print the "
+                             "(search, segmentation, integration points, assembly, csr), the work per point and "
+                             "each stage's user and system CPU, page faults and new carved bytes per point; "
+                             "newton: also print the "
                              "work per unknown (solid elements, tangent entries) and the CPU seconds of the call, "
                              "of the solid's element kernel and of the tangent's fresh pages, with their slopes")
     parser.add_argument("--order", choices=["generated", "morton"], default="generated",
