@@ -16,7 +16,14 @@ log(time) over log(size) is fitted by least squares; 1 means cost proportional t
   (about ten element-based integration points per solid element; each fibre is 0.3 long, the cube
   1, so its n elements are 0.3 times as long as the solid elements): n = (points / 10)^(1/3),
   fibres = points / (4 n). Prints the time per call, per
-  integration point and per control, for each size, and the slope.
+  integration point and per control, for each size, and the slope. ``--stages`` also prints, per
+  size, the wall time per point of each stage (the call's ``timings``), the scene's work per point
+  (candidate pairs, groups of points, entries of M and D, solid and beam elements: if these stay
+  level, a growth of the cost per point is a growth of the cost of the same work), the pooled
+  blocks of ``carve`` after the call (in use, unused), and per stage (medians over the rounds) the
+  user and system CPU seconds, the minor page faults and the bytes of new (not reused) carved
+  blocks, each per point: the stage boundaries are the call's own clock readings, which the
+  benchmark records with ``getrusage`` as well.
 - ``newton``: one Newton iteration's evaluation ``Model.residual(z, t, tangent=True)`` (residual
   and tangent of the solid, the beams and the penalty coupling, in the basis of the unknowns) of a
   Saint Venant–Kirchhoff cube ``fibre_cube(n, fibres, elements)`` with torsion-free fibres,
@@ -96,6 +103,67 @@ def spatially_ordered(beams, fibres):
     return m13.BeamMesh.hermite(positions[order].reshape(-1, 3), tangents[order].reshape(-1, 3), beams.elements)
 
 
+class _StageClock:
+    """Stands in for the ``time`` module of ``mortar1d3d.mortar.assemble`` during one call: each
+    ``perf_counter()`` reading (the call's stage boundaries, which fill its ``timings``) also
+    records the process's user and system CPU seconds and minor page faults at that moment."""
+
+    def __init__(self):
+        self.marks = []
+
+    def perf_counter(self):
+        usage = resource.getrusage(resource.RUSAGE_SELF)
+        t = time.perf_counter()
+        self.marks.append((t, usage.ru_utime, usage.ru_stime, usage.ru_minflt, _new_bytes()))
+        return t
+
+
+def _stage_call(call):
+    """``call()`` (an ``assemble_mortar``) with its stages' CPU seconds: the result and a dict
+    stage -> (wall, user, system seconds, minor faults). Each interval between two of the call's
+    clock readings is named by the ``timings`` entry with the same wall time (the same subtraction);
+    the interval from the last stage to the end of the call (the constraint residual and the
+    segments table) is "rest"."""
+    clock = _StageClock()
+    module = sys.modules["mortar1d3d.mortar.assemble"]
+    module.time = clock
+    try:
+        ops = call()
+    finally:
+        module.time = time
+    marks = clock.marks
+    names = {seconds: name for name, seconds in ops.timings.items() if name != "total"}
+    out = {}
+    for i in range(1, len(marks)):
+        name = names.get(marks[i][0] - marks[i - 1][0], "rest" if i == len(marks) - 1 else f"interval {i}")
+        out[name] = tuple(b - a for a, b in zip(marks[i - 1], marks[i]))
+    out["call"] = tuple(b - a for a, b in zip(marks[0], marks[-1]))
+    return ops, out
+
+
+def _new_bytes():
+    """Bytes of the new (not reused) blocks ``carve`` has made so far; NaN for a checkout without the count."""
+    from mortar1d3d import _memory
+    return getattr(_memory, "new_bytes", float("nan"))
+
+
+def _pool_bytes():
+    """GB of ``carve``'s pooled blocks (in use, unused); NaN for a checkout without ``pool_bytes``."""
+    from mortar1d3d import _memory
+    if not hasattr(_memory, "pool_bytes"):
+        return float("nan"), float("nan")
+    return tuple(b / 2**30 for b in _memory.pool_bytes())
+
+
+def _work(ops, n, fibres):
+    """The scene's own work per integration point (the same per point at every size if the cost
+    per point is to stay level)."""
+    count = ops.n_integration_points
+    return {"candidate pairs": ops.diagnostics["candidate_pairs"] / count, "groups": len(ops.segments) / count,
+            "M entries": ops.M.nnz / count, "D entries": ops.D.nnz / count, "solid elements": n ** 3 / count,
+            "beam elements": fibres * n / count}
+
+
 def assembly(points, rounds, stages=False, order="generated"):
     print(f"assembly: assemble_mortar on fibre_cube(n, fibres, n), {N_GAUSS} Gauss points, 1 thread; "
           f"median over {rounds} rounds")
@@ -103,7 +171,7 @@ def assembly(points, rounds, stages=False, order="generated"):
     m13.assemble_mortar(*m13.generate.fibre_cube(2, 2, 2), integration="element")     # compile before timing
     m13.assemble_mortar(*m13.generate.fibre_cube(2, 2, 2), integration="segment")
     for integration in ("element", "segment"):
-        sizes, ratios = [], []
+        sizes, ratios, cpu_calls = [], [], []
         for target in points:
             n = max(2, int(round((target / 10) ** (1 / 3))))
             fibres = max(1, int(round(target / (N_GAUSS * n))))
@@ -111,16 +179,26 @@ def assembly(points, rounds, stages=False, order="generated"):
             if order == "morton":
                 beams = spatially_ordered(beams, fibres)
             m13.assemble_mortar(beams, solid, integration=integration, n_gauss=N_GAUSS)      # first touch
-            times, per_control = [], []
+            times, per_control, stage_cpu = [], [], []
             for _ in range(rounds):
                 c = _control()
                 faults = _faults()
-                t, ops = _timed(lambda: m13.assemble_mortar(beams, solid, integration=integration, n_gauss=N_GAUSS))
+                if stages:
+                    t0 = time.perf_counter()
+                    ops, cpu = _stage_call(lambda: m13.assemble_mortar(beams, solid, integration=integration,
+                                                                       n_gauss=N_GAUSS))
+                    t = time.perf_counter() - t0
+                    stage_cpu.append(cpu)
+                    pooled = _pool_bytes()
+                else:
+                    t, ops = _timed(lambda: m13.assemble_mortar(beams, solid, integration=integration,
+                                                                n_gauss=N_GAUSS))
                 faults = _faults() - faults
                 times.append(t)
                 per_control.append(t / c)
                 count = ops.n_integration_points
                 timings = dict(ops.timings)
+                work = _work(ops, n, fibres) if stages else None
                 del ops
             t, r = float(np.median(times)), float(np.median(per_control))
             sizes.append(count)
@@ -131,8 +209,22 @@ def assembly(points, rounds, stages=False, order="generated"):
                 print("      ns per point by stage (last round): " + ", ".join(
                     f"{name} {1e9 * seconds / count:.0f}" for name, seconds in timings.items() if name != "total")
                     + f"; page faults per 1000 points {1e3 * faults / count:.2f}", flush=True)
+                print("      work per point: " + ", ".join(f"{name} {value:.4g}" for name, value in work.items())
+                      + "; pooled blocks after the call (GiB): in use {:.2f}, unused {:.2f}".format(*pooled),
+                      flush=True)
+                print(f"      CPU ns per point by stage, user + system (medians over {rounds} rounds), "
+                      "minor faults per 1000 points, new carved blocks in bytes per point:", flush=True)
+                for name in stage_cpu[-1]:
+                    user, system, minflt, fresh = (float(np.median([c[name][k] for c in stage_cpu]))
+                                                   for k in (1, 2, 3, 4))
+                    print(f"        {name:<20}{1e9 * user / count:>8.0f} +{1e9 * system / count:>6.0f}"
+                          f"{1e3 * minflt / count:>10.2f}{fresh / count:>10.1f}", flush=True)
+                cpu_calls.append(float(np.median([c["call"][1] + c["call"][2] for c in stage_cpu])))
             del beams, solid
         print(f"{integration:<12}slope of log(time/control) over log(points): {slope(sizes, ratios):.3f}")
+        if stages and len(sizes) > 1:
+            print(f"{integration:<12}slope of log(CPU seconds, user + system) over log(points): "
+                  f"{slope(sizes, cpu_calls):.3f}")
         record("scaling_assembly", integration=integration, points=[int(p) for p in sizes],
                per_control=ratios, slope=slope(sizes, ratios))
 
@@ -265,7 +357,9 @@ def main(argv=None):
                              "functions by own time")
     parser.add_argument("--stages", action="store_true",
                         help="assembly: also print the time per integration point of each stage of the call "
-                             "(search, segmentation, integration points, assembly, csr); newton: also print the "
+                             "(search, segmentation, integration points, assembly, csr), the work per point and "
+                             "each stage's user and system CPU, page faults and new carved bytes per point; "
+                             "newton: also print the "
                              "work per unknown (solid elements, tangent entries) and the CPU seconds of the call, "
                              "of the solid's element kernel and of the tangent's fresh pages, with their slopes")
     parser.add_argument("--order", choices=["generated", "morton"], default="generated",

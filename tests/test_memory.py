@@ -40,13 +40,30 @@ def test_a_block_with_any_array_alive_is_not_reused(empty_pool):
     assert e.ctypes.data == address        # both blocks free and equal: the older one is taken
 
 
-def test_unused_blocks_beyond_the_limit_are_given_back(empty_pool, monkeypatch):
+def test_a_new_block_first_gives_back_unused_blocks_of_its_size(empty_pool, monkeypatch):
     monkeypatch.setattr(_memory, "POOL_LIMIT", 10 << 20)
     held = [_memory.carve(((n, 1000), np.float64)) for n in (400, 500, 600)]   # blocks of 6, 6, 8 MiB
     assert [block.nbytes >> 20 for block in _memory._pool] == [6, 6, 8]
     del held
-    _memory.carve(((1200, 1000), np.float64))        # fits none (12 MiB); unused beyond 10 MiB go, oldest first
+    _memory.carve(((1200, 1000), np.float64))        # fits none (12 MiB): unused ones of 12 MiB go, oldest first
     assert [block.nbytes >> 20 for block in _memory._pool] == [8, 12]
+
+
+def test_blocks_in_use_at_once_are_kept_beyond_the_limit(empty_pool, monkeypatch):
+    """Unused blocks are kept up to the most the pool had in use at once (20 MiB here), not only up to
+    POOL_LIMIT: a repeated call of any size finds all its blocks again."""
+    monkeypatch.setattr(_memory, "POOL_LIMIT", 10 << 20)
+    sizes = (400, 500, 600)                                                    # blocks of 6, 6, 8 MiB
+    held = [_memory.carve(((n, 1000), np.float64))[0] for n in sizes]
+    addresses = [a.ctypes.data for a in held]
+    assert _memory.pool_bytes() == (20 << 20, 0)
+    del held
+    assert _memory.pool_bytes() == (0, 20 << 20)
+    again = [_memory.carve(((n, 1000), np.float64))[0] for n in sizes]
+    assert [a.ctypes.data for a in again] == addresses
+    del again
+    _memory.release_pool()
+    assert _memory.pool_bytes() == (0, 0) and _memory._most_in_use == 0
 
 
 def test_reused_memory_changes_no_result(empty_pool, monkeypatch):
