@@ -224,6 +224,12 @@ def _child(code, env, root, show):
             "in_process_s": own}
 
 
+def _matches(function, patterns):
+    """Whether the dotted name ``function`` contains one of ``patterns`` (a pattern ending in ``$``: ends with
+    it, e.g. ``search._find_pairs$`` without ``_find_pairs_chunk``; ``all``: every function)."""
+    return any(function.endswith(p[:-1]) if p.endswith("$") else (p == "all" or p in function) for p in patterns)
+
+
 def summarise(dumps, groups=()):
     """Own compile CPU seconds (LLVM part) by module of every ``--dump`` file, side by side, and of
     each group of functions named by a ``NAME=PATTERN[,PATTERN...]`` (a function is in the group when
@@ -241,7 +247,7 @@ def summarise(dumps, groups=()):
             if not module.startswith("mortar1d3d."):
                 module = "Numba's own implementations"
             for key, table in [(module, by_module)] + [
-                    (name, by_group) for name, patterns in groups if any(p in row["function"] for p in patterns)]:
+                    (name, by_group) for name, patterns in groups if _matches(row["function"], patterns)]:
                 table[key][0] += row["own_cpu_seconds"]
                 table[key][1] += row["own_llvm_seconds"]
                 table[key][2] += 1
@@ -281,7 +287,7 @@ def split(dumps, patterns):
             for callee, n in row["inlined"].items():
                 sites[callee] += n
                 callers[callee].add(row["function"])
-            if not ("all" in patterns or any(p in row["function"] for p in patterns)):
+            if not _matches(row["function"], patterns):
                 continue
             entry = table[row["function"]]
             entry["compilations"] += 1
@@ -293,7 +299,7 @@ def split(dumps, patterns):
                 rest -= t
             entry["rest"] += rest
         for name in sites:
-            if ("all" in patterns or any(p in name for p in patterns)) and name not in table:
+            if _matches(name, patterns) and name not in table:
                 table[name]["compilations"] += 0     # inlined only: never compiled on its own
         print(f"{Path(dump).name}: own compile CPU s per function (typing, lowering, LLVM, rest; x compilations; "
               f"inlined at IR level: sites in callers)")
@@ -321,7 +327,8 @@ def main(argv=None):
     parser.add_argument("--summarise", nargs="+", metavar="JSON",
                         help="print the own compile time by module of earlier --dump files (side by side) and exit")
     parser.add_argument("--group", action="append", default=[], metavar="NAME=PATTERN[,PATTERN]",
-                        help="with --summarise: also the total of the functions whose name contains a pattern")
+                        help="with --summarise: also the total of the functions whose name contains a pattern "
+                             "(ending in $: ends with it)")
     parser.add_argument("--split", nargs="+", metavar="PATTERN",
                         help="with --summarise: per function whose name contains a pattern ('all': every "
                              "function), its own time split into typing, lowering, LLVM and the rest, its "
