@@ -25,7 +25,13 @@ little to the wall time.
 
 ``--summarise A.json B.json [--group NAME=PATTERN,...]`` compiles nothing: it prints the own
 compile time of earlier dumps by module, side by side, and the totals of named groups of
-functions (e.g. ``--group rare=search_inside,locate_rare``).
+functions (e.g. ``--group rare=search_inside,locate_rare``; a pattern ending in ``$`` matches the end
+of a name). ``--summarise A.json --split PATTERN ...`` instead lists, per function whose name contains
+a pattern (``all``: every function), its own time split into typing (``nopython_type_inference``),
+lowering (``native_lowering``, ``native_parfor_lowering``), LLVM (every ``LLVM:`` stage) and the rest
+(Numba's other passes, the dispatcher), its compilations, and how often it was inlined at Numba IR
+level (``inline="always"``: call sites, and in how many functions; each copy is typed and lowered
+again in its caller): ``--dump`` records each compilation's stages and the functions inlined into it.
 
 ``--what element``: ``import mortar1d3d`` and the first element-based assembly of the same scene
 alone (what a user of element-based integration waits for on a first run).
