@@ -25,7 +25,13 @@ little to the wall time.
 
 ``--summarise A.json B.json [--group NAME=PATTERN,...]`` compiles nothing: it prints the own
 compile time of earlier dumps by module, side by side, and the totals of named groups of
-functions (e.g. ``--group rare=search_inside,locate_rare``).
+functions (e.g. ``--group rare=search_inside,locate_rare``; a pattern ending in ``$`` matches the end
+of a name). ``--summarise A.json --split PATTERN ...`` instead lists, per function whose name contains
+a pattern (``all``: every function), its own time split into typing (``nopython_type_inference``),
+lowering (``native_lowering``, ``native_parfor_lowering``), LLVM (every ``LLVM:`` stage) and the rest
+(Numba's other passes, the dispatcher), its compilations, and how often it was inlined at Numba IR
+level (``inline="always"``: call sites, and in how many functions; each copy is typed and lowered
+again in its caller): ``--dump`` records each compilation's stages and the functions inlined into it.
 
 ``--what element``: ``import mortar1d3d`` and the first element-based assembly of the same scene
 alone (what a user of element-based integration waits for on a first run). ``--what demo``: the
@@ -93,6 +99,8 @@ def _pop():
     if _frames:
         _frames[-1][3] += total
     _stages[name] += total - nested
+    if _compiles.stack:      # the same split per compilation (the innermost open one)
+        _compiles.stack[-1][3][name] += total - nested
     return total
 class _Listener(_event.Listener):
     # per open compilation: its start (CPU seconds of the process), the CPU seconds of the
@@ -100,19 +108,29 @@ class _Listener(_event.Listener):
     def __init__(self):
         self.stack = []
     def on_start(self, ev):
-        self.stack.append([time.process_time(), 0.0, 0.0])
+        self.stack.append([time.process_time(), 0.0, 0.0, collections.defaultdict(float), collections.Counter()])
         _push("compile", "rest of a compilation (dispatcher, outside the passes)")
     def on_end(self, ev):
         _pop()
-        start, nested, llvm = self.stack.pop()
+        start, nested, llvm, stages, inlined = self.stack.pop()
         total = time.process_time() - start
         if self.stack:
             self.stack[-1][1] += total
         d = ev.data.get("dispatcher")
         name = getattr(getattr(d, "py_func", None), "__qualname__", str(d))
         module = getattr(getattr(d, "py_func", None), "__module__", "?")
-        _spans.append((module + "." + name, total - nested, llvm, str(ev.data.get("args"))))
+        _spans.append((module + "." + name, total - nested, llvm, str(ev.data.get("args")), dict(stages),
+                       dict(inlined)))
 _compiles = _Listener()
+# functions inlined at Numba IR level (inline="always") into the open compilation, by name: each
+# copy is typed and lowered again as part of its caller
+from numba.core import inline_closurecall as _icc
+_inline_function = _icc.InlineWorker.inline_function
+def _counted_inline(self, caller_ir, block, i, function, *args, **kwargs):
+    if _compiles.stack:
+        _compiles.stack[-1][4][getattr(function, "__module__", "?") + "." + function.__qualname__] += 1
+    return _inline_function(self, caller_ir, block, i, function, *args, **kwargs)
+_icc.InlineWorker.inline_function = _counted_inline
 class _PassListener(_event.Listener):
     def on_start(self, ev):
         _push("pass", "pass " + ev.data["name"].split(" [")[0])
@@ -172,15 +190,15 @@ def _report():
     own = collections.defaultdict(float)
     own_llvm = collections.defaultdict(float)
     count = collections.Counter()
-    for name, t, llvm, _args in _spans:
+    for name, t, llvm, _args, _split, _inlined in _spans:
         own[name] += t
         own_llvm[name] += llvm
         count[name] += 1
     if DUMP:
         import json
         with open(DUMP, "w") as f:
-            json.dump([{"function": n, "own_cpu_seconds": t, "own_llvm_seconds": l, "args": a}
-                       for n, t, l, a in _spans], f, indent=0)
+            json.dump([{"function": n, "own_cpu_seconds": t, "own_llvm_seconds": l, "args": a, "stages": st,
+                        "inlined": il} for n, t, l, a, st, il in _spans], f, indent=0)
     top = sorted(own.items(), key=lambda kv: -kv[1])[:KERNELS]
     total = sum(own.values())
     print(f"compiling: {total:.1f} CPU s ({sum(own_llvm.values()):.1f} s of it in LLVM) in {len(_spans)} "
@@ -219,6 +237,12 @@ def _child(code, env, root, show):
             "in_process_s": own}
 
 
+def _matches(function, patterns):
+    """Whether the dotted name ``function`` contains one of ``patterns`` (a pattern ending in ``$``: ends with
+    it, e.g. ``search._find_pairs$`` without ``_find_pairs_chunk``; ``all``: every function)."""
+    return any(function.endswith(p[:-1]) if p.endswith("$") else (p == "all" or p in function) for p in patterns)
+
+
 def summarise(dumps, groups=()):
     """Own compile CPU seconds (LLVM part) by module of every ``--dump`` file, side by side, and of
     each group of functions named by a ``NAME=PATTERN[,PATTERN...]`` (a function is in the group when
@@ -236,7 +260,7 @@ def summarise(dumps, groups=()):
             if not module.startswith("mortar1d3d."):
                 module = "Numba's own implementations"
             for key, table in [(module, by_module)] + [
-                    (name, by_group) for name, patterns in groups if any(p in row["function"] for p in patterns)]:
+                    (name, by_group) for name, patterns in groups if _matches(row["function"], patterns)]:
                 table[key][0] += row["own_cpu_seconds"]
                 table[key][1] += row["own_llvm_seconds"]
                 table[key][2] += 1
@@ -250,6 +274,52 @@ def summarise(dumps, groups=()):
             [(m, [t[0][m] for t in tables]) for m in modules]:
         cells = " | ".join(f"{cpu:6.2f} ({llvm:5.2f}, {n:3d})" for cpu, llvm, n in rows)
         print(f"  {cells}  {label}")
+
+
+#: --split's columns: which stages of a compilation (``--dump``'s ``stages``) count as what
+SPLIT = (("typing", ("type_inference",)), ("lowering", ("lowering",)), ("LLVM", ("LLVM: ",)))
+
+
+def split(dumps, patterns):
+    """Per function whose dotted name contains one of ``patterns`` (all functions with ``all``), from
+    each ``--dump`` file: its compilations, own compile CPU s split into typing, lowering, LLVM and the
+    rest (Numba's other passes, the dispatcher), and how often it was inlined at Numba IR level
+    (``inline="always"``: sites, and the distinct functions it was inlined into, each of which types
+    and lowers the copy again); largest first."""
+    import collections
+    import json
+
+    for dump in dumps:
+        rows = json.loads(Path(dump).read_text())
+        if rows and "stages" not in rows[0]:
+            raise SystemExit(f"{dump}: written by an older cold_start.py (no stages per compilation)")
+        table = collections.defaultdict(lambda: collections.Counter())
+        sites = collections.Counter()
+        callers = collections.defaultdict(set)
+        for row in rows:
+            for callee, n in row["inlined"].items():
+                sites[callee] += n
+                callers[callee].add(row["function"])
+            if not _matches(row["function"], patterns):
+                continue
+            entry = table[row["function"]]
+            entry["compilations"] += 1
+            entry["own"] += row["own_cpu_seconds"]
+            rest = row["own_cpu_seconds"]
+            for column, keys in SPLIT:
+                t = sum(v for k, v in row["stages"].items() if any(key in k for key in keys))
+                entry[column] += t
+                rest -= t
+            entry["rest"] += rest
+        for name in sites:
+            if _matches(name, patterns) and name not in table:
+                table[name]["compilations"] += 0     # inlined only: never compiled on its own
+        print(f"{Path(dump).name}: own compile CPU s per function (typing, lowering, LLVM, rest; x compilations; "
+              f"inlined at IR level: sites in callers)")
+        for name, e in sorted(table.items(), key=lambda kv: -kv[1]["own"]):
+            inl = f"  inlined {sites[name]} in {len(callers[name])}" if sites[name] else ""
+            print(f"  {e['own']:6.2f}  ({e['typing']:5.2f}, {e['lowering']:5.2f}, {e['LLVM']:5.2f}, {e['rest']:5.2f}) "
+                  f"x{e['compilations']}{inl}  {name}")
 
 
 def main(argv=None):
@@ -270,8 +340,16 @@ def main(argv=None):
     parser.add_argument("--summarise", nargs="+", metavar="JSON",
                         help="print the own compile time by module of earlier --dump files (side by side) and exit")
     parser.add_argument("--group", action="append", default=[], metavar="NAME=PATTERN[,PATTERN]",
-                        help="with --summarise: also the total of the functions whose name contains a pattern")
+                        help="with --summarise: also the total of the functions whose name contains a pattern "
+                             "(ending in $: ends with it)")
+    parser.add_argument("--split", nargs="+", metavar="PATTERN",
+                        help="with --summarise: per function whose name contains a pattern ('all': every "
+                             "function), its own time split into typing, lowering, LLVM and the rest, its "
+                             "compilations and how often it was inlined at IR level")
     args = parser.parse_args(argv)
+    if args.summarise and args.split:
+        split(args.summarise, args.split)
+        return
     if args.summarise:
         summarise(args.summarise, [(g.split("=", 1)[0], g.split("=", 1)[1].split(",")) for g in args.group])
         return

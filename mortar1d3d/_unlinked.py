@@ -236,7 +236,7 @@ def unlinked(dispatcher, returns=None, cases=None):
 
     @intrinsic
     def call(typingctx, *args):
-        argtypes = tuple(types.unliteral(a) for a in args)
+        argtypes = tuple(_argument_type(a) for a in args)
         if cases is not None:
             variants = {k: (types.literal(k),) + argtypes[1:] for k in cases}
             symbols = {k: _declare_lazy(dispatcher, variants[k], returns) for k in cases}
@@ -294,6 +294,14 @@ def unlinked(dispatcher, returns=None, cases=None):
 
     call.__name__ = call.__qualname__ = f"unlinked_{dispatcher.py_func.__name__}"
     return call
+
+
+def _argument_type(argtype):
+    """The callee's type of an argument: not a literal, and a uint64 passed as an int64. A ``prange`` index is
+    an int64 when its kernel is typed and a uint64 in the parallel body typed afterwards: one signature
+    of the callee instead of two (the same value: an index is far below 2**63)."""
+    argtype = types.unliteral(argtype)
+    return types.int64 if argtype == types.uint64 else argtype
 
 
 def _load_lazy(context, builder, fnty, symbol):

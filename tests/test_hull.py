@@ -196,3 +196,22 @@ def test_operators_are_the_same_without_the_planes(element, monkeypatch):
                 np.testing.assert_array_equal(values, b.point_fields[field], err_msg=field)
             else:
                 same(values, b.point_fields[field], max(1.0, np.abs(b.point_fields[field]).max()), field)
+
+
+def test_a_mesh_without_hull_types_gets_the_kernels_zeros_without_it():
+    """A hex8 mesh (no type with hull planes) gets from :func:`solid_hulls` exactly what the kernel
+    writes for it (0, 0, 0, 0 rows: no bound) without the kernel being run; a mesh with one such
+    element runs it."""
+    from mortar1d3d.geometry import search
+
+    b, solid = generate.fibre_cube(3, 2, 3)
+    _, h, origin = solid_frames(solid)
+    args = (solid.kernel_points, solid.connectivity, solid.element_codes, origin, h)
+    kernel = np.full((solid.n_elements, MAX_FACES, 4), np.nan)
+    search._solid_hulls(*args, HULL_MARGIN, kernel, 1)
+    skipped = solid_hulls(*args)
+    assert skipped.shape == kernel.shape and not np.isnan(kernel).any()
+    assert skipped.tobytes() == kernel.tobytes() == bytes(kernel.nbytes)
+    tet = generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1), "tetra")
+    hull, _, _ = hulls(tet)
+    assert np.count_nonzero(hull[:, :4, :3]) > 0

@@ -272,8 +272,9 @@ def certified_margin(code, X, L, a):
 
 
 #: computed once per element, on the rare calls that need it: through a symbol, not compiled into every
-#: kernel that inlines locate_point (see mortar1d3d._unlinked)
-_certified_margin_call = unlinked(certified_margin)
+#: kernel that inlines locate_point (see mortar1d3d._unlinked); lazily: compiled when a scene first meets a
+#: Newton solution outside a curved element (never for a mesh of affine elements)
+_certified_margin_call = unlinked(certified_margin, returns=types.float64)
 #: ``table[s, 4, 1]`` of an element whose certificate :func:`linear_maps` left to its first use (see
 #: :func:`certified_outside`)
 PENDING_CERTIFICATE = -2.0

@@ -496,6 +496,10 @@ _hull_planes_call = unlinked(hull_planes, returns=types.none)
 def solid_hulls(points, conn, codes, solid_origin, solid_h, margin=HULL_MARGIN):
     """(n_elements, MAX_FACES, 4): the half-spaces of :func:`hull_planes` of every solid element, local to
     its origin, ``margin`` · h outside its control points (``points``: the mesh's ``kernel_points``)."""
+    if not HULL_TEST[codes].any():
+        # what the kernel writes for types without hull planes (no bound): a mesh of those (hex8) never
+        # compiles it
+        return np.zeros((conn.shape[0], MAX_FACES, 4))
     hull = np.empty((conn.shape[0], MAX_FACES, 4))
     _solid_hulls(points, conn, codes, solid_origin, solid_h, margin, hull, workers())
     return hull
