@@ -71,8 +71,10 @@ class BandedCholesky:
         A = sp.coo_matrix(A)
         n = A.shape[0]
         lower = A.row >= A.col
-        band = np.zeros((bandwidth + 1, n))
-        np.add.at(band, (A.row[lower] - A.col[lower], A.col[lower]), A.data[lower])
+        # summed by np.bincount (np.add.at's unbuffered scatter took 0.1-0.2 s for the 126,000 beam DOFs
+        # of fibre_cube(20, 1000, 20)); duplicates are summed in the same order
+        flat = (A.row[lower] - A.col[lower]).astype(np.int64) * n + A.col[lower]
+        band = np.bincount(flat, weights=A.data[lower], minlength=(bandwidth + 1) * n).reshape(bandwidth + 1, n)
         self.factor = scipy.linalg.cholesky_banded(band, lower=True, overwrite_ab=True, check_finite=False)
         self.shape = A.shape
 
