@@ -733,3 +733,49 @@ def test_fibre_cube_certificates(curved):
         np.testing.assert_allclose(fine.embedded_length, fine.beam_length, rtol=1e-13)
     # every fibre is fully inside: every beam node's LM is coupled
     assert np.all(ops.kappa > 0)
+
+
+# -- 4. block CSR of the local matrices = a stable sort and sums in gather order --------------------
+
+@pytest.mark.parametrize("n_cols, width_range", [(40, (2, 9)), (400, (30, 61))])
+def test_gathered_block_csr_sums_in_gather_order(n_cols, width_range):
+    """Random groups (several per beam element, columns in no order, repeated within and across
+    groups): each row's columns ascending and each sum in the gather order (beam elements, groups,
+    columns), bit for bit. The first case gives rows of a few distinct columns, the second rows of
+    far more than ``sparse._RANK_MAX`` (the two ways the fill orders a row)."""
+    from mortar1d3d.mortar import sparse
+    rng = np.random.default_rng(7)
+    n_beam, n_phi, block = 30, 2, 3
+    lm_index = np.stack([np.arange(n_beam), np.arange(1, n_beam + 1)], axis=1).astype(np.int64)
+    n_rows = n_beam + 1
+    beam_groups = np.concatenate([[0], np.cumsum(rng.integers(1, 4, n_beam))]).astype(np.int64)
+    n_groups = beam_groups[-1]
+    width = rng.integers(*width_range, n_groups).astype(np.int64)
+    col_table = np.full((n_groups, width.max()), -1, dtype=np.int64)
+    for g in range(n_groups):
+        col_table[g, :width[g]] = rng.integers(0, n_cols, width[g])
+    entry_start = np.concatenate([[0], np.cumsum(n_phi * width)[:-1]]).astype(np.int64)
+    vals = rng.standard_normal(int((n_phi * width).sum())) * 10.0 ** rng.integers(-8, 8, int((n_phi * width).sum()))
+    src_offsets, src = sparse.row_sources(lm_index, n_phi, n_rows)
+    matrix = sparse.gathered_block_csr(src_offsets, src, n_phi, beam_groups, entry_start, width, col_table,
+                                       np.arange(n_groups, dtype=np.int64), vals, (n_rows, n_cols), block)
+    longest = 0
+    for r in range(n_rows):
+        sums = {}
+        for e in range(n_beam):                       # beam elements ascending, as row_sources lists them
+            for j in range(n_phi):
+                if lm_index[e, j] != r:
+                    continue
+                for g in range(beam_groups[e], beam_groups[e + 1]):
+                    for q in range(width[g]):
+                        c = int(col_table[g, q])
+                        v = vals[entry_start[g] + j * width[g] + q]
+                        sums[c] = sums[c] + v if c in sums else v
+        cols = sorted(sums)
+        longest = max(longest, len(cols))
+        for i in range(block):
+            row = block * r + i
+            got = slice(matrix.indptr[row], matrix.indptr[row + 1])
+            np.testing.assert_array_equal(matrix.indices[got], block * np.array(cols) + i)
+            assert matrix.data[got].tobytes() == np.array([sums[c] for c in cols]).tobytes()
+    assert (longest <= sparse._RANK_MAX) == (n_cols == 40)

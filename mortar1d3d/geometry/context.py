@@ -89,7 +89,7 @@ class KernelInput:
         self.beam_code = beams.element_type.code
         self.hull = solid_hulls(self.points, self.conn, self.codes, self.solid_origin, self.solid_h)
         self.pair_offsets, self.pair_solid = find_candidate_pairs(self.beam_boxes, self.solid_boxes)
-        if HULL_TEST[np.unique(self.codes)].any():
+        if HULL_TEST[self.codes].any():
             self.pair_offsets, self.pair_solid = hull_pairs(self.pair_offsets, self.pair_solid, self.hull,
                                                             self.solid_origin, self.beam_code, self.Q, self.lengths,
                                                             self.beam_origin, self.beam_boxes)

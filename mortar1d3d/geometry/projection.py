@@ -8,6 +8,7 @@ All buffers come from the caller; nothing here allocates.
 import numpy as np
 from numba import prange, types
 
+from .._borrowed import borrowed
 from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit, njit_inline, njit_parallel
 from .._schedule import claim, new_claims, workers
 from .._unlinked import unlinked
@@ -716,6 +717,10 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
 
 @njit
 def _linear_maps_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, xc):
+    # the caller holds every array for this call: the calls per element pass them without reference
+    # counting (see mortar1d3d._borrowed)
+    points, conn, codes, solid_origin, solid_h, table, X, N, dN, xc = borrowed(points, conn, codes, solid_origin,
+                                                                               solid_h, table, X, N, dN, xc)
     for s in range(begin, stop):
         code = codes[s]
         load_element(points, conn, s, code, solid_origin, X)

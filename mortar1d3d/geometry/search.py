@@ -15,6 +15,7 @@ import numpy as np
 from numba import prange, types
 
 from .._config import PARAMETER_TOL, njit, njit_parallel, njit_inline
+from .._borrowed import borrowed
 from .._memory import carve
 from .._unlinked import unlinked
 from .._schedule import claim, new_claims, workers
@@ -106,6 +107,9 @@ def _solid_boxes(points, conn, codes, padding, boxes, size, origin, workers):
 
 @njit
 def _solid_boxes_chunk(begin, stop, points, conn, codes, padding, boxes, size, origin, X, C):
+    # the caller holds every array for this call: the calls per element pass them without reference
+    # counting (see mortar1d3d._borrowed)
+    points, conn, codes, boxes, size, origin, X, C = borrowed(points, conn, codes, boxes, size, origin, X, C)
     for s in range(begin, stop):
         code = codes[s]
         for a in range(N_NODES[code]):
@@ -184,6 +188,7 @@ def _bin_part(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, ids):
 
     When placing, ``counts[part, c]`` holds the part's next slot in cell c.
     """
+    solid_boxes, lower, dims, counts, ids = borrowed(solid_boxes, lower, dims, counts, ids)
     n_solid = solid_boxes.shape[0]
     lo = np.empty(3, dtype=np.int64)
     hi = np.empty(3, dtype=np.int64)
@@ -228,12 +233,17 @@ def _bin_solids(solid_boxes, lower, inv_cell, dims, n_parts):
     return offsets, ids
 
 
-@njit
-def _overlap(a, b):
+@njit_inline
+def _overlap(box, boxes, s):
+    """Whether ``box`` and ``boxes[s]`` overlap (inlined: no view of the row, no reference counting)."""
     for i in range(3):
-        if a[1, i] < b[0, i] or b[1, i] < a[0, i]:
+        if box[1, i] < boxes[s, 0, i] or boxes[s, 1, i] < box[0, i]:
             return False
     return True
+
+
+#: candidate lists up to this long are sorted in place by insertion (longer ones by numpy's sort)
+_INSERTION_SORT_MAX = 32
 
 
 @njit
@@ -270,10 +280,19 @@ def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, di
                     if seen[s] == stamp:
                         continue
                     seen[s] = stamp
-                    if _overlap(box, solid_boxes[s]):
+                    if _overlap(box, solid_boxes, s):
                         out[n] = s
                         n += 1
-    out[:n].sort()
+    if n > _INSERTION_SORT_MAX:
+        out[:n].sort()
+        return n
+    for a in range(1, n):                    # insertion sort: a few candidates per box, no call
+        s = out[a]
+        b = a
+        while b > 0 and out[b - 1] > s:
+            out[b] = out[b - 1]
+            b -= 1
+        out[b] = s
     return n
 
 
@@ -322,6 +341,8 @@ def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell
 
 @njit
 def _cell_totals_chunk(begin, stop, beam_boxes, cell_offsets, lower, inv_cell, dims, lo, hi, bound):
+    beam_boxes, cell_offsets, lower, dims, lo, hi, bound = borrowed(beam_boxes, cell_offsets, lower, dims, lo, hi,
+                                                                    bound)
     for e in range(begin, stop):
         bound[e + 1] = _cell_total(beam_boxes[e], cell_offsets, lower, inv_cell, dims, lo, hi)
 
@@ -329,6 +350,10 @@ def _cell_totals_chunk(begin, stop, beam_boxes, cell_offsets, lower, inv_cell, d
 @njit
 def _candidates_chunk(begin, stop, beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, lo, hi, work,
                       room, counts, seen):
+    # the caller holds every array for this call: the call per beam element passes them without
+    # reference counting (see mortar1d3d._borrowed)
+    beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, dims, lo, hi, work, room, counts, seen = borrowed(
+        beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, dims, lo, hi, work, room, counts, seen)
     for e in range(begin, stop):
         counts[e + 1] = _candidates_of_call(beam_boxes[e], solid_boxes, cell_offsets, cell_ids, lower, inv_cell,
                                             dims, lo, hi, work[room[e]:room[e + 1]], seen, e)
@@ -465,6 +490,8 @@ def _solid_hulls(points, conn, codes, solid_origin, solid_h, margin, hull, worke
 
 @njit
 def _solid_hulls_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, margin, hull, X, C):
+    points, conn, codes, solid_origin, solid_h, hull, X, C = borrowed(points, conn, codes, solid_origin, solid_h,
+                                                                     hull, X, C)
     for s in range(begin, stop):
         code = codes[s]
         if not HULL_TEST[code]:
@@ -517,7 +544,7 @@ def in_hull(hull, s, x0, x1, x2):
     return True
 
 
-@njit
+@njit_inline
 def _separated(hull, s, ctrl, n_ctrl, t0, t1, t2, pad):
     """Whether a plane of ``hull[s]`` has all of ``ctrl[:n_ctrl]`` + t beyond it by more than ``pad``."""
     for f in range(hull.shape[1]):

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import prange
 
+from .._borrowed import borrowed
 from .._config import announce_compilation, njit, njit_parallel
 from .._memory import carve
 from .._unlinked import unlinked
@@ -145,6 +146,12 @@ def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, l
 @njit
 def _group_operators_chunk(begin, stop, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
                            codes, conn, points, m_offsets, D_local, M_local, kappa_local, Dg, Mg, kg, Phi, H, N, nH):
+    # the caller holds every array for this call: the calls per point pass them without reference
+    # counting (see mortar1d3d._borrowed)
+    (group_start, p_beam, p_solid, eta, xi, weight, lengths, codes, conn, points, m_offsets, D_local, M_local,
+     kappa_local, Dg, Mg, kg, Phi, H, N) = borrowed(group_start, p_beam, p_solid, eta, xi, weight, lengths, codes, conn,
+                                                   points, m_offsets, D_local, M_local, kappa_local, Dg, Mg, kg, Phi, H,
+                                                   N)
     for g in range(begin, stop):
         e = p_beam[group_start[g]]
         s = p_solid[group_start[g]]

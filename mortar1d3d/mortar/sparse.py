@@ -17,6 +17,11 @@ from .._schedule import claim, n_chunks, new_claims, workers
 from .._unlinked import unlinked
 
 
+#: rows with up to this many distinct columns are ordered by counting (m² comparisons without branches),
+#: longer ones by an insertion sort
+_RANK_MAX = 64
+
+
 @njit
 def row_sources(lm_index, n_phi, n_rows):
     """CSR over LM rows of the (beam element, local function) pairs that feed each row."""
@@ -82,18 +87,19 @@ def _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_tab
         cols = np.empty(max_unique, dtype=np.int64)
         vs = np.empty(max_unique)
         slot = np.full(n_cols, -1, dtype=np.int64)
+        rank = np.empty(max_unique, dtype=np.int64)
         begin, stop = claim(claims, n_rows, worker)
         while begin < stop:
             _fill_rows_chunk_call(begin, stop, src_offsets, src, n_phi, beam_groups, entry_start, width, col_table,
-                                  col_row, vals, first, block, indices, data, cols, vs, slot)
+                                  col_row, vals, first, block, indices, data, cols, vs, slot, rank)
             begin, stop = claim(claims, n_rows, worker)
 
 
 @njit
 def _fill_rows_chunk(begin, stop, src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row, vals,
-                     first, block, indices, data, cols, vs, slot):
-    """The rows ``begin:stop`` of :func:`_fill_rows` (its loop body per claimed chunk; ``cols``, ``vs`` and
-    ``slot`` the worker's buffers, ``slot`` all -1 on entry and on return)."""
+                     first, block, indices, data, cols, vs, slot, rank):
+    """The rows ``begin:stop`` of :func:`_fill_rows` (its loop body per claimed chunk; ``cols``, ``vs``,
+    ``slot`` and ``rank`` the worker's buffers, ``slot`` all -1 on entry and on return)."""
     for r in range(begin, stop):
         m = 0
         for t in range(src_offsets[r], src_offsets[r + 1]):
@@ -114,21 +120,33 @@ def _fill_rows_chunk(begin, stop, src_offsets, src, n_phi, beam_groups, entry_st
                         vs[k] += vals[base + q]
         for t in range(m):
             slot[cols[t]] = -1
-        for i in range(1, m):                # insertion sort of the distinct columns (short rows)
-            c = cols[i]
-            v = vs[i]
-            k = i - 1
-            while k >= 0 and cols[k] > c:
-                cols[k + 1] = cols[k]
-                vs[k + 1] = vs[k]
-                k -= 1
-            cols[k + 1] = c
-            vs[k + 1] = v
+        if m <= _RANK_MAX:
+            # each distinct column's place in the sorted row: the number of smaller ones (no branch per
+            # comparison, unlike a sort: the row's columns come in no order the branches could learn)
+            for t in range(m):
+                c = cols[t]
+                k = 0
+                for u in range(m):
+                    k += cols[u] < c
+                rank[t] = k
+        else:
+            for i in range(1, m):            # insertion sort of the distinct columns (long rows)
+                c = cols[i]
+                v = vs[i]
+                k = i - 1
+                while k >= 0 and cols[k] > c:
+                    cols[k + 1] = cols[k]
+                    vs[k + 1] = vs[k]
+                    k -= 1
+                cols[k + 1] = c
+                vs[k + 1] = v
+            for t in range(m):
+                rank[t] = t
         for i in range(block):
             out = block * first[r] + i * m
             for t in range(m):
-                indices[out + t] = block * cols[t] + i
-                data[out + t] = vs[t]
+                indices[out + rank[t]] = block * cols[t] + i
+                data[out + rank[t]] = vs[t]
 
 
 #: the loop body of :func:`_fill_rows` (per claimed chunk), optimised once: called through a symbol
