@@ -4,6 +4,7 @@
                                                 [--stage call|search|points] [--distort 0.1]
                                                 [--n 10] [--fibres 200] [--calls 3]
                                                 [--element hexahedron|hexahedron27|tetra10|nurbs27] [--atomics]
+                                                [--functions K]
 
 On a shared, noisy machine seconds move by ±10 % from one run to the next; the number of executed
 instructions does not (callgrind counts them on a simulated CPU, whatever else the machine does).
@@ -20,6 +21,14 @@ interpreter, numpy/scipy and the rest, and each checkout's ratios to the first o
 are the reference counting of arrays passed to compiled calls that Numba could not prune
 (``benchmarks/atomics.py`` shows where they sit in the code): each costs tens of cycles, but counts
 as one instruction above.
+
+``--functions K`` also prints the K compiled functions that executed the most kernel instructions per
+call. Valgrind sees Numba's code without symbols and names each piece by an address; the child
+writes the entry address of every compiled function of the package (each dispatcher's compile
+results), and each address is given to the nearest entry at or below it. Callees compiled into a
+caller's code library (LLVM inlined them, or linked a private copy) count as the caller's, so a
+Newton path's chunk function carries the projection it calls; what lies below every entry (the
+parallel launch, Numba's runtime) is listed as such.
 
 Counts say whether a version *does more work*. Two versions with equal counts and different
 times differ in how the CPU runs the same work (code layout, branch prediction, memory), which
