@@ -4,6 +4,7 @@
                                                 [--stage call|search|points] [--distort 0.1]
                                                 [--n 10] [--fibres 200] [--calls 3]
                                                 [--element hexahedron|hexahedron27|tetra10|nurbs27] [--atomics]
+                                                [--functions K]
 
 On a shared, noisy machine seconds move by ±10 % from one run to the next; the number of executed
 instructions does not (callgrind counts them on a simulated CPU, whatever else the machine does).
@@ -20,6 +21,14 @@ interpreter, numpy/scipy and the rest, and each checkout's ratios to the first o
 are the reference counting of arrays passed to compiled calls that Numba could not prune
 (``benchmarks/atomics.py`` shows where they sit in the code): each costs tens of cycles, but counts
 as one instruction above.
+
+``--functions K`` also prints the K compiled functions that executed the most kernel instructions per
+call. Valgrind sees Numba's code without symbols and names each piece by an address; the child
+writes the entry address of every compiled function of the package (each dispatcher's compile
+results), and each address is given to the nearest entry at or below it. Callees compiled into a
+caller's code library (LLVM inlined them, or linked a private copy) count as the caller's, so a
+Newton path's chunk function carries the projection it calls; what lies below every entry (the
+parallel launch, Numba's runtime) is listed as such.
 
 Counts say whether a version *does more work*. Two versions with equal counts and different
 times differ in how the CPU runs the same work (code layout, branch prediction, memory), which
@@ -95,6 +104,35 @@ def _child(args):
     call()
     for _ in range(args.child_calls):
         call()
+    if args.entries:
+        _write_entries(args.entries)
+
+
+def _write_entries(path):
+    """Write the entry address and name of every compiled function of the package loaded in this
+    process (``--functions``), one line ``address name`` each: each dispatcher's compile results,
+    found as module attributes of the ``mortar1d3d`` modules. (Only entry points: a code library
+    loaded from the cache keeps no object code whose symbol table would name the callees inside it.)"""
+    from numba.core.registry import CPUDispatcher
+    entries = {}
+    for name, module in list(sys.modules.items()):
+        if not (name == "mortar1d3d" or name.startswith("mortar1d3d.")):
+            continue
+        for attr in list(vars(module).values()):
+            if not isinstance(attr, CPUDispatcher):
+                continue
+            for argtypes, cres in list(attr.overloads.items()):
+                try:
+                    address = cres.library.get_pointer_to_function(cres.fndesc.llvm_func_name)
+                except Exception:
+                    continue
+                if address:
+                    literal = [str(t.literal_value) for t in argtypes if hasattr(t, "literal_value")]
+                    entries[address] = (f"{attr.py_func.__module__}.{attr.py_func.__qualname__}"
+                                        + (f"[{','.join(literal)}]" if literal else ""))
+    with open(path, "w") as f:
+        for address in sorted(entries):
+            f.write(f"{address:x} {entries[address]}\n")
 
 
 def _environment(package, args):
@@ -110,6 +148,34 @@ TARGET = "haswell"
 #: its instruction sets, named explicitly: otherwise Numba asks the CPU it runs on, and valgrind's
 #: answer differs from the host's (the cache would then miss under valgrind)
 TARGET_FEATURES = "+sse2,+sse3,+ssse3,+sse4.1,+sse4.2,+popcnt,+avx,+avx2,+fma,+bmi,+bmi2,+lzcnt,+movbe,+f16c,+cx16"
+
+
+def _by_function(path, entries_path):
+    """Kernel instructions of a callgrind output per compiled function (``--functions``). Valgrind
+    sees Numba's code without symbols and names each piece of it by an address; each address is
+    given to the compiled function whose entry point (written by the child, :func:`_write_entries`)
+    is the nearest one at or below it. What LLVM inlined counts as its caller's; code between
+    entries that are not listed (a ``prange`` kernel's body, wrappers) counts as the entry before
+    it, so read the names as \"this function and what follows it in memory\"."""
+    import bisect
+    starts, names = [], []
+    for line in Path(entries_path).read_text().splitlines():
+        address, name = line.split(" ", 1)
+        starts.append(int(address, 16))
+        names.append(name)
+    text = subprocess.run(["callgrind_annotate", "--inclusive=no", "--threshold=100", "--show=Ir", str(path)],
+                          capture_output=True, text=True, check=True).stdout
+    totals = {}
+    for line in text.splitlines():
+        # e.g. "  679,642 ( 0.03%)  ???:0x00000000049367a8 [???]" (a suffix "'2": a recursion level)
+        match = re.match(r"\s*([\d,]+) \(\s*[\d.]+%\)\s+\?\?\?:0x([0-9a-fA-F]+)(?:'\d+)?\s+\[\?\?\?\]\s*$", line)
+        if not match:
+            continue
+        address = int(match.group(2), 16)
+        i = bisect.bisect_right(starts, address) - 1
+        name = names[i] if i >= 0 else "(below every entry)"
+        totals[name] = totals.get(name, 0) + int(match.group(1).replace(",", ""))
+    return totals
 
 
 def _by_object(path, event="Ir"):
@@ -135,17 +201,24 @@ PARTS = ("kernels", "python", "numpy/scipy", "other")
 
 def _count(package, args, calls):
     """Instructions executed by a child that makes ``calls`` extra calls: {"Ir": {part: count}}, and with
-    ``--atomics`` the atomic instructions too ({"Ge": {part: count}})."""
+    ``--atomics`` the atomic instructions too ({"Ge": {part: count}}); with ``--functions`` the kernels'
+    instructions per compiled function too ({"functions": {name: count}})."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "callgrind.out"
+        entries = Path(tmp) / "entries.txt"
         cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", f"--collect-bus={'yes' if args.atomics else 'no'}",
                sys.executable, str(HERE), "--child", "--package", str(package), "--integration",
                args.integration, "--distort", str(args.distort), "--n", str(args.n), "--fibres",
                str(args.fibres), "--element", args.element, "--stage", args.stage, "--child-calls", str(calls)]
+        if args.functions:
+            cmd += ["--entries", str(entries)]
         done = subprocess.run(cmd, env=_environment(package, args), capture_output=True, text=True)
         if done.returncode != 0:
             raise SystemExit(f"child failed ({package}, {calls} calls):\n{done.stderr[-2000:]}")
-        return {event: _by_object(out, event) for event in (("Ir", "Ge") if args.atomics else ("Ir",))}
+        counts = {event: _by_object(out, event) for event in (("Ir", "Ge") if args.atomics else ("Ir",))}
+        if args.functions:
+            counts["functions"] = _by_function(out, entries)
+        return counts
 
 
 def main(argv=None):
@@ -169,7 +242,12 @@ def main(argv=None):
     parser.add_argument("--atomics", action="store_true",
                         help="count the executed atomic (lock-prefixed) instructions too: callgrind's global "
                              "bus events, e.g. the reference counting of arrays passed to compiled calls")
+    parser.add_argument("--functions", type=int, default=0, metavar="K",
+                        help="also print the K compiled functions with the most kernel instructions per call "
+                             "(each address given to the nearest compiled entry point below it; inlined code "
+                             "counts as its caller's)")
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--entries", help=argparse.SUPPRESS)
     parser.add_argument("--child-calls", type=int, default=0, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.child:
@@ -192,7 +270,8 @@ def main(argv=None):
             more = _count(package, args, args.calls)
             if sum(more["Ir"].values()) < sum(base["Ir"].values()):
                 raise SystemExit(f"{package}: counts still inconsistent (compilation inside the counted runs?)")
-        per_call = {event: {k: (more[event][k] - base[event][k]) / args.calls for k in PARTS} for event in base}
+        per_call = {event: {k: (more[event][k] - base[event][k]) / args.calls for k in PARTS}
+                    for event in base if event != "functions"}
         counts.append(per_call)
         what = f"{args.integration} call" if args.stage == "call" else f"'{args.stage}' stage"
         scene = ("NURBS pipe, 40 helices" if args.element == "nurbs27"
@@ -201,6 +280,11 @@ def main(argv=None):
             if event in per_call:
                 print(f"{package}: {sum(per_call[event].values()):.4e} {name} per {what} ({scene}, n_gauss 4, "
                       "1 thread): " + ", ".join(f"{k} {v:.4e}" for k, v in per_call[event].items()), flush=True)
+        if args.functions:
+            names = set(more["functions"]) | set(base["functions"])
+            diff = {n: (more["functions"].get(n, 0) - base["functions"].get(n, 0)) / args.calls for n in names}
+            for n in sorted(diff, key=diff.get, reverse=True)[:args.functions]:
+                print(f"    {diff[n]:.4e}  {n}", flush=True)
     for package, c in zip(packages[1:], counts[1:]):
         for event, name in (("Ir", "instructions"), ("Ge", "atomic instructions")):
             if event not in c:
