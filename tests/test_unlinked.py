@@ -358,7 +358,7 @@ SCENE_RUN = textwrap.dedent("""
     import mortar1d3d as m
     from mortar1d3d.elements.solid import registry
     from mortar1d3d.elements.beam import registry as beams
-    from mortar1d3d.geometry import projection, search
+    from mortar1d3d.geometry import intersection, projection, search
     from mortar1d3d.integration import points
     b, s = m.generate.fibre_cube(3, 2, 3)
     m.assemble_mortar(b, s, integration="element")
@@ -367,7 +367,8 @@ SCENE_RUN = textwrap.dedent("""
                      for t in registry.SOLID_TYPES},
         other=[len(f.signatures) for f in (projection._map_other, projection._jacobian_other,
                                            projection.locate_rare, search.hull_planes)],
-        typed=[len(f.signatures) for f in (projection._project_typed, projection._polish_typed)],
+        typed=[len(f.signatures) for f in (projection._project_typed, projection._polish_typed,
+                                           intersection._intersect_typed)],
         beam_type=b.element_type.code,
         chunks=[sorted(str(sig[0]) for sig in f.signatures)
                 for f in (points._element_points_chunk, search._beam_frames_chunk)])))
@@ -387,6 +388,6 @@ def test_a_hex8_element_based_call_compiles_only_what_it_runs():
     others = {name: n for name, n in out["solid_types"].items() if name != "hexahedron"}
     assert len(others) == len(out["solid_types"]) - 1 and others == {name: 0 for name in others}
     assert out["other"] == [0, 0, 0, 0]
-    # nor the other types' own Newton projection and polishing step
-    assert out["typed"] == [0, 0]
+    # nor the other types' own Newton projection, polishing step and face Newton
+    assert out["typed"] == [0, 0, 0]
     assert out["chunks"] == [[f"Literal[int]({out['beam_type']})"]] * 2

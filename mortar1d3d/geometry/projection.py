@@ -43,7 +43,7 @@ _HEX8 = hex8.DESCRIPTOR.code
 _HEX27 = hex27.DESCRIPTOR.code
 _TET10 = tet10.DESCRIPTOR.code
 _NURBS27 = nurbs27.DESCRIPTOR.code
-#: every code but hex8's: the types whose Newton projection and polishing step are
+#: every code but hex8's: the types whose Newton projection, polishing step and face Newton are
 #: compiled once per type, with the code a compile-time constant (see :func:`project_point`)
 OTHER_CODES = tuple(code for code in range(len(solid.N_NODES)) if code != _HEX8)
 
