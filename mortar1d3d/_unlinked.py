@@ -25,7 +25,7 @@ cell this module allocates, registered under a stable symbol as above) and, whil
 empty, calls this module's resolver (a ``ctypes`` callback, also registered by name), which
 compiles or loads the callee and fills the slot. So a scene compiles only the callees it reaches:
 the other element types' kernels, the other types' map and Jacobian, the rare path of locating a
-point. The callee's return type must be given (the caller is typed without typing the callee); the
+point, the other types' own versions of the Newton projection (``cases=``, see :func:`unlinked`). The callee's return type must be given (the caller is typed without typing the callee); the
 resolver checks it against the compiled callee's and leaves the slot empty on a mismatch or a
 compile error, and the caller then raises instead of calling. A cached caller's hook registers the
 slot and the resolver only, without compiling the callee. :func:`compile_lazy` compiles every lazy
