@@ -76,6 +76,14 @@ def map_point(code, X, xi, N):
 @njit
 def _map_other(code, X, xi, N):
     """:func:`map_point` of every type but hex8."""
+    return _map_typed(code, X, xi, N)
+
+
+@njit_inline
+def _map_typed(code, X, xi, N):
+    """The code of :func:`_map_other`, inlined; where ``code`` is a literal (in :func:`_project_typed` and
+    the functions like it), Numba keeps only its type's branch: hex27's, tet10's and nurbs27's
+    contractions, every other type's shape functions and sum."""
     if code == _HEX27:
         return hex27.map_nodes(X, xi)
     if code == _TET10:
@@ -94,20 +102,6 @@ def _map_other(code, X, xi, N):
 #: each of them and in each of their callers; lazily: compiled at its first call, so never for a
 #: scene of hex8 elements only
 _map_other_call = unlinked(_map_other, returns=types.UniTuple(types.float64, 3))
-
-
-@njit_inline
-def _map_typed(code, X, xi, N):
-    """:func:`map_point` of a type but hex8 where ``code`` is a literal (in :func:`_project_typed` and
-    the functions like it): hex27's, tet10's and nurbs27's contractions inlined (Numba prunes the other
-    branches), every other type's call through the symbol."""
-    if code == _HEX27:
-        return hex27.map_nodes(X, xi)
-    if code == _TET10:
-        return tet10.map_nodes(X, xi)
-    if code == _NURBS27:
-        return nurbs27.map_nodes(X, xi)
-    return _map_other_call(code, X, xi, N)
 
 
 @njit_inline
@@ -143,6 +137,12 @@ def jacobian(code, X, xi, N, dN):
 @njit
 def _jacobian_other(code, X, xi, N, dN):
     """:func:`jacobian` of every type but hex8."""
+    return _jacobian_typed(code, X, xi, N, dN)
+
+
+@njit_inline
+def _jacobian_typed(code, X, xi, N, dN):
+    """The code of :func:`_jacobian_other`, inlined (as :func:`_map_typed`)."""
     if code == _HEX27:
         return hex27.jacobian_nodes(X, xi)
     if code == _TET10:
@@ -158,18 +158,6 @@ def _jacobian_other(code, X, xi, N, dN):
 
 #: called through a symbol, lazily, as :func:`_map_other`
 _jacobian_other_call = unlinked(_jacobian_other, returns=types.UniTuple(types.float64, 9))
-
-
-@njit_inline
-def _jacobian_typed(code, X, xi, N, dN):
-    """:func:`jacobian` as :func:`_map_typed`."""
-    if code == _HEX27:
-        return hex27.jacobian_nodes(X, xi)
-    if code == _TET10:
-        return tet10.jacobian_nodes(X, xi)
-    if code == _NURBS27:
-        return nurbs27.jacobian_nodes(X, xi)
-    return _jacobian_other_call(code, X, xi, N, dN)
 
 
 @njit
