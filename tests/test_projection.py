@@ -148,3 +148,56 @@ def test_polish_from_the_residual_left_by_the_locators(element):
                 polished += not np.array_equal(xi, before)
     # the step changed some points, so the comparison is not vacuous (a tet4 is affine: at round-off at once)
     assert polished > 0 or element == "tetra"
+
+
+def test_per_type_newton_gives_the_bits_of_a_call_per_evaluation():
+    """Every type but hex8 projects through its own compiled Newton iteration and polishing step
+    (``projection._project_typed``, ``_polish_typed``: the code a literal, hex27's, tet10's and nurbs27's
+    map and Jacobian inlined); the same iteration with the code a run-time integer (the map and the
+    Jacobian each one call through a symbol, the path before) gives the same bits: status, ξ and the
+    residual left in ``trial``. Curved hex27 and tet10 elements, nurbs27 elements with random control
+    points and weights; points inside and outside, Newton from the centre."""
+    from numba import njit
+    from mortar1d3d.geometry import projection as pr
+
+    @njit
+    def through_calls(code, X, p, h, xi, trial, N, dN):
+        status = pr._newton(code, X, p[0], p[1], p[2], h, xi, trial, N, dN, pr.map_point, pr.jacobian)
+        if status == pr.CONVERGED:
+            pr._polish_step(code, X, p[0], p[1], p[2], h, xi, trial, N, dN, pr.map_point, pr.jacobian)
+        return status
+
+    rng = np.random.default_rng(3)
+    X, N, dN, _, _, _, trial = pr.point_buffers()
+    elements = []
+    for name in ("hexahedron27", "tetra10"):
+        solid = distorted(name)
+        code = int(solid.element_codes[0])
+        for s in range(solid.n_elements):
+            elements.append((code, solid.points[solid.connectivity[s, : BY_CODE[code].n_nodes]], None))
+    code = SOLID_ELEMENTS["nurbs27"].code
+    for _ in range(8):
+        nodes = SOLID_ELEMENTS["nurbs27"].reference_nodes + rng.uniform(-0.15, 0.15, (27, 3))
+        elements.append((code, nodes, rng.uniform(0.5, 2.0, 27)))
+    converged = compared = 0
+    for code, nodes, weights in elements:
+        n = len(nodes)
+        X[:n, :3] = nodes - nodes[0]
+        if weights is not None:
+            X[:n, 3] = weights
+        h = np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0))
+        centre = np.full(3, 0.25) if code == SOLID_ELEMENTS["tetra10"].code else np.zeros(3)
+        for xi_true in centre + rng.uniform(-0.6, 0.6, (6, 3)):
+            p = np.array(pr.map_point(code, X, xi_true, N))
+            typed, calls = centre.copy(), centre.copy()
+            trial_calls = np.empty(3)
+            status = pr.project_point(code, X, *p, h, typed, trial, N, dN)
+            if status == pr.CONVERGED:
+                pr.polish_residual(code, X, *p, h, typed, trial, N, dN)
+            assert through_calls(code, X, p, h, calls, trial_calls, N, dN) == status
+            np.testing.assert_array_equal(typed, calls)
+            np.testing.assert_array_equal(trial, trial_calls)
+            converged += status == pr.CONVERGED
+            compared += 1
+    # Newton from the centre finds most of these points (the comparison covers whole iterations)
+    assert converged >= 0.9 * compared
