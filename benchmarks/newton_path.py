@@ -62,6 +62,9 @@ SEARCH_POINTS = 6
 #: a checkout whose linear maps leave the one-to-one certificates to their first use marks them so
 PENDING = getattr(pr, "PENDING_CERTIFICATE", None)
 
+#: whether the checkout's crossing search skips a touch start at a sample next to a sign change
+TOUCH_SKIPS_CROSSINGS = "at_crossing" in open(sg.__file__).read()
+
 if hasattr(sg, "_faces_in_linear_reach"):
     faces_in_linear_reach = sg._faces_in_linear_reach
 else:
@@ -291,7 +294,12 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                             out[5] += 1
                         best = min(best, abs(cur))
                         prev = cur
-                    if best < sg._NEAR_FACE * (abs(dg0) + abs(dg1) + abs(g1 - g0)) and g0 * g1 > 0.0:
+                    # the library's touch start skips a sample next to a sign change of the samples
+                    # (where its kernel has this test; an older checkout starts there)
+                    near = TOUCH_SKIPS_CROSSINGS and (
+                        (best == abs(g1) and k + 2 < S and g1 * sg._face_side(face, xi_s[k + 2]) <= 0.0)
+                        or (best == abs(g0) and k > 0 and g0 * sg._face_side(face, xi_s[k - 1]) <= 0.0))
+                    if best < sg._NEAR_FACE * (abs(dg0) + abs(dg1) + abs(g1 - g0)) and g0 * g1 > 0.0 and not near:
                         out[6] += 1
 
 

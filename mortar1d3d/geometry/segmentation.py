@@ -474,15 +474,23 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
                         eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s,
                                            k, t_start, z, xi, N, dN, H, dH)
                         count = _record(eta, f, out_eta, out_face, p, count, overflow)
-                if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0:
+                # nearest the face at a sample, beyond which the next interval changes sign: the
+                # model approaches the face monotonically, and the crossing lies in that interval,
+                # whose scan starts Newton at its sign change
+                at_crossing = ((best_t == 1.0 and k + 2 < S and ok[k + 2] and g[k + 1] * g[k + 2] <= 0.0)
+                               or (best_t == 0.0 and k > 0 and ok[k - 1] and g[k - 1] * g[k] <= 0.0))
+                if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0 and not at_crossing:
                     # close to the face without a sign change: a touch or a missed double crossing.
                     # Newton converges to one of two close roots; the other lies about as far on
                     # the other side of the extremum of g: start there too (a dip through the
-                    # face shorter than a sample interval has both ends found)
+                    # face shorter than a sample interval has both ends found). A root outside
+                    # the sample interval is no end of a dip within it: it is a crossing of a
+                    # neighbouring interval (found by that interval's own search), and its
+                    # mirror would only find it again
                     eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
                                        best_t, z, xi, N, dN, H, dH)
                     count = _record(eta, f, out_eta, out_face, p, count, overflow)
-                    if not np.isnan(eta):
+                    if eta_s[k] <= eta <= eta_s[k + 1]:
                         t_mirror = 2.0 * best_t - (eta - eta_s[k]) / (eta_s[k + 1] - eta_s[k])
                         if 0.0 < t_mirror < 1.0:
                             eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s,
