@@ -401,8 +401,8 @@ def main(argv=None):
           f"per searched pair: {out[2] / max(out[1], 1):.2f} sample projections "
           f"({out[3] / max(out[2], 1):.3f} Newton iterations each, {out[4]} fallbacks in all, {out[7]} of them "
           f"beyond a hull plane: the warm start kept if it converged, else no subdivision search), face-Newton starts "
-          f"{out[5] / max(out[1], 1):.3f} at sign changes + {out[6] / max(out[1], 1):.3f} at touches, crossings found "
-          f"{found / max(out[1], 1):.3f}")
+          f"{out[5] / max(out[1], 1):.3f} at sign changes + {out[6] / max(out[1], 1):.3f} at touches ({out[5]} + {out[6]} "
+          f"in all), crossings found {found / max(out[1], 1):.3f} ({found} in all)")
     return rates
 
 

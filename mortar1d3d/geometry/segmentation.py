@@ -8,7 +8,10 @@ Two stages, both parallel over independent items with pre-sized output slots:
    sample interval by the cubic Hermite interpolant of g and dg/dη; the face Newton starts
    at every sign change of that cubic, and at its minimum when it comes close to zero
    (a touch, or a leave-and-re-enter between two samples that linear interpolation would
-   miss). Accepted crossings have η in the beam element and ξ on the face (tolerance 1e-9).
+   miss; not at a sample next to a sign change of the samples, whose crossing that interval's
+   own start finds). Accepted crossings have η in the beam element and ξ on the face (tolerance
+   1e-9). Pairs are not searched where the beam element's box misses every face's box, or where
+   the element's linearised map proves that it reaches no face (:func:`_faces_in_linear_reach`).
 2. ``_tile`` (per beam element): the crossings of all its pairs plus η = ±1, sorted and merged
    within 1e-9, cut the element into intervals; each interval's midpoint goes to the *lowest
    index* candidate element containing it (so a piece on a shared face, edge or node is counted
