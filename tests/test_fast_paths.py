@@ -189,8 +189,44 @@ def test_pairs_out_of_reach_are_the_pairs_whose_beam_box_misses_every_face_box()
         reached |= np.all((face.max(axis=1) >= box[:, 0] - margin) & (face.min(axis=1) <= box[:, 1] + margin), axis=1)
     assert ops.diagnostics["pairs_out_of_reach"] == np.count_nonzero(~reached)
     assert 0 < ops.diagnostics["pairs_out_of_reach"] < ops.diagnostics["candidate_pairs"]
-    whole = np.logical_and.reduceat(~reached, ctx.pair_offsets[:-1])
+    # beam elements all of whose pairs are out of reach: of the boxes, or of the linearised maps
+    from mortar1d3d.geometry import segmentation
+    unsearched = segmentation.pair_crossings(ctx, pair_beam, ctx.pair_solid, 6)[3]
+    assert np.array_equal(unsearched == segmentation.BOX_MISS, ~reached)
+    assert ops.diagnostics["pairs_out_of_linear_reach"] == np.count_nonzero(unsearched == segmentation.LINEAR_MISS)
+    whole = np.logical_and.reduceat(unsearched != segmentation.SEARCHED, ctx.pair_offsets[:-1])
     assert ops.diagnostics["beam_elements_out_of_reach"] == np.count_nonzero(whole)
+    assert ops.diagnostics["beam_elements_out_of_reach"] >= np.count_nonzero(
+        np.logical_and.reduceat(~reached, ctx.pair_offsets[:-1]))
+
+
+@pytest.mark.parametrize("element, curved", [("hexahedron", False), ("hexahedron", True), ("tetra10", False)])
+def test_pairs_out_of_linear_reach_lie_entirely_inside_or_outside(element, curved):
+    """Pairs the linearised map leaves unsearched: the centreline, located at 201 points, is inside the
+    element at all of them or at none (no face crossing), on distorted cubes with straight and curved
+    beams."""
+    from mortar1d3d.geometry import segmentation
+    from mortar1d3d.geometry.projection import INSIDE, project_points
+    beams, cube = generate.fibre_cube(4, 40, 4, curved=curved)
+    if element != "hexahedron":
+        cube = generate.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (4, 4, 4), element=element)
+    solid = generate.distort(cube, 0.1, seed=1)
+    ctx = KernelInput(beams, solid)
+    pair_beam = ctx.pair_beam()
+    _, _, crossing_count, unsearched = segmentation.pair_crossings(ctx, pair_beam, ctx.pair_solid, 6)
+    decided = np.flatnonzero(unsearched == segmentation.LINEAR_MISS)
+    assert len(decided) > 0
+    eta = np.linspace(-1.0, 1.0, 201)
+    kinds = set()
+    for p in decided:
+        x = beams.evaluate(ctx.beam_ids[pair_beam[p]], eta)
+        _, status = project_points(solid, x, np.full(len(eta), ctx.pair_solid[p]))
+        inside = status == INSIDE
+        assert inside.all() or not inside.any(), (element, curved, p)
+        kinds.add(bool(inside[0]))
+    # inside decided everywhere; outside too on the hexahedra (the tetrahedra's boxes already drop those pairs)
+    assert kinds == ({False, True} if element == "hexahedron" else {True})
+    assert crossing_count[unsearched == segmentation.SEARCHED].sum() > 0
 
 
 @pytest.mark.parametrize("element", ["hexahedron", "tetra10"])
@@ -214,3 +250,34 @@ def test_crossing_table_overflow_is_searched_again(monkeypatch, element):
     assert again.diagnostics["face_crossings"] == reference.diagnostics["face_crossings"]
     np.testing.assert_array_equal(again.segments, reference.segments)
     assert abs(again.M - reference.M).max() == 0.0 and abs(again.D - reference.D).max() == 0.0
+
+
+def test_linear_reach_decides_a_beam_near_the_centre_and_refuses_crossings_and_near_faces():
+    """One trilinear hexahedron (the unit cube with its node (1, 1, 1) moved to (0.7, 1, 1), so that the
+    box of the face x = 1 reaches x = 0.7): a short beam at x = 0.70-0.74 meets that box but is left
+    unsearched, and its one segment is the whole element; a beam through the planar face x = 0 and a
+    beam inside, 0.08 from the face x = 1 (within the bound of the map's nonlinear part, about 0.32 in
+    ξ), are searched, and the first one's segment starts on the face (a closed form: η = 0)."""
+    from mortar1d3d.geometry import segmentation
+    points = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
+                      dtype=float)
+    points[6] += (-0.3, 0.0, 0.0)
+    solid = m13.SolidMesh(points, {"hexahedron": np.arange(8)[None, :]})
+    ends = [((0.70, 0.5, 0.5), (0.74, 0.52, 0.5)),       # meets the box of face x = 1: decided
+            ((-0.2, 0.3, 0.4), (0.2, 0.3, 0.4)),         # through the face x = 0 (nodes 0, 3, 4, 7: not moved)
+            ((0.9, 0.2, 0.2), (0.9, 0.3, 0.25))]         # inside, 0.08-0.09 from face x = 1: not decidable
+    beams = m13.BeamMesh.hermite([p for pair in ends for p in pair],
+                                 [np.subtract(b, a) / np.linalg.norm(np.subtract(b, a)) for a, b in ends
+                                  for _ in range(2)], [[0, 1], [2, 3], [4, 5]])
+    ctx = KernelInput(beams, solid)
+    _, _, count, unsearched = segmentation.pair_crossings(ctx, ctx.pair_beam(), ctx.pair_solid, 6)
+    assert list(unsearched) == [segmentation.LINEAR_MISS, segmentation.SEARCHED, segmentation.SEARCHED]
+    assert list(count > 0) == [False, True, False]
+    ops = m13.assemble_mortar(beams, solid, integration="segment", n_gauss=2)
+    s = ops.segments
+    assert list(s["beam_element"]) == [0, 1, 2]
+    assert s["eta_start"][0] == -1.0 and s["eta_end"][0] == 1.0
+    # beam 1: x = 0.2 η on y = 0.3, z = 0.4 (a straight Hermite element), inside for x >= 0
+    assert abs(s["eta_start"][1]) < 1e-12 and s["eta_end"][1] == 1.0
+    assert s["eta_start"][2] == -1.0 and s["eta_end"][2] == 1.0
+    assert ops.diagnostics["pairs_out_of_linear_reach"] == 1

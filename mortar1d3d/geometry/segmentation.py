@@ -8,7 +8,10 @@ Two stages, both parallel over independent items with pre-sized output slots:
    sample interval by the cubic Hermite interpolant of g and dg/dη; the face Newton starts
    at every sign change of that cubic, and at its minimum when it comes close to zero
    (a touch, or a leave-and-re-enter between two samples that linear interpolation would
-   miss). Accepted crossings have η in the beam element and ξ on the face (tolerance 1e-9).
+   miss; not at a sample next to a sign change of the samples, whose crossing that interval's
+   own start finds). Accepted crossings have η in the beam element and ξ on the face (tolerance
+   1e-9). Pairs are not searched where the beam element's box misses every face's box, or where
+   the element's linearised map proves that it reaches no face (:func:`_faces_in_linear_reach`).
 2. ``_tile`` (per beam element): the crossings of all its pairs plus η = ±1, sorted and merged
    within 1e-9, cut the element into intervals; each interval's midpoint goes to the *lowest
    index* candidate element containing it (so a piece on a shared face, edge or node is counted
@@ -45,6 +48,10 @@ from .search import in_hull
 _NEAR_FACE = 0.1     # min |g| of the cubic model below this fraction of its variation: try a touch there
 _SCAN = 8            # points per sample interval at which the cubic model of g is scanned
 _REACH_MARGIN = 1e-6  # faces whose box misses a beam element's box by more than this (relative): no crossing
+#: why a pair was not searched (``unsearched`` of :func:`pair_crossings`): searched; the beam element's box
+#: misses every face's box (:func:`_faces_in_reach`); the element's linearised map proves that it reaches
+#: no face (:func:`_faces_in_linear_reach`)
+SEARCHED, BOX_MISS, LINEAR_MISS = 0, 1, 2
 
 
 @njit
@@ -77,8 +84,10 @@ def pair_crossings(ctx, pair_beam, pair_solid, search_points):
     """The first stage: face crossings of the given pairs (``pair_beam`` indexes the beam elements of ``ctx``).
 
     Returns ``crossing_eta`` (n_pairs, width), ``crossing_face`` (n_pairs, width: the face of the
-    solid element each crossing lies on), ``crossing_count`` (n_pairs,) and ``no_face`` (n_pairs,):
-    the pairs whose beam element reaches no face of the solid element.
+    solid element each crossing lies on), ``crossing_count`` (n_pairs,) and ``unsearched`` (n_pairs,)
+    int8: ``SEARCHED`` (0), or why the beam element reaches no face of the solid element
+    (``BOX_MISS``: its box misses every face's box; ``LINEAR_MISS``: the element's linearised map
+    proves it, :func:`_faces_in_linear_reach`), so that it lies entirely inside or outside.
     """
     n = len(pair_solid)
     # a straight beam element in an affine solid element has face functions linear in η: their roots
@@ -88,10 +97,10 @@ def pair_crossings(ctx, pair_beam, pair_solid, search_points):
             ctx.lengths, ctx.beam_origin, ctx.beam_boxes, straight, search_points)
     full = crossings_capacity(search_points)
     width = min(_FIRST_CAPACITY, full)
-    crossing_eta, crossing_face, crossing_count, no_face, overflow = carve(
-        ((n, width), np.float64), ((n, width), np.int64), (n, np.int64), (n, np.bool_), (n, np.bool_))
+    crossing_eta, crossing_face, crossing_count, unsearched, overflow = carve(
+        ((n, width), np.float64), ((n, width), np.int64), (n, np.int64), (n, np.int8), (n, np.bool_))
     crossing_count[:] = 0
-    _pair_crossings(pair_beam, pair_solid, *args, crossing_eta, crossing_face, crossing_count, no_face, overflow,
+    _pair_crossings(pair_beam, pair_solid, *args, crossing_eta, crossing_face, crossing_count, unsearched, overflow,
                     workers())
     again = np.flatnonzero(overflow)
     if len(again) and crossing_eta.shape[1] < full:
@@ -99,7 +108,7 @@ def pair_crossings(ctx, pair_beam, pair_solid, search_points):
         more_face = np.empty((len(again), full), dtype=np.int64)
         more_count = np.zeros(len(again), dtype=np.int64)
         _pair_crossings(pair_beam[again], pair_solid[again], *args, more_eta, more_face, more_count,
-                        np.empty(len(again), dtype=np.bool_), np.empty(len(again), dtype=np.bool_), workers())
+                        np.empty(len(again), dtype=np.int8), np.empty(len(again), dtype=np.bool_), workers())
         width = int(more_count.max())
         wide = np.empty((n, max(width, crossing_eta.shape[1])))
         wide_face = np.empty((n, max(width, crossing_eta.shape[1])), dtype=np.int64)
@@ -109,7 +118,7 @@ def pair_crossings(ctx, pair_beam, pair_solid, search_points):
         wide_face[again, :width] = more_face[:, :width]
         crossing_eta, crossing_face = wide, wide_face
         crossing_count[again] = more_count
-    return crossing_eta, crossing_face, crossing_count, no_face
+    return crossing_eta, crossing_face, crossing_count, unsearched
 
 
 @njit
@@ -196,10 +205,100 @@ def _faces_in_reach(code, X, h, box, origin, C, reach):
     return any_face
 
 
+@njit
+def _faces_in_linear_reach(code, X, s, linear, beam_code, Qe, length, s0, s1, s2, a, Y, H, dH, reach):
+    """Clear ``reach[f]`` of the faces that the element's linearised map proves the beam element cannot
+    cross; False if no face is left (the beam element lies entirely inside or entirely outside).
+
+    With y = ξ - ξ_c, a polynomial map is x(ξ) = x_c + J_c y + Σ_q a_q y^α_q over its monomials of
+    degree >= 2, so the linearised parameters ζ(x) = ξ_c + L (x - x_c) (``linear``: L = J_c⁻¹) of
+    a point x(ξ) of the element differ from ξ by at most ε_i = Σ_q |(L a_q)_i| R^|α_q| in component
+    i (|y|∞ <= R in the element). ζ is affine in x, so the ζ of the beam element's centreline lie in
+    the convex hull of the ζ of its Bézier control points (every centreline is a cubic at most: its
+    end points and end tangents). A point of face f has n·(ξ - o) = 0, so its ζ lies within
+    Σ_i |n_i| ε_i of the face's plane, and a point of the element has n·(ξ - o) <= 0: if all control
+    points lie farther than that on the inner side of a face's plane, the beam cannot reach the
+    face; farther on its outer side, it cannot reach the element at all. The margin (``_REACH_MARGIN``
+    scaled by the sizes in parameter units) lies far above the tolerances with which crossings are
+    accepted (their ξ within 1e-9 of the element, η within 1e-9 of [-1, 1], the residual within
+    1e-9 h), so clearing such faces changes no crossing found. Rational types and elements without
+    a linearisation keep their ``reach`` unchanged.
+    """
+    if solid.RATIONAL[code] or not linear[s, 4, 0] >= 0.0:
+        return True
+    solid.monomial_coefficients(code, X, a)
+    radius = solid.RADIUS[code] * (1.0 + _REACH_MARGIN)
+    e0 = e1 = e2 = 0.0
+    for q in range(solid.N_CURVED[code]):
+        k = solid.CURVED_MONOMIALS[code, q]
+        scale = radius ** solid.CURVED_DEGREE[code, q]
+        e0 += abs(linear[s, 0, 0] * a[k, 0] + linear[s, 0, 1] * a[k, 1] + linear[s, 0, 2] * a[k, 2]) * scale
+        e1 += abs(linear[s, 1, 0] * a[k, 0] + linear[s, 1, 1] * a[k, 1] + linear[s, 1, 2] * a[k, 2]) * scale
+        e2 += abs(linear[s, 2, 0] * a[k, 0] + linear[s, 2, 1] * a[k, 1] + linear[s, 2, 2] * a[k, 2]) * scale
+    # Bézier control points of the centreline (η in [-1, 1]: dr/dt = 2 dr/dη for t in [0, 1]), as ζ
+    spread = 0.0
+    for end in range(2):
+        r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Qe, length, s0, s1, s2, 2.0 * end - 1.0, H, dH)
+        sign = (2.0 - 4.0 * end) / 3.0
+        _linear_image(code, linear, s, r0, r1, r2, Y[3 * end])
+        _linear_image(code, linear, s, r0 + sign * d0, r1 + sign * d1, r2 + sign * d2, Y[1 + end])
+    for c in range(1, 4):
+        for i in range(3):
+            spread = max(spread, abs(Y[c, i] - Y[0, i]))
+    size = 0.0
+    for i in range(3):
+        size = max(size, abs(linear[s, i, 0]) + abs(linear[s, i, 1]) + abs(linear[s, i, 2]))
+    pad = _REACH_MARGIN * (1.0 + spread + size * _solid_size(X, code))
+    faces = solid.faces(code)
+    any_face = False
+    for f in range(faces.shape[0]):
+        face = faces[f]
+        slack = abs(face[3, 0]) * e0 + abs(face[3, 1]) * e1 + abs(face[3, 2]) * e2 + pad
+        lo = np.inf
+        hi = -np.inf
+        for c in range(4):
+            g = _face_side(face, Y[c])
+            lo = min(lo, g)
+            hi = max(hi, g)
+        if lo > slack:
+            # beyond this face's plane: outside the element, no face reached
+            for k in range(faces.shape[0]):
+                reach[k] = False
+            return False
+        if hi < -slack:
+            reach[f] = False
+        any_face = any_face or reach[f]
+    return any_face
+
+
+@njit
+def _linear_image(code, linear, s, x0, x1, x2, out):
+    """ζ = ξ_c + L (x - x_c) of element s (x local to its node 0), without the start limit of
+    :func:`.projection.linear_parameters`."""
+    d0 = x0 - linear[s, 3, 0]
+    d1 = x1 - linear[s, 3, 1]
+    d2 = x2 - linear[s, 3, 2]
+    for i in range(3):
+        out[i] = solid.CENTRE[code, i] + linear[s, i, 0] * d0 + linear[s, i, 1] * d1 + linear[s, i, 2] * d2
+
+
+@njit
+def _solid_size(X, code):
+    """Largest coordinate extent of the element's nodes (local coordinates)."""
+    size = 0.0
+    for i in range(3):
+        lo = hi = X[0, i]
+        for k in range(1, solid.n_nodes(code)):
+            lo = min(lo, X[k, i])
+            hi = max(hi, X[k, i])
+        size = max(size, hi - lo)
+    return size
+
+
 @njit_parallel
 def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear, hull,
                     beam_code, Q, lengths, beam_origin, beam_boxes, straight, search_points, out_eta, out_face,
-                    out_count, no_face, overflow, workers):
+                    out_count, unsearched, overflow, workers):
     n_pairs = pair_beam.shape[0]
     S = search_points
     claims = new_claims(n_pairs, workers)
@@ -220,7 +319,7 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
         while begin < stop:
             _pair_crossings_chunk_call(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h,
                                        linear, hull, beam_code, Q, lengths, beam_origin, beam_boxes, straight, out_eta,
-                                       out_face, out_count, no_face, overflow, X, xi, S, C, reach, eta_s, H, dH, start,
+                                       out_face, out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH, start,
                                        ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z)
             begin, stop = claim(claims, n_pairs, worker)
 
@@ -228,15 +327,15 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
 @njit
 def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear, hull,
                           beam_code, Q, lengths, beam_origin, beam_boxes, straight, out_eta, out_face, out_count,
-                          no_face, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok, trial, N, dN, a, stack, xi_s,
+                          unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok, trial, N, dN, a, stack, xi_s,
                           dxi_s, g, dg, z):
     # the caller holds every array for this call: the calls below pass them without reference
     # counting (see mortar1d3d._borrowed)
     (pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear, hull, Q, lengths, beam_origin,
-        beam_boxes, straight, out_eta, out_face, out_count, no_face, overflow, X, xi, S, C, reach, eta_s, H, dH,
+        beam_boxes, straight, out_eta, out_face, out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH,
         start, ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z) = borrowed(pair_beam, pair_solid, codes, conn,
         points, solid_origin, solid_h, linear, hull, Q, lengths, beam_origin, beam_boxes, straight, out_eta,
-        out_face, out_count, no_face, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok, trial, N, dN, a, stack,
+        out_face, out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok, trial, N, dN, a, stack,
         xi_s, dxi_s, g, dg, z)
     for p in range(begin, stop):
         e = pair_beam[p]
@@ -246,13 +345,18 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
         Qe = Q[e]
         load_element(points, conn, s, code, solid_origin, X)
         overflow[p] = False
-        no_face[p] = not _faces_in_reach(code, X, h, beam_boxes[e], solid_origin[s], C, reach)
-        if no_face[p]:
-            out_count[p] = 0
+        unsearched[p] = BOX_MISS
+        out_count[p] = 0
+        if not _faces_in_reach(code, X, h, beam_boxes[e], solid_origin[s], C, reach):
             continue
         s0 = beam_origin[e, 0] - solid_origin[s, 0]
         s1 = beam_origin[e, 1] - solid_origin[s, 1]
         s2 = beam_origin[e, 2] - solid_origin[s, 2]
+        unsearched[p] = LINEAR_MISS
+        if not _faces_in_linear_reach(code, X, s, linear, beam_code, Qe, lengths[e], s0, s1, s2, a, C, H, dH,
+                                      reach):
+            continue
+        unsearched[p] = SEARCHED
         # samples along the beam element: ξ(η) and dξ/dη = J⁻¹ r'(η) (warm-started Newton)
         solid.centre(code, xi)
         affine = is_affine(linear, s)
@@ -373,15 +477,23 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
                         eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s,
                                            k, t_start, z, xi, N, dN, H, dH)
                         count = _record(eta, f, out_eta, out_face, p, count, overflow)
-                if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0:
+                # nearest the face at a sample, beyond which the next interval changes sign: the
+                # model approaches the face monotonically, and the crossing lies in that interval,
+                # whose scan starts Newton at its sign change
+                at_crossing = ((best_t == 1.0 and k + 2 < S and ok[k + 2] and g[k + 1] * g[k + 2] <= 0.0)
+                               or (best_t == 0.0 and k > 0 and ok[k - 1] and g[k - 1] * g[k] <= 0.0))
+                if best < _NEAR_FACE * (abs(d0) + abs(d1) + abs(g1 - g0)) and g0 * g1 > 0.0 and not at_crossing:
                     # close to the face without a sign change: a touch or a missed double crossing.
                     # Newton converges to one of two close roots; the other lies about as far on
                     # the other side of the extremum of g: start there too (a dip through the
-                    # face shorter than a sample interval has both ends found)
+                    # face shorter than a sample interval has both ends found). A root outside
+                    # the sample interval is no end of a dip within it: it is a crossing of a
+                    # neighbouring interval (found by that interval's own search), and its
+                    # mirror would only find it again
                     eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s, xi_s, k,
                                        best_t, z, xi, N, dN, H, dH)
                     count = _record(eta, f, out_eta, out_face, p, count, overflow)
-                    if not np.isnan(eta):
+                    if eta_s[k] <= eta <= eta_s[k + 1]:
                         t_mirror = 2.0 * best_t - (eta - eta_s[k]) / (eta_s[k + 1] - eta_s[k])
                         if 0.0 < t_mirror < 1.0:
                             eta = _try_between(code, X, h, beam_code, Qe, lengths[e], s0, s1, s2, face, eta_s,
@@ -899,18 +1011,21 @@ def segment(ctx, search_points, diagnostics=None):
     again (:func:`resegment`); :func:`mortar1d3d.integration.points.checked_segment_points` does
     that, for these and for the beam elements whose integration points miss their owner.
     ``diagnostics`` (a dict), if given, receives ``face_crossings``, ``pairs_out_of_reach``
-    (candidate pairs whose beam element reaches no face of the solid element: not searched) and
-    ``beam_elements_out_of_reach`` (beam elements all of whose pairs are such).
+    (candidate pairs whose beam element's box misses every face's box: not searched),
+    ``pairs_out_of_linear_reach`` (further pairs not searched: the solid element's linearised map
+    proves that the beam element reaches none of its faces) and ``beam_elements_out_of_reach`` (beam
+    elements all of whose pairs are either).
     """
-    crossing_eta, crossing_face, crossing_count, no_face = pair_crossings(ctx, ctx.pair_beam(), ctx.pair_solid,
-                                                                          search_points)
-    reaching = np.concatenate([[0], np.cumsum(~no_face)])
+    crossing_eta, crossing_face, crossing_count, unsearched = pair_crossings(ctx, ctx.pair_beam(), ctx.pair_solid,
+                                                                             search_points)
+    reaching = np.concatenate([[0], np.cumsum(unsearched == SEARCHED)])
     certain = reaching[ctx.pair_offsets[1:]] == reaching[ctx.pair_offsets[:-1]]
     *segments, seg_count = tile(ctx, crossing_eta, crossing_face, crossing_count)
     bad = check_tiling(ctx, *segments[1:], seg_count, certain)
     if diagnostics is not None:
         diagnostics["face_crossings"] = int(crossing_count.sum())
-        diagnostics["pairs_out_of_reach"] = int(no_face.sum())
+        diagnostics["pairs_out_of_reach"] = int(np.count_nonzero(unsearched == BOX_MISS))
+        diagnostics["pairs_out_of_linear_reach"] = int(np.count_nonzero(unsearched == LINEAR_MISS))
         diagnostics["beam_elements_out_of_reach"] = int(certain.sum())
     return (*segments, bad)
 
