@@ -25,7 +25,7 @@ cell this module allocates, registered under a stable symbol as above) and, whil
 empty, calls this module's resolver (a ``ctypes`` callback, also registered by name), which
 compiles or loads the callee and fills the slot. So a scene compiles only the callees it reaches:
 the other element types' kernels, the other types' map and Jacobian, the rare path of locating a
-point, the other types' own versions of the Newton projection (``cases=``, see :func:`unlinked`). The callee's return type must be given (the caller is typed without typing the callee); the
+point. The callee's return type must be given (the caller is typed without typing the callee); the
 resolver checks it against the compiled callee's and leaves the slot empty on a mismatch or a
 compile error, and the caller then raises instead of calling. A cached caller's hook registers the
 slot and the resolver only, without compiling the callee. :func:`compile_lazy` compiles every lazy
@@ -219,12 +219,11 @@ def unlinked(dispatcher, returns=None, cases=None):
     (for callees that a scene may never reach). The call then loads the entry point from a slot
     and tests it, a few instructions more per call.
 
-    ``cases``: integers the first argument takes (e.g. the beam types' codes), with ``returns``
-    given. The callee is then compiled once per value, each with its first argument a literal (a
-    compile-time constant: a ``select(code, name)`` in it picks its type's kernels), lazily; the call
-    picks the value's version at run time (no call for a value not listed: the call then returns the
-    return type's zero, nothing for ``types.none``). A loop over types thus compiles only the types a
-    scene has.
+    ``cases``: integers the first argument takes (e.g. the beam types' codes), for a callee
+    returning nothing (``returns=types.none``). The callee is then compiled once per value, each
+    with its first argument a literal (a compile-time constant: a ``select(code, name)`` in it picks
+    its type's kernels), lazily; the call picks the value's version at run time (no call for a value
+    not listed). A loop over types thus compiles only the types a scene has.
     """
 
     if tuple(numba.version_info.short) < SUPPORTED_FROM:
@@ -232,8 +231,8 @@ def unlinked(dispatcher, returns=None, cases=None):
     _keep_hooks_on_load()
     module, qualname = dispatcher.py_func.__module__, dispatcher.py_func.__qualname__
 
-    if cases is not None and returns is None:
-        raise ValueError("unlinked(..., cases=...) takes the callee's return type (returns=...)")
+    if cases is not None and returns != types.none:
+        raise ValueError("unlinked(..., cases=...) takes a callee returning nothing (returns=types.none)")
 
     @intrinsic
     def call(typingctx, *args):
@@ -247,9 +246,7 @@ def unlinked(dispatcher, returns=None, cases=None):
                 values = cgutils.unpack_tuple(builder, packed[0])
                 code = values[0]      # an integer: the literal's data model is the same
                 end = builder.append_basic_block("unlinked.end")
-                entry = builder.block
                 switch = builder.switch(code, end)
-                results = []
                 for k in cases:
                     block = builder.append_basic_block(f"unlinked.case{k}")
                     switch.add_case(ir.Constant(code.type, k), block)
@@ -259,22 +256,13 @@ def unlinked(dispatcher, returns=None, cases=None):
                             for v, t, c in zip(values[1:], signature.args[0].types[1:], callee_args[1:])]
                     fnty = context.call_conv.get_function_type(returns, callee_args)
                     fn = _load_lazy(context, builder, fnty, symbols[k])
-                    status, result = context.call_conv.call_function(builder, fn, returns, callee_args, [code] + rest)
+                    status, _ = context.call_conv.call_function(builder, fn, returns, callee_args, [code] + rest)
                     with cgutils.if_unlikely(builder, status.is_error):
                         context.call_conv.return_status_propagate(builder, status)
-                    results.append((result, builder.block))
                     builder.branch(end)
-                if returns != types.none:
-                    # a value not listed: the return type's zero
-                    results.append((context.get_constant_null(returns), entry))
                 builder.position_at_end(end)
                 context.active_code_library._reload_init.update(hooks)
-                if returns == types.none:
-                    return context.get_dummy_value()
-                value = builder.phi(context.get_value_type(returns))
-                for result, block in results:
-                    value.add_incoming(result, block)
-                return value
+                return context.get_dummy_value()
 
             return returns(types.StarArgTuple.from_types(args)), codegen
         if returns is None:

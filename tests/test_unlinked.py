@@ -241,17 +241,6 @@ LAZY = textwrap.dedent("""
         return out[0]
 
     @njit
-    def value_by_type(k, x):
-        # as by_type, returning its value
-        return 10.0 * k + x
-
-    value_by_type_call = unlinked(value_by_type, returns=types.float64, cases=(0, 1, 2))
-
-    @njit
-    def typed_value(k, x):
-        return value_by_type_call(k, x)
-
-    @njit
     def wrong(x):
         return x
 
@@ -273,8 +262,7 @@ LAZY_RUN = textwrap.dedent("""
     limit, k, then = float(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
     total = p.kernel(a, out, limit)
     value = p.typed(k, 0.5)
-    result = dict(total=total.tolist(), value=value, returned=p.typed_value(k, 0.25),
-                  value_by_type=sorted(str(s[0]) for s in p.value_by_type.signatures),
+    result = dict(total=total.tolist(), value=value,
                   kernel_misses=sum(p.kernel.stats.cache_misses.values()),
                   rare_signatures=len(p.rare.signatures),
                   rare_misses=sum(p.rare.stats.cache_misses.values()),
@@ -329,20 +317,16 @@ def test_lazy_cases_compile_one_version_per_value_used(tmp_path):
     (tmp_path / "lazy_probe.py").write_text(LAZY)
     one = _lazy_run(tmp_path, 2.0, 1)
     assert one["value"] == 1.0 and one["by_type"] == ["Literal[int](1)"] and one["by_type_misses"] == 1
-    # with a return value: the version's value is returned
-    assert one["returned"] == 10.25 and one["value_by_type"] == ["Literal[int](1)"]
     again = _lazy_run(tmp_path, 2.0, 1)                # the literal version is cached like any other
     assert again["value"] == 1.0 and again["by_type_misses"] == 0
     two = _lazy_run(tmp_path, 2.0, 2)
     assert two["value"] == -2.5 and two["by_type"] == ["Literal[int](2)"]
-    missing = _lazy_run(tmp_path, 2.0, 7)              # a value not listed: no call (a returned value: zero)
+    missing = _lazy_run(tmp_path, 2.0, 7)              # a value not listed: no call
     assert missing["value"] == 0.0 and missing["by_type"] == []
-    assert missing["returned"] == 0.0 and missing["value_by_type"] == []
     everything = _lazy_run(tmp_path, 2.0, 0, "compile_lazy")
     assert everything["value"] == 1.5 and everything["by_type"] == ["Literal[int](0)"]
-    assert everything["returned"] == 0.25
-    # the rare callee and the two other cases of each: what the callers used in this process declare
-    assert everything["compiled"] == 5
+    # the rare callee and the two other cases: what the callers used in this process declare
+    assert everything["compiled"] == 3
     assert (everything["rare_signatures_after"], everything["by_type_after"]) == (1, 3)
 
 
@@ -358,7 +342,7 @@ SCENE_RUN = textwrap.dedent("""
     import mortar1d3d as m
     from mortar1d3d.elements.solid import registry
     from mortar1d3d.elements.beam import registry as beams
-    from mortar1d3d.geometry import intersection, projection, search
+    from mortar1d3d.geometry import projection, search
     from mortar1d3d.integration import points
     b, s = m.generate.fibre_cube(3, 2, 3)
     m.assemble_mortar(b, s, integration="element")
@@ -369,8 +353,6 @@ SCENE_RUN = textwrap.dedent("""
                                            projection.locate_rare, search.hull_planes, search._solid_hulls,
                                            search._solid_hulls_chunk, projection.certified_margin)],
         bin_part=[str(sig[4]) for sig in search._bin_part.signatures],
-        typed=[len(f.signatures) for f in (projection._project_typed, projection._polish_typed,
-                                           intersection._intersect_typed)],
         beam_type=b.element_type.code,
         chunks=[sorted(str(sig[0]) for sig in f.signatures)
                 for f in (points._element_points_chunk, search._beam_frames_chunk)])))
@@ -380,11 +362,10 @@ SCENE_RUN = textwrap.dedent("""
 def test_a_hex8_element_based_call_compiles_only_what_it_runs():
     """The first element-based call of a hex8 scene with Hermite beams (the kernel cache of the test
     run, cold or warm) neither compiles nor loads another solid type's kernels, their map and
-    Jacobian (nor their own Newton iterations), the rare path of locating a point, the hull planes
-    or the hull kernel (hex8 has none), or the one-to-one certificate (its elements are affine),
-    and its beam loops exist for its beam type only: all are called lazily (``unlinked(...,
-    returns=...)``) or skipped. ``_bin_part``, called through a symbol with a ``prange`` index
-    (uint64 in the parallel body), exists for int64 only."""
+    Jacobian, the rare path of locating a point, the hull planes or the hull kernel (hex8 has none),
+    or the one-to-one certificate (its elements are affine), and its beam loops exist for its beam
+    type only: all are called lazily (``unlinked(..., returns=...)``) or skipped. ``_bin_part``, called
+    through a symbol with a ``prange`` index (uint64 in the parallel body), exists for int64 only."""
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     done = subprocess.run([sys.executable, "-c", SCENE_RUN], env=env, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
@@ -394,6 +375,4 @@ def test_a_hex8_element_based_call_compiles_only_what_it_runs():
     assert len(others) == len(out["solid_types"]) - 1 and others == {name: 0 for name in others}
     assert out["other"] == [0] * 7
     assert out["bin_part"] == ["int64"]
-    # nor the other types' own Newton projection, polishing step and face Newton
-    assert out["typed"] == [0, 0, 0]
     assert out["chunks"] == [[f"Literal[int]({out['beam_type']})"]] * 2

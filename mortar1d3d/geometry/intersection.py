@@ -6,13 +6,11 @@ intersection is one 3×3 Newton problem in z = (η, u, v):
     F(z) = x(o + u a + v b) - r(η) = 0,   ∂F/∂z = [-r'(η), J a, J b].
 """
 import numpy as np
-from numba import types
 
-from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit, njit_inline
-from .._unlinked import unlinked
+from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit
 from .beam import beam_point
 from .linalg import norm3, solve3
-from .projection import _HEX8, CONVERGED, FAILED, OTHER_CODES, _jacobian_typed, _map_typed, jacobian, map_point
+from .projection import CONVERGED, FAILED, jacobian, map_point
 
 #: step halvings of the line search. A beam that enters a face at a grazing angle (tangent to it
 #: a little outside) makes the Jacobian nearly singular near the tangency: the Newton step then
@@ -43,17 +41,6 @@ def face_coordinates(face, xi0, xi1, xi2):
 @njit
 def _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face, eta, u, v, xi, N, H, dH):
     """F at (η, u, v); sets ξ. Returns (|F|, F0, F1, F2, dr0, dr1, dr2)."""
-    return _residual_of(solid_code, X, beam_code, Q, length, s0, s1, s2, face, eta, u, v, xi, N, H, dH, map_point)
-
-
-@njit
-def _residual_typed(solid_code, X, beam_code, Q, length, s0, s1, s2, face, eta, u, v, xi, N, H, dH):
-    """:func:`_residual` in :func:`_intersect_typed` (``solid_code`` a literal: the type's map inlined)."""
-    return _residual_of(solid_code, X, beam_code, Q, length, s0, s1, s2, face, eta, u, v, xi, N, H, dH, _map_typed)
-
-
-@njit_inline
-def _residual_of(solid_code, X, beam_code, Q, length, s0, s1, s2, face, eta, u, v, xi, N, H, dH, map_point):
     for i in range(3):
         xi[i] = face[0, i] + u * face[1, i] + v * face[2, i]
     x0, x1, x2 = map_point(solid_code, X, xi, N)
@@ -73,31 +60,7 @@ def intersect_face(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, 
     one extra step for a transversal crossing (quadratic convergence), more for a beam that
     touches the face tangentially (a double root, linear convergence), where the residual
     test alone leaves η off by O(√tol) and two spurious crossings on either side of the touch.
-
-    hex8's iteration is compiled here; every other solid type's is one call to its own version
-    (``solid_code`` a literal: its map and Jacobian inlined), as in
-    :func:`~mortar1d3d.geometry.projection.project_point`.
     """
-    if solid_code != _HEX8:
-        return _intersect_typed_call(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH)
-    return _face_newton(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH,
-                        _residual, jacobian)
-
-
-@njit
-def _intersect_typed(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH):
-    """:func:`intersect_face` of one solid type but hex8 (``solid_code`` a literal)."""
-    return _face_newton(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH,
-                        _residual_typed, _jacobian_typed)
-
-
-#: per solid type but hex8, lazily (see mortar1d3d._unlinked): one call per face Newton
-_intersect_typed_call = unlinked(_intersect_typed, returns=types.int64, cases=OTHER_CODES)
-
-
-@njit_inline
-def _face_newton(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH, _residual, jacobian):
-    """The iteration of :func:`intersect_face`, with the residual and Jacobian of the caller."""
     tol = NEWTON_RESIDUAL_TOL * h
     fn, f0, f1, f2, d0, d1, d2 = _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face,
                                            z[0], z[1], z[2], xi, N, H, dH)

@@ -44,9 +44,6 @@ _HEX8 = hex8.DESCRIPTOR.code
 _HEX27 = hex27.DESCRIPTOR.code
 _TET10 = tet10.DESCRIPTOR.code
 _NURBS27 = nurbs27.DESCRIPTOR.code
-#: every code but hex8's: the types whose Newton projection, polishing step and face Newton are
-#: compiled once per type, with the code a compile-time constant (see :func:`project_point`)
-OTHER_CODES = tuple(code for code in range(len(solid.N_NODES)) if code != _HEX8)
 
 
 @njit_inline
@@ -77,14 +74,6 @@ def map_point(code, X, xi, N):
 @njit
 def _map_other(code, X, xi, N):
     """:func:`map_point` of every type but hex8."""
-    return _map_typed(code, X, xi, N)
-
-
-@njit_inline
-def _map_typed(code, X, xi, N):
-    """The code of :func:`_map_other`, inlined; where ``code`` is a literal (in :func:`_project_typed` and
-    the functions like it), Numba keeps only its type's branch: hex27's, tet10's and nurbs27's
-    contractions, every other type's shape functions and sum."""
     if code == _HEX27:
         return hex27.map_nodes(X, xi)
     if code == _TET10:
@@ -138,12 +127,6 @@ def jacobian(code, X, xi, N, dN):
 @njit
 def _jacobian_other(code, X, xi, N, dN):
     """:func:`jacobian` of every type but hex8."""
-    return _jacobian_typed(code, X, xi, N, dN)
-
-
-@njit_inline
-def _jacobian_typed(code, X, xi, N, dN):
-    """The code of :func:`_jacobian_other`, inlined (as :func:`_map_typed`)."""
     if code == _HEX27:
         return hex27.jacobian_nodes(X, xi)
     if code == _TET10:
@@ -170,31 +153,7 @@ def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
     :func:`polish_residual`, which then needs no evaluation of the map). Converged when
     |x(ξ) - p| <= 1e-12 h. Returns CONVERGED or FAILED (singular Jacobian, no decrease,
     parameters running away, or 20 iterations).
-
-    hex8's iteration is compiled here; every other type's is one call through a symbol to its own
-    version (:func:`_project_typed`, code a literal: its map and Jacobian inlined), compiled when a
-    scene first projects into an element of that type.
     """
-    if code != _HEX8:
-        return _project_typed_call(code, X, p0, p1, p2, h, xi, trial, N, dN)
-    return _newton(code, X, p0, p1, p2, h, xi, trial, N, dN, map_point, jacobian)
-
-
-@njit
-def _project_typed(code, X, p0, p1, p2, h, xi, trial, N, dN):
-    """:func:`project_point` of one type but hex8 (``code`` a literal)."""
-    return _newton(code, X, p0, p1, p2, h, xi, trial, N, dN, _map_typed, _jacobian_typed)
-
-
-#: per type but hex8, lazily (see mortar1d3d._unlinked): one call per projection instead of one per
-#: evaluation of the map or the Jacobian
-_project_typed_call = unlinked(_project_typed, returns=types.int64, cases=OTHER_CODES)
-
-
-@njit_inline
-def _newton(code, X, p0, p1, p2, h, xi, trial, N, dN, map_point, jacobian):
-    """The iteration of :func:`project_point`, with the map and Jacobian of the caller (inlined
-    functions: Numba inlines them here too)."""
     tol = NEWTON_RESIDUAL_TOL * h
     x0, x1, x2 = map_point(code, X, xi, N)
     r0, r1, r2 = p0 - x0, p1 - x1, p2 - x2
@@ -624,31 +583,12 @@ def store_residual(code, X, p0, p1, p2, xi, trial, N):
 @njit_inline
 def polish_residual(code, X, p0, p1, p2, h, xi, trial, N, dN):
     """:func:`polish` with the residual p - x(ξ) already in ``trial`` (as :func:`project_point` and
-    :func:`locate_point` leave it): the same step, one evaluation of the map fewer. Types but hex8
-    as in :func:`project_point`: one call to the type's own version.
+    :func:`locate_point` leave it): the same step, one evaluation of the map fewer.
 
     Inlined into its callers (the integration points' chunks call it once per point): a call would
     pass its five arrays and five scalars per point; inlined, the element-based points stage on the
     distorted hex8 cube executes 0.953 of the kernel instructions (benchmarks/README.md, "The hex8
     points stage in instructions"). The same operations, so the same bits."""
-    if code != _HEX8:
-        _polish_typed_call(code, X, p0, p1, p2, h, xi, trial, N, dN)
-        return
-    _polish_step(code, X, p0, p1, p2, h, xi, trial, N, dN, map_point, jacobian)
-
-
-@njit
-def _polish_typed(code, X, p0, p1, p2, h, xi, trial, N, dN):
-    """:func:`polish_residual` of one type but hex8 (``code`` a literal)."""
-    _polish_step(code, X, p0, p1, p2, h, xi, trial, N, dN, _map_typed, _jacobian_typed)
-
-
-_polish_typed_call = unlinked(_polish_typed, returns=types.none, cases=OTHER_CODES)
-
-
-@njit_inline
-def _polish_step(code, X, p0, p1, p2, h, xi, trial, N, dN, map_point, jacobian):
-    """The step of :func:`polish_residual` (map and Jacobian as in :func:`_newton`)."""
     r0, r1, r2 = trial[0], trial[1], trial[2]
     if norm3(r0, r1, r2) <= _ROUND_OFF * h:
         return      # already at round-off (affine elements after one Newton step): nothing to gain
