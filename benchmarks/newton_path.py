@@ -69,7 +69,7 @@ if hasattr(sg, "_faces_in_linear_reach"):
     faces_in_linear_reach = sg._faces_in_linear_reach
 else:
     @njit
-    def faces_in_linear_reach(code, X, s, linear, beam_code, Qe, length, s0, s1, s2, a, Y, H, dH, reach):
+    def faces_in_linear_reach(code, X, h, s, linear, beam_code, Qe, length, s0, s1, s2, a, Y, H, dH, reach):
         """An older checkout: only the boxes decide which pairs are searched."""
         return True
 
@@ -236,7 +236,7 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                 continue
             s0, s1, s2 = (beam_origin[e, 0] - solid_origin[s, 0], beam_origin[e, 1] - solid_origin[s, 1],
                           beam_origin[e, 2] - solid_origin[s, 2])
-            if not faces_in_linear_reach(code, X, s, linear, beam_code, Q[e], lengths[e], s0, s1, s2, a, C, H, dH,
+            if not faces_in_linear_reach(code, X, h, s, linear, beam_code, Q[e], lengths[e], s0, s1, s2, a, C, H, dH,
                                          reach):
                 out[8] += 1
                 continue

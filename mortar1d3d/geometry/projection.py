@@ -770,6 +770,18 @@ def is_affine(table, s):
 _START_LIMIT = 4.0
 
 
+@njit_inline
+def linear_image(code, table, s, x0, x1, x2):
+    """ζ = ξ_c + L (x - x_c) of element s (x local to node 0) as a 3-tuple, with no limit (the element
+    must have a linearisation: ``table[s, 4, 0] >= 0``)."""
+    d0 = x0 - table[s, 3, 0]
+    d1 = x1 - table[s, 3, 1]
+    d2 = x2 - table[s, 3, 2]
+    return (solid.CENTRE[code, 0] + table[s, 0, 0] * d0 + table[s, 0, 1] * d1 + table[s, 0, 2] * d2,
+            solid.CENTRE[code, 1] + table[s, 1, 0] * d0 + table[s, 1, 1] * d1 + table[s, 1, 2] * d2,
+            solid.CENTRE[code, 2] + table[s, 2, 0] * d0 + table[s, 2, 1] * d1 + table[s, 2, 2] * d2)
+
+
 @njit
 def linear_parameters(code, table, s, x0, x1, x2, xi):
     """ξ = ξ_c + L (x - x_c) of element s (x local to node 0): exact where affine, else a start.
@@ -779,12 +791,7 @@ def linear_parameters(code, table, s, x0, x1, x2, xi):
     """
     if not table[s, 4, 0] >= 0.0:
         return False
-    d0 = x0 - table[s, 3, 0]
-    d1 = x1 - table[s, 3, 1]
-    d2 = x2 - table[s, 3, 2]
-    y0 = solid.CENTRE[code, 0] + table[s, 0, 0] * d0 + table[s, 0, 1] * d1 + table[s, 0, 2] * d2
-    y1 = solid.CENTRE[code, 1] + table[s, 1, 0] * d0 + table[s, 1, 1] * d1 + table[s, 1, 2] * d2
-    y2 = solid.CENTRE[code, 2] + table[s, 2, 0] * d0 + table[s, 2, 1] * d1 + table[s, 2, 2] * d2
+    y0, y1, y2 = linear_image(code, table, s, x0, x1, x2)
     if table[s, 4, 0] == 0.0 and max(abs(y0), abs(y1), abs(y2)) > _START_LIMIT:
         return False
     xi[0], xi[1], xi[2] = y0, y1, y2

@@ -41,7 +41,7 @@ from .beam import beam_point, beams_affine
 from .intersection import face_coordinates, intersect_face
 from .linalg import norm3, solve3
 from .projection import (ANY_CANDIDATE, CONVERGED, NOT_CONVERGED, certified_outside, first_containing,
-                         is_affine, jacobian, linear_parameters, load_element, locate_outside, locate_point,
+                         is_affine, jacobian, linear_image, linear_parameters, load_element, locate_outside, locate_point,
                          point_buffers, project_point, search_buffers)
 from .search import in_hull
 
@@ -206,7 +206,7 @@ def _faces_in_reach(code, X, h, box, origin, C, reach):
 
 
 @njit
-def _faces_in_linear_reach(code, X, s, linear, beam_code, Qe, length, s0, s1, s2, a, Y, H, dH, reach):
+def _faces_in_linear_reach(code, X, h, s, linear, beam_code, Qe, length, s0, s1, s2, a, Y, H, dH, reach):
     """Clear ``reach[f]`` of the faces that the element's linearised map proves the beam element cannot
     cross; False if no face is left (the beam element lies entirely inside or entirely outside).
 
@@ -219,8 +219,8 @@ def _faces_in_linear_reach(code, X, s, linear, beam_code, Qe, length, s0, s1, s2
     Σ_i |n_i| ε_i of the face's plane, and a point of the element has n·(ξ - o) <= 0: if all control
     points lie farther than that on the inner side of a face's plane, the beam cannot reach the
     face; farther on its outer side, it cannot reach the element at all. The margin (``_REACH_MARGIN``
-    scaled by the sizes in parameter units) lies far above the tolerances with which crossings are
-    accepted (their ξ within 1e-9 of the element, η within 1e-9 of [-1, 1], the residual within
+    scaled by the sizes in parameter units, the element's by its size ``h``) lies far above the
+    tolerances with which crossings are accepted (their ξ within 1e-9 of the element, η within 1e-9 of [-1, 1], the residual within
     1e-9 h), so clearing such faces changes no crossing found. Rational types and elements without
     a linearisation keep their ``reach`` unchanged.
     """
@@ -240,15 +240,16 @@ def _faces_in_linear_reach(code, X, s, linear, beam_code, Qe, length, s0, s1, s2
     for end in range(2):
         r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Qe, length, s0, s1, s2, 2.0 * end - 1.0, H, dH)
         sign = (2.0 - 4.0 * end) / 3.0
-        _linear_image(code, linear, s, r0, r1, r2, Y[3 * end])
-        _linear_image(code, linear, s, r0 + sign * d0, r1 + sign * d1, r2 + sign * d2, Y[1 + end])
+        Y[3 * end, 0], Y[3 * end, 1], Y[3 * end, 2] = linear_image(code, linear, s, r0, r1, r2)
+        Y[1 + end, 0], Y[1 + end, 1], Y[1 + end, 2] = linear_image(code, linear, s, r0 + sign * d0, r1 + sign * d1,
+                                                                   r2 + sign * d2)
     for c in range(1, 4):
         for i in range(3):
             spread = max(spread, abs(Y[c, i] - Y[0, i]))
     size = 0.0
     for i in range(3):
         size = max(size, abs(linear[s, i, 0]) + abs(linear[s, i, 1]) + abs(linear[s, i, 2]))
-    pad = _REACH_MARGIN * (1.0 + spread + size * _solid_size(X, code))
+    pad = _REACH_MARGIN * (1.0 + spread + size * h)
     faces = solid.faces(code)
     any_face = False
     for f in range(faces.shape[0]):
@@ -269,30 +270,6 @@ def _faces_in_linear_reach(code, X, s, linear, beam_code, Qe, length, s0, s1, s2
             reach[f] = False
         any_face = any_face or reach[f]
     return any_face
-
-
-@njit
-def _linear_image(code, linear, s, x0, x1, x2, out):
-    """ζ = ξ_c + L (x - x_c) of element s (x local to its node 0), without the start limit of
-    :func:`.projection.linear_parameters`."""
-    d0 = x0 - linear[s, 3, 0]
-    d1 = x1 - linear[s, 3, 1]
-    d2 = x2 - linear[s, 3, 2]
-    for i in range(3):
-        out[i] = solid.CENTRE[code, i] + linear[s, i, 0] * d0 + linear[s, i, 1] * d1 + linear[s, i, 2] * d2
-
-
-@njit
-def _solid_size(X, code):
-    """Largest coordinate extent of the element's nodes (local coordinates)."""
-    size = 0.0
-    for i in range(3):
-        lo = hi = X[0, i]
-        for k in range(1, solid.n_nodes(code)):
-            lo = min(lo, X[k, i])
-            hi = max(hi, X[k, i])
-        size = max(size, hi - lo)
-    return size
 
 
 @njit_parallel
@@ -353,7 +330,7 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
         s1 = beam_origin[e, 1] - solid_origin[s, 1]
         s2 = beam_origin[e, 2] - solid_origin[s, 2]
         unsearched[p] = LINEAR_MISS
-        if not _faces_in_linear_reach(code, X, s, linear, beam_code, Qe, lengths[e], s0, s1, s2, a, C, H, dH,
+        if not _faces_in_linear_reach(code, X, h, s, linear, beam_code, Qe, lengths[e], s0, s1, s2, a, C, H, dH,
                                       reach):
             continue
         unsearched[p] = SEARCHED
