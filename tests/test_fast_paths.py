@@ -281,3 +281,98 @@ def test_linear_reach_decides_a_beam_near_the_centre_and_refuses_crossings_and_n
     assert abs(s["eta_start"][1]) < 1e-12 and s["eta_end"][1] == 1.0
     assert s["eta_start"][2] == -1.0 and s["eta_end"][2] == 1.0
     assert ops.diagnostics["pairs_out_of_linear_reach"] == 1
+
+
+def element_bounds(ctx):
+    """``segmentation.linear_errors`` of every element of the context, candidate of a beam element or not."""
+    from mortar1d3d.geometry import segmentation
+    errors = np.full((len(ctx.codes), 3), np.nan)
+    segmentation._linear_errors(np.arange(len(ctx.codes)), ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
+                                ctx.linear, errors, workers())
+    return errors
+
+
+@pytest.mark.parametrize("element, inside", [("hexahedron", 500), ("hexahedron27", 300), ("tetra10", 10)])
+def test_linear_side_agrees_with_the_locator(element, inside):
+    """Points the linearised map decides (``segmentation._linear_side``: inside, or outside, for certain)
+    are located there by the library's locator too: 4000 random points around the elements of a distorted
+    cube (0.1 cells), each against the element it was drawn near and that element's neighbour. The
+    curved tetrahedra, small against their bound, are decided inside only near their centres."""
+    from mortar1d3d.geometry import segmentation
+    from mortar1d3d.geometry.projection import INSIDE, project_points
+    cube = generate.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (3, 3, 3), element=element)
+    solid = generate.distort(cube, 0.1, seed=2)
+    ctx = KernelInput(generate.random_curved_beams(1, 2, seed=1), solid)
+    errors = element_bounds(ctx)
+    rng = np.random.default_rng(7)
+    elements = rng.integers(0, solid.n_elements, 4000)
+    elements = np.concatenate([elements, (elements + 1) % solid.n_elements])
+    centre = solid.points[solid.connectivity[elements % solid.n_elements]].mean(axis=1)
+    spread = 0.5 * ctx.solid_h[elements[:4000], None]
+    x = np.concatenate([centre[:4000] + spread * rng.uniform(-1, 1, (4000, 3))] * 2)
+    side = np.array([segmentation._linear_side(ctx.codes[s], s, ctx.linear, errors, *(x[i] - ctx.solid_origin[s]),
+                                               segmentation._SIDE_MARGIN) for i, s in enumerate(elements)])
+    _, status = project_points(solid, x, elements)
+    assert np.all(status[side < 0] == INSIDE)
+    assert np.all(status[side > 0] != INSIDE)
+    # it decides most points, in both ways, and leaves some near the faces to the locator
+    assert np.count_nonzero(side < 0) > inside and np.count_nonzero(side > 0) > 5000
+    assert np.count_nonzero(side == 0) > 100
+
+
+def test_linear_side_decides_the_centre_and_far_points_and_refuses_points_near_a_face():
+    """The hexahedron of the test above (node (1, 1, 1) moved to (0.7, 1, 1): the bound of its map's
+    nonlinear part is about 0.32 in ξ): its centre is inside for certain, a point 0.5 beyond the planar
+    face x = 0 outside for certain; points 0.05 inside and 0.05 outside that face, within the bound,
+    are left to the locator; an affine element is always left to its exact inverse map."""
+    from mortar1d3d.geometry import segmentation
+    points = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
+                      dtype=float)
+    curved = points.copy()
+    curved[6] += (-0.3, 0.0, 0.0)
+    for nodes, expected in ((curved, [-1, 1, 0, 0]), (points, [0, 0, 0, 0])):
+        solid = m13.SolidMesh(nodes, {"hexahedron": np.arange(8)[None, :]})
+        ctx = KernelInput(generate.random_curved_beams(1, 2, seed=1), solid)
+        errors = element_bounds(ctx)
+        # the moved node bends the map in x only
+        assert (errors[0, 0] > 0.3 if nodes is curved else errors[0, 0] < 1e-14) and np.all(errors[0, 1:] < 1e-14)
+        sides = [segmentation._linear_side(ctx.codes[0], 0, ctx.linear, errors, *(np.array(x) - ctx.solid_origin[0]),
+                                           segmentation._SIDE_MARGIN)
+                 for x in ((0.45, 0.5, 0.5), (-0.5, 0.5, 0.5), (0.05, 0.5, 0.5), (-0.05, 0.5, 0.5))]
+        assert sides == expected
+
+
+@pytest.mark.parametrize("element", ["hexahedron", "hexahedron27", "tetra10"])
+def test_tiling_and_its_check_give_the_same_answers_without_the_linearised_map(element):
+    """The tiling's owners and the tiling check's probes, decided by the linearised map where it can
+    (``segmentation._linear_side``), against the same stages with no element bound (every point
+    projected): the same segments, bit for bit, and the same verdicts of the check, on a distorted cube
+    with curved fibres, and with a segment's owner replaced (the check must fail there either way)."""
+    from mortar1d3d.geometry import segmentation
+    beams, cube = generate.fibre_cube(4, 60, 4, curved=True)
+    if element != "hexahedron":
+        cube = generate.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (4, 4, 4), element=element)
+    solid = generate.distort(cube, 0.12, seed=3)
+    ctx = KernelInput(beams, solid)
+    errors = segmentation.linear_errors(ctx)
+    blind = np.full_like(errors, np.nan)
+    eta, face, count, unsearched = segmentation.pair_crossings(ctx, ctx.pair_beam(), ctx.pair_solid, 6, errors)
+    tiled = segmentation.tile(ctx, eta, face, count, errors)
+    reference = segmentation.tile(ctx, eta, face, count, blind)
+    for a, b in zip(tiled, reference):
+        np.testing.assert_array_equal(a, b)
+    # the map decides most of the segments' midpoints in their owners (the comparison is not empty)
+    mid = [beams.evaluate(b, [0.5 * (a + c)])[0] for b, a, c in zip(tiled[0], tiled[2], tiled[3])]
+    sides = [segmentation._linear_side(ctx.codes[s], s, ctx.linear, errors, *(x - ctx.solid_origin[s]),
+                                       segmentation._SIDE_MARGIN) for s, x in zip(tiled[1], mid)]
+    least = {"hexahedron": len(sides) // 2, "hexahedron27": len(sides) // 10, "tetra10": 20}[element]
+    assert sides.count(1) == 0 and sides.count(-1) > least
+    certain = np.zeros(ctx.n_beam, dtype=bool)
+    good = segmentation.check_tiling(ctx, *tiled[1:4], tiled[4], certain, errors)
+    assert not good.any()
+    np.testing.assert_array_equal(good, segmentation.check_tiling(ctx, *tiled[1:4], tiled[4], certain, blind))
+    owners = tiled[1].copy()
+    owners[::7] = (owners[::7] + 5) % solid.n_elements        # a wrong owner every seventh segment
+    bad = segmentation.check_tiling(ctx, owners, *tiled[2:4], tiled[4], certain, errors)
+    assert bad.any()
+    np.testing.assert_array_equal(bad, segmentation.check_tiling(ctx, owners, *tiled[2:4], tiled[4], certain, blind))

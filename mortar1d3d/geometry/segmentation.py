@@ -18,6 +18,11 @@ Two stages, both parallel over independent items with pre-sized output slots:
    once); neighbouring intervals with the same owner are merged. Intervals whose midpoint lies
    in no element are outside the solid and are not coupled.
 
+Both stages and the tiling check ask whether a point lies in an element; a bound on how far each
+element's linearised map may be from its map (:func:`linear_errors`, once per call) answers most
+of these questions without a Newton projection: for a beam element with every point, or a point
+deep inside or far outside an element (:func:`_faces_in_linear_reach`, :func:`_linear_side`).
+
 By construction the segments of a beam element never overlap, and together with the uncoupled
 intervals they tile [-1, 1] exactly.
 
@@ -41,8 +46,8 @@ from .beam import beam_point, beams_affine
 from .intersection import face_coordinates, intersect_face
 from .linalg import norm3, solve3
 from .projection import (ANY_CANDIDATE, CONVERGED, NOT_CONVERGED, certified_outside, first_containing,
-                         is_affine, jacobian, linear_image, linear_parameters, load_element, locate_outside, locate_point,
-                         point_buffers, project_point, search_buffers)
+                         in_box, is_affine, jacobian, linear_image, linear_parameters, load_element, locate_outside,
+                         locate_point, point_buffers, project_point, search_buffers)
 from .search import in_hull
 
 _NEAR_FACE = 0.1     # min |g| of the cubic model below this fraction of its variation: try a touch there
@@ -80,21 +85,24 @@ def _record(eta, face, out_eta, out_face, p, count, overflow):
     return count
 
 
-def pair_crossings(ctx, pair_beam, pair_solid, search_points):
+def pair_crossings(ctx, pair_beam, pair_solid, search_points, errors=None):
     """The first stage: face crossings of the given pairs (``pair_beam`` indexes the beam elements of ``ctx``).
 
     Returns ``crossing_eta`` (n_pairs, width), ``crossing_face`` (n_pairs, width: the face of the
     solid element each crossing lies on), ``crossing_count`` (n_pairs,) and ``unsearched`` (n_pairs,)
     int8: ``SEARCHED`` (0), or why the beam element reaches no face of the solid element
     (``BOX_MISS``: its box misses every face's box; ``LINEAR_MISS``: the element's linearised map
-    proves it, :func:`_faces_in_linear_reach`), so that it lies entirely inside or outside.
+    proves it, :func:`_faces_in_linear_reach`), so that it lies entirely inside or outside. ``errors``:
+    :func:`linear_errors` of ``ctx`` (computed here if not given).
     """
+    if errors is None:
+        errors = linear_errors(ctx)
     n = len(pair_solid)
     # a straight beam element in an affine solid element has face functions linear in η: their roots
     # are the sign changes between samples, with no touch or double crossing to look for
     straight = beams_affine(ctx.beam_code, ctx.Q, ctx.lengths)
-    args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.linear, ctx.hull, ctx.beam_code, ctx.Q,
-            ctx.lengths, ctx.beam_origin, ctx.beam_boxes, straight, search_points)
+    args = (ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.linear, errors, ctx.hull,
+            ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, ctx.beam_boxes, straight, search_points)
     full = crossings_capacity(search_points)
     width = min(_FIRST_CAPACITY, full)
     crossing_eta, crossing_face, crossing_count, unsearched, overflow = carve(
@@ -206,26 +214,19 @@ def _faces_in_reach(code, X, h, box, origin, C, reach):
 
 
 @njit
-def _faces_in_linear_reach(code, X, h, s, linear, beam_code, Qe, length, s0, s1, s2, a, Y, H, dH, reach):
-    """Clear ``reach[f]`` of the faces that the element's linearised map proves the beam element cannot
-    cross; False if no face is left (the beam element lies entirely inside or entirely outside).
+def _linear_error(code, X, s, linear, a, out):
+    """ε of element s (local nodes ``X``; ``a``: scratch of :func:`.projection.search_buffers`) into ``out``
+    (3,): how far the linearised parameters ζ of a point of the element may lie from its ξ, per component
+    (see :func:`_faces_in_linear_reach`); NaN for a rational type or an element without a linearisation.
 
-    With y = ξ - ξ_c, a polynomial map is x(ξ) = x_c + J_c y + Σ_q a_q y^α_q over its monomials of
-    degree >= 2, so the linearised parameters ζ(x) = ξ_c + L (x - x_c) (``linear``: L = J_c⁻¹) of
-    a point x(ξ) of the element differ from ξ by at most ε_i = Σ_q |(L a_q)_i| R^|α_q| in component
-    i (|y|∞ <= R in the element). ζ is affine in x, so the ζ of the beam element's centreline lie in
-    the convex hull of the ζ of its Bézier control points (every centreline is a cubic at most: its
-    end points and end tangents). A point of face f has n·(ξ - o) = 0, so its ζ lies within
-    Σ_i |n_i| ε_i of the face's plane, and a point of the element has n·(ξ - o) <= 0: if all control
-    points lie farther than that on the inner side of a face's plane, the beam cannot reach the
-    face; farther on its outer side, it cannot reach the element at all. The margin (``_REACH_MARGIN``
-    scaled by the sizes in parameter units, the element's by its size ``h``) lies far above the
-    tolerances with which crossings are accepted (their ξ within 1e-9 of the element, η within 1e-9 of [-1, 1], the residual within
-    1e-9 h), so clearing such faces changes no crossing found. Rational types and elements without
-    a linearisation keep their ``reach`` unchanged.
+    With y = ξ - ξ_c, a polynomial map is x(ξ) = x_c + J_c y + Σ_q a_q y^α_q over its monomials of degree
+    >= 2, so ζ(x) = ξ_c + L (x - x_c) (``linear``: L = J_c⁻¹) of the point x(ξ) differs from ξ by at most
+    ε_i = Σ_q |(L a_q)_i| R^|α_q| in component i, for |y|∞ <= R (the element's radius, grown by
+    ``_REACH_MARGIN``: also for ξ within that much outside the element).
     """
     if solid.RATIONAL[code] or not linear[s, 4, 0] >= 0.0:
-        return True
+        out[0] = out[1] = out[2] = np.nan
+        return
     solid.monomial_coefficients(code, X, a)
     radius = solid.RADIUS[code] * (1.0 + _REACH_MARGIN)
     e0 = e1 = e2 = 0.0
@@ -235,6 +236,56 @@ def _faces_in_linear_reach(code, X, h, s, linear, beam_code, Qe, length, s0, s1,
         e0 += abs(linear[s, 0, 0] * a[k, 0] + linear[s, 0, 1] * a[k, 1] + linear[s, 0, 2] * a[k, 2]) * scale
         e1 += abs(linear[s, 1, 0] * a[k, 0] + linear[s, 1, 1] * a[k, 1] + linear[s, 1, 2] * a[k, 2]) * scale
         e2 += abs(linear[s, 2, 0] * a[k, 0] + linear[s, 2, 1] * a[k, 1] + linear[s, 2, 2] * a[k, 2]) * scale
+    out[0], out[1], out[2] = e0, e1, e2
+
+
+@njit_parallel
+def _linear_errors(elements, codes, conn, points, solid_origin, linear, errors, workers):
+    n = elements.shape[0]
+    claims = new_claims(n, workers)
+    for worker in prange(workers):
+        X, _, _, _, _, _, _ = point_buffers()
+        a, _ = search_buffers()
+        begin, stop = claim(claims, n, worker)
+        while begin < stop:
+            for i in range(begin, stop):
+                s = elements[i]
+                load_element(points, conn, s, codes[s], solid_origin, X)
+                _linear_error(codes[s], X, s, linear, a, errors[s])
+            begin, stop = claim(claims, n, worker)
+
+
+def linear_errors(ctx):
+    """(n_solid, 3): :func:`_linear_error` of every candidate element of ``ctx`` (NaN: no bound, or not a
+    candidate), computed once per call for the crossing search, the tiling and its check."""
+    errors = np.full((len(ctx.codes), 3), np.nan)
+    used = np.zeros(len(ctx.codes), dtype=np.bool_)
+    used[ctx.pair_solid] = True
+    _linear_errors(np.flatnonzero(used), ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.linear, errors,
+                   workers())
+    return errors
+
+
+@njit
+def _faces_in_linear_reach(code, h, s, linear, errors, beam_code, Qe, length, s0, s1, s2, Y, H, dH, reach):
+    """Clear ``reach[f]`` of the faces that the element's linearised map proves the beam element cannot
+    cross; False if no face is left (the beam element lies entirely inside or entirely outside).
+
+    The linearised parameters ζ of a point of the element lie within ε_i (``errors[s]``, see
+    :func:`_linear_error`) of its ξ in component i. ζ is affine in x, so the ζ of the beam element's
+    centreline lie in the convex hull of the ζ of its Bézier control points (every centreline is a cubic at
+    most: its end points and end tangents). A point of face f has n·(ξ - o) = 0, so its ζ lies within
+    Σ_i |n_i| ε_i of the face's plane, and a point of the element has n·(ξ - o) <= 0: if all control
+    points lie farther than that on the inner side of a face's plane, the beam cannot reach the
+    face; farther on its outer side, it cannot reach the element at all. The margin (``_REACH_MARGIN``
+    scaled by the sizes in parameter units, the element's by its size ``h``) lies far above the
+    tolerances with which crossings are accepted (their ξ within 1e-9 of the element, η within 1e-9 of [-1, 1],
+    the residual within 1e-9 h), so clearing such faces changes no crossing found. Rational types and elements without
+    a linearisation (ε NaN) keep their ``reach`` unchanged.
+    """
+    e0, e1, e2 = errors[s, 0], errors[s, 1], errors[s, 2]
+    if not e0 >= 0.0:
+        return True
     # Bézier control points of the centreline (η in [-1, 1]: dr/dt = 2 dr/dη for t in [0, 1]), as ζ
     spread = 0.0
     for end in range(2):
@@ -272,8 +323,64 @@ def _faces_in_linear_reach(code, X, h, s, linear, beam_code, Qe, length, s0, s1,
     return any_face
 
 
+#: how much deeper than its error bound the linearised image of a point must lie behind (or beyond) the face
+#: planes for :func:`_linear_side` to decide (parameter units): far above every tolerance of the inside tests
+#: it stands in for (1e-11 for owners, 1e-9 for crossings, 1e-6 for the tiling check's probes)
+_SIDE_MARGIN = 1e-5
+
+
+@njit
+def _linear_side(code, s, linear, errors, x0, x1, x2, pad):
+    """Where element s's linearised map puts the point x (local to the element's origin), for certain:
+    -1 inside, 1 outside, 0 undecided (also for affine elements, located exactly anyway, and for those
+    without an error bound, ``errors`` NaN).
+
+    The linearised parameters ζ of x lie within ε (``errors[s]``, :func:`_linear_error`) of the ξ of any
+    preimage of x in the element (or within ``_REACH_MARGIN`` of it). Beyond a face plane by more than
+    Σ_i |n_i| ε_i + ``pad``: x has no preimage there, it lies outside. Behind every face plane by more
+    than that: the map ξ ↦ ζ(x(ξ)) = ξ + δ(ξ), |δ_i| <= ε_i, moves no point of the element's boundary
+    across ζ(x) on the way from the identity (t δ, t from 0 to 1), so its degree at ζ(x) stays 1 and x
+    has a preimage in the element, deeper than ``pad`` behind every face: it lies inside for every
+    inside test of the library (tolerances up to ``pad``), whichever branch Newton would have found.
+    """
+    if linear[s, 4, 0] == 1.0 or not errors[s, 0] >= 0.0:
+        return 0
+    z0, z1, z2 = linear_image(code, linear, s, x0, x1, x2)
+    faces = solid.faces(code)
+    inside = True
+    for f in range(faces.shape[0]):
+        face = faces[f]
+        slack = (abs(face[3, 0]) * errors[s, 0] + abs(face[3, 1]) * errors[s, 1] + abs(face[3, 2]) * errors[s, 2]
+                 + pad)
+        g = face[3, 0] * (z0 - face[0, 0]) + face[3, 1] * (z1 - face[0, 1]) + face[3, 2] * (z2 - face[0, 2])
+        if g > slack:
+            return 1
+        if g >= -slack:
+            inside = False
+    return -1 if inside else 0
+
+
+@njit
+def _contains(r0, r1, r2, e, p, pair_solid, beam_origin, solid_boxes, hull, codes, conn, points, solid_origin, solid_h,
+              linear, errors, tol, pad, X, xi, trial, N, dN, a, stack):
+    """(contains, decided): whether candidate pair p's element contains the point r (beam element e's frame)
+    to ``tol`` (``first_containing``'s test on that element: the same answer), and whether
+    :func:`_linear_side` decided it without a projection (then ``xi`` is not set)."""
+    s = pair_solid[p]
+    if not in_box(solid_boxes[s], r0 + beam_origin[e, 0], r1 + beam_origin[e, 1], r2 + beam_origin[e, 2]):
+        return False, True
+    side = _linear_side(codes[s], s, linear, errors, r0 + (beam_origin[e, 0] - solid_origin[s, 0]),
+                        r1 + (beam_origin[e, 1] - solid_origin[s, 1]), r2 + (beam_origin[e, 2] - solid_origin[s, 2]),
+                        pad)
+    if side != 0:
+        return side < 0, True
+    found = first_containing(r0, r1, r2, e, pair_solid, p, p + 1, beam_origin, solid_boxes, hull, codes, conn, points,
+                             solid_origin, solid_h, linear, tol, X, xi, trial, N, dN, a, stack, ANY_CANDIDATE)
+    return found >= 0, False
+
+
 @njit_parallel
-def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear, hull,
+def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear, errors, hull,
                     beam_code, Q, lengths, beam_origin, beam_boxes, straight, search_points, out_eta, out_face,
                     out_count, unsearched, overflow, workers):
     n_pairs = pair_beam.shape[0]
@@ -295,23 +402,23 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
         begin, stop = claim(claims, n_pairs, worker)
         while begin < stop:
             _pair_crossings_chunk_call(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h,
-                                       linear, hull, beam_code, Q, lengths, beam_origin, beam_boxes, straight, out_eta,
-                                       out_face, out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH, start,
-                                       ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z)
+                                       linear, errors, hull, beam_code, Q, lengths, beam_origin, beam_boxes, straight,
+                                       out_eta, out_face, out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H,
+                                       dH, start, ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z)
             begin, stop = claim(claims, n_pairs, worker)
 
 
 @njit
-def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear, hull,
-                          beam_code, Q, lengths, beam_origin, beam_boxes, straight, out_eta, out_face, out_count,
-                          unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok, trial, N, dN, a, stack, xi_s,
-                          dxi_s, g, dg, z):
+def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear,
+                          errors, hull, beam_code, Q, lengths, beam_origin, beam_boxes, straight, out_eta, out_face,
+                          out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok, trial, N, dN, a,
+                          stack, xi_s, dxi_s, g, dg, z):
     # the caller holds every array for this call: the calls below pass them without reference
     # counting (see mortar1d3d._borrowed)
-    (pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear, hull, Q, lengths, beam_origin,
+    (pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear, errors, hull, Q, lengths, beam_origin,
         beam_boxes, straight, out_eta, out_face, out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH,
         start, ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z) = borrowed(pair_beam, pair_solid, codes, conn,
-        points, solid_origin, solid_h, linear, hull, Q, lengths, beam_origin, beam_boxes, straight, out_eta,
+        points, solid_origin, solid_h, linear, errors, hull, Q, lengths, beam_origin, beam_boxes, straight, out_eta,
         out_face, out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok, trial, N, dN, a, stack,
         xi_s, dxi_s, g, dg, z)
     for p in range(begin, stop):
@@ -330,7 +437,7 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
         s1 = beam_origin[e, 1] - solid_origin[s, 1]
         s2 = beam_origin[e, 2] - solid_origin[s, 2]
         unsearched[p] = LINEAR_MISS
-        if not _faces_in_linear_reach(code, X, h, s, linear, beam_code, Qe, lengths[e], s0, s1, s2, a, C, H, dH,
+        if not _faces_in_linear_reach(code, h, s, linear, errors, beam_code, Qe, lengths[e], s0, s1, s2, C, H, dH,
                                       reach):
             continue
         unsearched[p] = SEARCHED
@@ -568,7 +675,7 @@ def _merge_distance(beam_code, Qe, length, eta, h, H, dH):
 
 @njit_parallel
 def _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes, conn, points, solid_origin,
-          solid_h, solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, seg_offsets, seg_solid,
+          solid_h, solid_boxes, hull, linear, errors, beam_code, Q, lengths, beam_origin, seg_offsets, seg_solid,
           seg_start, seg_end, seg_count, workers):
     n_beam = pair_offsets.shape[0] - 1
     claims = new_claims(n_beam, workers)
@@ -582,25 +689,25 @@ def _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count,
         begin, stop = claim(claims, n_beam, worker)
         while begin < stop:
             _tile_chunk_call(begin, stop, pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes,
-                             conn, points, solid_origin, solid_h, solid_boxes, hull, linear, beam_code, Q, lengths,
-                             beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count, cuts, reach, H, dH,
-                             touch, owners, X, xi, trial, N, dN, a, stack)
+                             conn, points, solid_origin, solid_h, solid_boxes, hull, linear, errors, beam_code, Q,
+                             lengths, beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count, cuts, reach,
+                             H, dH, touch, owners, X, xi, trial, N, dN, a, stack)
             begin, stop = claim(claims, n_beam, worker)
 
 
 @njit
 def _tile_chunk(begin, stop, pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes, conn,
-                points, solid_origin, solid_h, solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin,
+                points, solid_origin, solid_h, solid_boxes, hull, linear, errors, beam_code, Q, lengths, beam_origin,
                 seg_offsets, seg_solid, seg_start, seg_end, seg_count, cuts, reach, H, dH, touch, owners, X, xi, trial,
                 N, dN, a, stack):
     # the caller holds every array for this call: the calls below pass them without reference
     # counting (see mortar1d3d._borrowed)
     (pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes, conn, points, solid_origin,
-        solid_h, solid_boxes, hull, linear, Q, lengths, beam_origin, seg_offsets, seg_solid, seg_start, seg_end,
+        solid_h, solid_boxes, hull, linear, errors, Q, lengths, beam_origin, seg_offsets, seg_solid, seg_start, seg_end,
         seg_count, cuts, reach, H, dH, touch, owners, X, xi, trial, N, dN, a, stack) = borrowed(pair_offsets,
         pair_solid, crossing_eta, crossing_face, crossing_count, codes, conn, points, solid_origin, solid_h,
-        solid_boxes, hull, linear, Q, lengths, beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count,
-        cuts, reach, H, dH, touch, owners, X, xi, trial, N, dN, a, stack)
+        solid_boxes, hull, linear, errors, Q, lengths, beam_origin, seg_offsets, seg_solid, seg_start, seg_end,
+        seg_count, cuts, reach, H, dH, touch, owners, X, xi, trial, N, dN, a, stack)
     for e in range(begin, stop):
         p0 = pair_offsets[e]
         p1 = pair_offsets[e + 1]
@@ -615,6 +722,7 @@ def _tile_chunk(begin, stop, pair_offsets, pair_solid, crossing_eta, crossing_fa
         round_off = 2.220446049250313e-16 * big / h
         owner_tol = SEGMENT_OWNER_TOL + 8.0 * round_off
         touch_tol = TOUCH_TOL + 64.0 * round_off
+        pad = _SIDE_MARGIN + 64.0 * round_off
         if m + 2 > cuts.shape[0]:
             cuts = np.empty(2 * (m + 2))
             reach = np.empty(2 * (m + 2))
@@ -667,27 +775,23 @@ def _tile_chunk(begin, stop, pair_offsets, pair_solid, crossing_eta, crossing_fa
             owners[iv] = -1
             mid = 0.5 * (cuts[iv] + cuts[iv + 1])
             r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, mid, H, dH)
-            first = p0
-            while first < p1:
-                owner = first_containing(r0, r1, r2, e, pair_solid, first, p1, beam_origin, solid_boxes, hull,
-                                         codes, conn, points, solid_origin, solid_h, linear, owner_tol, X, xi,
-                                         trial, N, dN, a, stack, ANY_CANDIDATE)
-                if owner < 0:
-                    break
-                p = first
-                while pair_solid[p] != owner:
-                    p += 1
+            for p in range(p0, p1):
+                inside, decided = _contains(r0, r1, r2, e, p, pair_solid, beam_origin, solid_boxes, hull, codes, conn,
+                                            points, solid_origin, solid_h, linear, errors, owner_tol, pad, X, xi,
+                                            trial, N, dN, a, stack)
+                if not inside:
+                    continue
                 # a piece bounded by crossings of the owner's faces lies on the owner's side of
                 # those faces only if the face conditions say so at its midpoint, not within the
                 # inside tolerance: a piece that leaves through a face and comes back through it,
                 # or a beam that passes an edge or a corner just outside, crossing the faces'
-                # planes beyond the faces (within the crossings' tolerance)
-                if _beyond_bounding_faces(codes[owner], crossing_eta, crossing_face, crossing_count, p,
-                                          cuts[iv], cuts[iv + 1], 2.0 * max(reach[iv], reach[iv + 1]),
-                                          xi) <= touch_tol:
-                    owners[iv] = owner
+                # planes beyond the faces (within the crossings' tolerance). A midpoint the
+                # linearised map puts inside lies deeper than ``pad`` behind every face: no test
+                if decided or _beyond_bounding_faces(codes[pair_solid[p]], crossing_eta, crossing_face, crossing_count,
+                                                     p, cuts[iv], cuts[iv + 1], 2.0 * max(reach[iv], reach[iv + 1]),
+                                                     xi) <= touch_tol:
+                    owners[iv] = pair_solid[p]
                     break
-                first = p + 1
         # a run of touches stays on the side the beam is on: it joins a neighbouring piece whose
         # owner contains it, or is not coupled (a touch from outside). A beam element that
         # lies in a face from end to end has no such neighbour: its pieces are owned as usual.
@@ -743,8 +847,8 @@ _GAP_PROBES = 7
 
 @njit_parallel
 def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, pair_solid, codes, conn,
-                  points, solid_origin, solid_h, solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, certain,
-                  bad, workers):
+                  points, solid_origin, solid_h, solid_boxes, hull, linear, errors, beam_code, Q, lengths, beam_origin,
+                  certain, bad, workers):
     """Flag beam elements whose pieces do not tile their embedded part.
 
     Probes every segment at 1/4 and 3/4 (its midpoint chose the owner): each probe must lie in
@@ -768,22 +872,22 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
         while begin < stop:
             _check_tiling_chunk_call(begin, stop, seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets,
                                      pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear,
-                                     beam_code, Q, lengths, beam_origin, certain, bad, H, dH, loose, X, xi, trial, N,
-                                     dN, a_buf, stack)
+                                     errors, beam_code, Q, lengths, beam_origin, certain, bad, H, dH, loose, X, xi,
+                                     trial, N, dN, a_buf, stack)
             begin, stop = claim(claims, n_beam, worker)
 
 
 @njit
 def _check_tiling_chunk(begin, stop, seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, pair_solid,
-                        codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear, beam_code, Q, lengths,
-                        beam_origin, certain, bad, H, dH, loose, X, xi, trial, N, dN, a_buf, stack):
+                        codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear, errors, beam_code, Q,
+                        lengths, beam_origin, certain, bad, H, dH, loose, X, xi, trial, N, dN, a_buf, stack):
     # the caller holds every array for this call: the calls below pass them without reference
     # counting (see mortar1d3d._borrowed)
     (seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, pair_solid, codes, conn, points,
-        solid_origin, solid_h, solid_boxes, hull, linear, Q, lengths, beam_origin, certain, bad, H, dH, X, xi,
-        trial, N, dN, a_buf, stack) = borrowed(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets,
-        pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear, Q, lengths, beam_origin,
-        certain, bad, H, dH, X, xi, trial, N, dN, a_buf, stack)
+        solid_origin, solid_h, solid_boxes, hull, linear, errors, Q, lengths, beam_origin, certain, bad, H, dH, X,
+        xi, trial, N, dN, a_buf, stack) = borrowed(seg_offsets, seg_solid, seg_start, seg_end, seg_count,
+        pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear, errors, Q,
+        lengths, beam_origin, certain, bad, H, dH, X, xi, trial, N, dN, a_buf, stack)
     for e in range(begin, stop):
         p0 = pair_offsets[e]
         p1 = pair_offsets[e + 1]
@@ -791,6 +895,12 @@ def _check_tiling_chunk(begin, stop, seg_offsets, seg_solid, seg_start, seg_end,
         if certain[e] and seg_count[e] == 1 and seg_start[base] == -1.0 and seg_end[base] == 1.0:
             bad[e] = False
             continue
+        # coordinates far from the origin carry round-off (see _tile_chunk)
+        h = np.inf
+        for p in range(p0, p1):
+            h = min(h, solid_h[pair_solid[p]])
+        pad = _SIDE_MARGIN + 64.0 * 2.220446049250313e-16 * max(abs(beam_origin[e, 0]), abs(beam_origin[e, 1]),
+                                                                abs(beam_origin[e, 2])) / h
         failed = False
         gap_start = -1.0
         for q in range(seg_count[e] + 1):
@@ -800,20 +910,29 @@ def _check_tiling_chunk(begin, stop, seg_offsets, seg_solid, seg_start, seg_end,
                 for k in range(1, _GAP_PROBES + 1):
                     eta = gap_start + k * (a - gap_start) / (_GAP_PROBES + 1)
                     r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
-                    if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull,
-                                        codes, conn, points, solid_origin, solid_h, linear, -loose, X, xi,
-                                        trial, N, dN, a_buf, stack, ANY_CANDIDATE) >= 0:
-                        failed = True
+                    for p in range(p0, p1):
+                        if _contains(r0, r1, r2, e, p, pair_solid, beam_origin, solid_boxes, hull, codes, conn, points,
+                                     solid_origin, solid_h, linear, errors, -loose, pad, X, xi, trial, N, dN, a_buf,
+                                     stack)[0]:
+                            failed = True
+                            break
             if last or failed:
                 break
             b = seg_end[base + q]
             owner = seg_solid[base + q]
+            p = p0
+            while p < p1 and pair_solid[p] != owner:
+                p += 1
+            if p == p1:
+                # not a candidate of this beam element
+                failed = True
+                break
             for k in (1, 3):
                 eta = a + 0.25 * k * (b - a)
                 r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], 0.0, 0.0, 0.0, eta, H, dH)
-                if first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes,
-                                    conn, points, solid_origin, solid_h, linear, loose, X, xi, trial, N, dN,
-                                    a_buf, stack, owner) != owner:
+                if not _contains(r0, r1, r2, e, p, pair_solid, beam_origin, solid_boxes, hull, codes, conn, points,
+                                 solid_origin, solid_h, linear, errors, loose, pad, X, xi, trial, N, dN, a_buf,
+                                 stack)[0]:
                     failed = True
             if failed:
                 break
@@ -909,13 +1028,14 @@ def _compact_index(offsets, counts):
     return out
 
 
-def tile(ctx, crossing_eta, crossing_face, crossing_count):
+def tile(ctx, crossing_eta, crossing_face, crossing_count, errors=None):
     """The second stage: the segments of every beam element of ``ctx`` from the crossings of its pairs.
 
     Per beam element, its pairs' crossings (rows of the (n_pairs, width) tables, ``crossing_count``
     used; face -1: a cut that is no face crossing) and η = ±1 cut [-1, 1] into intervals; each
     goes to the lowest-index candidate containing its midpoint, neighbours with the same owner
-    are merged (see the module docstring).
+    are merged (see the module docstring). ``errors``: :func:`linear_errors` of ``ctx`` (computed here if not
+    given), with which most midpoints are located without a projection (:func:`_linear_side`).
 
     Returns
     -------
@@ -935,23 +1055,28 @@ def tile(ctx, crossing_eta, crossing_face, crossing_count):
     seg_start = np.empty(total)
     seg_end = np.empty(total)
     seg_count = np.zeros(ctx.n_beam, dtype=np.int64)
+    if errors is None:
+        errors = linear_errors(ctx)
     _tile(pair_offsets, ctx.pair_solid, crossing_eta, crossing_face, crossing_count, ctx.codes, ctx.conn, ctx.points,
-          ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.hull, ctx.linear, ctx.beam_code, ctx.Q, ctx.lengths,
-          ctx.beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count, workers())
+          ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.hull, ctx.linear, errors, ctx.beam_code, ctx.Q,
+          ctx.lengths, ctx.beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count, workers())
     keep = _compact_index(seg_offsets, seg_count)
     return np.repeat(ctx.beam_ids, seg_count), seg_solid[keep], seg_start[keep], seg_end[keep], seg_count
 
 
-def check_tiling(ctx, seg_solid, seg_start, seg_end, seg_count, certain):
+def check_tiling(ctx, seg_solid, seg_start, seg_end, seg_count, certain, errors=None):
     """(m,) bool: the beam elements of ``ctx`` whose segments (of :func:`tile`) fail the tiling check.
 
     ``certain`` (m,) bool: beam elements that reach no face of any candidate (not probed when
-    they are one piece [-1, 1], see ``_check_tiling``).
+    they are one piece [-1, 1], see ``_check_tiling``). ``errors``: :func:`linear_errors` of ``ctx``
+    (computed here if not given), with which most probes are located without a projection.
     """
+    if errors is None:
+        errors = linear_errors(ctx)
     seg_offsets = np.concatenate([[0], np.cumsum(seg_count)]).astype(np.int64)
     bad = np.zeros(ctx.n_beam, dtype=np.bool_)
     _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, ctx.pair_offsets, ctx.pair_solid, ctx.codes,
-                  ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.hull, ctx.linear,
+                  ctx.conn, ctx.points, ctx.solid_origin, ctx.solid_h, ctx.solid_boxes, ctx.hull, ctx.linear, errors,
                   ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin, certain, bad, workers())
     return bad
 
@@ -975,9 +1100,10 @@ def _bisected(ctx):
     first = ctx.pair_offsets[:-1][has_pairs]
     crossing_eta[first] = cuts[has_pairs]
     crossing_count[first] = count[has_pairs]
-    *segments, seg_count = tile(ctx, crossing_eta, crossing_face, crossing_count)
+    errors = linear_errors(ctx)
+    *segments, seg_count = tile(ctx, crossing_eta, crossing_face, crossing_count, errors)
     # every beam element is probed: without face crossings no element is known to be one piece
-    return (*segments, check_tiling(ctx, *segments[1:], seg_count, np.zeros(n, dtype=np.bool_)))
+    return (*segments, check_tiling(ctx, *segments[1:], seg_count, np.zeros(n, dtype=np.bool_), errors))
 
 
 def segment(ctx, search_points, diagnostics=None):
@@ -993,12 +1119,13 @@ def segment(ctx, search_points, diagnostics=None):
     proves that the beam element reaches none of its faces) and ``beam_elements_out_of_reach`` (beam
     elements all of whose pairs are either).
     """
+    errors = linear_errors(ctx)
     crossing_eta, crossing_face, crossing_count, unsearched = pair_crossings(ctx, ctx.pair_beam(), ctx.pair_solid,
-                                                                             search_points)
+                                                                             search_points, errors)
     reaching = np.concatenate([[0], np.cumsum(unsearched == SEARCHED)])
     certain = reaching[ctx.pair_offsets[1:]] == reaching[ctx.pair_offsets[:-1]]
-    *segments, seg_count = tile(ctx, crossing_eta, crossing_face, crossing_count)
-    bad = check_tiling(ctx, *segments[1:], seg_count, certain)
+    *segments, seg_count = tile(ctx, crossing_eta, crossing_face, crossing_count, errors)
+    bad = check_tiling(ctx, *segments[1:], seg_count, certain, errors)
     if diagnostics is not None:
         diagnostics["face_crossings"] = int(crossing_count.sum())
         diagnostics["pairs_out_of_reach"] = int(np.count_nonzero(unsearched == BOX_MISS))
