@@ -50,7 +50,13 @@ import mortar1d3d as m13  # noqa: E402
 from mortar1d3d._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit  # noqa: E402
 from mortar1d3d.elements.solid import dispatch as solid  # noqa: E402
 from mortar1d3d.geometry import projection as pr  # noqa: E402
-from mortar1d3d.geometry.beam import beam_point  # noqa: E402
+from mortar1d3d.geometry.beam import beam_point, beams_affine  # noqa: E402
+from mortar1d3d.geometry.intersection import face_coordinates  # noqa: E402
+from mortar1d3d.geometry.intersection import _residual as face_residual  # noqa: E402
+from mortar1d3d.geometry.intersection import _BACKTRACKS as FACE_BACKTRACKS  # noqa: E402
+from mortar1d3d.geometry.intersection import _MAX_ETA as FACE_MAX_ETA  # noqa: E402
+from mortar1d3d.geometry.intersection import _POLISH_ITERATIONS as FACE_POLISH_ITERATIONS  # noqa: E402
+from mortar1d3d.geometry.intersection import _POLISH_STEP as FACE_POLISH_STEP  # noqa: E402
 from mortar1d3d.geometry.context import KernelInput  # noqa: E402
 from mortar1d3d.geometry.linalg import norm3, solve3  # noqa: E402
 from mortar1d3d.geometry import segmentation as sg  # noqa: E402
@@ -65,11 +71,20 @@ PENDING = getattr(pr, "PENDING_CERTIFICATE", None)
 #: whether the checkout's crossing search skips a touch start at a sample next to a sign change
 TOUCH_SKIPS_CROSSINGS = "at_crossing" in open(sg.__file__).read()
 
-if hasattr(sg, "_faces_in_linear_reach"):
-    faces_in_linear_reach = sg._faces_in_linear_reach
+if hasattr(sg, "linear_errors"):
+    @njit
+    def faces_in_linear_reach(code, X, h, s, linear, errors, beam_code, Qe, length, s0, s1, s2, a, Y, H, dH, reach):
+        """The library's linear-reach test, its error bounds ``errors`` computed once per element."""
+        return sg._faces_in_linear_reach(code, h, s, linear, errors, beam_code, Qe, length, s0, s1, s2, Y, H, dH,
+                                         reach)
+elif hasattr(sg, "_faces_in_linear_reach"):
+    @njit
+    def faces_in_linear_reach(code, X, h, s, linear, errors, beam_code, Qe, length, s0, s1, s2, a, Y, H, dH, reach):
+        """An older checkout's linear-reach test (its error bounds computed for every pair)."""
+        return sg._faces_in_linear_reach(code, X, h, s, linear, beam_code, Qe, length, s0, s1, s2, a, Y, H, dH, reach)
 else:
     @njit
-    def faces_in_linear_reach(code, X, h, s, linear, beam_code, Qe, length, s0, s1, s2, a, Y, H, dH, reach):
+    def faces_in_linear_reach(code, X, h, s, linear, errors, beam_code, Qe, length, s0, s1, s2, a, Y, H, dH, reach):
         """An older checkout: only the boxes decide which pairs are searched."""
         return True
 
@@ -211,13 +226,95 @@ def segment_point_counts(seg_beam, seg_solid, seg_start, seg_end, gx, codes, con
 
 
 @njit
-def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, linear, hull, beam_code, Q,
-                    lengths, beam_origin, beam_boxes, S, out):
-    """The crossing search's samples, counted: out = [pairs, pairs searched (a face in reach), sample
-    projections, their Newton iterations, sample fallbacks, face-Newton starts at sign changes of the
+def face_newton_counted(code, X, h, beam_code, Qe, length, s0, s1, s2, face, eta0, xs0, xs1, xs2, z, xi, N, dN, H, dH,
+                        out):
+    """The crossing search's face Newton (:func:`mortar1d3d.geometry.intersection.intersect_face`, then
+    the acceptance of ``segmentation._try_crossing``) from (η0, ξ0), counted: out[9] += Newton steps
+    (Jacobian and solve), out[10] += residual evaluations (the start's and every line-search trial's),
+    out[11] += 1 if no crossing was accepted. A copy of the library's iteration with counters (the
+    library's kernels hold none): the same steps, the same result. Returns the crossing's η or NaN."""
+    z[0] = eta0
+    z[1], z[2] = face_coordinates(face, xs0, xs1, xs2)
+    tol = NEWTON_RESIDUAL_TOL * h
+    fn, f0, f1, f2, d0, d1, d2 = face_residual(code, X, beam_code, Qe, length, s0, s1, s2, face, z[0], z[1], z[2],
+                                               xi, N, H, dH)
+    out[10] += 1
+    status = -1
+    last_step = np.inf
+    for it in range(NEWTON_MAX_ITERATIONS + FACE_POLISH_ITERATIONS):
+        converged = fn <= tol
+        if converged and last_step <= FACE_POLISH_STEP:
+            status = 1
+            break
+        if not converged and it >= NEWTON_MAX_ITERATIONS:
+            status = 0
+            break
+        j00, j01, j02, j10, j11, j12, j20, j21, j22 = pr.jacobian(code, X, xi, N, dN)
+        out[9] += 1
+        a, b = face[1], face[2]
+        det, s_eta, s_u, s_v = solve3(
+            -d0, j00 * a[0] + j01 * a[1] + j02 * a[2], j00 * b[0] + j01 * b[1] + j02 * b[2],
+            -d1, j10 * a[0] + j11 * a[1] + j12 * a[2], j10 * b[0] + j11 * b[1] + j12 * b[2],
+            -d2, j20 * a[0] + j21 * a[1] + j22 * a[2], j20 * b[0] + j21 * b[1] + j22 * b[2],
+            -f0, -f1, -f2)
+        if det == 0.0:
+            status = 1 if converged else 0
+            break
+        step = 1.0
+        accepted = False
+        for _b in range(FACE_BACKTRACKS):
+            e_t = z[0] + step * s_eta
+            u_t = z[1] + step * s_u
+            v_t = z[2] + step * s_v
+            ft, g0, g1, g2, c0, c1, c2 = face_residual(code, X, beam_code, Qe, length, s0, s1, s2, face, e_t, u_t,
+                                                       v_t, xi, N, H, dH)
+            out[10] += 1
+            if ft < fn or ft <= tol:
+                accepted = True
+                break
+            step *= 0.5
+        if not accepted:
+            face_residual(code, X, beam_code, Qe, length, s0, s1, s2, face, z[0], z[1], z[2], xi, N, H, dH)
+            out[10] += 1
+            status = 1 if fn <= 1e3 * tol else 0
+            break
+        last_step = step * max(abs(s_eta), abs(s_u), abs(s_v))
+        z[0], z[1], z[2] = e_t, u_t, v_t
+        fn, f0, f1, f2, d0, d1, d2 = ft, g0, g1, g2, c0, c1, c2
+        if abs(z[0]) > FACE_MAX_ETA:
+            status = 0
+            break
+    if status < 0:
+        status = 1 if fn <= tol else 0
+    if (status == 0 or z[0] < -1.0 - PARAMETER_TOL or z[0] > 1.0 + PARAMETER_TOL
+            or not solid.is_inside(code, xi, PARAMETER_TOL)):
+        out[11] += 1
+        return np.nan
+    return min(max(z[0], -1.0), 1.0)
+
+
+@njit
+def face_newton_between(code, X, h, beam_code, Qe, length, s0, s1, s2, face, eta_s, xi_s, k, t, z, xi, N, dN, H, dH,
+                        out):
+    """:func:`face_newton_counted` from the point at fraction t of sample interval k (the library's linear
+    start values, ``segmentation._try_between``)."""
+    return face_newton_counted(code, X, h, beam_code, Qe, length, s0, s1, s2, face,
+                               eta_s[k] + t * (eta_s[k + 1] - eta_s[k]),
+                               xi_s[k, 0] + t * (xi_s[k + 1, 0] - xi_s[k, 0]),
+                               xi_s[k, 1] + t * (xi_s[k + 1, 1] - xi_s[k, 1]),
+                               xi_s[k, 2] + t * (xi_s[k + 1, 2] - xi_s[k, 2]), z, xi, N, dN, H, dH, out)
+
+
+@njit
+def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, linear, errors, hull,
+                    beam_code, Q, lengths, beam_origin, beam_boxes, straight, S, out):
+    """The crossing search's samples and face Newton, counted: out = [pairs, pairs searched (a face in reach),
+    sample projections, their Newton iterations, sample fallbacks, face-Newton starts at sign changes of the
     cubic model, touch starts, fallbacks beyond a hull plane (no subdivision search), pairs whose boxes meet
-    but whose beam element the linearised map proves to reach no face (not searched)]. Starts from the
-    deflated cubic (a sample exactly on a face) and the mirror start after a touch are not counted (both rare)."""
+    but whose beam element the linearised map proves to reach no face (not searched), face-Newton steps,
+    face-Newton residual evaluations, face-Newton starts that found no crossing, mirror starts after a touch].
+    The face Newton runs from the library's starts (:func:`face_newton_counted`); starts from the deflated
+    cubic (a sample exactly on a face) and at a failed sample are not made (both rare, none on these scenes)."""
     C = np.empty((solid.MAX_CONTROL, 3))
     reach = np.empty(solid.MAX_FACES, dtype=np.bool_)
     X, N, dN, H, dH, xi, trial = pr.point_buffers()
@@ -225,6 +322,7 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
     eta_s = np.empty(S)
     xi_s = np.empty((S, 3))
     dxi_s = np.empty((S, 3))
+    z = np.empty(3)
     for e in range(pair_offsets.shape[0] - 1):
         for p in range(pair_offsets[e], pair_offsets[e + 1]):
             out[0] += 1
@@ -236,8 +334,8 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                 continue
             s0, s1, s2 = (beam_origin[e, 0] - solid_origin[s, 0], beam_origin[e, 1] - solid_origin[s, 1],
                           beam_origin[e, 2] - solid_origin[s, 2])
-            if not faces_in_linear_reach(code, X, h, s, linear, beam_code, Q[e], lengths[e], s0, s1, s2, a, C, H, dH,
-                                         reach):
+            if not faces_in_linear_reach(code, X, h, s, linear, errors, beam_code, Q[e], lengths[e], s0, s1, s2, a, C,
+                                         H, dH, reach):
                 out[8] += 1
                 continue
             out[1] += 1
@@ -273,6 +371,7 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                 _, dxi_s[k, 0], dxi_s[k, 1], dxi_s[k, 2] = solve3(j00, j01, j02, j10, j11, j12, j20, j21, j22,
                                                                   d0, d1, d2)
             faces = solid.faces(code)
+            line = pr.is_affine(linear, s) and straight[e]
             for f in range(faces.shape[0]):
                 if not reach[f]:
                     continue
@@ -288,19 +387,39 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                         continue
                     prev = g0
                     best = abs(g0)
+                    best_t = 0.0
                     for i in range(1, sg._SCAN + 1):
-                        cur = sg._hermite_g(g0, g1, dg0, dg1, i / sg._SCAN)
+                        t = i / sg._SCAN
+                        cur = sg._hermite_g(g0, g1, dg0, dg1, t)
+                        t_start = -1.0
                         if prev * cur <= 0.0 and not (prev == 0.0 and i > 1):
                             out[5] += 1
-                        best = min(best, abs(cur))
+                            t_start = t - 1.0 / sg._SCAN + (1.0 / sg._SCAN) * (prev / (prev - cur) if prev != cur
+                                                                                else 0.5)
+                        if abs(cur) < best:
+                            best = abs(cur)
+                            best_t = t
                         prev = cur
+                        if t_start >= 0.0:
+                            face_newton_between(code, X, h, beam_code, Q[e], lengths[e], s0, s1, s2, face, eta_s,
+                                                xi_s, k, t_start, z, xi, N, dN, H, dH, out)
+                    if line:
+                        continue
                     # the library's touch start skips a sample next to a sign change of the samples
-                    # (where its kernel has this test; an older checkout starts there)
+                    # (where its kernel has this test; an older checkout starts there, and mirrors every touch)
                     near = TOUCH_SKIPS_CROSSINGS and (
-                        (best == abs(g1) and k + 2 < S and g1 * sg._face_side(face, xi_s[k + 2]) <= 0.0)
-                        or (best == abs(g0) and k > 0 and g0 * sg._face_side(face, xi_s[k - 1]) <= 0.0))
+                        (best_t == 1.0 and k + 2 < S and g1 * sg._face_side(face, xi_s[k + 2]) <= 0.0)
+                        or (best_t == 0.0 and k > 0 and g0 * sg._face_side(face, xi_s[k - 1]) <= 0.0))
                     if best < sg._NEAR_FACE * (abs(dg0) + abs(dg1) + abs(g1 - g0)) and g0 * g1 > 0.0 and not near:
                         out[6] += 1
+                        eta = face_newton_between(code, X, h, beam_code, Q[e], lengths[e], s0, s1, s2, face, eta_s,
+                                                  xi_s, k, best_t, z, xi, N, dN, H, dH, out)
+                        if eta_s[k] <= eta <= eta_s[k + 1] or (not TOUCH_SKIPS_CROSSINGS and not np.isnan(eta)):
+                            t_mirror = 2.0 * best_t - (eta - eta_s[k]) / (eta_s[k + 1] - eta_s[k])
+                            if 0.0 < t_mirror < 1.0:
+                                out[12] += 1
+                                face_newton_between(code, X, h, beam_code, Q[e], lengths[e], s0, s1, s2, face,
+                                                    eta_s, xi_s, k, t_mirror, z, xi, N, dN, H, dH, out)
 
 
 def _median_timings(calls):
@@ -392,9 +511,11 @@ def main(argv=None):
     print(f"segment-based points: {out[0]} ({len(tiled[0])} segments, {len(tiled[0]) / len(pairs):.2f} per beam "
           f"element); Newton iterations per point {out[1] / max(out[0] - out[3], 1):.3f} (warm start), fallbacks "
           f"{out[2]}, affine {out[3]}")
-    out = np.zeros(9, dtype=np.int64)
-    crossing_counts(ctx.pair_offsets, ctx.pair_solid, *args_ctx, ctx.linear, hull, ctx.beam_code, ctx.Q, ctx.lengths,
-                    ctx.beam_origin, ctx.beam_boxes, SEARCH_POINTS, out)
+    out = np.zeros(13, dtype=np.int64)
+    errors = sg.linear_errors(ctx) if hasattr(sg, "linear_errors") else np.zeros((1, 3))
+    crossing_counts(ctx.pair_offsets, ctx.pair_solid, *args_ctx, ctx.linear, errors, hull, ctx.beam_code, ctx.Q,
+                    ctx.lengths, ctx.beam_origin, ctx.beam_boxes, beams_affine(ctx.beam_code, ctx.Q, ctx.lengths),
+                    SEARCH_POINTS, out)
     found = int(crossing[2].sum())
     print(f"crossing search: {out[0]} pairs, {out[1]} searched ({out[1] / len(pairs):.2f} per beam element), "
           f"{out[8]} more not searched (the linearised map proves that they reach no face); "
@@ -403,6 +524,9 @@ def main(argv=None):
           f"beyond a hull plane: the warm start kept if it converged, else no subdivision search), face-Newton starts "
           f"{out[5] / max(out[1], 1):.3f} at sign changes + {out[6] / max(out[1], 1):.3f} at touches ({out[5]} + {out[6]} "
           f"in all), crossings found {found / max(out[1], 1):.3f} ({found} in all)")
+    starts = out[5] + out[6] + out[12]
+    print(f"face Newton: {starts} solves (sign changes, touches and {out[12]} mirrors), {out[9] / max(starts, 1):.2f} "
+          f"steps and {out[10] / max(starts, 1):.2f} residual evaluations each, {out[11]} found no crossing")
     return rates
 
 
