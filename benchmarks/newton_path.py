@@ -26,7 +26,8 @@ Printed:
    and how many of those a hull plane rejects before Newton), Newton projections and iterations, points that needed the rare path (restart from the centre,
    face polish, subdivision search); for the segments: Newton iterations of the warm-started
    integration points and their fallbacks; for the crossing search: pairs searched, sample
-   projections per searched pair and their iterations, face-Newton starts and crossings found.
+   projections per searched pair (those the checkout's search needs) and their iterations, face-Newton
+   starts, their steps and residual evaluations (a counted copy of the face Newton), and crossings found.
 
 An iteration is one Newton step (Jacobian, solve, residual at the new point), counted as full steps
 from the kernel's start value (see :func:`newton_counted`); a projection that starts at the answer
@@ -70,6 +71,18 @@ PENDING = getattr(pr, "PENDING_CERTIFICATE", None)
 
 #: whether the checkout's crossing search skips a touch start at a sample next to a sign change
 TOUCH_SKIPS_CROSSINGS = "at_crossing" in open(sg.__file__).read()
+
+if hasattr(sg, "_live_intervals"):
+    live_intervals = sg._live_intervals
+else:
+    @njit
+    def live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need):
+        """An older checkout: every sample is projected, every interval of a face in reach searched."""
+        for k in range(eta_s.shape[0]):
+            need[k] = True
+            for f in range(solid.MAX_FACES):
+                live[k, f] = f < solid.faces(code).shape[0] and reach[f]
+        return True
 
 if hasattr(sg, "linear_errors"):
     @njit
@@ -311,7 +324,8 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
     """The crossing search's samples and face Newton, counted: out = [pairs, pairs searched (a face in reach),
     sample projections, their Newton iterations, sample fallbacks, face-Newton starts at sign changes of the
     cubic model, touch starts, fallbacks beyond a hull plane (no subdivision search), pairs whose boxes meet
-    but whose beam element the linearised map proves to reach no face (not searched), face-Newton steps,
+    but whose beam element the linearised map proves to reach no face (not searched: on the whole element,
+    or on each sample interval, ``segmentation._live_intervals``), face-Newton steps,
     face-Newton residual evaluations, face-Newton starts that found no crossing, mirror starts after a touch].
     The face Newton runs from the library's starts (:func:`face_newton_counted`); starts from the deflated
     cubic (a sample exactly on a face) and at a failed sample are not made (both rare, none on these scenes)."""
@@ -323,6 +337,10 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
     xi_s = np.empty((S, 3))
     dxi_s = np.empty((S, 3))
     z = np.empty(3)
+    rs = np.empty((S, 6))
+    zs = np.empty((S, 6))
+    live = np.empty((S, solid.MAX_FACES), dtype=np.bool_)
+    need = np.empty(S, dtype=np.bool_)
     for e in range(pair_offsets.shape[0] - 1):
         for p in range(pair_offsets[e], pair_offsets[e + 1]):
             out[0] += 1
@@ -338,17 +356,26 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                                          H, dH, reach):
                 out[8] += 1
                 continue
+            for k in range(S):
+                eta_s[k] = -1.0 + 2.0 * k / (S - 1)
+                rs[k, 0], rs[k, 1], rs[k, 2], rs[k, 3], rs[k, 4], rs[k, 5] = beam_point(beam_code, Q[e], lengths[e],
+                                                                                     s0, s1, s2, eta_s[k], H, dH)
+            if not live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need):
+                out[8] += 1
+                continue
             out[1] += 1
             solid.centre(code, xi)
             for k in range(S):
-                eta_s[k] = -1.0 + 2.0 * k / (S - 1)
-                r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q[e], lengths[e], s0, s1, s2, eta_s[k], H, dH)
+                if not need[k]:
+                    continue
+                r0, r1, r2, d0, d1, d2 = rs[k, 0], rs[k, 1], rs[k, 2], rs[k, 3], rs[k, 4], rs[k, 5]
                 if pr.is_affine(linear, s):
                     pr.linear_parameters(code, linear, s, r0, r1, r2, xi_s[k])
                     for i in range(3):
                         dxi_s[k, i] = linear[s, i, 0] * d0 + linear[s, i, 1] * d1 + linear[s, i, 2] * d2
                     continue
-                if k == 0:
+                if k == 0 or not need[k - 1]:
+                    solid.centre(code, xi)
                     pr.linear_parameters(code, linear, s, r0, r1, r2, xi)
                 else:
                     for i in range(3):
@@ -377,6 +404,8 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                     continue
                 face = faces[f]
                 for k in range(S - 1):
+                    if not live[k, f]:
+                        continue
                     step = eta_s[k + 1] - eta_s[k]
                     g0 = sg._face_side(face, xi_s[k])
                     g1 = sg._face_side(face, xi_s[k + 1])
@@ -408,8 +437,8 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                     # the library's touch start skips a sample next to a sign change of the samples
                     # (where its kernel has this test; an older checkout starts there, and mirrors every touch)
                     near = TOUCH_SKIPS_CROSSINGS and (
-                        (best_t == 1.0 and k + 2 < S and g1 * sg._face_side(face, xi_s[k + 2]) <= 0.0)
-                        or (best_t == 0.0 and k > 0 and g0 * sg._face_side(face, xi_s[k - 1]) <= 0.0))
+                        (best_t == 1.0 and k + 2 < S and need[k + 2] and g1 * sg._face_side(face, xi_s[k + 2]) <= 0.0)
+                        or (best_t == 0.0 and k > 0 and need[k - 1] and g0 * sg._face_side(face, xi_s[k - 1]) <= 0.0))
                     if best < sg._NEAR_FACE * (abs(dg0) + abs(dg1) + abs(g1 - g0)) and g0 * g1 > 0.0 and not near:
                         out[6] += 1
                         eta = face_newton_between(code, X, h, beam_code, Q[e], lengths[e], s0, s1, s2, face, eta_s,

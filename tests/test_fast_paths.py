@@ -224,8 +224,9 @@ def test_pairs_out_of_linear_reach_lie_entirely_inside_or_outside(element, curve
         inside = status == INSIDE
         assert inside.all() or not inside.any(), (element, curved, p)
         kinds.add(bool(inside[0]))
-    # inside decided everywhere; outside too on the hexahedra (the tetrahedra's boxes already drop those pairs)
-    assert kinds == ({False, True} if element == "hexahedron" else {True})
+    # inside and outside both decided (the tetrahedra's outside pairs by their sample intervals, each beyond
+    # some face's plane: their boxes drop the others)
+    assert kinds == {False, True}
     assert crossing_count[unsearched == segmentation.SEARCHED].sum() > 0
 
 
@@ -376,3 +377,67 @@ def test_tiling_and_its_check_give_the_same_answers_without_the_linearised_map(e
     bad = segmentation.check_tiling(ctx, owners, *tiled[2:4], tiled[4], certain, errors)
     assert bad.any()
     np.testing.assert_array_equal(bad, segmentation.check_tiling(ctx, owners, *tiled[2:4], tiled[4], certain, blind))
+
+
+@pytest.mark.parametrize("element", ["hexahedron", "hexahedron27", "tetra10"])
+def test_crossings_are_the_same_with_the_intervals_the_linearised_map_rules_out(element):
+    """The crossing search without the sample intervals the linearised map rules out
+    (``segmentation._live_intervals``) against the same search with no element bound (every sample
+    projected, every interval searched): the same crossings of the same faces (η to 1e-12: the samples
+    are warm-started from other samples), on a distorted cube with curved fibres."""
+    from mortar1d3d.geometry import segmentation
+    beams, cube = generate.fibre_cube(4, 60, 4, curved=True)
+    if element != "hexahedron":
+        cube = generate.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (4, 4, 4), element=element)
+    ctx = KernelInput(beams, generate.distort(cube, 0.12, seed=3))
+    errors = segmentation.linear_errors(ctx)
+    found = segmentation.pair_crossings(ctx, ctx.pair_beam(), ctx.pair_solid, 6, errors)
+    blind = segmentation.pair_crossings(ctx, ctx.pair_beam(), ctx.pair_solid, 6, np.full_like(errors, np.nan))
+    def distinct(table, p):
+        """(face, η) of pair p's crossings, one of each crossing found from several starts (within 1e-9)."""
+        out = []
+        for face, eta in sorted(zip(table[1][p, :table[2][p]], table[0][p, :table[2][p]])):
+            if not out or out[-1][0] != face or eta - out[-1][1] > 1e-9:
+                out.append((face, eta))
+        return np.array(out).reshape(-1, 2)
+
+    assert found[2].sum() > 50
+    for p in np.flatnonzero(found[2] + blind[2]):
+        np.testing.assert_allclose(distinct(found, p), distinct(blind, p), rtol=0, atol=1e-12)
+    # blind, only the boxes decide pairs; with the bound, more pairs are left unsearched
+    assert np.count_nonzero(found[3] == segmentation.LINEAR_MISS) > 0 == np.count_nonzero(
+        blind[3] == segmentation.LINEAR_MISS)
+
+
+def test_live_intervals_skip_samples_far_from_the_faces_and_keep_those_near_a_crossing():
+    """The hexahedron with the moved node (bound about 0.32 in ξ, in x only) and a straight beam along x
+    from -0.5 to 0.5 (y = 0.3, z = 0.4), through its planar face x = 0 at η = 0: of the six samples
+    (x = -0.5, -0.3, ..., 0.5) the first interval lies beyond that face's plane by more than the bound
+    and the last one behind every face's plane by more: neither is searched, and their outer samples are
+    not projected; the three intervals within the bound of the face x = 0 are searched for it."""
+    from mortar1d3d.elements.solid.dispatch import faces
+    from mortar1d3d.geometry import segmentation
+    from mortar1d3d.geometry.beam import beam_point
+    points = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]],
+                      dtype=float)
+    points[6] += (-0.3, 0.0, 0.0)
+    solid = m13.SolidMesh(points, {"hexahedron": np.arange(8)[None, :]})
+    beams = m13.BeamMesh.hermite([(-0.5, 0.3, 0.4), (0.5, 0.3, 0.4)], [(1.0, 0.0, 0.0)] * 2, [[0, 1]])
+    ctx = KernelInput(beams, solid)
+    errors = segmentation.linear_errors(ctx)
+    code = ctx.codes[0]
+    S = 6
+    eta = np.linspace(-1.0, 1.0, S)
+    shift = ctx.beam_origin[0] - ctx.solid_origin[0]
+    H, dH = np.empty(8), np.empty(8)
+    rs = np.array([beam_point(ctx.beam_code, ctx.Q[0], ctx.lengths[0], *shift, t, H, dH) for t in eta])
+    reach = np.ones(6, dtype=bool)
+    live, need, zs = np.zeros((S, 6), dtype=bool), np.zeros(S, dtype=bool), np.empty((S, 6))
+    assert segmentation._live_intervals(code, 0, ctx.solid_h[0], ctx.linear, errors, eta, rs, reach, zs, live, need)
+    x_minus = int(np.flatnonzero(np.all(faces(code)[:, 3] == (-1.0, 0.0, 0.0), axis=1))[0])
+    assert list(need) == [False, True, True, True, True, False]
+    assert list(live[:S - 1, x_minus]) == [False, True, True, True, False]
+    assert not live[:S - 1, np.arange(6) != x_minus].any()
+    # the crossing is found: one segment from the face (η = 0) to the end
+    ops = m13.assemble_mortar(beams, solid, integration="segment", n_gauss=2)
+    assert abs(ops.segments["eta_start"][0]) < 1e-12 and ops.segments["eta_end"][0] == 1.0

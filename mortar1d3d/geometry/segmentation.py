@@ -11,7 +11,9 @@ Two stages, both parallel over independent items with pre-sized output slots:
    miss; not at a sample next to a sign change of the samples, whose crossing that interval's
    own start finds). Accepted crossings have η in the beam element and ξ on the face (tolerance
    1e-9). Pairs are not searched where the beam element's box misses every face's box, or where
-   the element's linearised map proves that it reaches no face (:func:`_faces_in_linear_reach`).
+   the element's linearised map proves that it reaches no face (:func:`_faces_in_linear_reach`);
+   sample intervals where it proves that, and the samples that bound only such intervals, are
+   skipped (:func:`_live_intervals`).
 2. ``_tile`` (per beam element): the crossings of all its pairs plus η = ±1, sorted and merged
    within 1e-9, cut the element into intervals; each interval's midpoint goes to the *lowest
    index* candidate element containing it (so a piece on a shared face, edge or node is counted
@@ -323,6 +325,74 @@ def _faces_in_linear_reach(code, h, s, linear, errors, beam_code, Qe, length, s0
     return any_face
 
 
+@njit
+def _live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need):
+    """Which sample intervals of a searched pair may hold a crossing of which face: ``live[k, f]`` for
+    interval k (η_k to η_k+1) and face f, ``need[k]``: sample k bounds a live interval. False if none is live.
+
+    ``rs[k]``: the centreline's point and tangent dr/dη at sample k (local to the element's origin). The
+    centreline is a cubic at most, so on each interval its linearised image ζ (affine in x) lies in the
+    hull of four Bézier control points, from ζ and dζ/dη = L r' at the interval's ends; as for the whole
+    beam element (:func:`_faces_in_linear_reach`, the same bound and margins), a face whose plane all four
+    miss by more than Σ_i |n_i| ε_i has no crossing there, and none has where they lie that far beyond
+    one face's plane. Elements without a bound (rational, no linearisation) and affine ones (whose samples
+    cost no Newton) keep every interval of a face in ``reach``.
+    """
+    S = eta_s.shape[0]
+    faces = solid.faces(code)
+    bounded = linear[s, 4, 0] == 0.0 and errors[s, 0] >= 0.0
+    for k in range(S):
+        need[k] = not bounded
+        if bounded:
+            zs[k, 0], zs[k, 1], zs[k, 2] = linear_image(code, linear, s, rs[k, 0], rs[k, 1], rs[k, 2])
+            for i in range(3):
+                zs[k, 3 + i] = linear[s, i, 0] * rs[k, 3] + linear[s, i, 1] * rs[k, 4] + linear[s, i, 2] * rs[k, 5]
+    if not bounded:
+        for k in range(S - 1):
+            for f in range(faces.shape[0]):
+                live[k, f] = reach[f]
+        return True
+    spread = 0.0
+    size = 0.0
+    for i in range(3):
+        size = max(size, abs(linear[s, i, 0]) + abs(linear[s, i, 1]) + abs(linear[s, i, 2]))
+        for k in range(S):
+            spread = max(spread, abs(zs[k, i] - zs[0, i]) + (eta_s[S - 1] - eta_s[0]) * abs(zs[k, 3 + i]))
+    pad = _REACH_MARGIN * (1.0 + spread + size * h)
+    any_live = False
+    for k in range(S - 1):
+        third = (eta_s[k + 1] - eta_s[k]) / 3.0
+        outside = False
+        for f in range(faces.shape[0]):
+            live[k, f] = False
+        for f in range(faces.shape[0]):
+            face = faces[f]
+            slack = (abs(face[3, 0]) * errors[s, 0] + abs(face[3, 1]) * errors[s, 1] + abs(face[3, 2]) * errors[s, 2]
+                     + pad)
+            lo = np.inf
+            hi = -np.inf
+            for c in range(4):
+                end = k + c // 2
+                t = third if c == 1 else -third if c == 2 else 0.0
+                g = 0.0
+                for i in range(3):
+                    g += face[3, i] * (zs[end, i] + t * zs[end, 3 + i] - face[0, i])
+                lo = min(lo, g)
+                hi = max(hi, g)
+            if lo > slack:
+                outside = True
+                break
+            live[k, f] = reach[f] and hi >= -slack
+        if outside:
+            for f in range(faces.shape[0]):
+                live[k, f] = False
+        for f in range(faces.shape[0]):
+            if live[k, f]:
+                need[k] = need[k + 1] = True
+                any_live = True
+    return any_live
+
+
 #: how much deeper than its error bound the linearised image of a point must lie behind (or beyond) the face
 #: planes for :func:`_linear_side` to decide (parameter units): far above every tolerance of the inside tests
 #: it stands in for (1e-11 for owners, 1e-9 for crossings, 1e-6 for the tiling check's probes)
@@ -399,12 +469,17 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
         ok = np.empty(S, dtype=np.bool_)
         g = np.empty(S)
         dg = np.empty(S)
+        rs = np.empty((S, 6))
+        zs = np.empty((S, 6))
+        live = np.empty((S, solid.MAX_FACES), dtype=np.bool_)
+        need = np.empty(S, dtype=np.bool_)
         begin, stop = claim(claims, n_pairs, worker)
         while begin < stop:
             _pair_crossings_chunk_call(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h,
                                        linear, errors, hull, beam_code, Q, lengths, beam_origin, beam_boxes, straight,
                                        out_eta, out_face, out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H,
-                                       dH, start, ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z)
+                                       dH, start, ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z, rs, zs, live,
+                                       need)
             begin, stop = claim(claims, n_pairs, worker)
 
 
@@ -412,15 +487,15 @@ def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, so
 def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear,
                           errors, hull, beam_code, Q, lengths, beam_origin, beam_boxes, straight, out_eta, out_face,
                           out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok, trial, N, dN, a,
-                          stack, xi_s, dxi_s, g, dg, z):
+                          stack, xi_s, dxi_s, g, dg, z, rs, zs, live, need):
     # the caller holds every array for this call: the calls below pass them without reference
     # counting (see mortar1d3d._borrowed)
     (pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear, errors, hull, Q, lengths, beam_origin,
         beam_boxes, straight, out_eta, out_face, out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH,
-        start, ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z) = borrowed(pair_beam, pair_solid, codes, conn,
-        points, solid_origin, solid_h, linear, errors, hull, Q, lengths, beam_origin, beam_boxes, straight, out_eta,
-        out_face, out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok, trial, N, dN, a, stack,
-        xi_s, dxi_s, g, dg, z)
+        start, ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z, rs, zs, live, need) = borrowed(pair_beam, pair_solid,
+        codes, conn, points, solid_origin, solid_h, linear, errors, hull, Q, lengths, beam_origin, beam_boxes,
+        straight, out_eta, out_face, out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH, start, ok,
+        trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z, rs, zs, live, need)
     for p in range(begin, stop):
         e = pair_beam[p]
         s = pair_solid[p]
@@ -440,13 +515,22 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
         if not _faces_in_linear_reach(code, h, s, linear, errors, beam_code, Qe, lengths[e], s0, s1, s2, C, H, dH,
                                       reach):
             continue
+        for k in range(S):
+            eta_s[k] = -1.0 + 2.0 * k / (S - 1)
+            rs[k, 0], rs[k, 1], rs[k, 2], rs[k, 3], rs[k, 4], rs[k, 5] = beam_point(beam_code, Qe, lengths[e], s0, s1,
+                                                                                 s2, eta_s[k], H, dH)
+        # the sample intervals the linearised map cannot rule out, and the samples that bound them
+        if not _live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need):
+            continue
         unsearched[p] = SEARCHED
         # samples along the beam element: ξ(η) and dξ/dη = J⁻¹ r'(η) (warm-started Newton)
         solid.centre(code, xi)
         affine = is_affine(linear, s)
         for k in range(S):
-            eta_s[k] = -1.0 + 2.0 * k / (S - 1)
-            r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Qe, lengths[e], s0, s1, s2, eta_s[k], H, dH)
+            ok[k] = False
+            if not need[k]:
+                continue
+            r0, r1, r2, d0, d1, d2 = rs[k, 0], rs[k, 1], rs[k, 2], rs[k, 3], rs[k, 4], rs[k, 5]
             if affine:
                 # ξ(η) and dξ/dη = A⁻¹ r' directly
                 ok[k] = True
@@ -454,7 +538,9 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
                 for i in range(3):
                     dxi_s[k, i] = linear[s, i, 0] * d0 + linear[s, i, 1] * d1 + linear[s, i, 2] * d2
                 continue
-            if k == 0:
+            if k == 0 or not need[k - 1]:
+                # the first sample, or the first after samples not needed: the linearised estimate
+                solid.centre(code, xi)
                 linear_parameters(code, linear, s, r0, r1, r2, xi)
             elif ok[k - 1]:
                 # the previous sample's tangent predicts this one: ξ + dξ/dη Δη (after a failed
@@ -500,11 +586,13 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
                 continue
             face = faces[f]
             for k in range(S):
+                if not need[k]:
+                    continue
                 g[k] = (face[3, 0] * (xi_s[k, 0] - face[0, 0]) + face[3, 1] * (xi_s[k, 1] - face[0, 1])
                         + face[3, 2] * (xi_s[k, 2] - face[0, 2]))
                 dg[k] = face[3, 0] * dxi_s[k, 0] + face[3, 1] * dxi_s[k, 1] + face[3, 2] * dxi_s[k, 2]
             for k in range(S):
-                if not ok[k]:
+                if need[k] and not ok[k]:
                     # the projection failed here: start on the face centre
                     for i in range(3):      # element by element: an array assignment compiles Numba's
                         start[i] = solid.FACE_CENTROIDS[code, f, i]   # shape-mismatch message
@@ -512,7 +600,7 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
                                         start[0], start[1], start[2], z, xi, N, dN, H, dH)
                     count = _record(eta, f, out_eta, out_face, p, count, overflow)
             for k in range(S - 1):
-                if not (ok[k] and ok[k + 1]):
+                if not (live[k, f] and ok[k] and ok[k + 1]):
                     continue
                 step = eta_s[k + 1] - eta_s[k]
                 g0, g1 = g[k], g[k + 1]
