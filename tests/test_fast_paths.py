@@ -289,7 +289,7 @@ def element_bounds(ctx):
     from mortar1d3d.geometry import segmentation
     errors = np.full((len(ctx.codes), 3), np.nan)
     segmentation._linear_errors(np.arange(len(ctx.codes)), ctx.codes, ctx.conn, ctx.points, ctx.solid_origin,
-                                ctx.linear, errors, workers())
+                                ctx.linear, errors)
     return errors
 
 

@@ -23,7 +23,7 @@ from ..elements.beam import MAX_FUNCTIONS
 from ..elements.solid import dispatch as solid
 from .beam import AFFINE_TOL, beam_is_affine, beam_point
 from .projection import affine_inverse, affine_parameters, load_element
-from .segmentation import pair_crossings, tile
+from .segmentation import linear_errors, pair_crossings, tile
 
 #: a curved beam element is certified inside an affine solid element when all its Bézier control
 #: points lie this far (parameter units) inside; far above PARAMETER_TOL, so no neighbour can
@@ -175,9 +175,10 @@ def auto_segments(ctx, search_points):
                     beam_inside, workers())
     numeric = np.flatnonzero(state == PAIR_NUMERIC)
     crossing_eta, crossing_face = closed, closed_face
+    errors = linear_errors(ctx)     # the element bounds, once for both stages
     if len(numeric):
         found, found_face, found_count, _ = pair_crossings(ctx, ctx.pair_beam()[numeric], pair_solid[numeric],
-                                                           search_points)
+                                                           search_points, errors)
         width = max(2, int(found_count.max()))
         crossing_eta = np.empty((n_pairs, width))
         crossing_face = np.empty((n_pairs, width), dtype=np.int64)
@@ -186,7 +187,7 @@ def auto_segments(ctx, search_points):
         crossing_eta[numeric, :width] = found[:, :width]
         crossing_face[numeric, :width] = found_face[:, :width]
         count[numeric] = found_count
-    seg_beam, seg_solid, seg_start, seg_end, per_beam = tile(ctx, crossing_eta, crossing_face, count)
+    seg_beam, seg_solid, seg_start, seg_end, per_beam = tile(ctx, crossing_eta, crossing_face, count, errors)
     whole = (per_beam == 1)[seg_beam] & (seg_start == -1.0) & (seg_end == 1.0)
     info = {"face_crossings": int(count.sum()), "numeric_pairs": int(len(numeric)),
             "certified_inside": int(np.count_nonzero(beam_inside >= 0)),

@@ -241,20 +241,15 @@ def _linear_error(code, X, s, linear, a, out):
     out[0], out[1], out[2] = e0, e1, e2
 
 
-@njit_parallel
-def _linear_errors(elements, codes, conn, points, solid_origin, linear, errors, workers):
-    n = elements.shape[0]
-    claims = new_claims(n, workers)
-    for worker in prange(workers):
-        X, _, _, _, _, _, _ = point_buffers()
-        a, _ = search_buffers()
-        begin, stop = claim(claims, n, worker)
-        while begin < stop:
-            for i in range(begin, stop):
-                s = elements[i]
-                load_element(points, conn, s, codes[s], solid_origin, X)
-                _linear_error(codes[s], X, s, linear, a, errors[s])
-            begin, stop = claim(claims, n, worker)
+@njit
+def _linear_errors(elements, codes, conn, points, solid_origin, linear, errors):
+    # serial: a few hundred nanoseconds per element, where a parallel kernel would cost its compile time
+    X, _, _, _, _, _, _ = point_buffers()
+    a, _ = search_buffers()
+    for i in range(elements.shape[0]):
+        s = elements[i]
+        load_element(points, conn, s, codes[s], solid_origin, X)
+        _linear_error(codes[s], X, s, linear, a, errors[s])
 
 
 def linear_errors(ctx):
@@ -263,9 +258,15 @@ def linear_errors(ctx):
     errors = np.full((len(ctx.codes), 3), np.nan)
     used = np.zeros(len(ctx.codes), dtype=np.bool_)
     used[ctx.pair_solid] = True
-    _linear_errors(np.flatnonzero(used), ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.linear, errors,
-                   workers())
+    _linear_errors(np.flatnonzero(used), ctx.codes, ctx.conn, ctx.points, ctx.solid_origin, ctx.linear, errors)
     return errors
+
+
+@njit
+def _slack(face, errors, s, pad):
+    """Σ_i |n_i| ε_i + pad: how far from face ``face``'s plane the linearised image of a point of element s may
+    lie when the point's ξ is on it (``errors``: :func:`linear_errors`)."""
+    return abs(face[3, 0]) * errors[s, 0] + abs(face[3, 1]) * errors[s, 1] + abs(face[3, 2]) * errors[s, 2] + pad
 
 
 @njit
@@ -285,8 +286,7 @@ def _faces_in_linear_reach(code, h, s, linear, errors, beam_code, Qe, length, s0
     the residual within 1e-9 h), so clearing such faces changes no crossing found. Rational types and elements without
     a linearisation (ε NaN) keep their ``reach`` unchanged.
     """
-    e0, e1, e2 = errors[s, 0], errors[s, 1], errors[s, 2]
-    if not e0 >= 0.0:
+    if not errors[s, 0] >= 0.0:
         return True
     # Bézier control points of the centreline (η in [-1, 1]: dr/dt = 2 dr/dη for t in [0, 1]), as ζ
     spread = 0.0
@@ -307,7 +307,7 @@ def _faces_in_linear_reach(code, h, s, linear, errors, beam_code, Qe, length, s0
     any_face = False
     for f in range(faces.shape[0]):
         face = faces[f]
-        slack = abs(face[3, 0]) * e0 + abs(face[3, 1]) * e1 + abs(face[3, 2]) * e2 + pad
+        slack = _slack(face, errors, s, pad)
         lo = np.inf
         hi = -np.inf
         for c in range(4):
@@ -367,8 +367,7 @@ def _live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need
             live[k, f] = False
         for f in range(faces.shape[0]):
             face = faces[f]
-            slack = (abs(face[3, 0]) * errors[s, 0] + abs(face[3, 1]) * errors[s, 1] + abs(face[3, 2]) * errors[s, 2]
-                     + pad)
+            slack = _slack(face, errors, s, pad)
             lo = np.inf
             hi = -np.inf
             for c in range(4):
@@ -420,8 +419,7 @@ def _linear_side(code, s, linear, errors, x0, x1, x2, pad):
     inside = True
     for f in range(faces.shape[0]):
         face = faces[f]
-        slack = (abs(face[3, 0]) * errors[s, 0] + abs(face[3, 1]) * errors[s, 1] + abs(face[3, 2]) * errors[s, 2]
-                 + pad)
+        slack = _slack(face, errors, s, pad)
         g = face[3, 0] * (z0 - face[0, 0]) + face[3, 1] * (z1 - face[0, 1]) + face[3, 2] * (z2 - face[0, 2])
         if g > slack:
             return 1
