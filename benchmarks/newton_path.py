@@ -27,7 +27,9 @@ Printed:
    face polish, subdivision search); for the segments: Newton iterations of the warm-started
    integration points and their fallbacks; for the crossing search: pairs searched, sample
    projections per searched pair (those the checkout's search needs) and their iterations, face-Newton
-   starts, their steps and residual evaluations (a counted copy of the face Newton), and crossings found.
+   starts, their steps and residual evaluations (a counted copy of the face Newton), and crossings found;
+   for a checkout with the linearised map's point test, how many of the segments' midpoints and
+   tiling-check probes it decides in their owners.
 
 An iteration is one Newton step (Jacobian, solve, residual at the new point), counted as full steps
 from the kernel's start value (see :func:`newton_counted`); a projection that starts at the answer
@@ -451,6 +453,27 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
                                                     eta_s, xi_s, k, t_mirror, z, xi, N, dN, H, dH, out)
 
 
+if hasattr(sg, "_linear_side"):
+    @njit
+    def decided_points(seg_beam, seg_solid, seg_start, seg_end, codes, linear, errors, solid_origin, beam_code, Q,
+                       lengths, beam_origin, out):
+        """The segments' midpoints and the tiling check's probes (1/4, 3/4) that the library's linearised map
+        decides in the segment's owner (``segmentation._linear_side``, with its margin): out = [points, inside,
+        outside] (the tiling's intervals are these segments and the uncoupled gaps)."""
+        _, _, _, H, dH, _, _ = pr.point_buffers()
+        for g in range(seg_beam.shape[0]):
+            e, s = seg_beam[g], seg_solid[g]
+            for q in range(1, 4):
+                eta = seg_start[g] + 0.25 * q * (seg_end[g] - seg_start[g])
+                r0, r1, r2, _, _, _ = beam_point(beam_code, Q[e], lengths[e], beam_origin[e, 0] - solid_origin[s, 0],
+                                                 beam_origin[e, 1] - solid_origin[s, 1],
+                                                 beam_origin[e, 2] - solid_origin[s, 2], eta, H, dH)
+                side = sg._linear_side(codes[s], s, linear, errors, r0, r1, r2, sg._SIDE_MARGIN)
+                out[0] += 1
+                out[1] += side < 0
+                out[2] += side > 0
+
+
 def _median_timings(calls):
     keys = calls[0].keys()
     return {k: float(np.median([c[k] for c in calls])) for k in keys}
@@ -553,6 +576,12 @@ def main(argv=None):
           f"beyond a hull plane: the warm start kept if it converged, else no subdivision search), face-Newton starts "
           f"{out[5] / max(out[1], 1):.3f} at sign changes + {out[6] / max(out[1], 1):.3f} at touches ({out[5]} + {out[6]} "
           f"in all), crossings found {found / max(out[1], 1):.3f} ({found} in all)")
+    if hasattr(sg, "_linear_side"):
+        decided = np.zeros(3, dtype=np.int64)
+        decided_points(tiled[0], *tiled[1:4], ctx.codes, ctx.linear, errors, ctx.solid_origin, ctx.beam_code, ctx.Q,
+                       ctx.lengths, ctx.beam_origin, decided)
+        print(f"segments' midpoints and tiling-check probes in their owner: {decided[0]}, decided by the "
+              f"linearised map {decided[1]} inside, {decided[2]} outside (the others projected)")
     starts = out[5] + out[6] + out[12]
     print(f"face Newton: {starts} solves (sign changes, touches and {out[12]} mirrors), {out[9] / max(starts, 1):.2f} "
           f"steps and {out[10] / max(starts, 1):.2f} residual evaluations each, {out[11]} found no crossing")
