@@ -663,6 +663,16 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
     curved element whatever branch Newton takes; ``X`` is left holding the nodes of the last
     element tested.
     """
+    return first_containing_inline(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes,
+                                   conn, points, solid_origin, solid_h, linear, tol, X, xi, trial, N, dN, a,
+                                   stack, only)
+
+
+@njit_inline
+def first_containing_inline(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes, conn,
+                            points, solid_origin, solid_h, linear, tol, X, xi, trial, N, dN, a, stack, only):
+    """:func:`first_containing`, inlined into the element-based points loop, which calls it once per
+    point: as a call it passes seventeen arrays and eight scalars each time."""
     for p in range(p0, p1):
         s = pair_solid[p]
         if only >= 0 and s != only:
