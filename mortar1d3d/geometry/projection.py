@@ -160,6 +160,13 @@ def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
     iteration, one version for all of them, compiled when a scene first projects into an element
     that is not a hex8).
     """
+    return project_point_inline(code, X, p0, p1, p2, h, xi, trial, N, dN)
+
+
+@njit_inline
+def project_point_inline(code, X, p0, p1, p2, h, xi, trial, N, dN):
+    """:func:`project_point`, inlined into the segment-based points loop, which calls it once per
+    point (as a call: five arrays and five scalars each time)."""
     if code != _HEX8:
         return _project_other_call(code, X, p0, p1, p2, h, xi, trial, N, dN)
     return _newton(code, X, p0, p1, p2, h, xi, trial, N, dN)
@@ -223,10 +230,11 @@ def _newton(code, X, p0, p1, p2, h, xi, trial, N, dN):
     return status
 
 
-@njit
+@njit_inline
 def load_element(points, conn, element, code, origin, X):
     """Copy the local (origin-relative) node coordinates of ``element`` into ``X``; a rational element's
-    node weights (column 3 of ``points``, :attr:`mortar1d3d.mesh.SolidMesh.kernel_points`) into ``X[:, 3]``."""
+    node weights (column 3 of ``points``, :attr:`mortar1d3d.mesh.SolidMesh.kernel_points`) into ``X[:, 3]``.
+    Inlined: the loops that call it per element or point would pass four arrays per call."""
     for a in range(solid.n_nodes(code)):
         node = conn[element, a]
         X[a, 0] = points[node, 0] - origin[element, 0]
