@@ -160,13 +160,6 @@ def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
     iteration, one version for all of them, compiled when a scene first projects into an element
     that is not a hex8).
     """
-    return project_point_inline(code, X, p0, p1, p2, h, xi, trial, N, dN)
-
-
-@njit_inline
-def project_point_inline(code, X, p0, p1, p2, h, xi, trial, N, dN):
-    """:func:`project_point`, inlined into the segment-based points loop, which calls it once per
-    point (as a call: five arrays and five scalars each time)."""
     if code != _HEX8:
         return _project_other_call(code, X, p0, p1, p2, h, xi, trial, N, dN)
     return _newton(code, X, p0, p1, p2, h, xi, trial, N, dN)

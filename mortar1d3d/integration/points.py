@@ -31,7 +31,7 @@ from ..geometry.beam import beam_point_of
 from ..geometry.linalg import norm3
 from ..geometry.projection import (ANY_CANDIDATE, CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse,
                                    first_containing_inline, is_affine, linear_parameters, load_element, locate_point,
-                                   point_buffers, polish_residual, project_point_inline, search_buffers)
+                                   point_buffers, polish_residual, project_point, search_buffers)
 from ..geometry.segmentation import resegment, segment
 from ..quadrature import gauss_legendre, gauss_tables
 
@@ -101,7 +101,7 @@ def _segment_points_chunk(kb, begin, stop, seg_beam, seg_solid, seg_start, seg_e
             # iterations); if that does not end inside, locate the point for certain (a curved
             # element's map folds outside it: Newton may take that branch)
             linear_parameters(code, linear, s, r0, r1, r2, x)
-            if not (project_point_inline(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) == CONVERGED
+            if not (project_point(code, X, r0, r1, r2, solid_h[s], x, trial, N, dN) == CONVERGED
                     and solid.is_inside(code, x, loose)):
                 status[k] = locate_point(code, X, r0, r1, r2, solid_h[s], loose, linear, s, x, trial, N, dN,
                                          a, stack)
