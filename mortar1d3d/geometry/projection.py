@@ -153,7 +153,31 @@ def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
     :func:`polish_residual`, which then needs no evaluation of the map). Converged when
     |x(ξ) - p| <= 1e-12 h. Returns CONVERGED or FAILED (singular Jacobian, no decrease,
     parameters running away, or 20 iterations).
+
+    The trilinear hexahedron's iteration is compiled here, after one test of ``code``: below it
+    LLVM knows the type and drops the tests of every evaluation of the map and the Jacobian. Every
+    other type's iteration is one call through a symbol to :func:`_project_other` (the same
+    iteration, one version for all of them, compiled when a scene first projects into an element
+    that is not a hex8).
     """
+    if code != _HEX8:
+        return _project_other_call(code, X, p0, p1, p2, h, xi, trial, N, dN)
+    return _newton(code, X, p0, p1, p2, h, xi, trial, N, dN)
+
+
+@njit
+def _project_other(code, X, p0, p1, p2, h, xi, trial, N, dN):
+    """:func:`project_point` of every type but hex8."""
+    return _newton(code, X, p0, p1, p2, h, xi, trial, N, dN)
+
+
+#: lazily through a symbol (see mortar1d3d._unlinked): a scene of hex8 elements never compiles it
+_project_other_call = unlinked(_project_other, returns=types.int64)
+
+
+@njit_inline
+def _newton(code, X, p0, p1, p2, h, xi, trial, N, dN):
+    """The iteration of :func:`project_point` (inlined into it and into :func:`_project_other`)."""
     tol = NEWTON_RESIDUAL_TOL * h
     x0, x1, x2 = map_point(code, X, xi, N)
     r0, r1, r2 = p0 - x0, p1 - x1, p2 - x2
@@ -199,10 +223,11 @@ def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
     return status
 
 
-@njit
+@njit_inline
 def load_element(points, conn, element, code, origin, X):
     """Copy the local (origin-relative) node coordinates of ``element`` into ``X``; a rational element's
-    node weights (column 3 of ``points``, :attr:`mortar1d3d.mesh.SolidMesh.kernel_points`) into ``X[:, 3]``."""
+    node weights (column 3 of ``points``, :attr:`mortar1d3d.mesh.SolidMesh.kernel_points`) into ``X[:, 3]``.
+    Inlined: the loops that call it per element or point would pass four arrays per call."""
     for a in range(solid.n_nodes(code)):
         node = conn[element, a]
         X[a, 0] = points[node, 0] - origin[element, 0]
@@ -588,7 +613,27 @@ def polish_residual(code, X, p0, p1, p2, h, xi, trial, N, dN):
     Inlined into its callers (the integration points' chunks call it once per point): a call would
     pass its five arrays and five scalars per point; inlined, the element-based points stage on the
     distorted hex8 cube executes 0.953 of the kernel instructions (benchmarks/README.md, "The hex8
-    points stage in instructions"). The same operations, so the same bits."""
+    points stage in instructions"). The same operations, so the same bits. Types but hex8 as in
+    :func:`project_point`: one call to :func:`_polish_other`."""
+    if code != _HEX8:
+        _polish_other_call(code, X, p0, p1, p2, h, xi, trial, N, dN)
+        return
+    _polish_step(code, X, p0, p1, p2, h, xi, trial, N, dN)
+
+
+@njit
+def _polish_other(code, X, p0, p1, p2, h, xi, trial, N, dN):
+    """:func:`polish_residual` of every type but hex8."""
+    _polish_step(code, X, p0, p1, p2, h, xi, trial, N, dN)
+
+
+#: lazily through a symbol, as :func:`_project_other`
+_polish_other_call = unlinked(_polish_other, returns=types.none)
+
+
+@njit_inline
+def _polish_step(code, X, p0, p1, p2, h, xi, trial, N, dN):
+    """The step of :func:`polish_residual`."""
     r0, r1, r2 = trial[0], trial[1], trial[2]
     if norm3(r0, r1, r2) <= _ROUND_OFF * h:
         return      # already at round-off (affine elements after one Newton step): nothing to gain
@@ -619,6 +664,16 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
     curved element whatever branch Newton takes; ``X`` is left holding the nodes of the last
     element tested.
     """
+    return first_containing_inline(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes,
+                                   conn, points, solid_origin, solid_h, linear, tol, X, xi, trial, N, dN, a,
+                                   stack, only)
+
+
+@njit_inline
+def first_containing_inline(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes, conn,
+                            points, solid_origin, solid_h, linear, tol, X, xi, trial, N, dN, a, stack, only):
+    """:func:`first_containing`, inlined into the element-based points loop, which calls it once per
+    point: as a call it passes seventeen arrays and eight scalars each time."""
     for p in range(p0, p1):
         s = pair_solid[p]
         if only >= 0 and s != only:

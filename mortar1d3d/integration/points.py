@@ -30,7 +30,7 @@ from ..elements.beam import CODES as BEAM_CODES
 from ..geometry.beam import beam_point_of
 from ..geometry.linalg import norm3
 from ..geometry.projection import (ANY_CANDIDATE, CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse,
-                                   first_containing, is_affine, linear_parameters, load_element, locate_point,
+                                   first_containing_inline, is_affine, linear_parameters, load_element, locate_point,
                                    point_buffers, polish_residual, project_point, search_buffers)
 from ..geometry.segmentation import resegment, segment
 from ..quadrature import gauss_legendre, gauss_tables
@@ -167,9 +167,9 @@ def _element_points_chunk(kb, begin, stop, pair_offsets, pair_solid, gx, gw, cod
             owner[k] = -1
             status[k] = POINT_UNCOUPLED
             # the lowest-index candidate element containing the point owns it
-            s = first_containing(r0, r1, r2, e, pair_solid, pair_offsets[e], pair_offsets[e + 1], beam_origin,
-                                 solid_boxes, hull, codes, conn, points, solid_origin, solid_h, linear, tol,
-                                 X, x, trial, N, dN, a, stack, ANY_CANDIDATE)
+            s = first_containing_inline(r0, r1, r2, e, pair_solid, pair_offsets[e], pair_offsets[e + 1],
+                                        beam_origin, solid_boxes, hull, codes, conn, points, solid_origin, solid_h,
+                                        linear, tol, X, x, trial, N, dN, a, stack, ANY_CANDIDATE)
             if s >= 0:
                 if not is_affine(linear, s):
                     # X still holds the owner's nodes (it was the last element tested) and
