@@ -9,7 +9,8 @@ and every scalar entry stands for a 3×3 identity block.
 """
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
+from functools import partial
 
 import numpy as np
 from numba import prange
@@ -66,7 +67,10 @@ class MortarOperators:
         Total reference length of the beams.
     constraint_residual : float
         ‖D q_B − M X_S‖ / ‖D q_B‖ at the reference positions: round-off for any correct
-        integration, since both sides integrate Φ_j times the same point.
+        integration, since both sides integrate Φ_j times the same point. Computed on first
+        access (its kernel is compiled then, not in every first run; an assembly does not pay
+        for the pass over D and M unless the certificate is read); the constructor takes the
+        value or a function of no arguments returning it.
     diagnostics : dict
         Counts: candidate pairs, face crossings, points not converged / outside their element;
         segment-based also ``segmentation_fallbacks`` (beam elements whose pieces failed the
@@ -88,12 +92,13 @@ class MortarOperators:
     lm: str
     embedded_length: float
     beam_length: float
-    constraint_residual: float
+    constraint_residual: InitVar[object]
     diagnostics: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
 
-    def __post_init__(self):
+    def __post_init__(self, constraint_residual):
         self._points = None
+        self._constraint_residual = constraint_residual
 
     @property
     def points(self):
@@ -103,6 +108,11 @@ class MortarOperators:
                 table[name] = values
             self._points = table
         return self._points
+
+    def _residual(self):
+        if callable(self._constraint_residual):
+            self._constraint_residual = float(self._constraint_residual())
+        return self._constraint_residual
 
     @property
     def n_integration_points(self):
@@ -119,6 +129,21 @@ class MortarOperators:
                 f"{len(self.segments)} segments, {self.n_integration_points} points, "
                 f"embedded length {self.embedded_length:.6g} of {self.beam_length:.6g}, "
                 f"residual {self.constraint_residual:.2e})")
+
+
+def _constraint_residual(D, M, positions, tangents, points):
+    """``MortarOperators.constraint_residual`` of copies of the meshes' positions taken at assembly (a mesh
+    moved afterwards does not change it): q_B in the layout of ``BeamMesh.centreline_dofs`` ([r_0, t_0, r_1,
+    ...] with tangents), the same values, built without that method's parallel kernel, which a first run
+    would otherwise compile for this diagnostic alone."""
+    q = positions.ravel() if tangents is None else np.concatenate((positions, tangents), axis=1).ravel()
+    return relative_residual(D, q, M, points.ravel())
+
+
+#: computed on first access (see the class's docstring); the dataclass's InitVar of the same name is the
+#: constructor's argument, a value or a function returning it
+MortarOperators.constraint_residual = property(MortarOperators._residual,
+                                               doc="‖D q_B − M X_S‖ / ‖D q_B‖, computed on first access")
 
 
 @njit_parallel
@@ -410,7 +435,8 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
         segments["eta_end"] = eta[group_start[1:] - 1]
     point_fields = {"beam_element": p_beam, "solid_element": p_solid, "eta": eta, "xi": xi, "weight": weight,
                     "position": position, "status": status}
-    residual = relative_residual(D, beams.centreline_dofs(), M, solid.points.ravel())
+    residual = partial(_constraint_residual, D, M, beams.positions.copy(),
+                       None if beams.tangents is None else beams.tangents.copy(), solid.points.copy())
     timings["total"] = time.perf_counter() - t0
     return MortarOperators(D=D, M=M, kappa=kappa, segments=segments, point_fields=point_fields, n_lm=n_lm,
                            integration=integration, n_gauss=n_gauss, lm=lm_type.name,
