@@ -13,13 +13,13 @@ from dataclasses import InitVar, dataclass, field
 from functools import partial
 
 import numpy as np
-from numba import prange
 
 from .._borrowed import borrowed
-from .._config import announce_compilation, njit, njit_parallel
+from .._config import CHUNK, announce_compilation, njit
 from .._memory import carve
+from .._parallel import in_parallel
 from .._unlinked import unlinked
-from .._schedule import claim, new_claims, workers
+from .._schedule import claim, n_chunks, new_claims, workers
 from ..elements.multiplier import multiplier as multiplier_type
 from ..elements.multiplier import shape as lm_shape
 from ..elements.beam import MAX_FUNCTIONS
@@ -146,26 +146,32 @@ MortarOperators.constraint_residual = property(MortarOperators._residual,
                                                doc="‖D q_B − M X_S‖ / ‖D q_B‖, computed on first access")
 
 
-@njit_parallel
+@njit
 def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
                      codes, conn, points, m_offsets, D_local, M_local, kappa_local, workers):
     """Local D, M and κ of every group of points (``conn``, ``points``: a rational element's weights)."""
+    claims = new_claims(group_start.shape[0] - 1, workers)
+    _group_operators_workers(workers, claims, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
+                             codes, conn, points, m_offsets, D_local, M_local, kappa_local)
+
+
+@njit
+def _group_operators_worker(worker, claims, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
+                            codes, conn, points, m_offsets, D_local, M_local, kappa_local):
     n_groups = group_start.shape[0] - 1
     nH = beam_n_functions(beam_code)
-    claims = new_claims(n_groups, workers)
-    for worker in prange(workers):
-        Phi = np.empty(4)
-        H = np.empty(MAX_FUNCTIONS)
-        N = np.empty(solid_types.MAX_NODES)
-        Dg = np.empty((4, MAX_FUNCTIONS))
-        Mg = np.empty((4, solid_types.MAX_NODES))
-        kg = np.empty(4)
+    Phi = np.empty(4)
+    H = np.empty(MAX_FUNCTIONS)
+    N = np.empty(solid_types.MAX_NODES)
+    Dg = np.empty((4, MAX_FUNCTIONS))
+    Mg = np.empty((4, solid_types.MAX_NODES))
+    kg = np.empty(4)
+    begin, stop = claim(claims, n_groups, worker)
+    while begin < stop:
+        _group_operators_chunk_call(begin, stop, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths,
+                                    n_phi, codes, conn, points, m_offsets, D_local, M_local, kappa_local, Dg, Mg,
+                                    kg, Phi, H, N, nH)
         begin, stop = claim(claims, n_groups, worker)
-        while begin < stop:
-            _group_operators_chunk_call(begin, stop, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths,
-                                        n_phi, codes, conn, points, m_offsets, D_local, M_local, kappa_local, Dg, Mg,
-                                        kg, Phi, H, N, nH)
-            begin, stop = claim(claims, n_groups, worker)
 
 
 @njit
@@ -211,6 +217,8 @@ def _group_operators_chunk(begin, stop, group_start, p_beam, p_solid, eta, xi, w
 
 #: the loop body of :func:`_group_operators` (per claimed chunk), optimised once: called through a symbol
 _group_operators_chunk_call = unlinked(_group_operators_chunk)
+#: the kernel's workers run on the package's one parallel loop (see mortar1d3d._parallel)
+_group_operators_workers = in_parallel(_group_operators_worker)
 
 
 @njit
@@ -257,9 +265,15 @@ def _groups(p_beam, p_solid, codes, n_phi, n_beam):
     return group_start, m_offsets, beam_groups
 
 
-@njit_parallel
+@njit
 def _kappa(src_offsets, src, n_phi, beam_groups, kappa_local, kappa):
-    for r in prange(src_offsets.shape[0] - 1):
+    _kappa_parts(n_chunks(src_offsets.shape[0] - 1, CHUNK), src_offsets, src, n_phi, beam_groups, kappa_local, kappa)
+
+
+@njit
+def _kappa_part(c, src_offsets, src, n_phi, beam_groups, kappa_local, kappa):
+    # the rows of chunk c (a parallel loop over the rows in chunks: one call per chunk)
+    for r in range(c * CHUNK, min(src_offsets.shape[0] - 1, (c + 1) * CHUNK)):
         v = 0.0
         for t in range(src_offsets[r], src_offsets[r + 1]):
             e = src[t] // n_phi
@@ -267,6 +281,9 @@ def _kappa(src_offsets, src, n_phi, beam_groups, kappa_local, kappa):
             for g in range(beam_groups[e], beam_groups[e + 1]):
                 v += kappa_local[g, j]
         kappa[r] = v
+
+
+_kappa_parts = in_parallel(_kappa_part)
 
 
 def lm_numbering(beams, lm_type):
