@@ -4,16 +4,9 @@ The call must run every worker index once with the caller's arrays (the same bit
 replaces), keep the kernel free of a parallel loop of its own, leave kernel, worker and driver
 cachable (a second process loads them and compiles nothing), and raise when a worker raises.
 """
-import json
-import os
-import subprocess
-import sys
 import textwrap
-from pathlib import Path
 
-import pytest
-
-ROOT = Path(__file__).resolve().parents[1]
+from test_unlinked import _run as run_probe
 
 MODULE = textwrap.dedent("""
     import numpy as np
@@ -68,11 +61,7 @@ RUN = textwrap.dedent("""
 
 
 def _run(tmp_path):
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
-               PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]))
-    done = subprocess.run([sys.executable, "-c", RUN], env=env, cwd=tmp_path, capture_output=True, text=True)
-    assert done.returncode == 0, done.stderr
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return run_probe(tmp_path, RUN)
 
 
 def test_workers_on_the_shared_loop_results_errors_and_cache(tmp_path):

@@ -61,10 +61,12 @@ RUN = textwrap.dedent("""
 """)
 
 
-def _run(tmp_path):
+def _run(tmp_path, code=RUN):
+    """``code`` in a fresh process with the cache in ``tmp_path`` and its modules importable; its last
+    line of output, as JSON (also used by tests/test_parallel.py)."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
                PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]))
-    done = subprocess.run([sys.executable, "-c", RUN], env=env, cwd=tmp_path, capture_output=True, text=True)
+    done = subprocess.run([sys.executable, "-c", code], env=env, cwd=tmp_path, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout.strip().splitlines()[-1])
 
