@@ -125,7 +125,7 @@ def _solid_boxes_chunk(begin, stop, points, conn, codes, padding, boxes, size, o
         size[s] = _finish_box(boxes[s], padding)
 
 
-#: the loop bodies of the search's prange kernels (per claimed chunk or part), optimised once: called
+#: the loop bodies of the search's parallel kernels (per claimed chunk or part), optimised once: called
 #: through a symbol, not compiled into each parallel body and its kernel again (see mortar1d3d._unlinked)
 _solid_boxes_chunk_call = unlinked(_solid_boxes_chunk)
 #: the kernels' workers run on the package's one parallel loop (see mortar1d3d._parallel)
@@ -195,10 +195,11 @@ def _cell_range(box, lower, inv_cell, dims, lo, hi):
 
 
 @njit
-def _bin_part(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, ids):
+def _bin_part(part, solid_boxes, lower, inv_cell, dims, n_parts, counts, ids):
     """One pass over the elements of ``part``: count them per cell (``ids`` empty) or place them.
 
-    When placing, ``counts[part, c]`` holds the part's next slot in cell c.
+    When placing, ``counts[part, c]`` holds the part's next slot in cell c. A worker of
+    :func:`_bin_solids` (one per part, see mortar1d3d._parallel).
     """
     solid_boxes, lower, dims, counts, ids = borrowed(solid_boxes, lower, dims, counts, ids)
     n_solid = solid_boxes.shape[0]
@@ -215,15 +216,7 @@ def _bin_part(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, ids):
                         counts[part, c] += 1
 
 
-_bin_part_call = unlinked(_bin_part)
-
-
-@njit
-def _bin_part_worker(part, solid_boxes, lower, inv_cell, dims, n_parts, counts, ids):
-    _bin_part_call(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, ids)
-
-
-_bin_parts = in_parallel(_bin_part_worker)
+_bin_parts = in_parallel(_bin_part)
 
 
 @njit
@@ -279,6 +272,17 @@ def _cell_total(box, cell_offsets, lower, inv_cell, dims, lo, hi):
 
 
 @njit
+def _sort_front(out, n):
+    """Sort the first ``n`` entries of ``out`` in place (numpy's sort)."""
+    out[:n].sort()
+
+
+#: a candidate list longer than _INSERTION_SORT_MAX is rare (a beam element's box over many solid
+#: elements): numpy's sort (about 1 CPU s of a first compile) is compiled when a scene first has one
+_sort_front_call = unlinked(_sort_front, returns=types.none)
+
+
+@njit
 def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, lo, hi, out, seen, stamp):
     """Sorted unique solid elements overlapping ``box``, written to the front of ``out``.
 
@@ -302,7 +306,7 @@ def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, di
                         out[n] = s
                         n += 1
     if n > _INSERTION_SORT_MAX:
-        out[:n].sort()
+        _sort_front_call(out, n)
         return n
     for a in range(1, n):                    # insertion sort: a few candidates per box, no call
         s = out[a]
