@@ -6,10 +6,11 @@ distance from the global origin (docs/conventions.md §2: tolerances relative to
 All buffers come from the caller; nothing here allocates.
 """
 import numpy as np
-from numba import prange, types
+from numba import types
 
 from .._borrowed import borrowed
-from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit, njit_inline, njit_parallel
+from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit, njit_inline
+from .._parallel import in_parallel
 from .._schedule import claim, new_claims, workers
 from .._unlinked import unlinked
 from ..elements.beam import MAX_FUNCTIONS
@@ -747,7 +748,7 @@ def affine_parameters(code, Ainv, x0, x1, x2, xi):
 _affine_inverse_call = unlinked(affine_inverse)
 
 
-@njit_parallel
+@njit
 def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
     """The inverse of every element's map linearised at its parameter centre, for locating points.
 
@@ -762,17 +763,21 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
     (:func:`certified_outside`). Few elements ever need it, and it cost more than the rest of the
     row together.
     """
+    claims = new_claims(conn.shape[0], workers)
+    _linear_maps_workers(workers, claims, points, conn, codes, solid_origin, solid_h, table)
+
+
+@njit
+def _linear_maps_worker(worker, claims, points, conn, codes, solid_origin, solid_h, table):
     n = conn.shape[0]
-    claims = new_claims(n, workers)
-    for worker in prange(workers):
-        X = np.empty((solid.MAX_NODES, 4))
-        N = np.empty(solid.MAX_NODES)
-        dN = np.empty((solid.MAX_NODES, 3))
-        xc = np.empty(3)
+    X = np.empty((solid.MAX_NODES, 4))
+    N = np.empty(solid.MAX_NODES)
+    dN = np.empty((solid.MAX_NODES, 3))
+    xc = np.empty(3)
+    begin, stop = claim(claims, n, worker)
+    while begin < stop:
+        _linear_maps_chunk_call(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, xc)
         begin, stop = claim(claims, n, worker)
-        while begin < stop:
-            _linear_maps_chunk_call(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, xc)
-            begin, stop = claim(claims, n, worker)
 
 
 @njit
@@ -800,6 +805,8 @@ def _linear_maps_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, 
 
 #: the loop body of :func:`linear_maps` (per claimed chunk), optimised once: called through a symbol
 _linear_maps_chunk_call = unlinked(_linear_maps_chunk)
+#: the kernel's workers run on the package's one parallel loop (see mortar1d3d._parallel)
+_linear_maps_workers = in_parallel(_linear_maps_worker)
 
 
 @njit
@@ -853,35 +860,45 @@ def linear_parameters(code, table, s, x0, x1, x2, xi):
     return True
 
 
-@njit_parallel
+@njit
 def _project_points_kernel(points, conn, codes, solid_origin, solid_h, linear, x, elements, tol, xi, status,
                            workers):
     """ξ and INSIDE / OUTSIDE / NOT_CONVERGED of each point ``x[i]`` in element ``elements[i]``."""
     n = x.shape[0]
     claims = new_claims(n, workers)
-    for worker in prange(workers):
-        X, N, dN, _, _, _, trial = point_buffers()
-        a, stack = search_buffers()
+    _project_points_kernel_workers(workers, claims, points, conn, codes, solid_origin, solid_h, linear, x, elements,
+                                   tol, xi, status)
+
+
+@njit
+def _project_points_kernel_worker(worker, claims, points, conn, codes, solid_origin, solid_h, linear, x, elements,
+                                  tol, xi, status):
+    n = x.shape[0]
+    X, N, dN, _, _, _, trial = point_buffers()
+    a, stack = search_buffers()
+    begin, stop = claim(claims, n, worker)
+    while begin < stop:
+        for i in range(begin, stop):
+            s = elements[i]
+            code = codes[s]
+            x0 = x[i, 0] - solid_origin[s, 0]
+            x1 = x[i, 1] - solid_origin[s, 1]
+            x2 = x[i, 2] - solid_origin[s, 2]
+            if is_affine(linear, s):
+                linear_parameters(code, linear, s, x0, x1, x2, xi[i])
+                status[i] = INSIDE if solid.is_inside(code, xi[i], tol) else OUTSIDE
+                continue
+            load_element(points, conn, s, code, solid_origin, X)
+            status[i] = locate_point(code, X, x0, x1, x2, solid_h[s], tol, linear, s, xi[i], trial, N, dN, a,
+                                     stack)
+            if status[i] == NOT_CONVERGED:
+                xi[i, 0] = xi[i, 1] = xi[i, 2] = np.nan
+            else:
+                polish_residual(code, X, x0, x1, x2, solid_h[s], xi[i], trial, N, dN)
         begin, stop = claim(claims, n, worker)
-        while begin < stop:
-            for i in range(begin, stop):
-                s = elements[i]
-                code = codes[s]
-                x0 = x[i, 0] - solid_origin[s, 0]
-                x1 = x[i, 1] - solid_origin[s, 1]
-                x2 = x[i, 2] - solid_origin[s, 2]
-                if is_affine(linear, s):
-                    linear_parameters(code, linear, s, x0, x1, x2, xi[i])
-                    status[i] = INSIDE if solid.is_inside(code, xi[i], tol) else OUTSIDE
-                    continue
-                load_element(points, conn, s, code, solid_origin, X)
-                status[i] = locate_point(code, X, x0, x1, x2, solid_h[s], tol, linear, s, xi[i], trial, N, dN, a,
-                                         stack)
-                if status[i] == NOT_CONVERGED:
-                    xi[i, 0] = xi[i, 1] = xi[i, 2] = np.nan
-                else:
-                    polish_residual(code, X, x0, x1, x2, solid_h[s], xi[i], trial, N, dN)
-            begin, stop = claim(claims, n, worker)
+
+
+_project_points_kernel_workers = in_parallel(_project_points_kernel_worker)
 
 
 def project_points(solid, points, elements):
