@@ -4,10 +4,12 @@ import time
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import connected_components
 
 from ._common import check_square, split_dofs
 from .amg import _block_size, build_amg
+from ._products import extend_and_add
 from .direct import factorize_spd_block
 
 __all__ = ["AuxiliarySpacePreconditioner", "smooth_prolongation", "harmonic_prolongation", "drop_weak_blocks"]
@@ -193,24 +195,39 @@ class AuxiliarySpacePreconditioner:
                              f"got {smoothing!r}")
         self.A = A
         self.shape = A.shape
-        beam_rows = A[self._b].tocsr()                           # rows of the beam DOFs
-        A_bb = beam_rows[:, self._b].tocsr()
-        self.A_bs = beam_rows[:, self._s].tocsr()
+        # solid DOFs first, then the beams' (what the model gives): the rows of A are [A_SS A_SB] and
+        # [A_BS A_BB] as they are, used in place (no copies; the products below read them directly)
+        ordered = isinstance(self._s, slice) and isinstance(self._b, slice) and self._s.start == 0 \
+            and self._b.start == n_s and A.format == "csr" and A.has_canonical_format
+        if ordered:
+            solid_rows, beam_rows = _row_block(A, self._s), _row_block(A, self._b)
+            A_bb = _column_block(beam_rows, n_s, n)
+            self.A_bs = _column_block(beam_rows, 0, n_s)
+        else:
+            rows = A[self._b].tocsr()                            # rows of the beam DOFs
+            A_bb = rows[:, self._b].tocsr()
+            self.A_bs = rows[:, self._s].tocsr()
+            solid_rows = beam_rows = None
+            del rows
         self.A_sb = self.A_bs.T.tocsr()                          # A is symmetric
-        del beam_rows
         t = time.perf_counter()
         self._beam_factor = factorize_spd_block(A_bb)
         factor_time = time.perf_counter() - t
         t = time.perf_counter()
         P = harmonic_prolongation(A_bb, self.A_bs, drop, self._beam_factor) if smoothing == "harmonic" else \
-            smooth_prolongation(A_bb, self.A_bs, prolongation.tocsr(), smoothing, drop)
+            smooth_prolongation(A_bb, self.A_bs, prolongation.tocsr(), smoothing, drop, beam_rows=beam_rows)
         smoothing_time = time.perf_counter() - t
         self.smoothing = smoothing
         if sparsify > 0 and sparsify_scope not in ("hierarchy", "smoother"):
             raise ValueError(f"sparsify_scope must be 'hierarchy' or 'smoother', got {sparsify_scope!r}")
-        A_ss = A[self._s, self._s] if isinstance(self._s, slice) else A[self._s][:, self._s]
-        auxiliary = auxiliary_matrix(A_ss, self.A_bs, self.A_sb, A_bb, P)
-        del A_ss
+        if ordered:
+            auxiliary = auxiliary_matrix(None, self.A_bs, self.A_sb, A_bb, P, solid_rows=solid_rows,
+                                         beam_rows=beam_rows)
+        else:
+            A_ss = A[self._s][:, self._s]
+            auxiliary = auxiliary_matrix(A_ss, self.A_bs, self.A_sb, A_bb, P)
+            del A_ss
+        del solid_rows, beam_rows
         self.auxiliary_nnz = auxiliary.nnz
         self.prolongation = P
         self.timings = {"prolongation smoothing": smoothing_time,
@@ -270,7 +287,7 @@ class AuxiliarySpacePreconditioner:
         return x
 
 
-def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
+def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0, *, beam_rows=None):
     """``P`` moved ``steps`` damped Jacobi steps towards the harmonic extension ``−A_BB⁻¹ A_BS``.
 
     Parameters
@@ -281,6 +298,11 @@ def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
         The follow operator to start from.
     steps : int
         Number of steps (0 returns ``P``).
+    drop : float
+        Entries below ``drop`` times the largest magnitude of their row are left out at the end.
+    beam_rows : (n_b, n_s + n_b) scipy.sparse.csr_matrix, optional
+        ``[A_BS  A_BB]`` if the caller has it (e.g. the beam rows of ``A``, solid columns first);
+        formed here otherwise.
 
     Returns
     -------
@@ -302,25 +324,22 @@ def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
     A_bb = A_bb.tocsr()
     d = A_bb.diagonal()
     scale = 1.0 / np.sqrt(d)
-    # D^-1/2 A_BB D^-1/2 by scaling the entries (two products with diagonal matrices cost two sparse
-    # matrix products)
-    scaled = sp.csr_matrix((_row_scaled(A_bb, scale) * scale[A_bb.indices], A_bb.indices, A_bb.indptr),
-                           shape=A_bb.shape)
-    # scaled has a unit diagonal, so its λ_max is at least 1: a Lanczos start that misses the top of
-    # the spectrum (an invariant subspace of the ones vector) cannot make ω blow up
+    # λ_max of D^-1/2 A_BB D^-1/2, applied as scalings around A_BB (no scaled copy of A_BB); it has a
+    # unit diagonal, so its λ_max is at least 1: a Lanczos start that misses the top of the spectrum
+    # (an invariant subspace of the ones vector) cannot make ω blow up
+    scaled = spla.LinearOperator(A_bb.shape, matvec=lambda v: scale * (A_bb @ (scale * v.reshape(-1))),
+                                 matmat=lambda V: scale[:, None] * (A_bb @ (scale[:, None] * V)), dtype=np.float64)
     rho = max(largest_eigenvalue(scaled), 1.0)
-    del scaled
     jacobi = 1.0 / (rho * d)
-    # P − J (A_BS + A_BB P) = [−J A_BS   I − J A_BB] [I; P], J = diag(jacobi): one sparse product
-    # (the product A_BB P, its sum with A_BS and the difference from P merged three matrices of 7M
-    # entries at n = 20 of fibre_cube(n, 1000, 20))
-    joined = _beam_rows(A_bs, A_bb)
-    joined.data = -_row_scaled(joined, jacobi)
-    joined.data[_diagonal_entries(joined, A_bs.shape[1])] += 1.0
-    for _ in range(steps):
-        P = _times_identity_over(joined, P)
-    if drop > 0:
-        P = drop_weak_entries(P, drop)
+    # P − J (A_BS + A_BB P) = P − J [A_BS  A_BB] [I; P], J = diag(jacobi): each row accumulated once from
+    # the operands as they are, the weak entries dropped as the last step's rows are written
+    # (SciPy's products of stacked copies, the difference and the drop wrote and faulted in about
+    # 0.5 GB of fresh memory at n = 20 of fibre_cube(n, 1000, 20): benchmarks/README.md, "The set-up
+    # in one pass per product")
+    joined = _beam_rows(A_bs, A_bb) if beam_rows is None else beam_rows
+    identity = sp.identity(P.shape[0], format="csr")
+    for step in range(steps):
+        P = extend_and_add(joined, P, -jacobi, identity, P, drop if step == steps - 1 else 0.0)
     return P
 
 
@@ -383,21 +402,23 @@ def harmonic_prolongation(A_bb, A_bs, drop=0.0, factor=None, chunk=64):
     return drop_weak_entries(P, drop) if drop > 0 else P
 
 
-def auxiliary_matrix(A_ss, A_bs, A_sb, A_bb, P):
+def auxiliary_matrix(A_ss, A_bs, A_sb, A_bb, P, *, solid_rows=None, beam_rows=None):
     """``A_aux = Eᵀ A E = A_SS + A_SB P + Pᵀ (A_BS + A_BB P)`` with ``E = [I; P]`` (CSR, ``n_s x n_s``).
 
-    One sparse product ``[I  Pᵀ  A_SB] [A_SS; W; P]``, ``W = A_BS + A_BB P``, whose output is
-    ``A_aux`` itself: summing the three products ``A_SB P``, its transpose and ``Pᵀ A_BB P`` and
-    then ``A_SS`` made and merged five matrices of ``A_aux``'s size (36M entries at n = 40 of
-    ``fibre_cube(n, 1000, 20)``), which cost more than the products (CPU s of this step at n = 40:
-    benchmarks/README.md, "Forming A_aux in one product"). Equal to that sum up to round-off
+    ``W = [A_BS  A_BB] [I; P]`` first, then each row of ``[A_SS  A_SB] [I; P] + Pᵀ W`` accumulated
+    once (:func:`~mortar1d3d.solvers._products.extend_and_add`; ``solid_rows`` and ``beam_rows``, the
+    rows ``[A_SS  A_SB]`` and ``[A_BS  A_BB]``, if the caller has them, e.g. the rows of ``A``; ``A_ss``
+    is then not used). Summing the three products ``A_SB P``, its transpose and ``Pᵀ A_BB P`` and then
+    ``A_SS`` made and merged five matrices of ``A_aux``'s size (36M entries at n = 40 of
+    ``fibre_cube(n, 1000, 20)``), which cost more than the products (benchmarks/README.md, "Forming
+    A_aux in one product"); one SciPy product of the stacked copies ``[I  Pᵀ  A_SB] [A_SS; W; P]``
+    wrote them once more ("The set-up in one pass per product"). Equal to the sum up to round-off
     (the products are summed in another order), so symmetric up to round-off.
     """
-    W = _times_identity_over(_beam_rows(A_bs, A_bb), P)     # A_BS + A_BB P in one product
-    left = sp.hstack([sp.identity(A_ss.shape[0], format="csr"), P.T.tocsr(), A_sb], format="csr")
-    right = sp.vstack([A_ss, W, P], format="csr")
-    del W
-    return (left @ right).tocsr()
+    W = extend_and_add(_beam_rows(A_bs, A_bb) if beam_rows is None else beam_rows, P)   # A_BS + A_BB P
+    if solid_rows is None:
+        solid_rows = sp.hstack([A_ss, A_sb], format="csr")
+    return extend_and_add(solid_rows, P, None, P.T.tocsr(), W)
 
 
 def _beam_rows(A_bs, A_bb):
@@ -408,19 +429,21 @@ def _beam_rows(A_bs, A_bb):
     return joined
 
 
-def _times_identity_over(left, P):
-    """``left @ [I; P]`` (CSR), ``I`` of ``P``'s column count: ``left``'s first columns plus the
-    product of the rest with ``P``, in one sparse product."""
-    return (left @ sp.vstack([sp.identity(P.shape[1], format="csr"), P.tocsr()], format="csr")).tocsr()
+def _row_block(A, rows):
+    """The rows ``rows`` (a slice) of the CSR matrix ``A``, sharing its index and value arrays."""
+    first, last = A.indptr[rows.start], A.indptr[rows.stop]
+    return sp.csr_matrix((A.data[first:last], A.indices[first:last], A.indptr[rows.start:rows.stop + 1] - first),
+                         shape=(rows.stop - rows.start, A.shape[1]))
 
 
-def _diagonal_entries(A, offset):
-    """Positions in ``A.data`` (CSR) of the entries ``(i, offset + i)``, one per row, or ValueError."""
-    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
-    where = np.flatnonzero(A.indices == rows + offset)
-    if len(where) != A.shape[0]:
-        raise ValueError("the beam block must store each diagonal entry exactly once")
-    return where
+def _column_block(A, start, stop):
+    """The columns ``start:stop`` of the CSR matrix ``A`` with sorted indices (one pass over its entries)."""
+    inside = (A.indices >= start) & (A.indices < stop)
+    before = np.zeros(A.nnz + 1, A.indptr.dtype)       # entries inside before each position
+    np.cumsum(inside, out=before[1:])
+    indptr = before[A.indptr]
+    return sp.csr_matrix((A.data[inside], A.indices[inside] - A.indices.dtype.type(start), indptr),
+                         shape=(A.shape[0], stop - start))
 
 
 def drop_weak_entries(P, drop):
@@ -436,12 +459,6 @@ def drop_weak_entries(P, drop):
     rows = np.repeat(np.arange(P.shape[0]), counts)[keep]
     indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=P.shape[0]))])
     return sp.csr_matrix((P.data[keep], P.indices[keep], indptr), shape=P.shape)
-
-
-def _row_scaled(A, factor):
-    """The entries of the CSR matrix ``A`` times ``factor`` of their row (``diag(factor) @ A``
-    without a sparse product)."""
-    return np.repeat(factor, np.diff(A.indptr)) * A.data
 
 
 def _smooth_finest_with(ml, matrix):
