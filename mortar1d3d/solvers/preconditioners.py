@@ -551,9 +551,10 @@ def largest_eigenvalue(A, steps=LANCZOS_STEPS):
         w = A @ v
         if j:
             w -= beta[j - 1] * previous
-        alpha[j] = w @ v
+        alpha[j] = (w * v).sum()            # numpy sums: a threaded BLAS dot (or nrm2) of the
+        # 126,000 beam DOFs of fibre_cube(20, 1000, 20) cost 0.8 (3.7) ms of CPU against 0.1 on the shared machine
         w -= alpha[j] * v
-        beta[j] = np.linalg.norm(w)
+        beta[j] = np.sqrt((w * w).sum())
         if beta[j] <= 1e-14 * abs(alpha[j]):      # an invariant subspace: its Ritz values are exact
             steps = j + 1
             break
