@@ -9,7 +9,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ._common import check_square, split_dofs
 from .amg import _block_size, build_amg
-from ._products import extend_and_add
+from ._products import drop_weak_node_blocks, extend_and_add
 from .direct import factorize_spd_block
 
 __all__ = ["AuxiliarySpacePreconditioner", "smooth_prolongation", "harmonic_prolongation", "drop_weak_blocks"]
@@ -484,36 +484,17 @@ def drop_weak_blocks(A, delta, compensation="none", block_size=3):
     ``"signed"`` the symmetric part of their block row sum ``Σ_J A_IJ`` added to the diagonal block
     ``A_II`` (translations, which every block row sum acts on, keep their energy when those sums are
     symmetric).
+
+    One pass over the entries of ``A`` as CSR (:func:`~mortar1d3d.solvers._products.drop_weak_node_blocks`):
+    converting the 36M entries of ``A_aux`` at n = 40 of ``fibre_cube(n, 1000, 20)`` to BSR, sorting
+    them and selecting the kept blocks with NumPy took 2.2 of the set-up's 6 CPU seconds
+    (benchmarks/README.md, "The set-up in one pass per product").
     """
     if compensation not in ("none", "abs", "signed"):
         raise ValueError(f"compensation must be 'none', 'abs' or 'signed', got {compensation!r}")
-    k = block_size
-    B = sp.bsr_matrix(A, blocksize=(k, k))
-    B.sort_indices()
-    nodes = B.shape[0] // k
-    rows = np.repeat(np.arange(nodes), np.diff(B.indptr))
-    norms = np.sqrt(np.einsum("kij,kij->k", B.data, B.data))
-    diagonal = rows == B.indices
-    own = np.zeros(nodes)
-    own[rows[diagonal]] = norms[diagonal]
-    keep = diagonal | (norms >= delta * np.sqrt(own[rows] * own[B.indices]))
-    del norms
-    dropped = np.flatnonzero(~keep)
-    data, kept_rows = B.data[keep], rows[keep]      # copies of the kept blocks only
-    if compensation != "none" and len(dropped):
-        # the dropped blocks summed per block row (a sparse product: no unbuffered scatter)
-        by_row = sp.csr_matrix((np.ones(len(dropped)), (rows[dropped], np.arange(len(dropped)))),
-                               shape=(nodes, len(dropped)))
-        where = np.flatnonzero(diagonal[keep])      # the diagonal blocks among the kept ones
-        at = kept_rows[where]
-        if compensation == "abs":
-            sums = by_row @ np.abs(B.data[dropped]).sum(axis=2)
-            data[where] += sums[at][:, :, None] * np.eye(k)
-        else:
-            sums = (by_row @ B.data[dropped].reshape(-1, k * k)).reshape(-1, k, k)
-            data[where] += 0.5 * (sums[at] + sums[at].transpose(0, 2, 1))
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(kept_rows, minlength=nodes))])
-    return sp.bsr_matrix((data, B.indices[keep], indptr), shape=B.shape)
+    if A.shape[0] != A.shape[1] or A.shape[0] % block_size:
+        raise ValueError(f"A must be square with a size divisible by {block_size}, got {A.shape}")
+    return drop_weak_node_blocks(A, delta, compensation, block_size)
 
 
 def _contiguous(index):
