@@ -18,7 +18,7 @@ memory of the process so far (each solver's preconditioner is released once its 
 preconditioner, what ``solver = "amg"``/``"auto"`` runs for penalty-coupled beams, with ``k`` Jacobi
 steps on its prolongation (``harmonic``: the beams' exact response, ``harmonic_prolongation``) and strength
 threshold ``θ`` in its AMG, ``--aux k:θ[:drop[:f]] ...``:
-the default ``1:0.02:1e-3:f`` is the preconditioner's default, ``0:0`` its settings before the smoothed prolongation (``LUMPED``),
+the default ``1:0.05:1e-3:f`` is the preconditioner's default (``1:0.02:1e-3:f`` before session sixteen), ``0:0`` its settings before the smoothed prolongation (``LUMPED``),
 ``LUMPED``; further ``:key=value`` fields: ``sparsify=δ`` builds its AMG from ``A_aux`` without the 3x3
 blocks below ``δ`` of their diagonal blocks, ``compensation=none|abs|signed`` what they leave on the
 diagonal (``drop_weak_blocks``), ``sparsify_scope=smoother`` only the finest level's smoother on it), ``amg`` (CG +
@@ -159,7 +159,7 @@ def main(argv=None):
     parser.add_argument("--plain", type=int, nargs="*", default=[], help="sizes n to also solve with plain AMG")
     parser.add_argument("--schur", type=int, nargs="*", default=[],
                         help="sizes n to also solve by CG on the solid's Schur complement (method 'schur')")
-    parser.add_argument("--aux", nargs="+", default=["1:0.02:1e-3:f"], metavar="K:THETA[:DROP[:f]]",
+    parser.add_argument("--aux", nargs="+", default=["1:0.05:1e-3:f"], metavar="K:THETA[:DROP[:f]]",
                         help="auxiliary spaces to run: K Jacobi steps on the prolongation (0: the lumped "
                              "follow operator; 'harmonic': the beams' exact response), strength threshold THETA of its AMG, relative drop threshold "
                              "of the smoothed prolongation (default 0), ':f' for the AMG's filter_entries; "

@@ -325,7 +325,7 @@ def stiff_penalty_system():
 
 @pytest.mark.parametrize("system, smoothed, lumped", [("fibre_system", 13, 16), ("stiff_penalty_system", 18, 45)])
 def test_smoothed_auxiliary_space_needs_fewer_iterations_than_the_lumped_one(system, smoothed, lumped, request):
-    """The default (one smoothing step, AMG with θ = 0.02 and filtered prolongation smoothing) against
+    """The default (one smoothing step, AMG with θ = 0.05 and filtered prolongation smoothing) against
     the settings before (``LUMPED``): measured 12 against 16 iterations at the default ε = 1e3 E,
     16 against 45 at 1e4 E; both reach the direct solution."""
     from mortar1d3d.solvers.linear import AuxiliarySpacePreconditioner, solve_linear
@@ -463,7 +463,8 @@ def test_harmonic_prolongation_balances_the_beams_and_makes_the_auxiliary_matrix
     the beams it moves carry no force (``A_BS + A_BB P = 0``), ``Eᵀ A E`` is the Schur complement ``S``,
     the result does not depend on how many right-hand sides a solve takes, and ``drop`` leaves out
     exactly the entries below ``drop`` times their row's largest. The preconditioner built on it
-    reaches the direct solution in fewer CG iterations than the default."""
+    reaches the direct solution in fewer CG iterations than one Jacobi step with θ = 0.02 (the default
+    before session sixteen; with the default θ = 0.05 both take 11 on this scene)."""
     from mortar1d3d.solvers.linear import AuxiliarySpacePreconditioner, solve_linear
     from mortar1d3d.solvers.preconditioners import auxiliary_matrix, harmonic_prolongation
     from mortar1d3d.solvers.schur import SchurComplement
@@ -487,9 +488,9 @@ def test_harmonic_prolongation_balances_the_beams_and_makes_the_auxiliary_matrix
     assert dropped.nnz < 0.5 * P.nnz
     x_direct, _ = solve_linear(A, b, "direct")
     counts = []
-    for options in ({}, dict(smoothing="harmonic", theta=0.05)):
+    for options in (dict(theta=0.02), dict(smoothing="harmonic", theta=0.05), {}):
         pre = AuxiliarySpacePreconditioner(A, s, bm, split["prolongation"], R[s], block_size=3, **options)
         y, info = solve_linear(A, b, preconditioner=pre, rtol=1e-8)
         assert info["converged"] and np.linalg.norm(y - x_direct) <= 1e-6 * np.linalg.norm(x_direct)
         counts.append(info["iterations"])
-    assert counts[1] < counts[0], counts
+    assert counts[1] < counts[0] and counts[2] <= counts[0], counts
