@@ -32,7 +32,8 @@ blocks counted as 9 entries) and the size of the coarsest; for the auxiliary spa
 per row of ``A_aux`` itself, and the user and system CPU seconds and minor page faults of every set-up
 (the solid's AMG hierarchy, the auxiliary space: fresh memory that the kernel faults in and zeroes is
 system time); ``--cprofile K`` prints the K functions that took the most CPU seconds of the auxiliary
-space's set-up.
+space's set-up; ``--small-pages`` keeps NumPy from asking for huge pages, so that those faults count the
+fresh memory of a set-up in 4 KiB pages.
 The 1-minute load average is printed with every row: wall times on a shared machine are only
 comparable at the same load; ``--repeat k`` keeps the fastest of k solves of each system.
 """
@@ -173,9 +174,14 @@ def main(argv=None):
     parser.add_argument("--cprofile", type=int, default=0, metavar="K",
                         help="print the K functions that took the most CPU seconds of each auxiliary space's "
                              "set-up (the first of --repeat; cProfile, whose own cost is in that run's figures)")
+    parser.add_argument("--small-pages", action="store_true",
+                        help="NumPy's big arrays in 4 KiB pages (no madvise for huge pages), so that the minor "
+                             "page faults of a set-up (--profile) count its fresh memory in 4 KiB units")
     parser.add_argument("--repeat", type=int, default=1,
                         help="solve each system this many times and keep the fastest (CPU seconds) run")
     args = parser.parse_args(argv)
+    if args.small_pages:
+        np._core.multiarray._set_madvise_hugepage(False)
     print(f"penalty ε = {args.penalty_factor:g} E_solid, rtol {args.rtol:g}")
     print(f"{'n':>3} {'solid':>7} {'beam':>7} {'asm s':>6} {'solver':>12} {'setup s':>8} {'solve s':>8} "
           f"{'total s':>8} {'cpu s':>7} {'set cpu':>7} {'its':>5} {'rel. res':>8} {'|x-x_dir|':>9} "

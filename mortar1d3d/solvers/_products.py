@@ -1,4 +1,5 @@
-"""Sparse products of the auxiliary space's set-up, each in one pass (Numba kernels).
+"""Sparse kernels of the auxiliary space's set-up: its products, each in one pass, and the weak node
+blocks of the auxiliary matrix dropped in one pass (Numba).
 
 Every product here has the form ``f ⊙ (L₁ [I; R₁]) + L₂ R₂`` (``f`` a factor per row, ``I`` the
 identity on the first columns of ``L₁``): the smoothing step of the follow operator

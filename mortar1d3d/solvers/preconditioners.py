@@ -336,9 +336,9 @@ def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0, *, beam_rows=None):
     jacobi = 1.0 / (rho * d)
     # P − J (A_BS + A_BB P) = P − J [A_BS  A_BB] [I; P], J = diag(jacobi): each row accumulated once from
     # the operands as they are, the weak entries dropped as the last step's rows are written
-    # (SciPy's products of stacked copies, the difference and the drop wrote and faulted in about
-    # 0.5 GB of fresh memory at n = 20 of fibre_cube(n, 1000, 20): benchmarks/README.md, "The set-up
-    # in one pass per product")
+    # (SciPy's product of stacked copies, the difference and the drop wrote matrices of P's size several
+    # times, in memory fresh from the operating system: benchmarks/README.md, "The set-up in one pass per
+    # product")
     joined = _beam_rows(A_bs, A_bb) if beam_rows is None else beam_rows
     identity = sp.identity(P.shape[0], format="csr")
     for step in range(steps):
@@ -490,7 +490,7 @@ def drop_weak_blocks(A, delta, compensation="none", block_size=3):
 
     One pass over the entries of ``A`` as CSR (:func:`~mortar1d3d.solvers._products.drop_weak_node_blocks`):
     converting the 36M entries of ``A_aux`` at n = 40 of ``fibre_cube(n, 1000, 20)`` to BSR, sorting
-    them and selecting the kept blocks with NumPy took 2.2 of the set-up's 6 CPU seconds
+    them and selecting the kept blocks with NumPy took 2.2 of the set-up's 6 CPU seconds under cProfile
     (benchmarks/README.md, "The set-up in one pass per product").
     """
     if compensation not in ("none", "abs", "signed"):
@@ -535,8 +535,8 @@ def largest_eigenvalue(A, steps=LANCZOS_STEPS):
         w = A @ v
         if j:
             w -= beta[j - 1] * previous
-        alpha[j] = (w * v).sum()            # numpy sums: a threaded BLAS dot (or nrm2) of the
-        # 126,000 beam DOFs of fibre_cube(20, 1000, 20) cost 0.8 (3.7) ms of CPU against 0.1 on the shared machine
+        alpha[j] = (w * v).sum()            # NumPy sums: threaded BLAS ddot/dnrm2 calls were most of this
+        # function's CPU in the set-up of fibre_cube(20, 1000, 20) (benchmarks/README.md, "The set-up in one pass")
         w -= alpha[j] * v
         beta[j] = np.sqrt((w * w).sum())
         if beta[j] <= 1e-14 * abs(alpha[j]):      # an invariant subspace: its Ritz values are exact
