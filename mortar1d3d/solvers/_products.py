@@ -12,7 +12,21 @@ a fraction of their row's largest can be left out as the row is written.
 import numpy as np
 import scipy.sparse as sp
 
-from .._config import njit
+from .._config import njit, njit_inline
+
+
+@njit_inline
+def _add_row(indptr, indices, data, k, a, where, touched, acc, count):
+    """``acc += a · row k`` of a CSR matrix, the columns first touched appended to ``touched``
+    (``where[j] ≥ 0`` marks them); returns the new count of touched columns."""
+    for q in range(indptr[k], indptr[k + 1]):
+        j = indices[q]
+        if where[j] < 0:
+            where[j] = count
+            touched[count] = j
+            count += 1
+        acc[j] += a * data[q]
+    return count
 
 
 @njit
@@ -46,24 +60,9 @@ def _extend_and_add(first, l1_indptr, l1_indices, l1_data, factor, r1_indptr, r1
                     count += 1
                 acc[c] += a
             else:
-                k = c - first
-                for q in range(r1_indptr[k], r1_indptr[k + 1]):
-                    j = r1_indices[q]
-                    if where[j] < 0:
-                        where[j] = count
-                        touched[count] = j
-                        count += 1
-                    acc[j] += a * r1_data[q]
+                count = _add_row(r1_indptr, r1_indices, r1_data, c - first, a, where, touched, acc, count)
         for e in range(l2_indptr[i], l2_indptr[i + 1]):
-            k = l2_indices[e]
-            a = l2_data[e]
-            for q in range(r2_indptr[k], r2_indptr[k + 1]):
-                j = r2_indices[q]
-                if where[j] < 0:
-                    where[j] = count
-                    touched[count] = j
-                    count += 1
-                acc[j] += a * r2_data[q]
+            count = _add_row(r2_indptr, r2_indices, r2_data, l2_indices[e], l2_data[e], where, touched, acc, count)
         threshold = 0.0
         if drop > 0.0:
             largest = 0.0
