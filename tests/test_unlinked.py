@@ -380,3 +380,32 @@ def test_a_hex8_element_based_call_compiles_only_what_it_runs():
     assert out["other"] == [0] * 8
     assert out["bin_part"] == ["int64"]
     assert out["chunks"] == [[f"Literal[int]({out['beam_type']})"]] * 2
+
+
+OTHERS_RUN = textwrap.dedent("""
+    import json
+    import mortar1d3d as m
+    from mortar1d3d.geometry import intersection, projection
+    beams, solid = m.generate.fibre_cube(3, 6, 3)
+    solid = m.generate.distort(solid, 0.1)
+    ops = [m.assemble_mortar(beams, solid, integration=i, n_gauss=4) for i in ("segment", "element")]
+    out = {f.__name__: len(f.signatures)
+           for f in (projection._project_other, projection._polish_other, intersection._intersect_other)}
+    out["crossings"] = ops[0].diagnostics["face_crossings"]
+    out["embedded"] = [o.embedded_length / o.beam_length for o in ops]
+    print(json.dumps(out))
+""")
+
+
+def test_a_distorted_hex8_scene_never_compiles_the_other_types_newton_versions(tmp_path):
+    """hex8's Newton projection, polishing step and face Newton sit behind one type test: a distorted
+    hex8 scene (every location a Newton projection, crossings found by the face Newton) runs them
+    without compiling or loading the shared version of the other types."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    done = subprocess.run([sys.executable, "-c", OTHERS_RUN], env=env, cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    out = json.loads(done.stdout.strip().splitlines()[-1])
+    assert out["crossings"] > 0     # the face Newton ran (and every point of the distorted cube is a projection)
+    assert out["embedded"] == pytest.approx([1.0, 1.0], rel=1e-12)
+    assert {k: out[k] for k in ("_project_other", "_polish_other", "_intersect_other")} == \
+        {"_project_other": 0, "_polish_other": 0, "_intersect_other": 0}
