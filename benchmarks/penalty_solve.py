@@ -1,6 +1,6 @@
 """Linear solve of the penalty system of ``fibre_cube(n, 1000, 20)`` against the solid it sits in.
 
-    python benchmarks/penalty_solve.py --n 20 40 [--direct 20] [--plain 10] [--schur 20 40] [--penalty-factor 1e3] [--profile]
+    python benchmarks/penalty_solve.py --n 20 40 [--direct 20] [--plain 10] [--schur 20 40] [--penalty-factor 1e3] [--profile] [--cprofile 25]
                                        [--repeat 3] [--aux 0:0 1:0.02:1e-3:f 1:0.02:1e-3:f:sparsify=1e-3:compensation=abs]
 
 The system is the linearised model (solid: linear elastic E = 1e9, ν = 0.3, clamped at x = 0,
@@ -18,7 +18,7 @@ memory of the process so far (each solver's preconditioner is released once its 
 preconditioner, what ``solver = "amg"``/``"auto"`` runs for penalty-coupled beams, with ``k`` Jacobi
 steps on its prolongation (``harmonic``: the beams' exact response, ``harmonic_prolongation``) and strength
 threshold ``θ`` in its AMG, ``--aux k:θ[:drop[:f]] ...``:
-the default ``1:0.02:1e-3:f`` is the preconditioner's default, ``0:0`` its settings before the smoothed prolongation (``LUMPED``),
+the default ``1:0.05:1e-3:f`` is the preconditioner's default (``1:0.02:1e-3:f`` before session sixteen), ``0:0`` its settings before the smoothed prolongation (``LUMPED``),
 ``LUMPED``; further ``:key=value`` fields: ``sparsify=δ`` builds its AMG from ``A_aux`` without the 3x3
 blocks below ``δ`` of their diagonal blocks, ``compensation=none|abs|signed`` what they leave on the
 diagonal (``drop_weak_blocks``), ``sparsify_scope=smoother`` only the finest level's smoother on it), ``amg`` (CG +
@@ -29,12 +29,18 @@ set-up and its applications spent their time (:attr:`AuxiliarySpacePreconditione
 every AMG hierarchy (the solid alone's, the auxiliary space's), its levels, operator complexity
 (entries of all levels over the finest's), entries per row of the finest level (scalar rows, 3x3
 blocks counted as 9 entries) and the size of the coarsest; for the auxiliary space also the entries
-per row of ``A_aux`` itself.
+per row of ``A_aux`` itself, and the user and system CPU seconds and minor page faults of every set-up
+(the solid's AMG hierarchy, the auxiliary space: fresh memory that the kernel faults in and zeroes is
+system time); ``--cprofile K`` prints the K functions that took the most CPU seconds of the auxiliary
+space's set-up; ``--small-pages`` keeps NumPy from asking for huge pages, so that those faults count the
+fresh memory of a set-up in 4 KiB pages.
 The 1-minute load average is printed with every row: wall times on a shared machine are only
 comparable at the same load; ``--repeat k`` keeps the fastest of k solves of each system.
 """
 import argparse
+import cProfile
 import os
+import pstats
 import resource
 import sys
 import time
@@ -94,11 +100,13 @@ def peak_memory_gb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
 
 
-def run(A, b, rtol, maxiter, options, split, profile):
+def run(A, b, rtol, maxiter, options, split, profile, cprofile=0):
     """One timed solve: (x, info) with ``cpu_time``, ``load``, ``memory`` added (and ``timings``
-    of the auxiliary space with ``profile``). ``options["smoothing"]`` (aux and schur): ``(k, θ, drop, filter)``,
-    the auxiliary space is built here with those settings."""
+    of the auxiliary space and ``setup_usage`` with ``profile``). ``options["smoothing"]`` (aux and schur): ``(k, θ, drop, filter)``,
+    the auxiliary space is built here with those settings; ``cprofile > 0`` prints the functions that took
+    the most CPU seconds of its set-up (cProfile with a CPU clock; not timed: the profiler's own cost)."""
     setup = 0.0
+    usage = resource.getrusage(resource.RUSAGE_SELF)
     cpu = time.process_time()
     options = dict(options)
     smoothing = options.pop("smoothing", None)
@@ -106,17 +114,27 @@ def run(A, b, rtol, maxiter, options, split, profile):
     if smoothing is not None:
         smoothing, theta, drop, filt, extra = smoothing
         R_solid = options["near_nullspace"][split["solid"]]
+        profiler = cProfile.Profile(time.process_time) if cprofile else None
+        if profiler is not None:
+            profiler.enable()
         options = dict(options, preconditioner=AuxiliarySpacePreconditioner(
             A, split["solid"], split["beam"], split["prolongation"], R_solid, block_size=3,
             smoothing=smoothing, theta=theta, drop=drop, filter_entries=filt, **extra))
+        if profiler is not None:
+            profiler.disable()
+            print(f"      set-up, CPU seconds by function (cProfile, top {cprofile} by own time):", flush=True)
+            pstats.Stats(profiler, stream=sys.stdout).sort_stats("tottime").print_stats(cprofile)
     elif options["method"] == "amg":      # the hierarchy solve_linear would build, built here to time it
         options = dict(options, preconditioner=build_amg(A, options["near_nullspace"], block_size=options["block_size"]))
     setup = time.perf_counter() - t
     setup_cpu = time.process_time() - cpu
+    after = resource.getrusage(resource.RUSAGE_SELF)
+    setup_usage = (after.ru_utime - usage.ru_utime, after.ru_stime - usage.ru_stime, after.ru_minflt - usage.ru_minflt)
     x, info = solve_linear(A, b, rtol=rtol, maxiter=maxiter, **options)
     info["setup_time"] += setup
     info["setup_cpu"] = setup_cpu
     if profile:
+        info["setup_usage"] = setup_usage
         pre = info["preconditioner"]
         if smoothing is None:
             info["hierarchy"] = hierarchy(pre)
@@ -142,7 +160,7 @@ def main(argv=None):
     parser.add_argument("--plain", type=int, nargs="*", default=[], help="sizes n to also solve with plain AMG")
     parser.add_argument("--schur", type=int, nargs="*", default=[],
                         help="sizes n to also solve by CG on the solid's Schur complement (method 'schur')")
-    parser.add_argument("--aux", nargs="+", default=["1:0.02:1e-3:f"], metavar="K:THETA[:DROP[:f]]",
+    parser.add_argument("--aux", nargs="+", default=["1:0.05:1e-3:f"], metavar="K:THETA[:DROP[:f]]",
                         help="auxiliary spaces to run: K Jacobi steps on the prolongation (0: the lumped "
                              "follow operator; 'harmonic': the beams' exact response), strength threshold THETA of its AMG, relative drop threshold "
                              "of the smoothed prolongation (default 0), ':f' for the AMG's filter_entries; "
@@ -153,9 +171,17 @@ def main(argv=None):
     parser.add_argument("--maxiter", type=int, default=2000,
                         help="CG iterations before a solver's row says it did not converge")
     parser.add_argument("--profile", action="store_true", help="print where the auxiliary space spends its time")
+    parser.add_argument("--cprofile", type=int, default=0, metavar="K",
+                        help="print the K functions that took the most CPU seconds of each auxiliary space's "
+                             "set-up (the first of --repeat; cProfile, whose own cost is in that run's figures)")
+    parser.add_argument("--small-pages", action="store_true",
+                        help="NumPy's big arrays in 4 KiB pages (no madvise for huge pages), so that the minor "
+                             "page faults of a set-up (--profile) count its fresh memory in 4 KiB units")
     parser.add_argument("--repeat", type=int, default=1,
                         help="solve each system this many times and keep the fastest (CPU seconds) run")
     args = parser.parse_args(argv)
+    if args.small_pages:
+        np._core.multiarray._set_madvise_hugepage(False)
     print(f"penalty ε = {args.penalty_factor:g} E_solid, rtol {args.rtol:g}")
     print(f"{'n':>3} {'solid':>7} {'beam':>7} {'asm s':>6} {'solver':>12} {'setup s':>8} {'solve s':>8} "
           f"{'total s':>8} {'cpu s':>7} {'set cpu':>7} {'its':>5} {'rel. res':>8} {'|x-x_dir|':>9} "
@@ -188,7 +214,8 @@ def main(argv=None):
             for _ in range(args.repeat):
                 try:
                     x, info = run(A, b, args.rtol, args.maxiter, kw, split,
-                                  args.profile and name.startswith(("aux", "solid")))
+                                  args.profile and name.startswith(("aux", "solid")),
+                                  args.cprofile if best is None and name.startswith("aux") else 0)
                 except LinearSolverError as error:      # a variant that does not converge: say so, go on
                     print(f"{sizes} {name:>12} did not converge: {str(error).split('. Try')[0]}", flush=True)
                     break
@@ -213,6 +240,9 @@ def main(argv=None):
                    peak_memory_gb=info["memory"], load=info["load"])
             if "timings" in info:
                 print("      " + ", ".join(f"{k} {v:.2f} s" for k, v in info["timings"].items()), flush=True)
+            if "setup_usage" in info:
+                print("      set-up CPU: user {:.2f} s, system {:.2f} s, {} minor page faults".format(*info["setup_usage"]),
+                      flush=True)
             if "hierarchy" in info:
                 print("      " + info["hierarchy"], flush=True)
 

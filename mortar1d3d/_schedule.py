@@ -8,16 +8,20 @@ neighbour for a while. The kernels therefore start one worker per thread and han
 :data:`CHUNK` items from counters (atomic fetch-and-add). Worker ``w`` owns the ``w``-th
 contiguous part of the chunks and claims from it first, in order; once its part is done it
 claims chunks of the other parts (the next worker's first), so a slowed thread simply ends up
-with fewer chunks. ::
+with fewer chunks. A worker is an ordinary compiled function, run once per worker index on the
+package's one parallel loop (:mod:`mortar1d3d._parallel`)::
 
-    claims = new_claims(n, workers)     # workers: numba.get_num_threads(), passed in
-    for worker in prange(workers):
+    @njit
+    def _kernel_worker(worker, claims, n, ...):
         ... work buffers, once per worker ...
         begin, stop = claim(claims, n, worker)
         while begin < stop:
             for item in range(begin, stop):
                 ...
             begin, stop = claim(claims, n, worker)
+
+    claims = new_claims(n, workers)     # workers: numba.get_num_threads(), passed in
+    _kernel_workers(workers, claims, n, ...)     # _kernel_workers = in_parallel(_kernel_worker)
 
 Owning a part keeps consecutive kernels' work on the same thread where the machine allows it:
 the engine's arrays (points, groups, LM rows) are all ordered by beam element, so the items a

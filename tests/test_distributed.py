@@ -944,13 +944,16 @@ def test_follow_matrix_equals_the_serial_follow_operator(name):
 
 def test_smoothed_follow_settings_are_the_serial_defaults():
     """-mortar_follow smoothed (the default) takes the serial AuxiliarySpacePreconditioner's
-    defaults (one smoothing step, drop, AMG strength θ), lumped its LUMPED settings."""
+    defaults (one smoothing step, drop), lumped its LUMPED settings. GAMG's strength threshold stays
+    0.02, the serial θ before session sixteen moved it to 0.05 (measured with pyamg only; docs/distributed.md
+    says so): this test fails when either changes without the other being decided."""
     import inspect
     from mortar1d3d.distributed.auxiliary import FOLLOW_SETTINGS, follow_choice
     from mortar1d3d.solvers.preconditioners import AuxiliarySpacePreconditioner
     serial = {k: v.default for k, v in inspect.signature(AuxiliarySpacePreconditioner).parameters.items()}
     assert serial["smoothing"] == 1 and AuxiliarySpacePreconditioner.LUMPED["smoothing"] == 0
-    assert FOLLOW_SETTINGS["smoothed"] == {"drop": serial["drop"], "threshold": serial["theta"]}
+    assert serial["theta"] == 0.05
+    assert FOLLOW_SETTINGS["smoothed"] == {"drop": serial["drop"], "threshold": 0.02}
     assert FOLLOW_SETTINGS["lumped"] is None
     assert follow_choice() == "smoothed"
     with _petsc_options(mortar_follow="lumped"):

@@ -217,6 +217,24 @@ def test_constraint_residual_measures_a_violated_constraint(integration):
     assert relative_residual(ops.D, np.zeros_like(q), ops.M, x) == 0.0     # D q = 0: defined as 0
 
 
+
+@pytest.mark.parametrize("kind", ["hermite", "line"])
+def test_constraint_residual_is_read_lazily_from_the_assembled_positions(kind):
+    """``constraint_residual`` is computed on first access, from the positions the operators were assembled
+    with: the same bits as computing it from ``centreline_dofs`` at once, also after the meshes moved."""
+    from mortar1d3d.mortar.sparse import relative_residual
+    beams, solid = curved_beams() if kind == "hermite" else lagrange_beams(kind), distorted("hexahedron")
+    ops = m13.assemble_mortar(beams, solid, integration="element")
+    q, x = beams.centreline_dofs(), solid.points.ravel().copy()
+    expected = relative_residual(ops.D, q, ops.M, x)
+    assert 0.0 < expected < 1e-13
+    beams.positions[:] += 0.5        # moved after the assembly: the certificate is of the assembled positions
+    solid.points[:] *= 2.0
+    assert ops.constraint_residual == expected
+    assert ops.constraint_residual == expected     # computed once, then the value
+    # ... which the moved meshes' positions violate
+    assert relative_residual(ops.D, beams.centreline_dofs(), ops.M, solid.points.ravel()) > 1e-2
+
 @pytest.mark.parametrize("element", ["hexahedron", "hexahedron27", "tetra10"])
 def test_segments_lie_in_their_elements(element):
     """Independent check of the segmentation: sampled points inside the owner, cuts on its boundary."""
@@ -488,6 +506,9 @@ def test_broad_phase_widely_varying_sizes():
                                  [[[100.0, 0.0, 0.0], [101.0, 1.0, 1.0]]]])
     offsets, _ = assert_pairs_equal_brute_force(beam_boxes, solid_boxes)
     assert offsets[-1] == offsets[-2]
+    # some candidate lists are long enough for numpy's sort (compiled on first use), not the insertion sort
+    from mortar1d3d.geometry.search import _INSERTION_SORT_MAX
+    assert np.diff(offsets).max() > _INSERTION_SORT_MAX
 
 
 def test_broad_phase_touching_boxes_count():

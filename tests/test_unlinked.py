@@ -61,10 +61,12 @@ RUN = textwrap.dedent("""
 """)
 
 
-def _run(tmp_path):
+def _run(tmp_path, code=RUN):
+    """``code`` in a fresh process with the cache in ``tmp_path`` and its modules importable; its last
+    line of output, as JSON (also used by tests/test_parallel.py)."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
                PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]))
-    done = subprocess.run([sys.executable, "-c", RUN], env=env, cwd=tmp_path, capture_output=True, text=True)
+    done = subprocess.run([sys.executable, "-c", code], env=env, cwd=tmp_path, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout.strip().splitlines()[-1])
 
@@ -351,8 +353,9 @@ SCENE_RUN = textwrap.dedent("""
                      for t in registry.SOLID_TYPES},
         other=[len(f.signatures) for f in (projection._map_other, projection._jacobian_other,
                                            projection.locate_rare, search.hull_planes, search._solid_hulls,
-                                           search._solid_hulls_chunk, projection.certified_margin)],
-        bin_part=[str(sig[4]) for sig in search._bin_part.signatures],
+                                           search._solid_hulls_chunk, projection.certified_margin,
+                                           search._sort_front)],
+        bin_part=[str(sig[0]) for sig in search._bin_part.signatures],
         beam_type=b.element_type.code,
         chunks=[sorted(str(sig[0]) for sig in f.signatures)
                 for f in (points._element_points_chunk, search._beam_frames_chunk)])))
@@ -363,9 +366,10 @@ def test_a_hex8_element_based_call_compiles_only_what_it_runs():
     """The first element-based call of a hex8 scene with Hermite beams (the kernel cache of the test
     run, cold or warm) neither compiles nor loads another solid type's kernels, their map and
     Jacobian, the rare path of locating a point, the hull planes or the hull kernel (hex8 has none),
-    or the one-to-one certificate (its elements are affine), and its beam loops exist for its beam
-    type only: all are called lazily (``unlinked(..., returns=...)``) or skipped. ``_bin_part``, called
-    through a symbol with a ``prange`` index (uint64 in the parallel body), exists for int64 only."""
+    the one-to-one certificate (its elements are affine) or numpy's sort of a long candidate list,
+    and its beam loops exist for its beam type only: all are called lazily (``unlinked(...,
+    returns=...)``) or skipped. ``_bin_part``, a worker of the package's parallel loop
+    (mortar1d3d._parallel) called with its index, exists for int64 only."""
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     done = subprocess.run([sys.executable, "-c", SCENE_RUN], env=env, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
@@ -373,6 +377,35 @@ def test_a_hex8_element_based_call_compiles_only_what_it_runs():
     # hex8's kernels are linked into the dispatch (compiled with it on a cold cache, not loaded on a warm one)
     others = {name: n for name, n in out["solid_types"].items() if name != "hexahedron"}
     assert len(others) == len(out["solid_types"]) - 1 and others == {name: 0 for name in others}
-    assert out["other"] == [0] * 7
+    assert out["other"] == [0] * 8
     assert out["bin_part"] == ["int64"]
     assert out["chunks"] == [[f"Literal[int]({out['beam_type']})"]] * 2
+
+
+OTHERS_RUN = textwrap.dedent("""
+    import json
+    import mortar1d3d as m
+    from mortar1d3d.geometry import intersection, projection
+    beams, solid = m.generate.fibre_cube(3, 6, 3)
+    solid = m.generate.distort(solid, 0.1)
+    ops = [m.assemble_mortar(beams, solid, integration=i, n_gauss=4) for i in ("segment", "element")]
+    out = {f.__name__: len(f.signatures)
+           for f in (projection._project_other, projection._polish_other, intersection._intersect_other)}
+    out["crossings"] = ops[0].diagnostics["face_crossings"]
+    out["embedded"] = [o.embedded_length / o.beam_length for o in ops]
+    print(json.dumps(out))
+""")
+
+
+def test_a_distorted_hex8_scene_never_compiles_the_other_types_newton_versions(tmp_path):
+    """hex8's Newton projection, polishing step and face Newton sit behind one type test: a distorted
+    hex8 scene (every location a Newton projection, crossings found by the face Newton) runs them
+    without compiling or loading the shared version of the other types."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    done = subprocess.run([sys.executable, "-c", OTHERS_RUN], env=env, cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    out = json.loads(done.stdout.strip().splitlines()[-1])
+    assert out["crossings"] > 0     # the face Newton ran (and every point of the distorted cube is a projection)
+    assert out["embedded"] == pytest.approx([1.0, 1.0], rel=1e-12)
+    assert {k: out[k] for k in ("_project_other", "_polish_other", "_intersect_other")} == \
+        {"_project_other": 0, "_polish_other": 0, "_intersect_other": 0}

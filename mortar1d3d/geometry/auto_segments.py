@@ -14,9 +14,9 @@ segments from these crossings, exactly as for segment-based integration. Which s
 exact Gauss rule is decided with the integration points (:mod:`mortar1d3d.integration.points`).
 """
 import numpy as np
-from numba import prange
 
-from .._config import PARAMETER_TOL, njit, njit_parallel
+from .._config import PARAMETER_TOL, njit
+from .._parallel import in_parallel
 from .._schedule import claim, new_claims, workers
 from ..elements import beam as beam_functions
 from ..elements.beam import MAX_FUNCTIONS
@@ -33,7 +33,7 @@ CERTIFY_MARGIN = 1e3 * PARAMETER_TOL
 PAIR_DONE, PAIR_NUMERIC = 0, 1
 
 
-@njit_parallel
+@njit
 def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, beam_code, Q, lengths,
                     beam_origin, crossing_eta, crossing_face, crossing_count, pair_state, beam_affine, beam_inside,
                     workers):
@@ -48,98 +48,110 @@ def _auto_crossings(pair_offsets, pair_solid, codes, conn, points, solid_origin,
     - otherwise the pair is marked ``PAIR_NUMERIC`` for the segmentation's crossing search.
     """
     n_beam = pair_offsets.shape[0] - 1
-    tol = PARAMETER_TOL
     claims = new_claims(n_beam, workers)
-    for worker in prange(workers):
-        X = np.empty((solid.MAX_NODES, 4))
-        H = np.empty(MAX_FUNCTIONS)
-        dH = np.empty(MAX_FUNCTIONS)
-        ddH = np.empty(MAX_FUNCTIONS)
-        Ainv = np.empty((3, 3))
-        ctrl = np.empty((4, 3))
-        alpha = np.empty(3)
-        beta = np.empty(3)
-        xi = np.empty(3)
-        begin, stop = claim(claims, n_beam, worker)
-        while begin < stop:
-            for e in range(begin, stop):
-                Qe = Q[e]
-                straight = beam_is_affine(beam_code, Qe, lengths[e], ddH)
-                beam_affine[e] = straight
-                # the line r(η) = p + q η (straight) or the control polygon (curved), beam-local frame
-                p0, p1, p2, q0, q1, q2 = beam_point(beam_code, Qe, lengths[e], 0.0, 0.0, 0.0, 0.0, H, dH)
-                n_ctrl = 0 if straight else beam_functions.control_points(beam_code, Qe, lengths[e], ctrl)
-                inside = -1
-                for p in range(pair_offsets[e], pair_offsets[e + 1]):
-                    s = pair_solid[p]
-                    code = codes[s]
-                    crossing_count[p] = 0
-                    pair_state[p] = PAIR_NUMERIC
-                    load_element(points, conn, s, code, solid_origin, X)
-                    if not affine_inverse(code, X, solid_h[s], AFFINE_TOL, Ainv):
-                        continue
-                    s0 = beam_origin[e, 0] - solid_origin[s, 0]
-                    s1 = beam_origin[e, 1] - solid_origin[s, 1]
-                    s2 = beam_origin[e, 2] - solid_origin[s, 2]
-                    if not straight:
-                        certified = True
-                        for k in range(n_ctrl):
-                            affine_parameters(code, Ainv, ctrl[k, 0] + s0, ctrl[k, 1] + s1, ctrl[k, 2] + s2, xi)
-                            if solid.outside_distance(code, xi) > -CERTIFY_MARGIN:
-                                certified = False
-                                break
-                        if certified:
-                            inside = s
+    _auto_crossings_workers(workers, claims, pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h,
+                            beam_code, Q, lengths, beam_origin, crossing_eta, crossing_face, crossing_count,
+                            pair_state, beam_affine, beam_inside)
+
+
+@njit
+def _auto_crossings_worker(worker, claims, pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h,
+                           beam_code, Q, lengths, beam_origin, crossing_eta, crossing_face, crossing_count,
+                           pair_state, beam_affine, beam_inside):
+    n_beam = pair_offsets.shape[0] - 1
+    tol = PARAMETER_TOL
+    X = np.empty((solid.MAX_NODES, 4))
+    H = np.empty(MAX_FUNCTIONS)
+    dH = np.empty(MAX_FUNCTIONS)
+    ddH = np.empty(MAX_FUNCTIONS)
+    Ainv = np.empty((3, 3))
+    ctrl = np.empty((4, 3))
+    alpha = np.empty(3)
+    beta = np.empty(3)
+    xi = np.empty(3)
+    begin, stop = claim(claims, n_beam, worker)
+    while begin < stop:
+        for e in range(begin, stop):
+            Qe = Q[e]
+            straight = beam_is_affine(beam_code, Qe, lengths[e], ddH)
+            beam_affine[e] = straight
+            # the line r(η) = p + q η (straight) or the control polygon (curved), beam-local frame
+            p0, p1, p2, q0, q1, q2 = beam_point(beam_code, Qe, lengths[e], 0.0, 0.0, 0.0, 0.0, H, dH)
+            n_ctrl = 0 if straight else beam_functions.control_points(beam_code, Qe, lengths[e], ctrl)
+            inside = -1
+            for p in range(pair_offsets[e], pair_offsets[e + 1]):
+                s = pair_solid[p]
+                code = codes[s]
+                crossing_count[p] = 0
+                pair_state[p] = PAIR_NUMERIC
+                load_element(points, conn, s, code, solid_origin, X)
+                if not affine_inverse(code, X, solid_h[s], AFFINE_TOL, Ainv):
+                    continue
+                s0 = beam_origin[e, 0] - solid_origin[s, 0]
+                s1 = beam_origin[e, 1] - solid_origin[s, 1]
+                s2 = beam_origin[e, 2] - solid_origin[s, 2]
+                if not straight:
+                    certified = True
+                    for k in range(n_ctrl):
+                        affine_parameters(code, Ainv, ctrl[k, 0] + s0, ctrl[k, 1] + s1, ctrl[k, 2] + s2, xi)
+                        if solid.outside_distance(code, xi) > -CERTIFY_MARGIN:
+                            certified = False
                             break
-                        continue
-                    pair_state[p] = PAIR_DONE
-                    affine_parameters(code, Ainv, p0 + s0, p1 + s1, p2 + s2, alpha)
+                    if certified:
+                        inside = s
+                        break
+                    continue
+                pair_state[p] = PAIR_DONE
+                affine_parameters(code, Ainv, p0 + s0, p1 + s1, p2 + s2, alpha)
+                for i in range(3):
+                    beta[i] = Ainv[i, 0] * q0 + Ainv[i, 1] * q1 + Ainv[i, 2] * q2
+                # clip the line against the half-spaces n·(ξ - o) <= 0 of the faces
+                eta_in = -np.inf
+                eta_out = np.inf
+                face_in = face_out = -1
+                empty = False
+                faces = solid.faces(code)
+                for f in range(faces.shape[0]):
+                    g0 = 0.0
+                    g1 = 0.0
                     for i in range(3):
-                        beta[i] = Ainv[i, 0] * q0 + Ainv[i, 1] * q1 + Ainv[i, 2] * q2
-                    # clip the line against the half-spaces n·(ξ - o) <= 0 of the faces
-                    eta_in = -np.inf
-                    eta_out = np.inf
-                    face_in = face_out = -1
-                    empty = False
-                    faces = solid.faces(code)
-                    for f in range(faces.shape[0]):
-                        g0 = 0.0
-                        g1 = 0.0
-                        for i in range(3):
-                            g0 += faces[f, 3, i] * (alpha[i] - faces[f, 0, i])
-                            g1 += faces[f, 3, i] * beta[i]
-                        if g1 == 0.0:
-                            if g0 > 0.0:
-                                empty = True
-                        elif g1 > 0.0:
-                            if -g0 / g1 < eta_out:
-                                eta_out = -g0 / g1
-                                face_out = f
-                        elif -g0 / g1 > eta_in:
-                            eta_in = -g0 / g1
-                            face_in = f
-                    if empty:
+                        g0 += faces[f, 3, i] * (alpha[i] - faces[f, 0, i])
+                        g1 += faces[f, 3, i] * beta[i]
+                    if g1 == 0.0:
+                        if g0 > 0.0:
+                            empty = True
+                    elif g1 > 0.0:
+                        if -g0 / g1 < eta_out:
+                            eta_out = -g0 / g1
+                            face_out = f
+                    elif -g0 / g1 > eta_in:
+                        eta_in = -g0 / g1
+                        face_in = f
+                if empty:
+                    continue
+                # entry and exit are crossings when they lie on the element (inside test with the
+                # tolerance, as for a numeric crossing) and on the beam element
+                n = 0
+                for k in range(2):
+                    t = eta_in if k == 0 else eta_out
+                    if not (-1.0 - tol <= t <= 1.0 + tol):
                         continue
-                    # entry and exit are crossings when they lie on the element (inside test with the
-                    # tolerance, as for a numeric crossing) and on the beam element
-                    n = 0
-                    for k in range(2):
-                        t = eta_in if k == 0 else eta_out
-                        if not (-1.0 - tol <= t <= 1.0 + tol):
-                            continue
-                        for i in range(3):
-                            xi[i] = alpha[i] + beta[i] * t
-                        if solid.is_inside(code, xi, tol):
-                            crossing_eta[p, n] = min(max(t, -1.0), 1.0)
-                            crossing_face[p, n] = face_in if k == 0 else face_out
-                            n += 1
-                    crossing_count[p] = n
-                beam_inside[e] = inside
-                if inside >= 0:
-                    for p in range(pair_offsets[e], pair_offsets[e + 1]):
-                        crossing_count[p] = 0
-                        pair_state[p] = PAIR_DONE
-            begin, stop = claim(claims, n_beam, worker)
+                    for i in range(3):
+                        xi[i] = alpha[i] + beta[i] * t
+                    if solid.is_inside(code, xi, tol):
+                        crossing_eta[p, n] = min(max(t, -1.0), 1.0)
+                        crossing_face[p, n] = face_in if k == 0 else face_out
+                        n += 1
+                crossing_count[p] = n
+            beam_inside[e] = inside
+            if inside >= 0:
+                for p in range(pair_offsets[e], pair_offsets[e + 1]):
+                    crossing_count[p] = 0
+                    pair_state[p] = PAIR_DONE
+        begin, stop = claim(claims, n_beam, worker)
+
+
+_auto_crossings_workers = in_parallel(_auto_crossings_worker)
 
 
 def auto_segments(ctx, search_points):

@@ -6,11 +6,13 @@ intersection is one 3×3 Newton problem in z = (η, u, v):
     F(z) = x(o + u a + v b) - r(η) = 0,   ∂F/∂z = [-r'(η), J a, J b].
 """
 import numpy as np
+from numba import types
 
-from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit
+from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit, njit_inline
+from .._unlinked import unlinked
 from .beam import beam_point
 from .linalg import norm3, solve3
-from .projection import CONVERGED, FAILED, jacobian, map_point
+from .projection import _HEX8, CONVERGED, FAILED, jacobian, map_point
 
 #: step halvings of the line search. A beam that enters a face at a grazing angle (tangent to it
 #: a little outside) makes the Jacobian nearly singular near the tangency: the Newton step then
@@ -60,7 +62,28 @@ def intersect_face(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, 
     one extra step for a transversal crossing (quadratic convergence), more for a beam that
     touches the face tangentially (a double root, linear convergence), where the residual
     test alone leaves η off by O(√tol) and two spurious crossings on either side of the touch.
+
+    The trilinear hexahedron's iteration is compiled here, every other type's is one call to
+    :func:`_intersect_other`, as in :func:`~mortar1d3d.geometry.projection.project_point`.
     """
+    if solid_code != _HEX8:
+        return _intersect_other_call(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH)
+    return _face_newton(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH)
+
+
+@njit
+def _intersect_other(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH):
+    """:func:`intersect_face` of every solid type but hex8."""
+    return _face_newton(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH)
+
+
+#: lazily through a symbol (see mortar1d3d._unlinked): a scene of hex8 elements never compiles it
+_intersect_other_call = unlinked(_intersect_other, returns=types.int64)
+
+
+@njit_inline
+def _face_newton(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH):
+    """The iteration of :func:`intersect_face` (inlined into it and into :func:`_intersect_other`)."""
     tol = NEWTON_RESIDUAL_TOL * h
     fn, f0, f1, f2, d0, d1, d2 = _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face,
                                            z[0], z[1], z[2], xi, N, H, dH)

@@ -6,10 +6,11 @@ distance from the global origin (docs/conventions.md §2: tolerances relative to
 All buffers come from the caller; nothing here allocates.
 """
 import numpy as np
-from numba import prange, types
+from numba import types
 
 from .._borrowed import borrowed
-from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit, njit_inline, njit_parallel
+from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, PARAMETER_TOL, njit, njit_inline
+from .._parallel import in_parallel
 from .._schedule import claim, new_claims, workers
 from .._unlinked import unlinked
 from ..elements.beam import MAX_FUNCTIONS
@@ -153,7 +154,31 @@ def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
     :func:`polish_residual`, which then needs no evaluation of the map). Converged when
     |x(ξ) - p| <= 1e-12 h. Returns CONVERGED or FAILED (singular Jacobian, no decrease,
     parameters running away, or 20 iterations).
+
+    The trilinear hexahedron's iteration is compiled here, after one test of ``code``: below it
+    LLVM knows the type and drops the tests of every evaluation of the map and the Jacobian. Every
+    other type's iteration is one call through a symbol to :func:`_project_other` (the same
+    iteration, one version for all of them, compiled when a scene first projects into an element
+    that is not a hex8).
     """
+    if code != _HEX8:
+        return _project_other_call(code, X, p0, p1, p2, h, xi, trial, N, dN)
+    return _newton(code, X, p0, p1, p2, h, xi, trial, N, dN)
+
+
+@njit
+def _project_other(code, X, p0, p1, p2, h, xi, trial, N, dN):
+    """:func:`project_point` of every type but hex8."""
+    return _newton(code, X, p0, p1, p2, h, xi, trial, N, dN)
+
+
+#: lazily through a symbol (see mortar1d3d._unlinked): a scene of hex8 elements never compiles it
+_project_other_call = unlinked(_project_other, returns=types.int64)
+
+
+@njit_inline
+def _newton(code, X, p0, p1, p2, h, xi, trial, N, dN):
+    """The iteration of :func:`project_point` (inlined into it and into :func:`_project_other`)."""
     tol = NEWTON_RESIDUAL_TOL * h
     x0, x1, x2 = map_point(code, X, xi, N)
     r0, r1, r2 = p0 - x0, p1 - x1, p2 - x2
@@ -199,10 +224,11 @@ def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
     return status
 
 
-@njit
+@njit_inline
 def load_element(points, conn, element, code, origin, X):
     """Copy the local (origin-relative) node coordinates of ``element`` into ``X``; a rational element's
-    node weights (column 3 of ``points``, :attr:`mortar1d3d.mesh.SolidMesh.kernel_points`) into ``X[:, 3]``."""
+    node weights (column 3 of ``points``, :attr:`mortar1d3d.mesh.SolidMesh.kernel_points`) into ``X[:, 3]``.
+    Inlined: the loops that call it per element or point would pass four arrays per call."""
     for a in range(solid.n_nodes(code)):
         node = conn[element, a]
         X[a, 0] = points[node, 0] - origin[element, 0]
@@ -588,7 +614,27 @@ def polish_residual(code, X, p0, p1, p2, h, xi, trial, N, dN):
     Inlined into its callers (the integration points' chunks call it once per point): a call would
     pass its five arrays and five scalars per point; inlined, the element-based points stage on the
     distorted hex8 cube executes 0.953 of the kernel instructions (benchmarks/README.md, "The hex8
-    points stage in instructions"). The same operations, so the same bits."""
+    points stage in instructions"). The same operations, so the same bits. Types but hex8 as in
+    :func:`project_point`: one call to :func:`_polish_other`."""
+    if code != _HEX8:
+        _polish_other_call(code, X, p0, p1, p2, h, xi, trial, N, dN)
+        return
+    _polish_step(code, X, p0, p1, p2, h, xi, trial, N, dN)
+
+
+@njit
+def _polish_other(code, X, p0, p1, p2, h, xi, trial, N, dN):
+    """:func:`polish_residual` of every type but hex8."""
+    _polish_step(code, X, p0, p1, p2, h, xi, trial, N, dN)
+
+
+#: lazily through a symbol, as :func:`_project_other`
+_polish_other_call = unlinked(_polish_other, returns=types.none)
+
+
+@njit_inline
+def _polish_step(code, X, p0, p1, p2, h, xi, trial, N, dN):
+    """The step of :func:`polish_residual`."""
     r0, r1, r2 = trial[0], trial[1], trial[2]
     if norm3(r0, r1, r2) <= _ROUND_OFF * h:
         return      # already at round-off (affine elements after one Newton step): nothing to gain
@@ -619,6 +665,16 @@ def first_containing(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes
     curved element whatever branch Newton takes; ``X`` is left holding the nodes of the last
     element tested.
     """
+    return first_containing_inline(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes,
+                                   conn, points, solid_origin, solid_h, linear, tol, X, xi, trial, N, dN, a,
+                                   stack, only)
+
+
+@njit_inline
+def first_containing_inline(r0, r1, r2, e, pair_solid, p0, p1, beam_origin, solid_boxes, hull, codes, conn,
+                            points, solid_origin, solid_h, linear, tol, X, xi, trial, N, dN, a, stack, only):
+    """:func:`first_containing`, inlined into the element-based points loop, which calls it once per
+    point: as a call it passes seventeen arrays and eight scalars each time."""
     for p in range(p0, p1):
         s = pair_solid[p]
         if only >= 0 and s != only:
@@ -692,7 +748,7 @@ def affine_parameters(code, Ainv, x0, x1, x2, xi):
 _affine_inverse_call = unlinked(affine_inverse)
 
 
-@njit_parallel
+@njit
 def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
     """The inverse of every element's map linearised at its parameter centre, for locating points.
 
@@ -707,17 +763,21 @@ def linear_maps(points, conn, codes, solid_origin, solid_h, table, workers):
     (:func:`certified_outside`). Few elements ever need it, and it cost more than the rest of the
     row together.
     """
+    claims = new_claims(conn.shape[0], workers)
+    _linear_maps_workers(workers, claims, points, conn, codes, solid_origin, solid_h, table)
+
+
+@njit
+def _linear_maps_worker(worker, claims, points, conn, codes, solid_origin, solid_h, table):
     n = conn.shape[0]
-    claims = new_claims(n, workers)
-    for worker in prange(workers):
-        X = np.empty((solid.MAX_NODES, 4))
-        N = np.empty(solid.MAX_NODES)
-        dN = np.empty((solid.MAX_NODES, 3))
-        xc = np.empty(3)
+    X = np.empty((solid.MAX_NODES, 4))
+    N = np.empty(solid.MAX_NODES)
+    dN = np.empty((solid.MAX_NODES, 3))
+    xc = np.empty(3)
+    begin, stop = claim(claims, n, worker)
+    while begin < stop:
+        _linear_maps_chunk_call(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, xc)
         begin, stop = claim(claims, n, worker)
-        while begin < stop:
-            _linear_maps_chunk_call(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, xc)
-            begin, stop = claim(claims, n, worker)
 
 
 @njit
@@ -745,6 +805,8 @@ def _linear_maps_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, 
 
 #: the loop body of :func:`linear_maps` (per claimed chunk), optimised once: called through a symbol
 _linear_maps_chunk_call = unlinked(_linear_maps_chunk)
+#: the kernel's workers run on the package's one parallel loop (see mortar1d3d._parallel)
+_linear_maps_workers = in_parallel(_linear_maps_worker)
 
 
 @njit
@@ -798,35 +860,45 @@ def linear_parameters(code, table, s, x0, x1, x2, xi):
     return True
 
 
-@njit_parallel
+@njit
 def _project_points_kernel(points, conn, codes, solid_origin, solid_h, linear, x, elements, tol, xi, status,
                            workers):
     """ξ and INSIDE / OUTSIDE / NOT_CONVERGED of each point ``x[i]`` in element ``elements[i]``."""
     n = x.shape[0]
     claims = new_claims(n, workers)
-    for worker in prange(workers):
-        X, N, dN, _, _, _, trial = point_buffers()
-        a, stack = search_buffers()
+    _project_points_kernel_workers(workers, claims, points, conn, codes, solid_origin, solid_h, linear, x, elements,
+                                   tol, xi, status)
+
+
+@njit
+def _project_points_kernel_worker(worker, claims, points, conn, codes, solid_origin, solid_h, linear, x, elements,
+                                  tol, xi, status):
+    n = x.shape[0]
+    X, N, dN, _, _, _, trial = point_buffers()
+    a, stack = search_buffers()
+    begin, stop = claim(claims, n, worker)
+    while begin < stop:
+        for i in range(begin, stop):
+            s = elements[i]
+            code = codes[s]
+            x0 = x[i, 0] - solid_origin[s, 0]
+            x1 = x[i, 1] - solid_origin[s, 1]
+            x2 = x[i, 2] - solid_origin[s, 2]
+            if is_affine(linear, s):
+                linear_parameters(code, linear, s, x0, x1, x2, xi[i])
+                status[i] = INSIDE if solid.is_inside(code, xi[i], tol) else OUTSIDE
+                continue
+            load_element(points, conn, s, code, solid_origin, X)
+            status[i] = locate_point(code, X, x0, x1, x2, solid_h[s], tol, linear, s, xi[i], trial, N, dN, a,
+                                     stack)
+            if status[i] == NOT_CONVERGED:
+                xi[i, 0] = xi[i, 1] = xi[i, 2] = np.nan
+            else:
+                polish_residual(code, X, x0, x1, x2, solid_h[s], xi[i], trial, N, dN)
         begin, stop = claim(claims, n, worker)
-        while begin < stop:
-            for i in range(begin, stop):
-                s = elements[i]
-                code = codes[s]
-                x0 = x[i, 0] - solid_origin[s, 0]
-                x1 = x[i, 1] - solid_origin[s, 1]
-                x2 = x[i, 2] - solid_origin[s, 2]
-                if is_affine(linear, s):
-                    linear_parameters(code, linear, s, x0, x1, x2, xi[i])
-                    status[i] = INSIDE if solid.is_inside(code, xi[i], tol) else OUTSIDE
-                    continue
-                load_element(points, conn, s, code, solid_origin, X)
-                status[i] = locate_point(code, X, x0, x1, x2, solid_h[s], tol, linear, s, xi[i], trial, N, dN, a,
-                                         stack)
-                if status[i] == NOT_CONVERGED:
-                    xi[i, 0] = xi[i, 1] = xi[i, 2] = np.nan
-                else:
-                    polish_residual(code, X, x0, x1, x2, solid_h[s], xi[i], trial, N, dN)
-            begin, stop = claim(claims, n, worker)
+
+
+_project_points_kernel_workers = in_parallel(_project_points_kernel_worker)
 
 
 def project_points(solid, points, elements):

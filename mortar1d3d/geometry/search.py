@@ -12,11 +12,12 @@ faces as well, and :func:`hull_pairs` drops the pairs those planes separate, the
 :func:`in_hull` makes per point.
 """
 import numpy as np
-from numba import prange, types
+from numba import types
 
-from .._config import PARAMETER_TOL, njit, njit_parallel, njit_inline
+from .._config import PARAMETER_TOL, njit, njit_inline
 from .._borrowed import borrowed
 from .._memory import carve
+from .._parallel import in_parallel
 from .._unlinked import unlinked
 from .._schedule import claim, new_claims, workers
 from ..elements import beam as beam_functions
@@ -93,16 +94,20 @@ def _finish_box(box, padding):
     return size
 
 
-@njit_parallel
+@njit
 def _solid_boxes(points, conn, codes, padding, boxes, size, origin, workers):
     claims = new_claims(conn.shape[0], workers)
-    for worker in prange(workers):
-        X = np.empty((MAX_NODES, 3))
-        C = np.empty((MAX_CONTROL, 3))
+    _solid_boxes_workers(workers, claims, points, conn, codes, padding, boxes, size, origin)
+
+
+@njit
+def _solid_boxes_worker(worker, claims, points, conn, codes, padding, boxes, size, origin):
+    X = np.empty((MAX_NODES, 3))
+    C = np.empty((MAX_CONTROL, 3))
+    begin, stop = claim(claims, conn.shape[0], worker)
+    while begin < stop:
+        _solid_boxes_chunk_call(begin, stop, points, conn, codes, padding, boxes, size, origin, X, C)
         begin, stop = claim(claims, conn.shape[0], worker)
-        while begin < stop:
-            _solid_boxes_chunk_call(begin, stop, points, conn, codes, padding, boxes, size, origin, X, C)
-            begin, stop = claim(claims, conn.shape[0], worker)
 
 
 @njit
@@ -120,26 +125,32 @@ def _solid_boxes_chunk(begin, stop, points, conn, codes, padding, boxes, size, o
         size[s] = _finish_box(boxes[s], padding)
 
 
-#: the loop bodies of the search's prange kernels (per claimed chunk or part), optimised once: called
+#: the loop bodies of the search's parallel kernels (per claimed chunk or part), optimised once: called
 #: through a symbol, not compiled into each parallel body and its kernel again (see mortar1d3d._unlinked)
 _solid_boxes_chunk_call = unlinked(_solid_boxes_chunk)
+#: the kernels' workers run on the package's one parallel loop (see mortar1d3d._parallel)
+_solid_boxes_workers = in_parallel(_solid_boxes_worker)
 
 
-@njit_parallel
+@njit
 def _beam_frames(positions, tangents, elements, lengths, code, padding, Q, origin, boxes, size, workers):
     # coefficients relative to the first node (the kernels' frame); the box from the Bézier control
     # points of the coefficients in the global frame (the curve lies in their convex hull)
+    claims = new_claims(elements.shape[0], workers)
+    _beam_frames_workers(workers, claims, positions, tangents, elements, lengths, code, padding, Q, origin, boxes, size)
+
+
+@njit
+def _beam_frames_worker(worker, claims, positions, tangents, elements, lengths, code, padding, Q, origin, boxes, size):
     n_el = elements.shape[0]
-    claims = new_claims(n_el, workers)
-    for worker in prange(workers):
-        zero = np.zeros(3)
-        ctrl = np.empty((beam_functions.MAX_FUNCTIONS, 3))
-        global_q = np.empty((beam_functions.MAX_FUNCTIONS, 3))
+    zero = np.zeros(3)
+    ctrl = np.empty((beam_functions.MAX_FUNCTIONS, 3))
+    global_q = np.empty((beam_functions.MAX_FUNCTIONS, 3))
+    begin, stop = claim(claims, n_el, worker)
+    while begin < stop:
+        _beam_frames_chunk_call(code, begin, stop, positions, tangents, elements, lengths, padding, Q,
+                                origin, boxes, size, zero, ctrl, global_q)
         begin, stop = claim(claims, n_el, worker)
-        while begin < stop:
-            _beam_frames_chunk_call(code, begin, stop, positions, tangents, elements, lengths, padding, Q,
-                                    origin, boxes, size, zero, ctrl, global_q)
-            begin, stop = claim(claims, n_el, worker)
 
 
 @njit
@@ -162,6 +173,7 @@ def _beam_frames_chunk(k, begin, stop, positions, tangents, elements, lengths, p
 #: called once per chunk through a symbol, not compiled into the kernel again, and compiled per beam type
 #: when a scene first uses it (see mortar1d3d._unlinked)
 _beam_frames_chunk_call = unlinked(_beam_frames_chunk, returns=types.none, cases=_BEAM_CODES)
+_beam_frames_workers = in_parallel(_beam_frames_worker)
 
 
 @njit
@@ -183,10 +195,11 @@ def _cell_range(box, lower, inv_cell, dims, lo, hi):
 
 
 @njit
-def _bin_part(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, ids):
+def _bin_part(part, solid_boxes, lower, inv_cell, dims, n_parts, counts, ids):
     """One pass over the elements of ``part``: count them per cell (``ids`` empty) or place them.
 
-    When placing, ``counts[part, c]`` holds the part's next slot in cell c.
+    When placing, ``counts[part, c]`` holds the part's next slot in cell c. A worker of
+    :func:`_bin_solids` (one per part, see mortar1d3d._parallel).
     """
     solid_boxes, lower, dims, counts, ids = borrowed(solid_boxes, lower, dims, counts, ids)
     n_solid = solid_boxes.shape[0]
@@ -203,10 +216,10 @@ def _bin_part(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, ids):
                         counts[part, c] += 1
 
 
-_bin_part_call = unlinked(_bin_part)
+_bin_parts = in_parallel(_bin_part)
 
 
-@njit_parallel
+@njit
 def _bin_solids(solid_boxes, lower, inv_cell, dims, n_parts):
     """CSR (offsets, ids) of the solid elements whose box covers each grid cell, ids ascending.
 
@@ -216,8 +229,7 @@ def _bin_solids(solid_boxes, lower, inv_cell, dims, n_parts):
     """
     n_cells = dims[0] * dims[1] * dims[2]
     counts = np.zeros((n_parts, n_cells), dtype=np.int64)
-    for part in prange(n_parts):
-        _bin_part_call(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, np.empty(0, dtype=np.int64))
+    _bin_parts(n_parts, solid_boxes, lower, inv_cell, dims, n_parts, counts, np.empty(0, dtype=np.int64))
     offsets = np.empty(n_cells + 1, dtype=np.int64)
     total = 0
     for c in range(n_cells):           # counts become each part's first slot in cell c
@@ -228,8 +240,7 @@ def _bin_solids(solid_boxes, lower, inv_cell, dims, n_parts):
             total += n
     offsets[n_cells] = total
     ids = np.empty(total, dtype=np.int64)
-    for part in prange(n_parts):
-        _bin_part_call(solid_boxes, lower, inv_cell, dims, part, n_parts, counts, ids)
+    _bin_parts(n_parts, solid_boxes, lower, inv_cell, dims, n_parts, counts, ids)
     return offsets, ids
 
 
@@ -261,6 +272,17 @@ def _cell_total(box, cell_offsets, lower, inv_cell, dims, lo, hi):
 
 
 @njit
+def _sort_front(out, n):
+    """Sort the first ``n`` entries of ``out`` in place (numpy's sort)."""
+    out[:n].sort()
+
+
+#: a candidate list longer than _INSERTION_SORT_MAX is rare (a beam element's box over many solid
+#: elements): numpy's sort (about 1 CPU s of a first compile) is compiled when a scene first has one
+_sort_front_call = unlinked(_sort_front, returns=types.none)
+
+
+@njit
 def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, lo, hi, out, seen, stamp):
     """Sorted unique solid elements overlapping ``box``, written to the front of ``out``.
 
@@ -284,7 +306,7 @@ def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, di
                         out[n] = s
                         n += 1
     if n > _INSERTION_SORT_MAX:
-        out[:n].sort()
+        _sort_front_call(out, n)
         return n
     for a in range(1, n):                    # insertion sort: a few candidates per box, no call
         s = out[a]
@@ -301,42 +323,59 @@ def _candidates_of(box, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, di
 _candidates_of_call = unlinked(_candidates_of)
 
 
-@njit_parallel
+@njit
 def _find_pairs(beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, workers):
     # one pass of overlap tests: each beam element gets room for every entry of the cells it
     # covers (a cheap bound), finds its sorted unique candidates in place, then the lists are packed
     n_beam = beam_boxes.shape[0]
     bound = np.zeros(n_beam + 1, dtype=np.int64)
     claims = new_claims(n_beam, workers)
-    for worker in prange(workers):
-        lo = np.empty(3, dtype=np.int64)
-        hi = np.empty(3, dtype=np.int64)
-        begin, stop = claim(claims, n_beam, worker)
-        while begin < stop:
-            _cell_totals_chunk_call(begin, stop, beam_boxes, cell_offsets, lower, inv_cell, dims, lo, hi, bound)
-            begin, stop = claim(claims, n_beam, worker)
+    _cell_totals_workers(workers, claims, beam_boxes, cell_offsets, lower, inv_cell, dims, bound)
     room = np.cumsum(bound)
     work = np.empty(room[-1], dtype=np.int64)
     counts = np.zeros(n_beam + 1, dtype=np.int64)
     claims = new_claims(n_beam, workers)
-    for worker in prange(workers):
-        lo = np.empty(3, dtype=np.int64)
-        hi = np.empty(3, dtype=np.int64)
-        seen = np.full(solid_boxes.shape[0], -1, dtype=np.int64)
-        begin, stop = claim(claims, n_beam, worker)
-        while begin < stop:
-            _candidates_chunk_call(begin, stop, beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims,
-                                   lo, hi, work, room, counts, seen)
-            begin, stop = claim(claims, n_beam, worker)
+    _candidates_workers(workers, claims, beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, work,
+                        room, counts)
     offsets = np.cumsum(counts)
     solids = np.empty(offsets[-1], dtype=np.int64)
     claims = new_claims(n_beam, workers)
-    for worker in prange(workers):
-        begin, stop = claim(claims, n_beam, worker)
-        while begin < stop:
-            _pack_chunk_call(begin, stop, counts, offsets, room, work, solids)
-            begin, stop = claim(claims, n_beam, worker)
+    _pack_workers(workers, claims, counts, offsets, room, work, solids)
     return offsets, solids
+
+
+@njit
+def _cell_totals_worker(worker, claims, beam_boxes, cell_offsets, lower, inv_cell, dims, bound):
+    n_beam = beam_boxes.shape[0]
+    lo = np.empty(3, dtype=np.int64)
+    hi = np.empty(3, dtype=np.int64)
+    begin, stop = claim(claims, n_beam, worker)
+    while begin < stop:
+        _cell_totals_chunk_call(begin, stop, beam_boxes, cell_offsets, lower, inv_cell, dims, lo, hi, bound)
+        begin, stop = claim(claims, n_beam, worker)
+
+
+@njit
+def _candidates_worker(worker, claims, beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, work,
+                       room, counts):
+    n_beam = beam_boxes.shape[0]
+    lo = np.empty(3, dtype=np.int64)
+    hi = np.empty(3, dtype=np.int64)
+    seen = np.full(solid_boxes.shape[0], -1, dtype=np.int64)
+    begin, stop = claim(claims, n_beam, worker)
+    while begin < stop:
+        _candidates_chunk_call(begin, stop, beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims,
+                               lo, hi, work, room, counts, seen)
+        begin, stop = claim(claims, n_beam, worker)
+
+
+@njit
+def _pack_worker(worker, claims, counts, offsets, room, work, solids):
+    n_beam = counts.shape[0] - 1
+    begin, stop = claim(claims, n_beam, worker)
+    while begin < stop:
+        _pack_chunk_call(begin, stop, counts, offsets, room, work, solids)
+        begin, stop = claim(claims, n_beam, worker)
 
 
 @njit
@@ -369,6 +408,9 @@ def _pack_chunk(begin, stop, counts, offsets, room, work, solids):
 _cell_totals_chunk_call = unlinked(_cell_totals_chunk)
 _candidates_chunk_call = unlinked(_candidates_chunk)
 _pack_chunk_call = unlinked(_pack_chunk)
+_cell_totals_workers = in_parallel(_cell_totals_worker)
+_candidates_workers = in_parallel(_candidates_worker)
+_pack_workers = in_parallel(_pack_worker)
 
 
 @njit
@@ -475,17 +517,21 @@ def hull_planes(code, X, C, pad, planes):
         planes[f, 0], planes[f, 1], planes[f, 2], planes[f, 3] = n0, n1, n2, top + pad
 
 
-@njit_parallel
+@njit
 def _solid_hulls(points, conn, codes, solid_origin, solid_h, margin, hull, workers):
+    claims = new_claims(conn.shape[0], workers)
+    _solid_hulls_workers(workers, claims, points, conn, codes, solid_origin, solid_h, margin, hull)
+
+
+@njit
+def _solid_hulls_worker(worker, claims, points, conn, codes, solid_origin, solid_h, margin, hull):
     n = conn.shape[0]
-    claims = new_claims(n, workers)
-    for worker in prange(workers):
-        X = np.empty((MAX_NODES, 3))
-        C = np.empty((MAX_CONTROL, 3))
+    X = np.empty((MAX_NODES, 3))
+    C = np.empty((MAX_CONTROL, 3))
+    begin, stop = claim(claims, n, worker)
+    while begin < stop:
+        _solid_hulls_chunk_call(begin, stop, points, conn, codes, solid_origin, solid_h, margin, hull, X, C)
         begin, stop = claim(claims, n, worker)
-        while begin < stop:
-            _solid_hulls_chunk_call(begin, stop, points, conn, codes, solid_origin, solid_h, margin, hull, X, C)
-            begin, stop = claim(claims, n, worker)
 
 
 @njit
@@ -516,6 +562,7 @@ def _solid_hulls_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, 
 
 
 _solid_hulls_chunk_call = unlinked(_solid_hulls_chunk)
+_solid_hulls_workers = in_parallel(_solid_hulls_worker)
 #: lazily through a symbol (once per element): a mesh of types without hull planes (hex8) never compiles it
 _hull_planes_call = unlinked(hull_planes, returns=types.none)
 
@@ -559,32 +606,42 @@ def _separated(hull, s, ctrl, n_ctrl, t0, t1, t2, pad):
     return False
 
 
-@njit_parallel
+@njit
 def _hull_pair_counts(pair_offsets, pair_solid, hull, solid_origin, beam_code, Q, lengths, beam_origin, beam_boxes,
                       margin, keep, counts, workers):
     n_beam = pair_offsets.shape[0] - 1
     claims = new_claims(n_beam, workers)
-    for worker in prange(workers):
-        ctrl = np.empty((beam_functions.MAX_FUNCTIONS, 3))
+    _hull_pair_counts_workers(workers, claims, pair_offsets, pair_solid, hull, solid_origin, beam_code, Q, lengths,
+                              beam_origin, beam_boxes, margin, keep, counts)
+
+
+@njit
+def _hull_pair_counts_worker(worker, claims, pair_offsets, pair_solid, hull, solid_origin, beam_code, Q, lengths,
+                             beam_origin, beam_boxes, margin, keep, counts):
+    n_beam = pair_offsets.shape[0] - 1
+    ctrl = np.empty((beam_functions.MAX_FUNCTIONS, 3))
+    begin, stop = claim(claims, n_beam, worker)
+    while begin < stop:
+        for e in range(begin, stop):
+            n_ctrl = beam_functions.control_points(beam_code, Q[e], lengths[e], ctrl)
+            size = 0.0
+            for i in range(3):
+                size += (beam_boxes[e, 1, i] - beam_boxes[e, 0, i]) ** 2
+            big = max(abs(beam_origin[e, 0]), abs(beam_origin[e, 1]), abs(beam_origin[e, 2]))
+            pad = margin * size ** 0.5 + _SHIFT_ROUND_OFF * big
+            n = 0
+            for p in range(pair_offsets[e], pair_offsets[e + 1]):
+                s = pair_solid[p]
+                keep[p] = not _separated(hull, s, ctrl, n_ctrl, beam_origin[e, 0] - solid_origin[s, 0],
+                                         beam_origin[e, 1] - solid_origin[s, 1],
+                                         beam_origin[e, 2] - solid_origin[s, 2], pad)
+                if keep[p]:
+                    n += 1
+            counts[e + 1] = n
         begin, stop = claim(claims, n_beam, worker)
-        while begin < stop:
-            for e in range(begin, stop):
-                n_ctrl = beam_functions.control_points(beam_code, Q[e], lengths[e], ctrl)
-                size = 0.0
-                for i in range(3):
-                    size += (beam_boxes[e, 1, i] - beam_boxes[e, 0, i]) ** 2
-                big = max(abs(beam_origin[e, 0]), abs(beam_origin[e, 1]), abs(beam_origin[e, 2]))
-                pad = margin * size ** 0.5 + _SHIFT_ROUND_OFF * big
-                n = 0
-                for p in range(pair_offsets[e], pair_offsets[e + 1]):
-                    s = pair_solid[p]
-                    keep[p] = not _separated(hull, s, ctrl, n_ctrl, beam_origin[e, 0] - solid_origin[s, 0],
-                                             beam_origin[e, 1] - solid_origin[s, 1],
-                                             beam_origin[e, 2] - solid_origin[s, 2], pad)
-                    if keep[p]:
-                        n += 1
-                counts[e + 1] = n
-            begin, stop = claim(claims, n_beam, worker)
+
+
+_hull_pair_counts_workers = in_parallel(_hull_pair_counts_worker)
 
 
 def hull_pairs(pair_offsets, pair_solid, hull, solid_origin, beam_code, Q, lengths, beam_origin, beam_boxes,

@@ -36,11 +36,11 @@ search points, or bisection of the owner along η), for the one fallback loop of
 :func:`mortar1d3d.integration.points.checked_segment_points`.
 """
 import numpy as np
-from numba import prange
 
 from .._borrowed import borrowed
-from .._config import MERGE_TOL, PARAMETER_TOL, SEGMENT_OWNER_TOL, TOUCH_TOL, njit, njit_parallel
+from .._config import MERGE_TOL, PARAMETER_TOL, SEGMENT_OWNER_TOL, TOUCH_TOL, njit
 from .._memory import carve
+from .._parallel import in_parallel
 from .._unlinked import unlinked
 from .._schedule import claim, new_claims, workers
 from ..elements.solid import dispatch as solid
@@ -447,38 +447,49 @@ def _contains(r0, r1, r2, e, p, pair_solid, beam_origin, solid_boxes, hull, code
     return found >= 0, False
 
 
-@njit_parallel
+@njit
 def _pair_crossings(pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear, errors, hull,
                     beam_code, Q, lengths, beam_origin, beam_boxes, straight, search_points, out_eta, out_face,
                     out_count, unsearched, overflow, workers):
     n_pairs = pair_beam.shape[0]
-    S = search_points
     claims = new_claims(n_pairs, workers)
-    for worker in prange(workers):
-        C = np.empty((solid.MAX_CONTROL, 3))
-        reach = np.empty(solid.MAX_FACES, dtype=np.bool_)
-        X, N, dN, H, dH, xi, trial = point_buffers()
-        a, stack = search_buffers()
-        z = np.empty(3)
-        start = np.empty(3)
-        eta_s = np.empty(S)
-        xi_s = np.empty((S, 3))
-        dxi_s = np.empty((S, 3))
-        ok = np.empty(S, dtype=np.bool_)
-        g = np.empty(S)
-        dg = np.empty(S)
-        rs = np.empty((S, 6))
-        zs = np.empty((S, 6))
-        live = np.empty((S, solid.MAX_FACES), dtype=np.bool_)
-        need = np.empty(S, dtype=np.bool_)
+    _pair_crossings_workers(workers, claims, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h,
+                            linear, errors, hull, beam_code, Q, lengths, beam_origin, beam_boxes, straight,
+                            search_points, out_eta, out_face, out_count, unsearched, overflow)
+
+
+@njit
+def _pair_crossings_worker(worker, claims, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h, linear,
+                           errors, hull, beam_code, Q, lengths, beam_origin, beam_boxes, straight, search_points, out_eta,
+                           out_face, out_count, unsearched, overflow):
+    n_pairs = pair_beam.shape[0]
+    S = search_points
+    C = np.empty((solid.MAX_CONTROL, 3))
+    reach = np.empty(solid.MAX_FACES, dtype=np.bool_)
+    X, N, dN, H, dH, xi, trial = point_buffers()
+    a, stack = search_buffers()
+    z = np.empty(3)
+    start = np.empty(3)
+    eta_s = np.empty(S)
+    xi_s = np.empty((S, 3))
+    dxi_s = np.empty((S, 3))
+    ok = np.empty(S, dtype=np.bool_)
+    g = np.empty(S)
+    dg = np.empty(S)
+    rs = np.empty((S, 6))
+    zs = np.empty((S, 6))
+    live = np.empty((S, solid.MAX_FACES), dtype=np.bool_)
+    need = np.empty(S, dtype=np.bool_)
+    begin, stop = claim(claims, n_pairs, worker)
+    while begin < stop:
+        _pair_crossings_chunk_call(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h,
+                                   linear, errors, hull, beam_code, Q, lengths, beam_origin, beam_boxes, straight,
+                                   out_eta, out_face, out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H, dH,
+                                   start, ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z, rs, zs, live, need)
         begin, stop = claim(claims, n_pairs, worker)
-        while begin < stop:
-            _pair_crossings_chunk_call(begin, stop, pair_beam, pair_solid, codes, conn, points, solid_origin, solid_h,
-                                       linear, errors, hull, beam_code, Q, lengths, beam_origin, beam_boxes, straight,
-                                       out_eta, out_face, out_count, unsearched, overflow, X, xi, S, C, reach, eta_s, H,
-                                       dH, start, ok, trial, N, dN, a, stack, xi_s, dxi_s, g, dg, z, rs, zs, live,
-                                       need)
-            begin, stop = claim(claims, n_pairs, worker)
+
+
+_pair_crossings_workers = in_parallel(_pair_crossings_worker)
 
 
 @njit
@@ -759,26 +770,38 @@ def _merge_distance(beam_code, Qe, length, eta, h, H, dH):
     return MERGE_TOL * h / max(norm3(d0, d1, d2), 1e-300)
 
 
-@njit_parallel
+@njit
 def _tile(pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes, conn, points, solid_origin,
           solid_h, solid_boxes, hull, linear, errors, beam_code, Q, lengths, beam_origin, seg_offsets, seg_solid,
           seg_start, seg_end, seg_count, workers):
     n_beam = pair_offsets.shape[0] - 1
     claims = new_claims(n_beam, workers)
-    for worker in prange(workers):
-        X, N, dN, H, dH, xi, trial = point_buffers()
-        a, stack = search_buffers()
-        cuts = np.empty(64)
-        reach = np.empty(64)
-        touch = np.empty(64, dtype=np.bool_)
-        owners = np.empty(64, dtype=np.int64)
+    _tile_workers(workers, claims, pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes,
+                  conn, points, solid_origin, solid_h, solid_boxes, hull, linear, errors, beam_code, Q, lengths,
+                  beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count)
+
+
+@njit
+def _tile_worker(worker, claims, pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes, conn,
+                 points, solid_origin, solid_h, solid_boxes, hull, linear, errors, beam_code, Q, lengths,
+                 beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count):
+    n_beam = pair_offsets.shape[0] - 1
+    X, N, dN, H, dH, xi, trial = point_buffers()
+    a, stack = search_buffers()
+    cuts = np.empty(64)
+    reach = np.empty(64)
+    touch = np.empty(64, dtype=np.bool_)
+    owners = np.empty(64, dtype=np.int64)
+    begin, stop = claim(claims, n_beam, worker)
+    while begin < stop:
+        _tile_chunk_call(begin, stop, pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes,
+                         conn, points, solid_origin, solid_h, solid_boxes, hull, linear, errors, beam_code, Q,
+                         lengths, beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count, cuts, reach, H, dH,
+                         touch, owners, X, xi, trial, N, dN, a, stack)
         begin, stop = claim(claims, n_beam, worker)
-        while begin < stop:
-            _tile_chunk_call(begin, stop, pair_offsets, pair_solid, crossing_eta, crossing_face, crossing_count, codes,
-                             conn, points, solid_origin, solid_h, solid_boxes, hull, linear, errors, beam_code, Q,
-                             lengths, beam_origin, seg_offsets, seg_solid, seg_start, seg_end, seg_count, cuts, reach,
-                             H, dH, touch, owners, X, xi, trial, N, dN, a, stack)
-            begin, stop = claim(claims, n_beam, worker)
+
+
+_tile_workers = in_parallel(_tile_worker)
 
 
 @njit
@@ -931,7 +954,7 @@ _tile_chunk_call = unlinked(_tile_chunk)
 _GAP_PROBES = 7
 
 
-@njit_parallel
+@njit
 def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets, pair_solid, codes, conn,
                   points, solid_origin, solid_h, solid_boxes, hull, linear, errors, beam_code, Q, lengths, beam_origin,
                   certain, bad, workers):
@@ -949,18 +972,30 @@ def _check_tiling(seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_of
     contains all of it.
     """
     n_beam = pair_offsets.shape[0] - 1
-    loose = 1e3 * PARAMETER_TOL
     claims = new_claims(n_beam, workers)
-    for worker in prange(workers):
-        X, N, dN, H, dH, xi, trial = point_buffers()
-        a_buf, stack = search_buffers()
+    _check_tiling_workers(workers, claims, seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets,
+                          pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear,
+                          errors, beam_code, Q, lengths, beam_origin, certain, bad)
+
+
+@njit
+def _check_tiling_worker(worker, claims, seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets,
+                         pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear,
+                         errors, beam_code, Q, lengths, beam_origin, certain, bad):
+    n_beam = pair_offsets.shape[0] - 1
+    loose = 1e3 * PARAMETER_TOL
+    X, N, dN, H, dH, xi, trial = point_buffers()
+    a_buf, stack = search_buffers()
+    begin, stop = claim(claims, n_beam, worker)
+    while begin < stop:
+        _check_tiling_chunk_call(begin, stop, seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets,
+                                 pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear,
+                                 errors, beam_code, Q, lengths, beam_origin, certain, bad, H, dH, loose, X, xi, trial,
+                                 N, dN, a_buf, stack)
         begin, stop = claim(claims, n_beam, worker)
-        while begin < stop:
-            _check_tiling_chunk_call(begin, stop, seg_offsets, seg_solid, seg_start, seg_end, seg_count, pair_offsets,
-                                     pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear,
-                                     errors, beam_code, Q, lengths, beam_origin, certain, bad, H, dH, loose, X, xi,
-                                     trial, N, dN, a_buf, stack)
-            begin, stop = claim(claims, n_beam, worker)
+
+
+_check_tiling_workers = in_parallel(_check_tiling_worker)
 
 
 @njit
@@ -1043,7 +1078,7 @@ def _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_
 _SHARP = TOUCH_TOL
 
 
-@njit_parallel
+@njit
 def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h, solid_boxes, hull, linear,
                     beam_code, Q, lengths, beam_origin, n_samples, out_eta, out_count, workers):
     """Cuts of each beam element where the owner (lowest-index element containing r(η)) changes.
@@ -1055,46 +1090,58 @@ def _bisection_cuts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
     and end in the same owner are not seen.
     """
     n_beam = pair_offsets.shape[0] - 1
-    cap = out_eta.shape[1]
     claims = new_claims(n_beam, workers)
-    for worker in prange(workers):
-        X, N, dN, H, dH, xi, trial = point_buffers()
-        a, stack = search_buffers()
+    _bisection_cuts_workers(workers, claims, pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h,
+                            solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, n_samples, out_eta,
+                            out_count)
+
+
+@njit
+def _bisection_cuts_worker(worker, claims, pair_offsets, pair_solid, codes, conn, points, solid_origin, solid_h,
+                           solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, n_samples, out_eta,
+                           out_count):
+    n_beam = pair_offsets.shape[0] - 1
+    cap = out_eta.shape[1]
+    X, N, dN, H, dH, xi, trial = point_buffers()
+    a, stack = search_buffers()
+    begin, stop = claim(claims, n_beam, worker)
+    while begin < stop:
+        for e in range(begin, stop):
+            p0 = pair_offsets[e]
+            p1 = pair_offsets[e + 1]
+            count = 0
+            previous = -2
+            eta_previous = -1.0
+            for k in range(n_samples):
+                eta = -1.0 + 2.0 * k / (n_samples - 1)
+                owner = _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
+                               hull, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH, a,
+                               stack)
+                lo = eta_previous
+                current = previous
+                while k > 0 and current != owner and count < cap:
+                    hi = eta
+                    while hi - lo > 1e-13:
+                        mid = 0.5 * (lo + hi)
+                        if _owner(mid, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
+                                  solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N,
+                                  dN, H, dH, a, stack) == current:
+                            lo = mid
+                        else:
+                            hi = mid
+                    out_eta[e, count] = 0.5 * (lo + hi)
+                    count += 1
+                    current = _owner(hi, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
+                                     solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, X, xi, trial,
+                                     N, dN, H, dH, a, stack)
+                    lo = hi
+                previous = owner
+                eta_previous = eta
+            out_count[e] = count
         begin, stop = claim(claims, n_beam, worker)
-        while begin < stop:
-            for e in range(begin, stop):
-                p0 = pair_offsets[e]
-                p1 = pair_offsets[e + 1]
-                count = 0
-                previous = -2
-                eta_previous = -1.0
-                for k in range(n_samples):
-                    eta = -1.0 + 2.0 * k / (n_samples - 1)
-                    owner = _owner(eta, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h, solid_boxes,
-                                   hull, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N, dN, H, dH, a,
-                                   stack)
-                    lo = eta_previous
-                    current = previous
-                    while k > 0 and current != owner and count < cap:
-                        hi = eta
-                        while hi - lo > 1e-13:
-                            mid = 0.5 * (lo + hi)
-                            if _owner(mid, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
-                                      solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, X, xi, trial, N,
-                                      dN, H, dH, a, stack) == current:
-                                lo = mid
-                            else:
-                                hi = mid
-                        out_eta[e, count] = 0.5 * (lo + hi)
-                        count += 1
-                        current = _owner(hi, e, pair_solid, p0, p1, codes, conn, points, solid_origin, solid_h,
-                                         solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, X, xi, trial,
-                                         N, dN, H, dH, a, stack)
-                        lo = hi
-                    previous = owner
-                    eta_previous = eta
-                out_count[e] = count
-            begin, stop = claim(claims, n_beam, worker)
+
+
+_bisection_cuts_workers = in_parallel(_bisection_cuts_worker)
 
 
 #: search points of the first retry of a beam element whose pieces do not tile

@@ -16,11 +16,12 @@ the projection. Only the set of points differs (docs/conventions.md §1):
   the integrand is a polynomial (:func:`exact_rule_counts`).
 """
 import numpy as np
-from numba import prange, types
+from numba import types
 
 from .._borrowed import borrowed
-from .._config import PARAMETER_TOL, njit, njit_parallel
+from .._config import PARAMETER_TOL, njit
 from .._memory import carve
+from .._parallel import in_parallel
 from .._unlinked import unlinked
 from .._schedule import claim, new_claims, workers
 from ..elements import beam as beam_elements
@@ -30,7 +31,7 @@ from ..elements.beam import CODES as BEAM_CODES
 from ..geometry.beam import beam_point_of
 from ..geometry.linalg import norm3
 from ..geometry.projection import (ANY_CANDIDATE, CONVERGED, INSIDE, NOT_CONVERGED, OUTSIDE, affine_inverse,
-                                   first_containing, is_affine, linear_parameters, load_element, locate_point,
+                                   first_containing_inline, is_affine, linear_parameters, load_element, locate_point,
                                    point_buffers, polish_residual, project_point, search_buffers)
 from ..geometry.segmentation import resegment, segment
 from ..quadrature import gauss_legendre, gauss_tables
@@ -39,23 +40,31 @@ from ..quadrature import gauss_legendre, gauss_tables
 POINT_INSIDE, POINT_OUTSIDE, POINT_NOT_CONVERGED, POINT_UNCOUPLED = INSIDE, OUTSIDE, NOT_CONVERGED, 3
 
 
-@njit_parallel
+@njit
 def _segment_points(seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, codes, conn, points,
                     solid_origin, solid_h, linear, beam_code, Q, lengths, beam_origin,
                     eta, xi, weight, position, status, workers):
     # segment g gets the n-point rule (n = seg_points[g+1] - seg_points[g]) stored in row n of gx, gw
+    claims = new_claims(seg_beam.shape[0], workers)
+    _segment_points_workers(workers, claims, seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, codes, conn,
+                            points, solid_origin, solid_h, linear, beam_code, Q, lengths, beam_origin, eta, xi, weight,
+                            position, status)
+
+
+@njit
+def _segment_points_worker(worker, claims, seg_beam, seg_solid, seg_start, seg_end, seg_points, gx, gw, codes, conn,
+                           points, solid_origin, solid_h, linear, beam_code, Q, lengths, beam_origin, eta, xi, weight,
+                           position, status):
     n_seg = seg_beam.shape[0]
-    claims = new_claims(n_seg, workers)
-    for worker in prange(workers):
-        X, N, dN, H, dH, x, trial = point_buffers()
-        a, stack = search_buffers()
+    X, N, dN, H, dH, x, trial = point_buffers()
+    a, stack = search_buffers()
+    begin, stop = claim(claims, n_seg, worker)
+    while begin < stop:
+        _segment_points_chunk_call(beam_code, begin, stop, seg_beam, seg_solid, seg_start, seg_end, seg_points,
+                                   gx, gw, codes, conn, points, solid_origin, solid_h, linear, Q, lengths,
+                                   beam_origin, eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a,
+                                   stack)
         begin, stop = claim(claims, n_seg, worker)
-        while begin < stop:
-            _segment_points_chunk_call(beam_code, begin, stop, seg_beam, seg_solid, seg_start, seg_end, seg_points,
-                                       gx, gw, codes, conn, points, solid_origin, solid_h, linear, Q, lengths,
-                                       beam_origin, eta, xi, weight, position, status, X, N, dN, H, dH, x, trial, a,
-                                       stack)
-            begin, stop = claim(claims, n_seg, worker)
 
 
 @njit
@@ -120,24 +129,34 @@ def _segment_points_chunk(kb, begin, stop, seg_beam, seg_solid, seg_start, seg_e
 #: called once per chunk through a symbol, not compiled into the kernel again, and compiled per beam type
 #: when a scene first uses it (see mortar1d3d._unlinked)
 _segment_points_chunk_call = unlinked(_segment_points_chunk, returns=types.none, cases=BEAM_CODES)
+#: the kernels' workers run on the package's one parallel loop (see mortar1d3d._parallel)
+_segment_points_workers = in_parallel(_segment_points_worker)
 
 
-@njit_parallel
+@njit
 def _element_points(pair_offsets, pair_solid, gx, gw, codes, conn, points, solid_origin, solid_h,
                     solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin,
                     beam, owner, eta, xi, weight, position, status, workers):
+    claims = new_claims(pair_offsets.shape[0] - 1, workers)
+    _element_points_workers(workers, claims, pair_offsets, pair_solid, gx, gw, codes, conn, points, solid_origin,
+                            solid_h, solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, beam, owner, eta,
+                            xi, weight, position, status)
+
+
+@njit
+def _element_points_worker(worker, claims, pair_offsets, pair_solid, gx, gw, codes, conn, points, solid_origin,
+                           solid_h, solid_boxes, hull, linear, beam_code, Q, lengths, beam_origin, beam, owner, eta, xi,
+                           weight, position, status):
     n_beam = pair_offsets.shape[0] - 1
-    claims = new_claims(n_beam, workers)
-    for worker in prange(workers):
-        X, N, dN, H, dH, x, trial = point_buffers()
-        a, stack = search_buffers()
+    X, N, dN, H, dH, x, trial = point_buffers()
+    a, stack = search_buffers()
+    begin, stop = claim(claims, n_beam, worker)
+    while begin < stop:
+        _element_points_chunk_call(beam_code, begin, stop, pair_offsets, pair_solid, gx, gw, codes, conn,
+                                   points, solid_origin, solid_h, solid_boxes, hull, linear, Q, lengths,
+                                   beam_origin, beam, owner, eta, xi, weight, position, status, X, N, dN, H, dH,
+                                   x, trial, a, stack)
         begin, stop = claim(claims, n_beam, worker)
-        while begin < stop:
-            _element_points_chunk_call(beam_code, begin, stop, pair_offsets, pair_solid, gx, gw, codes, conn,
-                                       points, solid_origin, solid_h, solid_boxes, hull, linear, Q, lengths,
-                                       beam_origin, beam, owner, eta, xi, weight, position, status, X, N, dN, H, dH,
-                                       x, trial, a, stack)
-            begin, stop = claim(claims, n_beam, worker)
 
 
 @njit
@@ -167,9 +186,9 @@ def _element_points_chunk(kb, begin, stop, pair_offsets, pair_solid, gx, gw, cod
             owner[k] = -1
             status[k] = POINT_UNCOUPLED
             # the lowest-index candidate element containing the point owns it
-            s = first_containing(r0, r1, r2, e, pair_solid, pair_offsets[e], pair_offsets[e + 1], beam_origin,
-                                 solid_boxes, hull, codes, conn, points, solid_origin, solid_h, linear, tol,
-                                 X, x, trial, N, dN, a, stack, ANY_CANDIDATE)
+            s = first_containing_inline(r0, r1, r2, e, pair_solid, pair_offsets[e], pair_offsets[e + 1],
+                                        beam_origin, solid_boxes, hull, codes, conn, points, solid_origin, solid_h,
+                                        linear, tol, X, x, trial, N, dN, a, stack, ANY_CANDIDATE)
             if s >= 0:
                 if not is_affine(linear, s):
                     # X still holds the owner's nodes (it was the last element tested) and
@@ -184,6 +203,7 @@ def _element_points_chunk(kb, begin, stop, pair_offsets, pair_solid, gx, gw, cod
 
 #: called once per chunk through a symbol, compiled per beam type when first used, as the one above
 _element_points_chunk_call = unlinked(_element_points_chunk, returns=types.none, cases=BEAM_CODES)
+_element_points_workers = in_parallel(_element_points_worker)
 
 
 def segment_points(ctx, seg_beam, seg_solid, seg_start, seg_end, n_gauss):
@@ -322,28 +342,38 @@ def exact_gauss_count(beam_code, solid_code, n_phi):
     return degree // 2 + 1
 
 
-@njit_parallel
+@njit
 def _auto_gauss_counts(seg_beam, seg_solid, codes, conn, points, solid_origin, solid_h, beam_affine, beam_code,
                        n_phi, n_gauss, counts, exact, workers):
     """Gauss points per segment: the minimal exact rule where the integrand is a polynomial, else n_gauss."""
     n_seg = seg_beam.shape[0]
     claims = new_claims(n_seg, workers)
-    for worker in prange(workers):
-        X = np.empty((solid.MAX_NODES, 4))
-        Ainv = np.empty((3, 3))
+    _auto_gauss_counts_workers(workers, claims, seg_beam, seg_solid, codes, conn, points, solid_origin, solid_h,
+                               beam_affine, beam_code, n_phi, n_gauss, counts, exact)
+
+
+@njit
+def _auto_gauss_counts_worker(worker, claims, seg_beam, seg_solid, codes, conn, points, solid_origin, solid_h,
+                              beam_affine, beam_code, n_phi, n_gauss, counts, exact):
+    n_seg = seg_beam.shape[0]
+    X = np.empty((solid.MAX_NODES, 4))
+    Ainv = np.empty((3, 3))
+    begin, stop = claim(claims, n_seg, worker)
+    while begin < stop:
+        for g in range(begin, stop):
+            s = seg_solid[g]
+            code = codes[s]
+            counts[g] = n_gauss
+            exact[g] = False
+            if beam_affine[seg_beam[g]]:
+                load_element(points, conn, s, code, solid_origin, X)
+                if affine_inverse(code, X, solid_h[s], AFFINE_TOL, Ainv):
+                    counts[g] = exact_gauss_count(beam_code, code, n_phi)
+                    exact[g] = True
         begin, stop = claim(claims, n_seg, worker)
-        while begin < stop:
-            for g in range(begin, stop):
-                s = seg_solid[g]
-                code = codes[s]
-                counts[g] = n_gauss
-                exact[g] = False
-                if beam_affine[seg_beam[g]]:
-                    load_element(points, conn, s, code, solid_origin, X)
-                    if affine_inverse(code, X, solid_h[s], AFFINE_TOL, Ainv):
-                        counts[g] = exact_gauss_count(beam_code, code, n_phi)
-                        exact[g] = True
-            begin, stop = claim(claims, n_seg, worker)
+
+
+_auto_gauss_counts_workers = in_parallel(_auto_gauss_counts_worker)
 
 
 def exact_rule_counts(ctx, seg_beam, seg_solid, beam_affine, n_phi, n_gauss):

@@ -9,16 +9,17 @@ and every scalar entry stands for a 3×3 identity block.
 """
 import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
+from functools import partial
 
 import numpy as np
-from numba import prange
 
 from .._borrowed import borrowed
-from .._config import announce_compilation, njit, njit_parallel
+from .._config import CHUNK, announce_compilation, njit
 from .._memory import carve
+from .._parallel import in_parallel
 from .._unlinked import unlinked
-from .._schedule import claim, new_claims, workers
+from .._schedule import claim, n_chunks, new_claims, workers
 from ..elements.multiplier import multiplier as multiplier_type
 from ..elements.multiplier import shape as lm_shape
 from ..elements.beam import MAX_FUNCTIONS
@@ -66,7 +67,10 @@ class MortarOperators:
         Total reference length of the beams.
     constraint_residual : float
         ‖D q_B − M X_S‖ / ‖D q_B‖ at the reference positions: round-off for any correct
-        integration, since both sides integrate Φ_j times the same point.
+        integration, since both sides integrate Φ_j times the same point. Computed on first
+        access (its kernel is compiled then, not in every first run; an assembly does not pay
+        for the pass over D and M unless the certificate is read); the constructor takes the
+        value or a function of no arguments returning it.
     diagnostics : dict
         Counts: candidate pairs, face crossings, points not converged / outside their element;
         segment-based also ``segmentation_fallbacks`` (beam elements whose pieces failed the
@@ -88,12 +92,13 @@ class MortarOperators:
     lm: str
     embedded_length: float
     beam_length: float
-    constraint_residual: float
+    constraint_residual: InitVar[object]
     diagnostics: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
 
-    def __post_init__(self):
+    def __post_init__(self, constraint_residual):
         self._points = None
+        self._constraint_residual = constraint_residual
 
     @property
     def points(self):
@@ -103,6 +108,11 @@ class MortarOperators:
                 table[name] = values
             self._points = table
         return self._points
+
+    def _residual(self):
+        if callable(self._constraint_residual):
+            self._constraint_residual = float(self._constraint_residual())
+        return self._constraint_residual
 
     @property
     def n_integration_points(self):
@@ -121,26 +131,47 @@ class MortarOperators:
                 f"residual {self.constraint_residual:.2e})")
 
 
-@njit_parallel
+def _constraint_residual(D, M, positions, tangents, points):
+    """``MortarOperators.constraint_residual`` of copies of the meshes' positions taken at assembly (a mesh
+    moved afterwards does not change it): q_B in the layout of ``BeamMesh.centreline_dofs`` ([r_0, t_0, r_1,
+    ...] with tangents), the same values, built without that method's parallel kernel, which a first run
+    would otherwise compile for this diagnostic alone."""
+    q = positions.ravel() if tangents is None else np.concatenate((positions, tangents), axis=1).ravel()
+    return relative_residual(D, q, M, points.ravel())
+
+
+#: computed on first access (see the class's docstring); the dataclass's InitVar of the same name is the
+#: constructor's argument, a value or a function returning it
+MortarOperators.constraint_residual = property(MortarOperators._residual,
+                                               doc="‖D q_B − M X_S‖ / ‖D q_B‖, computed on first access")
+
+
+@njit
 def _group_operators(group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
                      codes, conn, points, m_offsets, D_local, M_local, kappa_local, workers):
     """Local D, M and κ of every group of points (``conn``, ``points``: a rational element's weights)."""
+    claims = new_claims(group_start.shape[0] - 1, workers)
+    _group_operators_workers(workers, claims, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
+                             codes, conn, points, m_offsets, D_local, M_local, kappa_local)
+
+
+@njit
+def _group_operators_worker(worker, claims, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
+                            codes, conn, points, m_offsets, D_local, M_local, kappa_local):
     n_groups = group_start.shape[0] - 1
     nH = beam_n_functions(beam_code)
-    claims = new_claims(n_groups, workers)
-    for worker in prange(workers):
-        Phi = np.empty(4)
-        H = np.empty(MAX_FUNCTIONS)
-        N = np.empty(solid_types.MAX_NODES)
-        Dg = np.empty((4, MAX_FUNCTIONS))
-        Mg = np.empty((4, solid_types.MAX_NODES))
-        kg = np.empty(4)
+    Phi = np.empty(4)
+    H = np.empty(MAX_FUNCTIONS)
+    N = np.empty(solid_types.MAX_NODES)
+    Dg = np.empty((4, MAX_FUNCTIONS))
+    Mg = np.empty((4, solid_types.MAX_NODES))
+    kg = np.empty(4)
+    begin, stop = claim(claims, n_groups, worker)
+    while begin < stop:
+        _group_operators_chunk_call(begin, stop, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths,
+                                    n_phi, codes, conn, points, m_offsets, D_local, M_local, kappa_local, Dg, Mg,
+                                    kg, Phi, H, N, nH)
         begin, stop = claim(claims, n_groups, worker)
-        while begin < stop:
-            _group_operators_chunk_call(begin, stop, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths,
-                                        n_phi, codes, conn, points, m_offsets, D_local, M_local, kappa_local, Dg, Mg,
-                                        kg, Phi, H, N, nH)
-            begin, stop = claim(claims, n_groups, worker)
 
 
 @njit
@@ -186,6 +217,8 @@ def _group_operators_chunk(begin, stop, group_start, p_beam, p_solid, eta, xi, w
 
 #: the loop body of :func:`_group_operators` (per claimed chunk), optimised once: called through a symbol
 _group_operators_chunk_call = unlinked(_group_operators_chunk)
+#: the kernel's workers run on the package's one parallel loop (see mortar1d3d._parallel)
+_group_operators_workers = in_parallel(_group_operators_worker)
 
 
 @njit
@@ -232,9 +265,15 @@ def _groups(p_beam, p_solid, codes, n_phi, n_beam):
     return group_start, m_offsets, beam_groups
 
 
-@njit_parallel
+@njit
 def _kappa(src_offsets, src, n_phi, beam_groups, kappa_local, kappa):
-    for r in prange(src_offsets.shape[0] - 1):
+    _kappa_parts(n_chunks(src_offsets.shape[0] - 1, CHUNK), src_offsets, src, n_phi, beam_groups, kappa_local, kappa)
+
+
+@njit
+def _kappa_part(c, src_offsets, src, n_phi, beam_groups, kappa_local, kappa):
+    # the rows of chunk c (a parallel loop over the rows in chunks: one call per chunk)
+    for r in range(c * CHUNK, min(src_offsets.shape[0] - 1, (c + 1) * CHUNK)):
         v = 0.0
         for t in range(src_offsets[r], src_offsets[r + 1]):
             e = src[t] // n_phi
@@ -242,6 +281,9 @@ def _kappa(src_offsets, src, n_phi, beam_groups, kappa_local, kappa):
             for g in range(beam_groups[e], beam_groups[e + 1]):
                 v += kappa_local[g, j]
         kappa[r] = v
+
+
+_kappa_parts = in_parallel(_kappa_part)
 
 
 def lm_numbering(beams, lm_type):
@@ -410,7 +452,8 @@ def assemble_mortar(beams, solid, integration="segment", n_gauss=6, lm="line2", 
         segments["eta_end"] = eta[group_start[1:] - 1]
     point_fields = {"beam_element": p_beam, "solid_element": p_solid, "eta": eta, "xi": xi, "weight": weight,
                     "position": position, "status": status}
-    residual = relative_residual(D, beams.centreline_dofs(), M, solid.points.ravel())
+    residual = partial(_constraint_residual, D, M, beams.positions.copy(),
+                       None if beams.tangents is None else beams.tangents.copy(), solid.points.copy())
     timings["total"] = time.perf_counter() - t0
     return MortarOperators(D=D, M=M, kappa=kappa, segments=segments, point_fields=point_fields, n_lm=n_lm,
                            integration=integration, n_gauss=n_gauss, lm=lm_type.name,

@@ -9,9 +9,9 @@ copy of the gathered entries: less memory to fault in).
 """
 import numpy as np
 import scipy.sparse as sp
-from numba import prange
 
-from .._config import CHUNK, njit, njit_parallel
+from .._config import CHUNK, njit
+from .._parallel import in_parallel
 from .._memory import carve
 from .._schedule import claim, n_chunks, new_claims, workers
 from .._unlinked import unlinked
@@ -41,35 +41,45 @@ def row_sources(lm_index, n_phi, n_rows):
     return offsets, src
 
 
-@njit_parallel
+@njit
 def _count_unique(src_offsets, src, n_phi, beam_groups, width, col_table, col_row, n_cols, unique, workers):
     """Distinct columns (``unique``) of every row.
 
     Each worker keeps a marker array over the columns (the last row that saw a column):
     counting costs one visit per entry, no sort, in any order of the rows.
     """
+    claims = new_claims(src_offsets.shape[0] - 1, workers)
+    _count_unique_workers(workers, claims, src_offsets, src, n_phi, beam_groups, width, col_table, col_row, n_cols,
+                          unique)
+
+
+@njit
+def _count_unique_worker(worker, claims, src_offsets, src, n_phi, beam_groups, width, col_table, col_row, n_cols,
+                         unique):
     n_rows = src_offsets.shape[0] - 1
-    claims = new_claims(n_rows, workers)
-    for worker in prange(workers):
-        marker = np.full(n_cols, -1, dtype=np.int64)
+    marker = np.full(n_cols, -1, dtype=np.int64)
+    begin, stop = claim(claims, n_rows, worker)
+    while begin < stop:
+        for r in range(begin, stop):
+            u = 0
+            for t in range(src_offsets[r], src_offsets[r + 1]):
+                e = src[t] // n_phi
+                for g in range(beam_groups[e], beam_groups[e + 1]):
+                    row = col_row[g]
+                    for q in range(width[g]):
+                        c = col_table[row, q]
+                        if marker[c] != r:
+                            marker[c] = r
+                            u += 1
+            unique[r] = u
         begin, stop = claim(claims, n_rows, worker)
-        while begin < stop:
-            for r in range(begin, stop):
-                u = 0
-                for t in range(src_offsets[r], src_offsets[r + 1]):
-                    e = src[t] // n_phi
-                    for g in range(beam_groups[e], beam_groups[e + 1]):
-                        row = col_row[g]
-                        for q in range(width[g]):
-                            c = col_table[row, q]
-                            if marker[c] != r:
-                                marker[c] = r
-                                u += 1
-                unique[r] = u
-            begin, stop = claim(claims, n_rows, worker)
 
 
-@njit_parallel
+#: the kernels' workers run on the package's one parallel loop (see mortar1d3d._parallel)
+_count_unique_workers = in_parallel(_count_unique_worker)
+
+
+@njit
 def _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row, vals, first,
                max_unique, n_cols, block, indices, data, workers):
     """Gather and sum each row's entries per column, sort the columns, and write the row's ``block``
@@ -81,18 +91,24 @@ def _fill_rows(src_offsets, src, n_phi, beam_groups, entry_start, width, col_tab
     so only the distinct columns are sorted: a row of a 27-node element type gathers several times
     as many entries as it has columns (its beam elements' groups share nodes).
     """
+    claims = new_claims(src_offsets.shape[0] - 1, workers)
+    _fill_rows_workers(workers, claims, src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row,
+                       vals, first, max_unique, n_cols, block, indices, data)
+
+
+@njit
+def _fill_rows_worker(worker, claims, src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row,
+                      vals, first, max_unique, n_cols, block, indices, data):
     n_rows = src_offsets.shape[0] - 1
-    claims = new_claims(n_rows, workers)
-    for worker in prange(workers):
-        cols = np.empty(max_unique, dtype=np.int64)
-        vs = np.empty(max_unique)
-        slot = np.full(n_cols, -1, dtype=np.int64)
-        rank = np.empty(max_unique, dtype=np.int64)
+    cols = np.empty(max_unique, dtype=np.int64)
+    vs = np.empty(max_unique)
+    slot = np.full(n_cols, -1, dtype=np.int64)
+    rank = np.empty(max_unique, dtype=np.int64)
+    begin, stop = claim(claims, n_rows, worker)
+    while begin < stop:
+        _fill_rows_chunk_call(begin, stop, src_offsets, src, n_phi, beam_groups, entry_start, width, col_table,
+                              col_row, vals, first, block, indices, data, cols, vs, slot, rank)
         begin, stop = claim(claims, n_rows, worker)
-        while begin < stop:
-            _fill_rows_chunk_call(begin, stop, src_offsets, src, n_phi, beam_groups, entry_start, width, col_table,
-                                  col_row, vals, first, block, indices, data, cols, vs, slot, rank)
-            begin, stop = claim(claims, n_rows, worker)
 
 
 @njit
@@ -151,15 +167,25 @@ def _fill_rows_chunk(begin, stop, src_offsets, src, n_phi, beam_groups, entry_st
 
 #: the loop body of :func:`_fill_rows` (per claimed chunk), optimised once: called through a symbol
 _fill_rows_chunk_call = unlinked(_fill_rows_chunk)
+_fill_rows_workers = in_parallel(_fill_rows_worker)
 
 
-@njit_parallel
+@njit
 def _block_indptr(first, unique, block, indptr):
     """Row pointers of the expanded matrix: block row r has ``block`` rows of ``unique[r]`` entries."""
     indptr[0] = 0
-    for r in prange(unique.shape[0]):
+    _block_indptr_parts(n_chunks(unique.shape[0], CHUNK), first, unique, block, indptr)
+
+
+@njit
+def _block_indptr_part(c, first, unique, block, indptr):
+    # the block rows of chunk c (a parallel loop over the rows in chunks: one call per chunk)
+    for r in range(c * CHUNK, min(unique.shape[0], (c + 1) * CHUNK)):
         for i in range(block):
             indptr[block * r + i + 1] = block * first[r] + (i + 1) * unique[r]
+
+
+_block_indptr_parts = in_parallel(_block_indptr_part)
 
 
 def gathered_block_csr(src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row, vals, shape,
@@ -201,29 +227,36 @@ def _attach_csr(data, indices, indptr, shape):
     return matrix
 
 
-@njit_parallel
+@njit
 def _residual_squares(d_ptr, d_idx, d_val, q, m_ptr, m_idx, m_val, x, partial, workers):
     # per chunk of rows: Σ (D q - M x)_r² and Σ (D q)_r², rows in order;
     # chunks summed in order by the caller, so the result does not depend on the number of threads
+    claims = new_claims(d_ptr.shape[0] - 1, workers)
+    _residual_squares_workers(workers, claims, d_ptr, d_idx, d_val, q, m_ptr, m_idx, m_val, x, partial)
+
+
+@njit
+def _residual_squares_worker(worker, claims, d_ptr, d_idx, d_val, q, m_ptr, m_idx, m_val, x, partial):
     n_rows = d_ptr.shape[0] - 1
-    claims = new_claims(n_rows, workers)
-    for worker in prange(workers):
+    begin, stop = claim(claims, n_rows, worker)
+    while begin < stop:
+        diff = 0.0
+        ref = 0.0
+        for r in range(begin, stop):
+            a = 0.0
+            for t in range(d_ptr[r], d_ptr[r + 1]):
+                a += d_val[t] * q[d_idx[t]]
+            b = 0.0
+            for t in range(m_ptr[r], m_ptr[r + 1]):
+                b += m_val[t] * x[m_idx[t]]
+            diff += (a - b) ** 2
+            ref += a * a
+        partial[begin // CHUNK, 0] = diff
+        partial[begin // CHUNK, 1] = ref
         begin, stop = claim(claims, n_rows, worker)
-        while begin < stop:
-            diff = 0.0
-            ref = 0.0
-            for r in range(begin, stop):
-                a = 0.0
-                for t in range(d_ptr[r], d_ptr[r + 1]):
-                    a += d_val[t] * q[d_idx[t]]
-                b = 0.0
-                for t in range(m_ptr[r], m_ptr[r + 1]):
-                    b += m_val[t] * x[m_idx[t]]
-                diff += (a - b) ** 2
-                ref += a * a
-            partial[begin // CHUNK, 0] = diff
-            partial[begin // CHUNK, 1] = ref
-            begin, stop = claim(claims, n_rows, worker)
+
+
+_residual_squares_workers = in_parallel(_residual_squares_worker)
 
 
 def relative_residual(D, q, M, x):

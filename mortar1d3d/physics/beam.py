@@ -35,9 +35,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from numba import prange
 
-from .._config import CHUNK, njit, njit_inline, njit_parallel
+from .._config import CHUNK, njit, njit_inline
+from .._parallel import in_parallel
 from ..elements.beam import evaluate
 from ..quadrature import gauss_legendre
 from ..mesh import BeamMesh
@@ -330,7 +330,7 @@ def _element_range(first, last, dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want
                     ke[e, s, r] = ke[e, r, s]
 
 
-@njit_parallel
+@njit
 def _element_chunks(dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want, energy, fe, ke):
     """:func:`_element_range` over chunks of :data:`CHUNK` elements in parallel.
 
@@ -338,9 +338,17 @@ def _element_chunks(dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want, energy, fe
     outputs are bit-identical for any number of threads.
     """
     n_el = dH.shape[0]
-    for c in prange((n_el + CHUNK - 1) // CHUNK):
-        _element_range(c * CHUNK, min(n_el, (c + 1) * CHUNK), dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want,
-                       energy, fe, ke)
+    _element_chunks_workers((n_el + CHUNK - 1) // CHUNK, dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want, energy,
+                            fe, ke, n_el)
+
+
+@njit
+def _element_chunks_worker(c, dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want, energy, fe, ke, n_el):
+    _element_range(c * CHUNK, min(n_el, (c + 1) * CHUNK), dH, ddH, A0, B0, J, kappa0, EA_w, EI_w, Qd, want,
+                   energy, fe, ke)
+
+
+_element_chunks_workers = in_parallel(_element_chunks_worker)
 
 
 # -- reference geometry (numpy) --------------------------------------------------------------------

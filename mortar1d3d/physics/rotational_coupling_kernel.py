@@ -59,9 +59,9 @@ truncation ``O(h²)`` and round-off ``eps/h`` are both about 1e-10 relative with
 :data:`FD_STEP`.
 """
 import numpy as np
-from numba import prange
 
-from .._config import njit, njit_parallel
+from .._config import njit
+from .._parallel import in_parallel
 from ..elements.solid import dispatch as solid_types
 from .rotations import exp, log
 from .simo_reissner_kernel import _matmul, element_setup
@@ -500,12 +500,21 @@ def _hessian_points(begin, stop, kind, x, nodes, n_local, G, L0, triads, rotatio
         status[p] = point_hessian(kind, F, L0[p], tl, lag[p], lam[p], H[p])
 
 
-@njit_parallel
+@njit
 def hessian_range(kind, x, nodes, n_local, G, L0, triads, rotation_nodes, beam_element, lag, lam, H, status):
     """``H[p] = ∂(J_pᵀ λ_p)/∂(F, θ)`` (n_pts, 18, 18) in the layout of :func:`jacobian_range`;
     H must hold zeros on entry. Chunks of :data:`POINT_CHUNK` points run in parallel; every point
     is computed by the same serial code, so the result does not depend on the thread count."""
     n = len(beam_element)
-    for c in prange((n + POINT_CHUNK - 1) // POINT_CHUNK):
-        _hessian_points(c * POINT_CHUNK, min(n, (c + 1) * POINT_CHUNK), kind, x, nodes, n_local, G, L0, triads,
-                        rotation_nodes, beam_element, lag, lam, H, status)
+    _hessian_range_workers((n + POINT_CHUNK - 1) // POINT_CHUNK, kind, x, nodes, n_local, G, L0, triads,
+                          rotation_nodes, beam_element, lag, lam, H, status, n)
+
+
+@njit
+def _hessian_range_worker(c, kind, x, nodes, n_local, G, L0, triads, rotation_nodes, beam_element, lag, lam, H,
+                         status, n):
+    _hessian_points(c * POINT_CHUNK, min(n, (c + 1) * POINT_CHUNK), kind, x, nodes, n_local, G, L0, triads,
+                    rotation_nodes, beam_element, lag, lam, H, status)
+
+
+_hessian_range_workers = in_parallel(_hessian_range_worker)

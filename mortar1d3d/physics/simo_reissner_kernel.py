@@ -43,9 +43,9 @@ number of threads.
 import math
 
 import numpy as np
-from numba import prange
 
-from .._config import CHUNK, njit, njit_inline, njit_parallel
+from .._config import CHUNK, njit, njit_inline
+from .._parallel import in_parallel
 from .rotations import _cross, exp, jacobian, jacobian_derivative_transpose, jacobian_inverse, log
 
 __all__ = ["element_range", "element_chunks", "strain_range", "N_DOFS", "STEP", "OK", "ROTATION_RANGE",
@@ -412,14 +412,23 @@ def _centreline_columns(e, dH, lag, dlag, A0, J, wF, Gamma0, CF, D, triads, lagr
             ke[e, 18 + i, col] += acc[0, col, i]
 
 
-@njit_parallel
+@njit
 def element_chunks(dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dd, triads, spins, want, energy, fe, ke, status):
     """:func:`element_range` over chunks of :data:`CHUNK` elements in parallel (bit-identical for any
     number of threads: every element is computed by the same serial code)."""
     n_el = dH.shape[0]
-    for c in prange((n_el + CHUNK - 1) // CHUNK):
-        element_range(c * CHUNK, min(n_el, (c + 1) * CHUNK), dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dd,
-                      triads, spins, want, energy, fe, ke, status)
+    _element_chunks_workers((n_el + CHUNK - 1) // CHUNK, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dd, triads,
+                           spins, want, energy, fe, ke, status, n_el)
+
+
+@njit
+def _element_chunks_worker(c, dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dd, triads, spins, want, energy, fe,
+                          ke, status, n_el):
+    element_range(c * CHUNK, min(n_el, (c + 1) * CHUNK), dH, lag, dlag, A0, J, wF, wM, Gamma0, K0, CF, CM, Dd,
+                  triads, spins, want, energy, fe, ke, status)
+
+
+_element_chunks_workers = in_parallel(_element_chunks_worker)
 
 
 @njit

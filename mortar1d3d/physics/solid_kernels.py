@@ -20,9 +20,9 @@ allocated per block of elements, never for all elements. :func:`cell_fields_kern
 strain and Cauchy stress over each element's Gauss points.
 """
 import numpy as np
-from numba import prange
 
-from .._config import CHUNK, njit, njit_inline, njit_parallel
+from .._config import CHUNK, njit, njit_inline
+from .._parallel import in_parallel
 from .._schedule import n_chunks
 from .._unlinked import unlinked
 from ..elements.solid.dispatch import N_NODES
@@ -212,7 +212,7 @@ def _element(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam,
 _element_call = unlinked(_element)
 
 
-@njit_parallel
+@njit
 def assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_ptr, colour_blocks, block, node_ptr,
                     slot_ptr, slots, mat_code, lam, mu, linear, want_tangent, fibre_ptr, fibre_data, fibre_set, f,
                     data, data_map, element_energy, status):
@@ -235,46 +235,60 @@ def assemble_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_ptr
     # a hex8 mesh's element matrix buffer stays 4.6 KB whatever types the registry holds
     w = connectivity.shape[1]
     for colour in range(colour_ptr.shape[0] - 1):
-        for c in prange(colour_ptr[colour], colour_ptr[colour + 1]):
-            ue = np.empty((w, 3))
-            fe = np.empty((w, 3))
-            Ke = np.empty((9 * w, w))
-            F = np.empty((3, 3))
-            S = np.empty((3, 3))
-            Cv = np.empty((6, 6))
-            P = np.empty((3, 3))
-            A = np.empty(81 + 54)
-            G = np.empty((27, w))
-            D = np.empty((3, w))
-            k = colour_blocks[c]
-            for e in range(k * block, min(n_el, (k + 1) * block)):
-                energy, st = _element_call(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam, mu,
-                                      linear, want_tangent, C0, ue, fe, Ke, F, S, Cv, P, A, G, D, fibre_ptr,
-                                      fibre_data, fibre_set)
-                element_energy[e] = energy
-                status[e] = st
-                n = N_NODES[codes[e]]
-                for a in range(n):
-                    v = connectivity[e, a]
-                    for i in range(3):
-                        f[3 * v + i] += fe[a, i]
-                if not want_tangent:
-                    continue
-                base_slot = slot_ptr[e]
-                for a in range(n):
-                    v = connectivity[e, a]
-                    deg = node_ptr[v + 1] - node_ptr[v]
-                    row0 = 9 * node_ptr[v]
-                    for b in range(n):
-                        col = row0 + 3 * slots[base_slot + a * n + b]
-                        for i in range(3):
-                            pos = col + 3 * i * deg
-                            if mapped:
-                                pos = data_map[pos]
-                            r = 9 * a + 3 * i
-                            data[pos] += Ke[r, b]
-                            data[pos + 1] += Ke[r + 1, b]
-                            data[pos + 2] += Ke[r + 2, b]
+        _assemble_workers(colour_ptr[colour + 1] - colour_ptr[colour], colour_ptr[colour], u, connectivity, codes,
+                          gp_ptr, dn_ptr, dNdX, wJ, colour_blocks, block, node_ptr, slot_ptr, slots, mat_code, lam,
+                          mu, linear, want_tangent, fibre_ptr, fibre_data, fibre_set, f, data, data_map,
+                          element_energy, status, C0, n_el, mapped, w)
+
+
+@njit
+def _assemble_worker(j, first, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, colour_blocks, block, node_ptr,
+                     slot_ptr, slots, mat_code, lam, mu, linear, want_tangent, fibre_ptr, fibre_data, fibre_set, f,
+                     data, data_map, element_energy, status, C0, n_el, mapped, w):
+    # block colour_blocks[first + j] of the colour starting at first (see assemble_kernel)
+    c = first + j
+    ue = np.empty((w, 3))
+    fe = np.empty((w, 3))
+    Ke = np.empty((9 * w, w))
+    F = np.empty((3, 3))
+    S = np.empty((3, 3))
+    Cv = np.empty((6, 6))
+    P = np.empty((3, 3))
+    A = np.empty(81 + 54)
+    G = np.empty((27, w))
+    D = np.empty((3, w))
+    k = colour_blocks[c]
+    for e in range(k * block, min(n_el, (k + 1) * block)):
+        energy, st = _element_call(e, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam, mu,
+                              linear, want_tangent, C0, ue, fe, Ke, F, S, Cv, P, A, G, D, fibre_ptr,
+                              fibre_data, fibre_set)
+        element_energy[e] = energy
+        status[e] = st
+        n = N_NODES[codes[e]]
+        for a in range(n):
+            v = connectivity[e, a]
+            for i in range(3):
+                f[3 * v + i] += fe[a, i]
+        if not want_tangent:
+            continue
+        base_slot = slot_ptr[e]
+        for a in range(n):
+            v = connectivity[e, a]
+            deg = node_ptr[v + 1] - node_ptr[v]
+            row0 = 9 * node_ptr[v]
+            for b in range(n):
+                col = row0 + 3 * slots[base_slot + a * n + b]
+                for i in range(3):
+                    pos = col + 3 * i * deg
+                    if mapped:
+                        pos = data_map[pos]
+                    r = 9 * a + 3 * i
+                    data[pos] += Ke[r, b]
+                    data[pos + 1] += Ke[r + 1, b]
+                    data[pos + 2] += Ke[r + 2, b]
+
+
+_assemble_workers = in_parallel(_assemble_worker)
 
 
 @njit_inline
@@ -291,70 +305,79 @@ def _add_symmetric(out, e, w, s00, s11, s22, s01, s12, s02):
     out[e, 2, 0] += w * s02
 
 
-@njit_parallel
+@njit
 def cell_fields_kernel(u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam, mu, linear,
                        fibre_ptr, fibre_data, fibre_set, strain, stress, status):
     """Per element, the w det J-weighted mean over its Gauss points of E (ε) and σ."""
     n_el = codes.shape[0]
-    for c in prange(n_chunks(n_el, CHUNK)):
-        F = np.empty((3, 3))
-        S = np.empty((3, 3))
-        Cv = np.empty((6, 6))
-        for e in range(c * CHUNK, min(n_el, (c + 1) * CHUNK)):
-            n = N_NODES[codes[e]]
-            status[e] = STATUS_OK
-            fibre_lo = fibre_ptr[fibre_set[e]]
-            fibre_hi = fibre_ptr[fibre_set[e] + 1]
-            volume = 0.0
+    _cell_fields_kernel_workers(n_chunks(n_el, CHUNK), u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code,
+                               lam, mu, linear, fibre_ptr, fibre_data, fibre_set, strain, stress, status, n_el)
+
+
+@njit
+def _cell_fields_kernel_worker(c, u, connectivity, codes, gp_ptr, dn_ptr, dNdX, wJ, mat_code, lam, mu, linear,
+                              fibre_ptr, fibre_data, fibre_set, strain, stress, status, n_el):
+    F = np.empty((3, 3))
+    S = np.empty((3, 3))
+    Cv = np.empty((6, 6))
+    for e in range(c * CHUNK, min(n_el, (c + 1) * CHUNK)):
+        n = N_NODES[codes[e]]
+        status[e] = STATUS_OK
+        fibre_lo = fibre_ptr[fibre_set[e]]
+        fibre_hi = fibre_ptr[fibre_set[e] + 1]
+        volume = 0.0
+        for i in range(3):
+            for j in range(3):
+                strain[e, i, j] = 0.0
+                stress[e, i, j] = 0.0
+        for q in range(gp_ptr[e + 1] - gp_ptr[e]):
+            x = dn_ptr[e] + 3 * n * q
+            w = wJ[gp_ptr[e] + q]
+            volume += w
             for i in range(3):
                 for j in range(3):
-                    strain[e, i, j] = 0.0
-                    stress[e, i, j] = 0.0
-            for q in range(gp_ptr[e + 1] - gp_ptr[e]):
-                x = dn_ptr[e] + 3 * n * q
-                w = wJ[gp_ptr[e] + q]
-                volume += w
+                    F[i, j] = 0.0
+            for a in range(n):
+                v = connectivity[e, a]
                 for i in range(3):
                     for j in range(3):
-                        F[i, j] = 0.0
-                for a in range(n):
-                    v = connectivity[e, a]
-                    for i in range(3):
-                        for j in range(3):
-                            F[i, j] += u[3 * v + i] * dNdX[x + j * n + a]      # ∇u for now
-                if linear:
-                    e00, e11, e22, e01, e12, e02 = small_strain(F)
-                    _add_symmetric(strain, e, w, e00, e11, e22, e01, e12, e02)
-                    hooke_stress(lam, mu, e00, e11, e22, e01, e12, e02, S)      # σ = C₀ : ε
+                        F[i, j] += u[3 * v + i] * dNdX[x + j * n + a]      # ∇u for now
+            if linear:
+                e00, e11, e22, e01, e12, e02 = small_strain(F)
+                _add_symmetric(strain, e, w, e00, e11, e22, e01, e12, e02)
+                hooke_stress(lam, mu, e00, e11, e22, e01, e12, e02, S)      # σ = C₀ : ε
+                for i in range(3):
+                    for j in range(3):
+                        stress[e, i, j] += w * S[i, j]
+                if fibre_hi > fibre_lo:
+                    S[:, :] = 0.0
+                    add_fibres(fibre_data, fibre_lo, fibre_hi, F, True, S, Cv)
                     for i in range(3):
                         for j in range(3):
                             stress[e, i, j] += w * S[i, j]
-                    if fibre_hi > fibre_lo:
-                        S[:, :] = 0.0
-                        add_fibres(fibre_data, fibre_lo, fibre_hi, F, True, S, Cv)
-                        for i in range(3):
-                            for j in range(3):
-                                stress[e, i, j] += w * S[i, j]
-                    continue
-                stress_tangent(mat_code, lam, mu, F, S, Cv)     # takes H = ∇u
-                if fibre_hi > fibre_lo:
-                    add_fibres(fibre_data, fibre_lo, fibre_hi, F, False, S, Cv)
-                e00, e11, e22, e01, e12, e02 = green_lagrange(F)
-                _add_symmetric(strain, e, w, e00, e11, e22, e01, e12, e02)
-                for i in range(3):
-                    F[i, i] += 1.0
-                det = det3(F)
-                if not det > 0.0:
-                    status[e] = STATUS_INVERTED
-                for i in range(3):
-                    for j in range(3):
-                        # σ = F S Fᵀ / J
-                        sigma = 0.0
-                        for I in range(3):
-                            for J in range(3):
-                                sigma += F[i, I] * S[I, J] * F[j, J]
-                        stress[e, i, j] += w * sigma / det
+                continue
+            stress_tangent(mat_code, lam, mu, F, S, Cv)     # takes H = ∇u
+            if fibre_hi > fibre_lo:
+                add_fibres(fibre_data, fibre_lo, fibre_hi, F, False, S, Cv)
+            e00, e11, e22, e01, e12, e02 = green_lagrange(F)
+            _add_symmetric(strain, e, w, e00, e11, e22, e01, e12, e02)
+            for i in range(3):
+                F[i, i] += 1.0
+            det = det3(F)
+            if not det > 0.0:
+                status[e] = STATUS_INVERTED
             for i in range(3):
                 for j in range(3):
-                    strain[e, i, j] /= volume
-                    stress[e, i, j] /= volume
+                    # σ = F S Fᵀ / J
+                    sigma = 0.0
+                    for I in range(3):
+                        for J in range(3):
+                            sigma += F[i, I] * S[I, J] * F[j, J]
+                    stress[e, i, j] += w * sigma / det
+        for i in range(3):
+            for j in range(3):
+                strain[e, i, j] /= volume
+                stress[e, i, j] /= volume
+
+
+_cell_fields_kernel_workers = in_parallel(_cell_fields_kernel_worker)

@@ -10,9 +10,9 @@ and the weights ``w det J`` of every Gauss point of every element, which the ele
 (:mod:`~mortar1d3d.physics.solid_kernels`) then read at every evaluation.
 """
 import numpy as np
-from numba import prange
 
-from .._config import CHUNK, njit_parallel
+from .._config import CHUNK, njit
+from .._parallel import in_parallel
 from .._schedule import n_chunks
 from ..elements.solid.dispatch import BY_CODE, MAX_NODES, N_NODES, RATIONAL, SOLID_MODULES, deriv, weighted_derivatives
 from ..errors import MeshError, format_ids
@@ -79,7 +79,7 @@ def reference_gauss_points(points, connectivity, codes):
     return gp_ptr, dn_ptr, dNdX, wJ
 
 
-@njit_parallel
+@njit
 def reference_kernel(points, connectivity, codes, gp_ptr, dn_ptr, rule_ptr, rule_xi, rule_w, dNdX, wJ, status):
     """∂N_a/∂X and w det J at every Gauss point (reference configuration); status 1 if det J <= 0.
 
@@ -87,55 +87,64 @@ def reference_kernel(points, connectivity, codes, gp_ptr, dn_ptr, rule_ptr, rule
     node index fastest, so that the loops over nodes in the element kernel vectorise.
     """
     n_el = codes.shape[0]
-    for c in prange(n_chunks(n_el, CHUNK)):
-        dN = np.empty((MAX_NODES, 3))
-        N = np.empty(MAX_NODES)
-        for e in range(c * CHUNK, min(n_el, (c + 1) * CHUNK)):
-            code = codes[e]
-            n = N_NODES[code]
-            status[e] = 0
-            for q in range(gp_ptr[e + 1] - gp_ptr[e]):
-                r = rule_ptr[code] + q
-                if RATIONAL[code]:
-                    weighted_derivatives(code, rule_xi[r], connectivity[e], points, N, dN)
-                else:
-                    deriv(code, rule_xi[r], dN)
-                j00 = j01 = j02 = j10 = j11 = j12 = j20 = j21 = j22 = 0.0
-                for a in range(n):
-                    x = points[connectivity[e, a]]
-                    j00 += x[0] * dN[a, 0]
-                    j01 += x[0] * dN[a, 1]
-                    j02 += x[0] * dN[a, 2]
-                    j10 += x[1] * dN[a, 0]
-                    j11 += x[1] * dN[a, 1]
-                    j12 += x[1] * dN[a, 2]
-                    j20 += x[2] * dN[a, 0]
-                    j21 += x[2] * dN[a, 1]
-                    j22 += x[2] * dN[a, 2]
-                c00 = j11 * j22 - j12 * j21
-                c01 = j12 * j20 - j10 * j22
-                c02 = j10 * j21 - j11 * j20
-                det = j00 * c00 + j01 * c01 + j02 * c02
-                if not det > 0.0:
-                    status[e] = 1
-                    det = 1.0
-                inv = 1.0 / det
-                # J⁻¹ (row i = ∂ξ_i/∂X); ∂N/∂X_j = Σ_i ∂N/∂ξ_i (J⁻¹)_ij
-                i00 = c00 * inv
-                i01 = (j02 * j21 - j01 * j22) * inv
-                i02 = (j01 * j12 - j02 * j11) * inv
-                i10 = c01 * inv
-                i11 = (j00 * j22 - j02 * j20) * inv
-                i12 = (j02 * j10 - j00 * j12) * inv
-                i20 = c02 * inv
-                i21 = (j01 * j20 - j00 * j21) * inv
-                i22 = (j00 * j11 - j01 * j10) * inv
-                base = dn_ptr[e] + 3 * n * q
-                for a in range(n):
-                    d0 = dN[a, 0]
-                    d1 = dN[a, 1]
-                    d2 = dN[a, 2]
-                    dNdX[base + a] = d0 * i00 + d1 * i10 + d2 * i20
-                    dNdX[base + n + a] = d0 * i01 + d1 * i11 + d2 * i21
-                    dNdX[base + 2 * n + a] = d0 * i02 + d1 * i12 + d2 * i22
-                wJ[gp_ptr[e] + q] = rule_w[r] * det
+    _reference_kernel_workers(n_chunks(n_el, CHUNK), points, connectivity, codes, gp_ptr, dn_ptr, rule_ptr, rule_xi,
+                             rule_w, dNdX, wJ, status, n_el)
+
+
+@njit
+def _reference_kernel_worker(c, points, connectivity, codes, gp_ptr, dn_ptr, rule_ptr, rule_xi, rule_w, dNdX, wJ,
+                            status, n_el):
+    dN = np.empty((MAX_NODES, 3))
+    N = np.empty(MAX_NODES)
+    for e in range(c * CHUNK, min(n_el, (c + 1) * CHUNK)):
+        code = codes[e]
+        n = N_NODES[code]
+        status[e] = 0
+        for q in range(gp_ptr[e + 1] - gp_ptr[e]):
+            r = rule_ptr[code] + q
+            if RATIONAL[code]:
+                weighted_derivatives(code, rule_xi[r], connectivity[e], points, N, dN)
+            else:
+                deriv(code, rule_xi[r], dN)
+            j00 = j01 = j02 = j10 = j11 = j12 = j20 = j21 = j22 = 0.0
+            for a in range(n):
+                x = points[connectivity[e, a]]
+                j00 += x[0] * dN[a, 0]
+                j01 += x[0] * dN[a, 1]
+                j02 += x[0] * dN[a, 2]
+                j10 += x[1] * dN[a, 0]
+                j11 += x[1] * dN[a, 1]
+                j12 += x[1] * dN[a, 2]
+                j20 += x[2] * dN[a, 0]
+                j21 += x[2] * dN[a, 1]
+                j22 += x[2] * dN[a, 2]
+            c00 = j11 * j22 - j12 * j21
+            c01 = j12 * j20 - j10 * j22
+            c02 = j10 * j21 - j11 * j20
+            det = j00 * c00 + j01 * c01 + j02 * c02
+            if not det > 0.0:
+                status[e] = 1
+                det = 1.0
+            inv = 1.0 / det
+            # J⁻¹ (row i = ∂ξ_i/∂X); ∂N/∂X_j = Σ_i ∂N/∂ξ_i (J⁻¹)_ij
+            i00 = c00 * inv
+            i01 = (j02 * j21 - j01 * j22) * inv
+            i02 = (j01 * j12 - j02 * j11) * inv
+            i10 = c01 * inv
+            i11 = (j00 * j22 - j02 * j20) * inv
+            i12 = (j02 * j10 - j00 * j12) * inv
+            i20 = c02 * inv
+            i21 = (j01 * j20 - j00 * j21) * inv
+            i22 = (j00 * j11 - j01 * j10) * inv
+            base = dn_ptr[e] + 3 * n * q
+            for a in range(n):
+                d0 = dN[a, 0]
+                d1 = dN[a, 1]
+                d2 = dN[a, 2]
+                dNdX[base + a] = d0 * i00 + d1 * i10 + d2 * i20
+                dNdX[base + n + a] = d0 * i01 + d1 * i11 + d2 * i21
+                dNdX[base + 2 * n + a] = d0 * i02 + d1 * i12 + d2 * i22
+            wJ[gp_ptr[e] + q] = rule_w[r] * det
+
+
+_reference_kernel_workers = in_parallel(_reference_kernel_worker)

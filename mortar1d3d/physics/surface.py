@@ -37,9 +37,9 @@ from functools import lru_cache
 
 import numpy as np
 import scipy.sparse as sp
-from numba import prange
 
-from .._config import njit, njit_parallel
+from .._config import njit
+from .._parallel import in_parallel
 from ..elements.solid.dispatch import BY_CODE, MAX_FACES, MAX_NODES, deriv, shape
 from ..geometry.linalg import norm3
 from .rational_surface import kernel_tables
@@ -319,27 +319,36 @@ def _face_tangents(x, conn, e, c, fc, q, m, nodes, dN_du, dN_dv):
     return xu0, xu1, xu2, xv0, xv1, xv2
 
 
-@njit_parallel
+@njit
 def _traction_kernel(X, conn, element, code, face, t, nodes, n_face_nodes, n_points, weights, N, dN_du,
                      dN_dv, f_offsets, f_local):
     """Local nodal forces ``∫ N_k t dA0`` of every face into ``f_local`` (flat, ``f_offsets``)."""
-    for i in prange(element.shape[0]):
-        e, c, fc = element[i], code[i], face[i]
-        m = n_face_nodes[c, fc]
-        o = f_offsets[i]
-        for r in range(3 * m):
-            f_local[o + r] = 0.0
-        for q in range(n_points[c, fc]):
-            xu0, xu1, xu2, xv0, xv1, xv2 = _face_tangents(X, conn, e, c, fc, q, m, nodes, dN_du, dN_dv)
-            dA = weights[c, fc, q] * norm3(xu1 * xv2 - xu2 * xv1, xu2 * xv0 - xu0 * xv2, xu0 * xv1 - xu1 * xv0)
-            for k in range(m):
-                g = dA * N[c, fc, q, k]
-                f_local[o + 3 * k] += g * t[i, 0]
-                f_local[o + 3 * k + 1] += g * t[i, 1]
-                f_local[o + 3 * k + 2] += g * t[i, 2]
+    _traction_kernel_workers(element.shape[0], X, conn, element, code, face, t, nodes, n_face_nodes, n_points,
+                             weights, N, dN_du, dN_dv, f_offsets, f_local)
 
 
-@njit_parallel
+@njit
+def _traction_kernel_worker(i, X, conn, element, code, face, t, nodes, n_face_nodes, n_points, weights, N, dN_du,
+                            dN_dv, f_offsets, f_local):
+    e, c, fc = element[i], code[i], face[i]
+    m = n_face_nodes[c, fc]
+    o = f_offsets[i]
+    for r in range(3 * m):
+        f_local[o + r] = 0.0
+    for q in range(n_points[c, fc]):
+        xu0, xu1, xu2, xv0, xv1, xv2 = _face_tangents(X, conn, e, c, fc, q, m, nodes, dN_du, dN_dv)
+        dA = weights[c, fc, q] * norm3(xu1 * xv2 - xu2 * xv1, xu2 * xv0 - xu0 * xv2, xu0 * xv1 - xu1 * xv0)
+        for k in range(m):
+            g = dA * N[c, fc, q, k]
+            f_local[o + 3 * k] += g * t[i, 0]
+            f_local[o + 3 * k + 1] += g * t[i, 1]
+            f_local[o + 3 * k + 2] += g * t[i, 2]
+
+
+_traction_kernel_workers = in_parallel(_traction_kernel_worker)
+
+
+@njit
 def _pressure_kernel(x, conn, element, code, face, p, nodes, n_face_nodes, n_points, weights, N, dN_du, dN_dv,
                      orientation, f_offsets, k_offsets, tangent, f_local, k_local):
     """Local follower forces and, if ``tangent``, their derivatives, face by face.
@@ -348,42 +357,51 @@ def _pressure_kernel(x, conn, element, code, face, p, nodes, n_face_nodes, n_poi
     ``c_l = N_l,v x_,u - N_l,u x_,v`` and ``[c]_× δ = c × δ``; ``s`` orients ``a × b`` outward.
     Local DOF ``3 k + i`` (face node k, component i); the local matrix is row-major.
     """
-    for i in prange(element.shape[0]):
-        e, c, fc = element[i], code[i], face[i]
-        m = n_face_nodes[c, fc]
-        nl = 3 * m
-        fo = f_offsets[i]
-        ko = k_offsets[i]
-        for r in range(nl):
-            f_local[fo + r] = 0.0
-        if tangent:
-            for r in range(nl * nl):
-                k_local[ko + r] = 0.0
-        scale = -p * orientation[c, fc]
-        for q in range(n_points[c, fc]):
-            xu0, xu1, xu2, xv0, xv1, xv2 = _face_tangents(x, conn, e, c, fc, q, m, nodes, dN_du, dN_dv)
-            n0 = xu1 * xv2 - xu2 * xv1
-            n1 = xu2 * xv0 - xu0 * xv2
-            n2 = xu0 * xv1 - xu1 * xv0
-            sw = scale * weights[c, fc, q]
-            for k in range(m):
-                g = sw * N[c, fc, q, k]
-                f_local[fo + 3 * k] += g * n0
-                f_local[fo + 3 * k + 1] += g * n1
-                f_local[fo + 3 * k + 2] += g * n2
-                if tangent:
-                    for l in range(m):
-                        du, dv = dN_du[c, fc, q, l], dN_dv[c, fc, q, l]
-                        c0 = g * (dv * xu0 - du * xv0)
-                        c1 = g * (dv * xu1 - du * xv1)
-                        c2 = g * (dv * xu2 - du * xv2)
-                        b = ko + 3 * k * nl + 3 * l
-                        k_local[b + 1] -= c2
-                        k_local[b + 2] += c1
-                        k_local[b + nl] += c2
-                        k_local[b + nl + 2] -= c0
-                        k_local[b + 2 * nl] -= c1
-                        k_local[b + 2 * nl + 1] += c0
+    _pressure_kernel_workers(element.shape[0], x, conn, element, code, face, p, nodes, n_face_nodes, n_points,
+                             weights, N, dN_du, dN_dv, orientation, f_offsets, k_offsets, tangent, f_local, k_local)
+
+
+@njit
+def _pressure_kernel_worker(i, x, conn, element, code, face, p, nodes, n_face_nodes, n_points, weights, N, dN_du,
+                            dN_dv, orientation, f_offsets, k_offsets, tangent, f_local, k_local):
+    e, c, fc = element[i], code[i], face[i]
+    m = n_face_nodes[c, fc]
+    nl = 3 * m
+    fo = f_offsets[i]
+    ko = k_offsets[i]
+    for r in range(nl):
+        f_local[fo + r] = 0.0
+    if tangent:
+        for r in range(nl * nl):
+            k_local[ko + r] = 0.0
+    scale = -p * orientation[c, fc]
+    for q in range(n_points[c, fc]):
+        xu0, xu1, xu2, xv0, xv1, xv2 = _face_tangents(x, conn, e, c, fc, q, m, nodes, dN_du, dN_dv)
+        n0 = xu1 * xv2 - xu2 * xv1
+        n1 = xu2 * xv0 - xu0 * xv2
+        n2 = xu0 * xv1 - xu1 * xv0
+        sw = scale * weights[c, fc, q]
+        for k in range(m):
+            g = sw * N[c, fc, q, k]
+            f_local[fo + 3 * k] += g * n0
+            f_local[fo + 3 * k + 1] += g * n1
+            f_local[fo + 3 * k + 2] += g * n2
+            if tangent:
+                for l in range(m):
+                    du, dv = dN_du[c, fc, q, l], dN_dv[c, fc, q, l]
+                    c0 = g * (dv * xu0 - du * xv0)
+                    c1 = g * (dv * xu1 - du * xv1)
+                    c2 = g * (dv * xu2 - du * xv2)
+                    b = ko + 3 * k * nl + 3 * l
+                    k_local[b + 1] -= c2
+                    k_local[b + 2] += c1
+                    k_local[b + nl] += c2
+                    k_local[b + nl + 2] -= c0
+                    k_local[b + 2 * nl] -= c1
+                    k_local[b + 2 * nl + 1] += c0
+
+
+_pressure_kernel_workers = in_parallel(_pressure_kernel_worker)
 
 
 # --------------------------------------------------------------------------------------------

@@ -23,6 +23,8 @@ One idea per module, all importable from here as before:
   Cholesky of the beam blocks;
 - :mod:`~mortar1d3d.solvers.amg`: smoothed-aggregation AMG set-up;
 - :mod:`~mortar1d3d.solvers.preconditioners`: the auxiliary-space preconditioner;
+- :mod:`~mortar1d3d.solvers._products`: the two Numba kernels of its set-up (its sparse products
+  row by row, the weak node blocks dropped);
 - :mod:`~mortar1d3d.solvers.krylov`: CG/MINRES/GMRES to the caller's tolerance, breakdown fallback,
   round-off floor;
 - :mod:`~mortar1d3d.solvers.dependent`: dependent constraint rows;
@@ -30,7 +32,7 @@ One idea per module, all importable from here as before:
 - :mod:`~mortar1d3d.solvers._common`: :class:`LinearSolverError` and argument checks.
 
 Everything here works on ``scipy.sparse`` matrices; the heavy lifting is in SuperLU (scipy) and
-pyamg, so there is no Numba kernel in these modules.
+pyamg, and the only Numba kernels are those of ``_products``.
 """
 import time
 

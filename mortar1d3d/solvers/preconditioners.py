@@ -4,10 +4,12 @@ import time
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import connected_components
 
 from ._common import check_square, split_dofs
 from .amg import _block_size, build_amg
+from ._products import drop_weak_node_blocks, extend_and_add
 from .direct import factorize_spd_block
 
 __all__ = ["AuxiliarySpacePreconditioner", "smooth_prolongation", "harmonic_prolongation", "drop_weak_blocks"]
@@ -39,7 +41,7 @@ class AuxiliarySpacePreconditioner:
     drop : float
         After smoothing, entries of ``P`` below ``drop`` times the largest of their row are left out.
     theta : float
-        Strength threshold of the AMG of ``A_aux`` (:func:`build_amg`).
+        Strength threshold of the AMG of ``A_aux`` (:func:`build_amg`), default :attr:`THETA`.
     filter_entries : bool
         The AMG smooths its prolongation with the strong entries of ``A_aux`` only (:func:`build_amg`).
     sparsify : float
@@ -168,9 +170,12 @@ class AuxiliarySpacePreconditioner:
     LUMPED = dict(smoothing=0, theta=0.0, drop=0.0, filter_entries=False, sparsify=0.0)
     #: the default δ of ``sparsify`` (the penalty path; the Lagrange block preconditioner with LUMPED)
     SPARSIFY = 3e-3
+    #: the default strength threshold of the AMG of ``A_aux`` (0.02 before session sixteen: 19 instead of 18
+    #: CG iterations at n = 40 of ``fibre_cube(n, 1000, 20)``, the same 12 and 27 at n = 20 and 66)
+    THETA = 0.05
 
     def __init__(self, A, solid, beam, prolongation, near_nullspace=None, *, block_size=None, smoothing=1,
-                 theta=0.02, drop=1e-3, filter_entries=True, sparsify=SPARSIFY, compensation="signed", sparsify_scope="hierarchy",
+                 theta=THETA, drop=1e-3, filter_entries=True, sparsify=SPARSIFY, compensation="signed", sparsify_scope="hierarchy",
                  keep_auxiliary=False):
         start = time.perf_counter()
         A = check_square(A, "A")
@@ -193,24 +198,39 @@ class AuxiliarySpacePreconditioner:
                              f"got {smoothing!r}")
         self.A = A
         self.shape = A.shape
-        beam_rows = A[self._b].tocsr()                           # rows of the beam DOFs
-        A_bb = beam_rows[:, self._b].tocsr()
-        self.A_bs = beam_rows[:, self._s].tocsr()
+        # solid DOFs first, then the beams' (what the model gives): the rows of A are [A_SS A_SB] and
+        # [A_BS A_BB] as they are, used in place (no copies; the products below read them directly)
+        ordered = isinstance(self._s, slice) and isinstance(self._b, slice) and self._s.start == 0 \
+            and self._b.start == n_s and A.format == "csr" and A.has_canonical_format
+        if ordered:
+            solid_rows, beam_rows = _row_block(A, self._s), _row_block(A, self._b)
+            A_bb = _column_block(beam_rows, n_s, n)
+            self.A_bs = _column_block(beam_rows, 0, n_s)
+        else:
+            rows = A[self._b].tocsr()                            # rows of the beam DOFs
+            A_bb = rows[:, self._b].tocsr()
+            self.A_bs = rows[:, self._s].tocsr()
+            solid_rows = beam_rows = None
+            del rows
         self.A_sb = self.A_bs.T.tocsr()                          # A is symmetric
-        del beam_rows
         t = time.perf_counter()
         self._beam_factor = factorize_spd_block(A_bb)
         factor_time = time.perf_counter() - t
         t = time.perf_counter()
         P = harmonic_prolongation(A_bb, self.A_bs, drop, self._beam_factor) if smoothing == "harmonic" else \
-            smooth_prolongation(A_bb, self.A_bs, prolongation.tocsr(), smoothing, drop)
+            smooth_prolongation(A_bb, self.A_bs, prolongation.tocsr(), smoothing, drop, beam_rows=beam_rows)
         smoothing_time = time.perf_counter() - t
         self.smoothing = smoothing
         if sparsify > 0 and sparsify_scope not in ("hierarchy", "smoother"):
             raise ValueError(f"sparsify_scope must be 'hierarchy' or 'smoother', got {sparsify_scope!r}")
-        A_ss = A[self._s, self._s] if isinstance(self._s, slice) else A[self._s][:, self._s]
-        auxiliary = auxiliary_matrix(A_ss, self.A_bs, self.A_sb, A_bb, P)
-        del A_ss
+        if ordered:
+            auxiliary = auxiliary_matrix(None, self.A_bs, self.A_sb, A_bb, P, solid_rows=solid_rows,
+                                         beam_rows=beam_rows)
+        else:
+            A_ss = A[self._s][:, self._s]
+            auxiliary = auxiliary_matrix(A_ss, self.A_bs, self.A_sb, A_bb, P)
+            del A_ss
+        del solid_rows, beam_rows
         self.auxiliary_nnz = auxiliary.nnz
         self.prolongation = P
         self.timings = {"prolongation smoothing": smoothing_time,
@@ -270,7 +290,7 @@ class AuxiliarySpacePreconditioner:
         return x
 
 
-def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
+def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0, *, beam_rows=None):
     """``P`` moved ``steps`` damped Jacobi steps towards the harmonic extension ``−A_BB⁻¹ A_BS``.
 
     Parameters
@@ -281,6 +301,11 @@ def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
         The follow operator to start from.
     steps : int
         Number of steps (0 returns ``P``).
+    drop : float
+        Entries below ``drop`` times the largest magnitude of their row are left out at the end.
+    beam_rows : (n_b, n_s + n_b) scipy.sparse.csr_matrix, optional
+        ``[A_BS  A_BB]`` if the caller has it (e.g. the beam rows of ``A``, solid columns first);
+        formed here otherwise.
 
     Returns
     -------
@@ -302,25 +327,22 @@ def smooth_prolongation(A_bb, A_bs, P, steps=1, drop=0.0):
     A_bb = A_bb.tocsr()
     d = A_bb.diagonal()
     scale = 1.0 / np.sqrt(d)
-    # D^-1/2 A_BB D^-1/2 by scaling the entries (two products with diagonal matrices cost two sparse
-    # matrix products)
-    scaled = sp.csr_matrix((_row_scaled(A_bb, scale) * scale[A_bb.indices], A_bb.indices, A_bb.indptr),
-                           shape=A_bb.shape)
-    # scaled has a unit diagonal, so its λ_max is at least 1: a Lanczos start that misses the top of
-    # the spectrum (an invariant subspace of the ones vector) cannot make ω blow up
+    # λ_max of D^-1/2 A_BB D^-1/2, applied as scalings around A_BB (no scaled copy of A_BB); it has a
+    # unit diagonal, so its λ_max is at least 1: a Lanczos start that misses the top of the spectrum
+    # (an invariant subspace of the ones vector) cannot make ω blow up
+    scaled = spla.LinearOperator(A_bb.shape, matvec=lambda v: scale * (A_bb @ (scale * v.reshape(-1))),
+                                 matmat=lambda V: scale[:, None] * (A_bb @ (scale[:, None] * V)), dtype=np.float64)
     rho = max(largest_eigenvalue(scaled), 1.0)
-    del scaled
     jacobi = 1.0 / (rho * d)
-    # P − J (A_BS + A_BB P) = [−J A_BS   I − J A_BB] [I; P], J = diag(jacobi): one sparse product
-    # (the product A_BB P, its sum with A_BS and the difference from P merged three matrices of 7M
-    # entries at n = 20 of fibre_cube(n, 1000, 20))
-    joined = _beam_rows(A_bs, A_bb)
-    joined.data = -_row_scaled(joined, jacobi)
-    joined.data[_diagonal_entries(joined, A_bs.shape[1])] += 1.0
-    for _ in range(steps):
-        P = _times_identity_over(joined, P)
-    if drop > 0:
-        P = drop_weak_entries(P, drop)
+    # P − J (A_BS + A_BB P) = P − J [A_BS  A_BB] [I; P], J = diag(jacobi): each row accumulated once from
+    # the operands as they are, the weak entries dropped as the last step's rows are written
+    # (SciPy's product of stacked copies, the difference and the drop wrote matrices of P's size several
+    # times, in memory fresh from the operating system: benchmarks/README.md, "The set-up in one pass per
+    # product")
+    joined = _beam_rows(A_bs, A_bb) if beam_rows is None else beam_rows
+    identity = sp.identity(P.shape[0], format="csr")
+    for step in range(steps):
+        P = extend_and_add(joined, P, -jacobi, identity, P, drop if step == steps - 1 else 0.0)
     return P
 
 
@@ -383,21 +405,23 @@ def harmonic_prolongation(A_bb, A_bs, drop=0.0, factor=None, chunk=64):
     return drop_weak_entries(P, drop) if drop > 0 else P
 
 
-def auxiliary_matrix(A_ss, A_bs, A_sb, A_bb, P):
+def auxiliary_matrix(A_ss, A_bs, A_sb, A_bb, P, *, solid_rows=None, beam_rows=None):
     """``A_aux = Eᵀ A E = A_SS + A_SB P + Pᵀ (A_BS + A_BB P)`` with ``E = [I; P]`` (CSR, ``n_s x n_s``).
 
-    One sparse product ``[I  Pᵀ  A_SB] [A_SS; W; P]``, ``W = A_BS + A_BB P``, whose output is
-    ``A_aux`` itself: summing the three products ``A_SB P``, its transpose and ``Pᵀ A_BB P`` and
-    then ``A_SS`` made and merged five matrices of ``A_aux``'s size (36M entries at n = 40 of
-    ``fibre_cube(n, 1000, 20)``), which cost more than the products (CPU s of this step at n = 40:
-    benchmarks/README.md, "Forming A_aux in one product"). Equal to that sum up to round-off
+    ``W = [A_BS  A_BB] [I; P]`` first, then each row of ``[A_SS  A_SB] [I; P] + Pᵀ W`` accumulated
+    once (:func:`~mortar1d3d.solvers._products.extend_and_add`; ``solid_rows`` and ``beam_rows``, the
+    rows ``[A_SS  A_SB]`` and ``[A_BS  A_BB]``, if the caller has them, e.g. the rows of ``A``; ``A_ss``
+    is then not used). Summing the three products ``A_SB P``, its transpose and ``Pᵀ A_BB P`` and then
+    ``A_SS`` made and merged five matrices of ``A_aux``'s size (36M entries at n = 40 of
+    ``fibre_cube(n, 1000, 20)``), which cost more than the products (benchmarks/README.md, "Forming
+    A_aux in one product"); one SciPy product of the stacked copies ``[I  Pᵀ  A_SB] [A_SS; W; P]``
+    wrote them once more ("The set-up in one pass per product"). Equal to the sum up to round-off
     (the products are summed in another order), so symmetric up to round-off.
     """
-    W = _times_identity_over(_beam_rows(A_bs, A_bb), P)     # A_BS + A_BB P in one product
-    left = sp.hstack([sp.identity(A_ss.shape[0], format="csr"), P.T.tocsr(), A_sb], format="csr")
-    right = sp.vstack([A_ss, W, P], format="csr")
-    del W
-    return (left @ right).tocsr()
+    W = extend_and_add(_beam_rows(A_bs, A_bb) if beam_rows is None else beam_rows, P)   # A_BS + A_BB P
+    if solid_rows is None:
+        solid_rows = sp.hstack([A_ss, A_sb], format="csr")
+    return extend_and_add(solid_rows, P, None, P.T.tocsr(), W)
 
 
 def _beam_rows(A_bs, A_bb):
@@ -408,19 +432,21 @@ def _beam_rows(A_bs, A_bb):
     return joined
 
 
-def _times_identity_over(left, P):
-    """``left @ [I; P]`` (CSR), ``I`` of ``P``'s column count: ``left``'s first columns plus the
-    product of the rest with ``P``, in one sparse product."""
-    return (left @ sp.vstack([sp.identity(P.shape[1], format="csr"), P.tocsr()], format="csr")).tocsr()
+def _row_block(A, rows):
+    """The rows ``rows`` (a slice) of the CSR matrix ``A``, sharing its index and value arrays."""
+    first, last = A.indptr[rows.start], A.indptr[rows.stop]
+    return sp.csr_matrix((A.data[first:last], A.indices[first:last], A.indptr[rows.start:rows.stop + 1] - first),
+                         shape=(rows.stop - rows.start, A.shape[1]))
 
 
-def _diagonal_entries(A, offset):
-    """Positions in ``A.data`` (CSR) of the entries ``(i, offset + i)``, one per row, or ValueError."""
-    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
-    where = np.flatnonzero(A.indices == rows + offset)
-    if len(where) != A.shape[0]:
-        raise ValueError("the beam block must store each diagonal entry exactly once")
-    return where
+def _column_block(A, start, stop):
+    """The columns ``start:stop`` of the CSR matrix ``A`` with sorted indices (one pass over its entries)."""
+    inside = (A.indices >= start) & (A.indices < stop)
+    before = np.zeros(A.nnz + 1, A.indptr.dtype)       # entries inside before each position
+    np.cumsum(inside, out=before[1:])
+    indptr = before[A.indptr]
+    return sp.csr_matrix((A.data[inside], A.indices[inside] - A.indices.dtype.type(start), indptr),
+                         shape=(A.shape[0], stop - start))
 
 
 def drop_weak_entries(P, drop):
@@ -436,12 +462,6 @@ def drop_weak_entries(P, drop):
     rows = np.repeat(np.arange(P.shape[0]), counts)[keep]
     indptr = np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=P.shape[0]))])
     return sp.csr_matrix((P.data[keep], P.indices[keep], indptr), shape=P.shape)
-
-
-def _row_scaled(A, factor):
-    """The entries of the CSR matrix ``A`` times ``factor`` of their row (``diag(factor) @ A``
-    without a sparse product)."""
-    return np.repeat(factor, np.diff(A.indptr)) * A.data
 
 
 def _smooth_finest_with(ml, matrix):
@@ -467,36 +487,17 @@ def drop_weak_blocks(A, delta, compensation="none", block_size=3):
     ``"signed"`` the symmetric part of their block row sum ``Σ_J A_IJ`` added to the diagonal block
     ``A_II`` (translations, which every block row sum acts on, keep their energy when those sums are
     symmetric).
+
+    One pass over the entries of ``A`` as CSR (:func:`~mortar1d3d.solvers._products.drop_weak_node_blocks`):
+    converting the 36M entries of ``A_aux`` at n = 40 of ``fibre_cube(n, 1000, 20)`` to BSR, sorting
+    them and selecting the kept blocks with NumPy took 2.2 of the set-up's 6 CPU seconds under cProfile
+    (benchmarks/README.md, "The set-up in one pass per product").
     """
     if compensation not in ("none", "abs", "signed"):
         raise ValueError(f"compensation must be 'none', 'abs' or 'signed', got {compensation!r}")
-    k = block_size
-    B = sp.bsr_matrix(A, blocksize=(k, k))
-    B.sort_indices()
-    nodes = B.shape[0] // k
-    rows = np.repeat(np.arange(nodes), np.diff(B.indptr))
-    norms = np.sqrt(np.einsum("kij,kij->k", B.data, B.data))
-    diagonal = rows == B.indices
-    own = np.zeros(nodes)
-    own[rows[diagonal]] = norms[diagonal]
-    keep = diagonal | (norms >= delta * np.sqrt(own[rows] * own[B.indices]))
-    del norms
-    dropped = np.flatnonzero(~keep)
-    data, kept_rows = B.data[keep], rows[keep]      # copies of the kept blocks only
-    if compensation != "none" and len(dropped):
-        # the dropped blocks summed per block row (a sparse product: no unbuffered scatter)
-        by_row = sp.csr_matrix((np.ones(len(dropped)), (rows[dropped], np.arange(len(dropped)))),
-                               shape=(nodes, len(dropped)))
-        where = np.flatnonzero(diagonal[keep])      # the diagonal blocks among the kept ones
-        at = kept_rows[where]
-        if compensation == "abs":
-            sums = by_row @ np.abs(B.data[dropped]).sum(axis=2)
-            data[where] += sums[at][:, :, None] * np.eye(k)
-        else:
-            sums = (by_row @ B.data[dropped].reshape(-1, k * k)).reshape(-1, k, k)
-            data[where] += 0.5 * (sums[at] + sums[at].transpose(0, 2, 1))
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(kept_rows, minlength=nodes))])
-    return sp.bsr_matrix((data, B.indices[keep], indptr), shape=B.shape)
+    if A.shape[0] != A.shape[1] or A.shape[0] % block_size:
+        raise ValueError(f"A must be square with a size divisible by {block_size}, got {A.shape}")
+    return drop_weak_node_blocks(A, delta, compensation, block_size)
 
 
 def _contiguous(index):
@@ -534,9 +535,10 @@ def largest_eigenvalue(A, steps=LANCZOS_STEPS):
         w = A @ v
         if j:
             w -= beta[j - 1] * previous
-        alpha[j] = w @ v
+        alpha[j] = (w * v).sum()            # NumPy sums: threaded BLAS ddot/dnrm2 calls were most of this
+        # function's CPU in the set-up of fibre_cube(20, 1000, 20) (benchmarks/README.md, "The set-up in one pass")
         w -= alpha[j] * v
-        beta[j] = np.linalg.norm(w)
+        beta[j] = np.sqrt((w * w).sum())
         if beta[j] <= 1e-14 * abs(alpha[j]):      # an invariant subspace: its Ritz values are exact
             steps = j + 1
             break
