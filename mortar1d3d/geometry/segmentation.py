@@ -326,6 +326,19 @@ def _faces_in_linear_reach(code, h, s, linear, errors, beam_code, Qe, length, s0
 
 
 @njit
+def _interval_pad(linear, s, zs, eta_s, h):
+    """``_REACH_MARGIN`` scaled by the size of the samples' linearised images ``zs`` and of the element (h)."""
+    S = eta_s.shape[0]
+    spread = 0.0
+    size = 0.0
+    for i in range(3):
+        size = max(size, abs(linear[s, i, 0]) + abs(linear[s, i, 1]) + abs(linear[s, i, 2]))
+        for k in range(S):
+            spread = max(spread, abs(zs[k, i] - zs[0, i]) + (eta_s[S - 1] - eta_s[0]) * abs(zs[k, 3 + i]))
+    return _REACH_MARGIN * (1.0 + spread + size * h)
+
+
+@njit
 def _live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need):
     """Which sample intervals of a searched pair may hold a crossing of which face: ``live[k, f]`` for
     interval k (η_k to η_k+1) and face f, ``need[k]``: sample k bounds a live interval. False if none is live.
@@ -352,13 +365,7 @@ def _live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need
             for f in range(faces.shape[0]):
                 live[k, f] = reach[f]
         return True
-    spread = 0.0
-    size = 0.0
-    for i in range(3):
-        size = max(size, abs(linear[s, i, 0]) + abs(linear[s, i, 1]) + abs(linear[s, i, 2]))
-        for k in range(S):
-            spread = max(spread, abs(zs[k, i] - zs[0, i]) + (eta_s[S - 1] - eta_s[0]) * abs(zs[k, 3 + i]))
-    pad = _REACH_MARGIN * (1.0 + spread + size * h)
+    pad = _interval_pad(linear, s, zs, eta_s, h)
     any_live = False
     for k in range(S - 1):
         third = (eta_s[k + 1] - eta_s[k]) / 3.0
@@ -371,11 +378,7 @@ def _live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need
             lo = np.inf
             hi = -np.inf
             for c in range(4):
-                end = k + c // 2
-                t = third if c == 1 else -third if c == 2 else 0.0
-                g = 0.0
-                for i in range(3):
-                    g += face[3, i] * (zs[end, i] + t * zs[end, 3 + i] - face[0, i])
+                g = _control_value(face, zs, k, c, third)
                 lo = min(lo, g)
                 hi = max(hi, g)
             if lo > slack:
@@ -390,6 +393,101 @@ def _live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need
                 need[k] = need[k + 1] = True
                 any_live = True
     return any_live
+
+
+#: a sample interval whose part that may meet the element is shorter than this share of it (in η) gets its
+#: samples moved to that part (:func:`_clip_samples`)
+_CLIP_SHARE = 0.5
+#: how far beyond the part that may meet the element a moved sample lies (share of that part, and of the interval)
+_CLIP_MARGIN = 0.05
+
+
+@njit
+def _control_value(face, zs, k, c, third):
+    """Face ``face``'s plane function at Bézier control point c (0 to 3) of the linearised images ``zs`` on
+    sample interval k (``third``: a third of its length in η)."""
+    end = k + c // 2
+    t = third if c == 1 else -third if c == 2 else 0.0
+    v = 0.0
+    for i in range(3):
+        v += face[3, i] * (zs[end, i] + t * zs[end, 3 + i] - face[0, i])
+    return v
+
+
+@njit
+def _clip_samples(code, s, h, linear, errors, eta_s, rs, zs, live, beam_code, Qe, length, s0, s1, s2, H, dH):
+    """Move the samples of a lone live interval (:func:`_live_intervals`) to where the beam element may meet
+    element s, so that their projections start near the element.
+
+    Every point of the element has its linearised image ζ within ε of the reference cube (``errors[s]``): on
+    sample interval k, the beam can meet the element only where the Bézier model of ζ (``zs``, the same four
+    control points as :func:`_live_intervals`) lies behind every face plane within Σ_i |n_i| ε_i + pad. By
+    the convex hull property that part lies in [t_lo, t_hi] of the interval (t in [0, 1]), the span of the
+    control polygon below that level, for every face. A crossing cannot lie outside it. Where a sample
+    bounds no other live interval and [t_lo, t_hi] leaves out more than ``_CLIP_SHARE`` of the interval, the
+    sample is moved to just beyond that end (``_CLIP_MARGIN``). A long beam element cutting a corner of a
+    small curved element otherwise has its samples far outside, where Newton on the element's map follows
+    branches folded far from the element and the cubic model of a face function between them misses a
+    crossing (found by the corner-cut fuzz test: hex20 near its validity limit, a piece 3e-10 long in η).
+    """
+    if not (linear[s, 4, 0] == 0.0 and errors[s, 0] >= 0.0):
+        return
+    S = eta_s.shape[0]
+    faces = solid.faces(code)
+    pad = _interval_pad(linear, s, zs, eta_s, h)
+    for k in range(S - 1):
+        any_live = False
+        for f in range(faces.shape[0]):
+            any_live = any_live or live[k, f]
+        if not any_live:
+            continue
+        third = (eta_s[k + 1] - eta_s[k]) / 3.0
+        t_lo = 0.0
+        t_hi = 1.0
+        for f in range(faces.shape[0]):
+            face = faces[f]
+            slack = _slack(face, errors, s, pad)
+            lo = 2.0
+            hi = -1.0
+            for c in range(4):
+                bc = _control_value(face, zs, k, c, third) - slack
+                if bc <= 0.0:
+                    lo = min(lo, c / 3.0)
+                    hi = max(hi, c / 3.0)
+                for d in range(c + 1, 4):
+                    bd = _control_value(face, zs, k, d, third) - slack
+                    if (bc <= 0.0) != (bd <= 0.0):
+                        t = (c + (d - c) * bc / (bc - bd)) / 3.0
+                        lo = min(lo, t)
+                        hi = max(hi, t)
+            t_lo = max(t_lo, lo)
+            t_hi = min(t_hi, hi)
+        if t_hi < t_lo:
+            continue
+        width = t_hi - t_lo
+        if width > _CLIP_SHARE:
+            continue
+        margin = _CLIP_MARGIN * max(width, 1e-3)
+        left = k == 0
+        if not left:
+            left = True
+            for f in range(faces.shape[0]):
+                left = left and not live[k - 1, f]
+        right = k + 2 == S
+        if not right:
+            right = True
+            for f in range(faces.shape[0]):
+                right = right and not live[k + 1, f]
+        step = eta_s[k + 1] - eta_s[k]
+        a = eta_s[k]
+        if left and t_lo - margin > 0.0:
+            eta_s[k] = a + (t_lo - margin) * step
+            rs[k, 0], rs[k, 1], rs[k, 2], rs[k, 3], rs[k, 4], rs[k, 5] = beam_point(beam_code, Qe, length, s0, s1, s2,
+                                                                                 eta_s[k], H, dH)
+        if right and t_hi + margin < 1.0:
+            eta_s[k + 1] = a + (t_hi + margin) * step
+            rs[k + 1, 0], rs[k + 1, 1], rs[k + 1, 2], rs[k + 1, 3], rs[k + 1, 4], rs[k + 1, 5] = beam_point(
+                beam_code, Qe, length, s0, s1, s2, eta_s[k + 1], H, dH)
 
 
 #: how much deeper than its error bound the linearised image of a point must lie behind (or beyond) the face
@@ -531,6 +629,8 @@ def _pair_crossings_chunk(begin, stop, pair_beam, pair_solid, codes, conn, point
         # the sample intervals the linearised map cannot rule out, and the samples that bound them
         if not _live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need):
             continue
+        _clip_samples(code, s, h, linear, errors, eta_s, rs, zs, live, beam_code, Qe, lengths[e], s0, s1, s2, H,
+                      dH)
         unsearched[p] = SEARCHED
         # samples along the beam element: ξ(η) and dξ/dη = J⁻¹ r'(η) (warm-started Newton)
         solid.centre(code, xi)
