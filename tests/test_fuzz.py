@@ -442,6 +442,27 @@ def corner_cuts(draw):
 CUT_DEPTH = 1e-11
 
 
+def test_a_long_beam_cutting_an_edge_of_a_curved_hex20_keeps_its_piece():
+    """An example :func:`corner_cuts` drew (seed 3911, hexahedron20 curved by half its validity limit, an
+    edge of the solid cut 1e-8 deep by a beam element 91 long): the embedded piece is 3e-10 long in η and
+    lies between two samples 15 away from the element. Found when the crossing search stopped projecting
+    the samples the linearised map rules out: the two it kept followed branches of the map folded far
+    from the element and the cubic model between them missed a face crossing; the samples are now moved
+    near the element first (``segmentation._clip_samples``)."""
+    box = generate.box((0, 0, 0), (SIZE,) * 3, (2, 2, 2), "hexahedron20")
+    rng = np.random.default_rng(3911)
+    solid = _curved_box(box, rng, 0.5)
+    draws = iter(["edge", 8, False])                  # kind, depth 10^-8, a long beam element
+    a, b = _cut(lambda strategy: next(draws), rng, box, solid, outer=True)
+    part = hc.straight(a, b, 1)
+    beams = BeamMesh.hermite(part.positions, part.tangents, part.elements)
+    depth = -hc.containment(solid, (0.5 * (a + b))[None]).min()
+    assert 1e-9 < depth < 1e-7
+    ops = check_scene(beams, solid)
+    s = ops.segments
+    assert len(s) == 1 and s["eta_start"][0] < 0.0 < s["eta_end"][0] and s["eta_end"][0] - s["eta_start"][0] < 1e-9
+
+
 @given(scene=corner_cuts())
 def test_fuzz_corner_and_edge_cuts_at_every_depth(scene):
     """The catalogue's checks, and the piece the first beam cuts off a corner or an edge of the solid is
