@@ -86,6 +86,14 @@ else:
                 live[k, f] = f < solid.faces(code).shape[0] and reach[f]
         return True
 
+if hasattr(sg, "_clip_samples"):
+    clip_samples = sg._clip_samples
+else:
+    @njit
+    def clip_samples(code, s, h, linear, errors, eta_s, rs, zs, live, beam_code, Qe, length, s0, s1, s2, H, dH):
+        """An older checkout: the samples stay where they are."""
+        return
+
 if hasattr(sg, "linear_errors"):
     @njit
     def faces_in_linear_reach(code, X, h, s, linear, errors, beam_code, Qe, length, s0, s1, s2, a, Y, H, dH, reach):
@@ -365,6 +373,7 @@ def crossing_counts(pair_offsets, pair_solid, codes, conn, points, solid_origin,
             if not live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need):
                 out[8] += 1
                 continue
+            clip_samples(code, s, h, linear, errors, eta_s, rs, zs, live, beam_code, Q[e], lengths[e], s0, s1, s2, H, dH)
             out[1] += 1
             solid.centre(code, xi)
             for k in range(S):
