@@ -395,9 +395,11 @@ def _live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need
     return any_live
 
 
-#: a sample interval whose part that may meet the element is shorter than this share of it (in η) gets its
-#: samples moved to that part (:func:`_clip_samples`)
-_CLIP_SHARE = 0.5
+#: a sample of a lone live interval moves towards the part that may meet the element (:func:`_clip_samples`)
+#: when its linearised image lies farther than this beyond a face plane (parameter units: the element is 2
+#: wide) and the part leaves out more than ``_CLIP_SHARE`` of the interval at its end
+_CLIP_FAR = 1.0
+_CLIP_SHARE = 0.25
 #: how far beyond the part that may meet the element a moved sample lies (share of that part, and of the interval)
 _CLIP_MARGIN = 0.05
 
@@ -423,39 +425,48 @@ def _clip_samples(code, s, h, linear, errors, eta_s, rs, zs, live, beam_code, Qe
     sample interval k, the beam can meet the element only where the Bézier model of ζ (``zs``, the same four
     control points as :func:`_live_intervals`) lies behind every face plane within Σ_i |n_i| ε_i + pad. By
     the convex hull property that part lies in [t_lo, t_hi] of the interval (t in [0, 1]), the span of the
-    control polygon below that level, for every face. A crossing cannot lie outside it. Where a sample
-    bounds no other live interval and [t_lo, t_hi] leaves out more than ``_CLIP_SHARE`` of the interval, the
-    sample is moved to just beyond that end (``_CLIP_MARGIN``). A long beam element cutting a corner of a
-    small curved element otherwise has its samples far outside, where Newton on the element's map follows
-    branches folded far from the element and the cubic model of a face function between them misses a
-    crossing (found by the corner-cut fuzz test: hex20 near its validity limit, a piece 3e-10 long in η).
+    control polygon below that level, for every face. A crossing cannot lie outside it. A sample that
+    bounds no other live interval and lies farther than ``_CLIP_FAR`` beyond a face plane moves to just
+    beyond its end of [t_lo, t_hi] (``_CLIP_MARGIN``) if that leaves out more than ``_CLIP_SHARE`` of the
+    interval. A long beam element cutting a corner of a small curved element otherwise has its samples far
+    outside, where Newton on the element's map follows branches folded far from the element and the cubic
+    model of a face function between them misses a crossing (found by the corner-cut fuzz test: a hex20
+    curved by half its validity limit, a piece 3e-10 long in η).
     """
     if not (linear[s, 4, 0] == 0.0 and errors[s, 0] >= 0.0):
         return
     S = eta_s.shape[0]
     faces = solid.faces(code)
-    pad = _interval_pad(linear, s, zs, eta_s, h)
+    pad = -1.0
     for k in range(S - 1):
-        any_live = False
-        for f in range(faces.shape[0]):
-            any_live = any_live or live[k, f]
-        if not any_live:
+        if not _any_live(live, k, faces.shape[0]):
             continue
+        # only a far sample that bounds no other live interval moves
+        left = (k == 0 or not _any_live(live, k - 1, faces.shape[0])) and _beyond(faces, zs, k) > _CLIP_FAR
+        right = (k + 2 == S or not _any_live(live, k + 1, faces.shape[0])) and _beyond(faces, zs, k + 1) > _CLIP_FAR
+        if not (left or right):
+            continue
+        if pad < 0.0:
+            pad = _interval_pad(linear, s, zs, eta_s, h)
         third = (eta_s[k + 1] - eta_s[k]) / 3.0
         t_lo = 0.0
         t_hi = 1.0
         for f in range(faces.shape[0]):
             face = faces[f]
             slack = _slack(face, errors, s, pad)
+            b0 = _control_value(face, zs, k, 0, third) - slack
+            b1 = _control_value(face, zs, k, 1, third) - slack
+            b2 = _control_value(face, zs, k, 2, third) - slack
+            b3 = _control_value(face, zs, k, 3, third) - slack
             lo = 2.0
             hi = -1.0
             for c in range(4):
-                bc = _control_value(face, zs, k, c, third) - slack
+                bc = b0 if c == 0 else b1 if c == 1 else b2 if c == 2 else b3
                 if bc <= 0.0:
                     lo = min(lo, c / 3.0)
                     hi = max(hi, c / 3.0)
                 for d in range(c + 1, 4):
-                    bd = _control_value(face, zs, k, d, third) - slack
+                    bd = b1 if d == 1 else b2 if d == 2 else b3
                     if (bc <= 0.0) != (bd <= 0.0):
                         t = (c + (d - c) * bc / (bc - bd)) / 3.0
                         lo = min(lo, t)
@@ -464,30 +475,37 @@ def _clip_samples(code, s, h, linear, errors, eta_s, rs, zs, live, beam_code, Qe
             t_hi = min(t_hi, hi)
         if t_hi < t_lo:
             continue
-        width = t_hi - t_lo
-        if width > _CLIP_SHARE:
-            continue
-        margin = _CLIP_MARGIN * max(width, 1e-3)
-        left = k == 0
-        if not left:
-            left = True
-            for f in range(faces.shape[0]):
-                left = left and not live[k - 1, f]
-        right = k + 2 == S
-        if not right:
-            right = True
-            for f in range(faces.shape[0]):
-                right = right and not live[k + 1, f]
+        margin = _CLIP_MARGIN * max(t_hi - t_lo, 1e-3)
         step = eta_s[k + 1] - eta_s[k]
         a = eta_s[k]
-        if left and t_lo - margin > 0.0:
+        if left and t_lo - margin > _CLIP_SHARE:
             eta_s[k] = a + (t_lo - margin) * step
             rs[k, 0], rs[k, 1], rs[k, 2], rs[k, 3], rs[k, 4], rs[k, 5] = beam_point(beam_code, Qe, length, s0, s1, s2,
                                                                                  eta_s[k], H, dH)
-        if right and t_hi + margin < 1.0:
+        if right and t_hi + margin < 1.0 - _CLIP_SHARE:
             eta_s[k + 1] = a + (t_hi + margin) * step
             rs[k + 1, 0], rs[k + 1, 1], rs[k + 1, 2], rs[k + 1, 3], rs[k + 1, 4], rs[k + 1, 5] = beam_point(
                 beam_code, Qe, length, s0, s1, s2, eta_s[k + 1], H, dH)
+
+
+@njit
+def _any_live(live, k, n_faces):
+    """Whether sample interval k is live for some face."""
+    for f in range(n_faces):
+        if live[k, f]:
+            return True
+    return False
+
+
+@njit
+def _beyond(faces, zs, k):
+    """How far beyond the farthest face plane the linearised image of sample k lies (negative: inside)."""
+    out = -np.inf
+    for f in range(faces.shape[0]):
+        face = faces[f]
+        out = max(out, face[3, 0] * (zs[k, 0] - face[0, 0]) + face[3, 1] * (zs[k, 1] - face[0, 1])
+                  + face[3, 2] * (zs[k, 2] - face[0, 2]))
+    return out
 
 
 #: how much deeper than its error bound the linearised image of a point must lie behind (or beyond) the face
