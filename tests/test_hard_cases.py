@@ -125,6 +125,12 @@ RANDOM_REGRESSIONS = {
 }
 
 
+#: found by the crossing search alone since its samples far outside a curved element move near it first
+#: (``segmentation._clip_samples``): two search points on a hexahedron20, one interval whose ends lie far
+#: beyond the faces; the two other cases still need the fallback
+RESOLVED_BY_THE_SEARCH = {"rand_111_hex20"}
+
+
 def _random_regression(name):
     element, seed, search_points, a, b, t1, t2 = RANDOM_REGRESSIONS[name]
     solid = generate.distort(generate.box((0, 0, 0), (2, 2, 2), (2, 2, 2), element), 0.2, seed=seed)
@@ -138,7 +144,10 @@ def test_random_regression_resolved_by_the_fallback(name):
         warnings.simplefilter("error")
         ops = hc.assemble(case, search_points=search_points)
     d = ops.diagnostics
-    assert d["segmentation_fallbacks"] >= 1 and d["segmentation_unresolved"] == 0, d
+    if name in RESOLVED_BY_THE_SEARCH:
+        assert d["segmentation_fallbacks"] == 0 and d["segmentation_unresolved"] == 0, d
+    else:
+        assert d["segmentation_fallbacks"] >= 1 and d["segmentation_unresolved"] == 0, d
     hc.check_finite(ops)
     hc.check_tiling(ops, case)
     hc.check_certificates(ops, case)
