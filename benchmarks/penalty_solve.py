@@ -29,7 +29,8 @@ set-up and its applications spent their time (:attr:`AuxiliarySpacePreconditione
 every AMG hierarchy (the solid alone's, the auxiliary space's), its levels, operator complexity
 (entries of all levels over the finest's), entries per row of the finest level (scalar rows, 3x3
 blocks counted as 9 entries) and the size of the coarsest; for the auxiliary space also the entries
-per row of ``A_aux`` itself, and the user and system CPU seconds and minor page faults of every set-up
+of ``A`` and of its block ``A_BS`` (what CG's product and an application multiply with besides the
+V-cycle) and the entries per row of ``A_aux`` itself, and the user and system CPU seconds and minor page faults of every set-up
 (the solid's AMG hierarchy, the auxiliary space: fresh memory that the kernel faults in and zeroes is
 system time); ``--cprofile K`` prints the K functions that took the most CPU seconds of the auxiliary
 space's set-up, ``--cprofile-solve K`` those of every solver's solve after its set-up (CG, the
@@ -153,7 +154,8 @@ def run(A, b, rtol, maxiter, options, split, profile, cprofile=0, cprofile_solve
         else:
             info["timings"] = pre.timings
             sparse = pre.sparse_auxiliary
-            info["hierarchy"] = (f"A_aux {pre.auxiliary_nnz / len(split['solid']):.1f} entries per row"
+            info["hierarchy"] = (f"A {A.nnz} entries (A_BS {pre.A_bs.nnz}); "
+                                 f"A_aux {pre.auxiliary_nnz / len(split['solid']):.1f} entries per row"
                                  + ("" if sparse is None else f", sparsified {sparse.nnz / sparse.shape[0]:.1f}")
                                  + "; " + hierarchy(pre.amg))
     info["cpu_time"] = time.process_time() - cpu
