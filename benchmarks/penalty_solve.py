@@ -1,6 +1,6 @@
 """Linear solve of the penalty system of ``fibre_cube(n, 1000, 20)`` against the solid it sits in.
 
-    python benchmarks/penalty_solve.py --n 20 40 [--direct 20] [--plain 10] [--schur 20 40] [--penalty-factor 1e3] [--profile] [--cprofile 25]
+    python benchmarks/penalty_solve.py --n 20 40 [--direct 20] [--plain 10] [--schur 20 40] [--penalty-factor 1e3] [--profile] [--cprofile 25] [--cprofile-solve 25]
                                        [--repeat 3] [--aux 0:0 1:0.02:1e-3:f 1:0.02:1e-3:f:sparsify=1e-3:compensation=abs]
 
 The system is the linearised model (solid: linear elastic E = 1e9, ν = 0.3, clamped at x = 0,
@@ -29,10 +29,12 @@ set-up and its applications spent their time (:attr:`AuxiliarySpacePreconditione
 every AMG hierarchy (the solid alone's, the auxiliary space's), its levels, operator complexity
 (entries of all levels over the finest's), entries per row of the finest level (scalar rows, 3x3
 blocks counted as 9 entries) and the size of the coarsest; for the auxiliary space also the entries
-per row of ``A_aux`` itself, and the user and system CPU seconds and minor page faults of every set-up
+of ``A`` and of its block ``A_BS`` (what CG's product and an application multiply with besides the
+V-cycle) and the entries per row of ``A_aux`` itself, and the user and system CPU seconds and minor page faults of every set-up
 (the solid's AMG hierarchy, the auxiliary space: fresh memory that the kernel faults in and zeroes is
 system time); ``--cprofile K`` prints the K functions that took the most CPU seconds of the auxiliary
-space's set-up; ``--small-pages`` keeps NumPy from asking for huge pages, so that those faults count the
+space's set-up, ``--cprofile-solve K`` those of every solver's solve after its set-up (CG, the
+preconditioner's applications); ``--small-pages`` keeps NumPy from asking for huge pages, so that those faults count the
 fresh memory of a set-up in 4 KiB pages.
 The 1-minute load average is printed with every row: wall times on a shared machine are only
 comparable at the same load; ``--repeat k`` keeps the fastest of k solves of each system.
@@ -100,7 +102,13 @@ def peak_memory_gb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
 
 
-def run(A, b, rtol, maxiter, options, split, profile, cprofile=0):
+def top_functions(profiler, k, what):
+    """Print the ``k`` functions that took the most CPU seconds (own time) under ``profiler``."""
+    print(f"      {what}, CPU seconds by function (cProfile, top {k} by own time):", flush=True)
+    pstats.Stats(profiler, stream=sys.stdout).sort_stats("tottime").print_stats(k)
+
+
+def run(A, b, rtol, maxiter, options, split, profile, cprofile=0, cprofile_solve=0):
     """One timed solve: (x, info) with ``cpu_time``, ``load``, ``memory`` added (and ``timings``
     of the auxiliary space and ``setup_usage`` with ``profile``). ``options["smoothing"]`` (aux and schur): ``(k, θ, drop, filter)``,
     the auxiliary space is built here with those settings; ``cprofile > 0`` prints the functions that took
@@ -122,15 +130,20 @@ def run(A, b, rtol, maxiter, options, split, profile, cprofile=0):
             smoothing=smoothing, theta=theta, drop=drop, filter_entries=filt, **extra))
         if profiler is not None:
             profiler.disable()
-            print(f"      set-up, CPU seconds by function (cProfile, top {cprofile} by own time):", flush=True)
-            pstats.Stats(profiler, stream=sys.stdout).sort_stats("tottime").print_stats(cprofile)
+            top_functions(profiler, cprofile, "set-up")
     elif options["method"] == "amg":      # the hierarchy solve_linear would build, built here to time it
         options = dict(options, preconditioner=build_amg(A, options["near_nullspace"], block_size=options["block_size"]))
     setup = time.perf_counter() - t
     setup_cpu = time.process_time() - cpu
     after = resource.getrusage(resource.RUSAGE_SELF)
     setup_usage = (after.ru_utime - usage.ru_utime, after.ru_stime - usage.ru_stime, after.ru_minflt - usage.ru_minflt)
+    profiler = cProfile.Profile(time.process_time) if cprofile_solve else None
+    if profiler is not None:
+        profiler.enable()
     x, info = solve_linear(A, b, rtol=rtol, maxiter=maxiter, **options)
+    if profiler is not None:
+        profiler.disable()
+        top_functions(profiler, cprofile_solve, "solve after the set-up")
     info["setup_time"] += setup
     info["setup_cpu"] = setup_cpu
     if profile:
@@ -141,7 +154,8 @@ def run(A, b, rtol, maxiter, options, split, profile, cprofile=0):
         else:
             info["timings"] = pre.timings
             sparse = pre.sparse_auxiliary
-            info["hierarchy"] = (f"A_aux {pre.auxiliary_nnz / len(split['solid']):.1f} entries per row"
+            info["hierarchy"] = (f"A {A.nnz} entries (A_BS {pre.A_bs.nnz}); "
+                                 f"A_aux {pre.auxiliary_nnz / len(split['solid']):.1f} entries per row"
                                  + ("" if sparse is None else f", sparsified {sparse.nnz / sparse.shape[0]:.1f}")
                                  + "; " + hierarchy(pre.amg))
     info["cpu_time"] = time.process_time() - cpu
@@ -174,6 +188,10 @@ def main(argv=None):
     parser.add_argument("--cprofile", type=int, default=0, metavar="K",
                         help="print the K functions that took the most CPU seconds of each auxiliary space's "
                              "set-up (the first of --repeat; cProfile, whose own cost is in that run's figures)")
+    parser.add_argument("--cprofile-solve", type=int, default=0, metavar="K",
+                        help="print the K functions that took the most CPU seconds of the solve after the "
+                             "set-up (CG and its preconditioner applications; the first of --repeat of every "
+                             "solver row, the solid alone's too; cProfile, whose own cost is in that run's figures)")
     parser.add_argument("--small-pages", action="store_true",
                         help="NumPy's big arrays in 4 KiB pages (no madvise for huge pages), so that the minor "
                              "page faults of a set-up (--profile) count its fresh memory in 4 KiB units")
@@ -215,7 +233,8 @@ def main(argv=None):
                 try:
                     x, info = run(A, b, args.rtol, args.maxiter, kw, split,
                                   args.profile and name.startswith(("aux", "solid")),
-                                  args.cprofile if best is None and name.startswith("aux") else 0)
+                                  args.cprofile if best is None and name.startswith("aux") else 0,
+                                  args.cprofile_solve if best is None else 0)
                 except LinearSolverError as error:      # a variant that does not converge: say so, go on
                     print(f"{sizes} {name:>12} did not converge: {str(error).split('. Try')[0]}", flush=True)
                     break

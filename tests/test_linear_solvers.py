@@ -512,3 +512,29 @@ def test_amg_setup_is_repeatable_and_leaves_the_callers_random_stream_alone():
     np.random.seed(1)
     build_amg(A, block_size=1)
     assert np.random.rand() == after       # the caller's stream continues as if nothing happened
+
+
+@pytest.mark.parametrize("case", ["elasticity", "three levels", "one level", "auxiliary"])
+def test_v_cycle_is_pyamgs_preconditioner_bit_for_bit(medium, case):
+    """VCycle skips the norms and residual products of pyamg's solve around its one cycle, and
+    returns exactly what ``ml.aspreconditioner(cycle="V")`` returns: 2 levels (medium elasticity,
+    3x3 blocks), 3 levels (a 1D Laplacian of 3000 rows), 1 level (coarse solve only), and the
+    sparsified auxiliary-space hierarchy, whose finest smoother is replaced."""
+    from mortar1d3d.solvers.amg import VCycle, build_amg
+    if case == "auxiliary":
+        A = penalty_matrix(medium, 1e3)
+        aux = AuxiliarySpacePreconditioner(A, medium["solid"], medium["beam"], follow_prolongation(medium),
+                                           medium["R"][medium["solid"]], block_size=3)
+        ml = aux.amg
+        assert isinstance(aux._cycle, VCycle)
+    elif case == "elasticity":
+        ml = build_amg(penalty_matrix(medium, 20.0), medium["R"])
+    else:
+        A = sp.diags([-1.0, 2.0, -1.0], [-1, 0, 1], shape=(3000, 3000), format="csr") + 1e-3 * sp.eye(3000)
+        ml = build_amg(A, block_size=1)
+        if case == "one level":
+            ml.levels = ml.levels[-1:]
+    assert len(ml.levels) == {"elasticity": 2, "three levels": 3, "one level": 1, "auxiliary": 2}[case]
+    b = np.random.default_rng(5).standard_normal(ml.levels[0].A.shape[0])
+    ours, pyamgs = VCycle(ml).matvec(b), ml.aspreconditioner(cycle="V").matvec(b)
+    assert np.array_equal(ours, pyamgs) and np.abs(ours).max() > 0

@@ -39,7 +39,7 @@ import time
 import numpy as np
 
 from ._common import LinearSolverError, check_square, check_vector, split_dofs
-from .amg import AMG_SEED, build_amg
+from .amg import AMG_SEED, VCycle, build_amg
 from .dependent import DEPENDENT_ROW_TOLERANCE, DependentRows, dependent_rows
 from .direct import (BANDED_MAX_BANDWIDTH, DIRECT_MAX_DOFS, BandedCholesky, bandwidth, factorize,  # noqa: F401
                      factorize_spd_block)
@@ -181,7 +181,7 @@ def solve_linear(A, b, method="auto", *, near_nullspace=None, rtol=1e-10, maxite
         info["preconditioner"] = preconditioner
     else:
         ml = preconditioner if preconditioner is not None else build_amg(A, near_nullspace, block_size=block_size)
-        M = ml.aspreconditioner(cycle="V")
+        M = VCycle(ml)
         info["amg_levels"] = len(ml.levels)
         info["preconditioner"] = ml
     info["setup_time"] = time.perf_counter() - t

@@ -8,7 +8,7 @@ import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import connected_components
 
 from ._common import check_square, split_dofs
-from .amg import _block_size, build_amg
+from .amg import VCycle, _block_size, build_amg
 from ._products import drop_weak_node_blocks, extend_and_add
 from .direct import factorize_spd_block
 
@@ -252,7 +252,7 @@ class AuxiliarySpacePreconditioner:
         if sparse is not hierarchy_matrix:
             _smooth_finest_with(self.amg, sparse)
         self.sparse_auxiliary = sparse if sparsify > 0 else None
-        self._cycle = self.amg.aspreconditioner(cycle="V")
+        self._cycle = VCycle(self.amg)
         self.timings["amg set-up"] = time.perf_counter() - t
         self.timings["beam factorisation"] = factor_time
         self.timings.update({"applications": 0.0, "amg cycles": 0.0, "beam solves": 0.0})

@@ -12,7 +12,7 @@ import scipy.sparse.linalg as spla
 
 from ..errors import CouplingWarning, format_ids
 from ._common import LinearSolverError, check_square, check_vector, split_dofs
-from .amg import build_amg
+from .amg import VCycle, build_amg
 from .dependent import DependentRows, dependent_rows
 from .direct import DIRECT_MAX_DOFS, factorize
 from .krylov import raise_not_converged, roundoff_level, run_krylov
@@ -390,12 +390,12 @@ def solve_saddle(K, B, kappa, b, c, method="auto", *, solid=None, beam=None, pen
             apply_primal = aux.matvec
         elif primal == "monolithic":
             ml = build_amg(K_gamma, null, block_size=block_size)
-            apply_primal = ml.aspreconditioner(cycle="V").matvec
+            apply_primal = VCycle(ml).matvec
             levels = len(ml.levels)
         else:
             ml = build_amg(K_gamma[solid][:, solid], None if null is None else null[solid])
             levels = len(ml.levels)
-            amg = ml.aspreconditioner(cycle="V")
+            amg = VCycle(ml)
             lu_beam = factorize(K_gamma[beam][:, beam], symmetric_positive=True) if len(beam) else None
 
             def apply_primal(r):

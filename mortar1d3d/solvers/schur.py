@@ -4,6 +4,7 @@ import numpy as np
 import scipy.sparse.linalg as spla
 
 from .krylov import roundoff_level, run_krylov
+from .preconditioners import _row_block
 
 __all__ = ["SchurComplement", "schur_cg"]
 
@@ -34,7 +35,13 @@ class SchurComplement:
         pre = preconditioner
         self._s, self._b = pre._s, pre._b
         self.n = pre.shape[0]
-        self.rows = pre.A[self._s].tocsr()                    # [A_SS, A_SB]
+        A = pre.A
+        if isinstance(self._s, slice) and A.format == "csr":
+            # the solid rows of A as they are (the model numbers the solid DOFs first): no copy of
+            # them (get_csr_submatrix took 0.1 CPU s at n = 20 of fibre_cube(n, 1000, 20))
+            self.rows = _row_block(A, self._s)                 # [A_SS, A_SB]
+        else:
+            self.rows = A[self._s].tocsr()
         self.coupling = pre.A_bs                              # A_BS
         self.factor = pre._beam_factor
         n_s = self.rows.shape[0]
