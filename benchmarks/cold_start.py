@@ -1,6 +1,7 @@
 """Cold start of a checkout's package: a fresh process, an empty kernel cache, one compile.
 
-    .venv/bin/python benchmarks/cold_start.py [--package CHECKOUT] [--what first|element|warmup|demo] [--kernels 25]
+    .venv/bin/python benchmarks/cold_start.py [--package CHECKOUT] [--what first|element|warmup|demo]
+                                              [--elements NAME ...] [--kernels 25]
 
 ``--what first`` (default): ``import mortar1d3d`` and the first segment- and element-based
 assembly of a tiny hex8 scene (``STARTUP_CODE`` of ``test_startup.py``); ``--what warmup``:
@@ -36,7 +37,9 @@ again in its caller): ``--dump`` records each compilation's stages and the funct
 ``--what element``: ``import mortar1d3d`` and the first element-based assembly of the same scene
 alone (what a user of element-based integration waits for on a first run). ``--what demo``: the
 warm-up the demo runs before its first result, ``warmup(elements=["hexahedron"],
-integrations=["segment", "element"], physics=False)`` (the engine's kernels a hex8 scene runs).
+integrations=["segment", "element"], physics=False)`` (the engine's kernels a hex8 scene runs);
+with ``--elements NAME ...`` (meshio names, e.g. ``hexahedron27``) the same warm-up for those element
+types instead of hex8 (what a user of curved elements would run before a first scene).
 
 ``--warm [N]``: afterwards the same code N (default 1) more times, each in a fresh process with the
 now populated cache (the warm start: every kernel loaded, nothing compiled); their CPU seconds and
@@ -327,6 +330,8 @@ def main(argv=None):
     parser.add_argument("--package", default=str(Path(__file__).resolve().parents[1]), metavar="CHECKOUT",
                         help="directory holding the mortar1d3d package to start (default: this checkout)")
     parser.add_argument("--what", choices=("first", "element", "warmup", "demo"), default="first")
+    parser.add_argument("--elements", nargs="+", metavar="NAME",
+                        help="with --what demo: warm up these solid element types (meshio names) instead of hex8")
     parser.add_argument("--kernels", type=int, default=0, metavar="N",
                         help="list the N functions with the largest own compile time")
     parser.add_argument("--warm", type=int, nargs="?", const=1, default=0, metavar="N",
@@ -356,7 +361,10 @@ def main(argv=None):
     root = Path(args.package).resolve()
     if not (root / "mortar1d3d" / "__init__.py").is_file():
         parser.error(f"--package: no mortar1d3d package in {root}")
-    code = {"first": STARTUP_CODE, "element": ELEMENT_CODE, "warmup": WARMUP_CODE, "demo": DEMO_CODE}[args.what]
+    if args.elements and args.what != "demo":
+        parser.error("--elements: only with --what demo")
+    demo = DEMO_CODE.replace("['hexahedron']", repr(list(args.elements))) if args.elements else DEMO_CODE
+    code = {"first": STARTUP_CODE, "element": ELEMENT_CODE, "warmup": WARMUP_CODE, "demo": demo}[args.what]
     if args.kernels > 0:
         dump = repr(str(Path(args.dump).resolve())) if args.dump else "None"
         code = RECORDER_CODE.replace("KERNELS", str(args.kernels)).replace("DUMP", dump) + "\n" + code
@@ -376,8 +384,8 @@ def main(argv=None):
             where = "from an empty cache" if cold else "with a populated cache (warm start)"
             print(f"{args.what} {where}, package {root}: {child['wall_s']:.1f} s wall{inside}, "
                   f"{child['cpu_s']:.2f} CPU s", flush=True)
-        record("cold_start", what=args.what, package=str(root), cold=next((r for r in runs if r["cold"]), None),
-               warm=[r for r in runs if not r["cold"]])
+        record("cold_start", what=args.what, elements=args.elements, package=str(root),
+               cold=next((r for r in runs if r["cold"]), None), warm=[r for r in runs if not r["cold"]])
     finally:
         if not args.cache:
             shutil.rmtree(cache, ignore_errors=True)

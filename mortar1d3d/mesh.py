@@ -5,9 +5,8 @@ Inputs are checked here, once; kernels downstream assume valid data.
 import warnings
 
 import numpy as np
-from numba import prange
 
-from ._config import njit, njit_parallel
+from ._config import njit
 from .elements.beam import BEAM_ELEMENTS, MAX_FUNCTIONS, beam_element
 from .elements.beam import evaluate as _beam_functions
 from .elements.solid.dispatch import N_NODES, NODAL_ELEMENTS, solid_element
@@ -356,9 +355,12 @@ class BeamMesh:
     def centreline_dofs(self):
         """Reference centreline DOF vector q_B (docs/conventions.md §2 layout)."""
         if self.tangents is not None:
-            q = np.empty(6 * self.n_nodes)
-            _interleave(self.positions, self.tangents, q)
-            return q
+            # [r_0, t_0, r_1, t_1, ...]: two strided copies (a compiled parallel loop cost a first run
+            # about a second of compiling for what is one pass over the nodes, once per model)
+            q = np.empty((self.n_nodes, 2, 3))
+            q[:, 0] = self.positions
+            q[:, 1] = self.tangents
+            return q.reshape(-1)
         return self.positions.ravel().copy()
 
     def coefficients(self, elements=None):
@@ -402,15 +404,6 @@ class BeamMesh:
     def __repr__(self):
         return (f"BeamMesh({self.element_type.name}: {self.n_nodes} nodes, {self.n_elements} elements, "
                 f"length {self.length:.6g})")
-
-
-@njit_parallel
-def _interleave(positions, tangents, q):
-    """q = [r_0, t_0, r_1, t_1, ...] (6 per node)."""
-    for a in prange(positions.shape[0]):
-        for i in range(3):
-            q[6 * a + i] = positions[a, i]
-            q[6 * a + 3 + i] = tangents[a, i]
 
 
 @njit

@@ -7,18 +7,29 @@ INTEGRATIONS = ("segment", "element", "auto")
 
 def _engine_scene(name):
     """(beams, solid) of a tiny scene of solid element type ``name``: a fibre in a 2 x 2 x 2 box for
-    the Lagrange types, a fibre along a quarter of a hollow cylinder (rational weights) for NURBS."""
+    hex8, six fibres in a distorted 3 x 3 x 3 box for the other Lagrange types, a fibre along a
+    quarter of a hollow cylinder (rational weights) for NURBS.
+
+    The other types' box is distorted (:func:`~mortar1d3d.generate.distort`: its interior nodes
+    moved), so that its elements are curved as in their scenes: an undistorted box's elements are
+    affine, located without a Newton step, and left the Newton versions a curved element runs
+    (projection, polishing, face crossings) and its one-to-one certificate to be compiled at a
+    user's first curved scene (one fibre in 2 x 2 x 2 elements met neither a crossing that needs the
+    face Newton nor a point that needs the certificate). hex8's Newton path is compiled into the
+    kernels whatever the scene; its certificate and the rare paths, which the distorted scene also
+    runs (about 4 CPU s of compiling), are left to a hex8 scene's first use (the demo's scene is
+    undistorted)."""
     import numpy as np
 
     from . import generate
     from .elements import solid_element
 
     element = solid_element(name)
-    beams, cube = generate.fibre_cube(2, 1, 2)
     if name == "hexahedron":
-        return beams, cube
+        return generate.fibre_cube(2, 1, 2)
+    beams, _ = generate.fibre_cube(3, 6, 3)
     if not element.rational:
-        return beams, generate.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (2, 2, 2), element=name)
+        return beams, generate.distort(generate.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (3, 3, 3), element=name), 0.1)
     from . import nurbs
 
     pipe = nurbs.hollow_cylinder(0.2, 0.3, 1.0, angle=90.0, elements=(1, 2, 2), degree=element.degree)
@@ -37,8 +48,11 @@ def warmup(verbose=False, elements=None, integrations=INTEGRATIONS, physics=True
     ``elements`` (meshio names of solid element types, e.g. ``["hexahedron"]``) limits the engine
     to tiny scenes of those types with the given ``integrations`` and leaves out the lazy callees
     those scenes do not run: what a scene of those types compiles on its first call, paid up front.
-    A path the tiny scenes do not take (a rare fallback of locating a point, say) still compiles
-    when a later scene first takes it. ``physics=False`` leaves out the physics.
+    The tiny scenes of the types other than hex8 are distorted (curved elements: the Newton
+    projection, the face Newton of the crossings and the one-to-one certificate run). A path they
+    do not take (a rare fallback of locating a point, numpy's sort of a long candidate list, and for
+    hex8 the certificate of a curved element) still compiles when a later scene first takes it.
+    ``physics=False`` leaves out the physics.
     Returns the elapsed time in seconds.
     """
     from ._config import announce_compilation

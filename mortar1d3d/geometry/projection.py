@@ -776,11 +776,11 @@ def _linear_maps_worker(worker, claims, points, conn, codes, solid_origin, solid
     xc = np.empty(3)
     begin, stop = claim(claims, n, worker)
     while begin < stop:
-        _linear_maps_chunk_call(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, xc)
+        _linear_maps_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, xc)
         begin, stop = claim(claims, n, worker)
 
 
-@njit
+@njit_inline
 def _linear_maps_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, table, X, N, dN, xc):
     # the caller holds every array for this call: the calls per element pass them without reference
     # counting (see mortar1d3d._borrowed)
@@ -803,9 +803,8 @@ def _linear_maps_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, 
             table[s, :, :] = np.nan
 
 
-#: the loop body of :func:`linear_maps` (per claimed chunk), optimised once: called through a symbol
-_linear_maps_chunk_call = unlinked(_linear_maps_chunk)
-#: the kernel's workers run on the package's one parallel loop (see mortar1d3d._parallel)
+#: the kernel's workers run on the package's one parallel loop (see mortar1d3d._parallel); the worker, compiled
+#: on its own and called through a symbol, inlines its loop body (``njit_inline``), which is optimised once
 _linear_maps_workers = in_parallel(_linear_maps_worker)
 
 

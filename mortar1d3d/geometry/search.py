@@ -106,11 +106,11 @@ def _solid_boxes_worker(worker, claims, points, conn, codes, padding, boxes, siz
     C = np.empty((MAX_CONTROL, 3))
     begin, stop = claim(claims, conn.shape[0], worker)
     while begin < stop:
-        _solid_boxes_chunk_call(begin, stop, points, conn, codes, padding, boxes, size, origin, X, C)
+        _solid_boxes_chunk(begin, stop, points, conn, codes, padding, boxes, size, origin, X, C)
         begin, stop = claim(claims, conn.shape[0], worker)
 
 
-@njit
+@njit_inline
 def _solid_boxes_chunk(begin, stop, points, conn, codes, padding, boxes, size, origin, X, C):
     # the caller holds every array for this call: the calls per element pass them without reference
     # counting (see mortar1d3d._borrowed)
@@ -125,10 +125,9 @@ def _solid_boxes_chunk(begin, stop, points, conn, codes, padding, boxes, size, o
         size[s] = _finish_box(boxes[s], padding)
 
 
-#: the loop bodies of the search's parallel kernels (per claimed chunk or part), optimised once: called
-#: through a symbol, not compiled into each parallel body and its kernel again (see mortar1d3d._unlinked)
-_solid_boxes_chunk_call = unlinked(_solid_boxes_chunk)
-#: the kernels' workers run on the package's one parallel loop (see mortar1d3d._parallel)
+#: the kernels' workers run on the package's one parallel loop (see mortar1d3d._parallel); a worker is
+#: compiled on its own and called through a symbol, so the loop bodies it inlines (``_X_chunk``,
+#: ``njit_inline``: one function compiled instead of a worker and a chunk function) are optimised once
 _solid_boxes_workers = in_parallel(_solid_boxes_worker)
 
 
@@ -351,7 +350,7 @@ def _cell_totals_worker(worker, claims, beam_boxes, cell_offsets, lower, inv_cel
     hi = np.empty(3, dtype=np.int64)
     begin, stop = claim(claims, n_beam, worker)
     while begin < stop:
-        _cell_totals_chunk_call(begin, stop, beam_boxes, cell_offsets, lower, inv_cell, dims, lo, hi, bound)
+        _cell_totals_chunk(begin, stop, beam_boxes, cell_offsets, lower, inv_cell, dims, lo, hi, bound)
         begin, stop = claim(claims, n_beam, worker)
 
 
@@ -364,8 +363,8 @@ def _candidates_worker(worker, claims, beam_boxes, solid_boxes, cell_offsets, ce
     seen = np.full(solid_boxes.shape[0], -1, dtype=np.int64)
     begin, stop = claim(claims, n_beam, worker)
     while begin < stop:
-        _candidates_chunk_call(begin, stop, beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims,
-                               lo, hi, work, room, counts, seen)
+        _candidates_chunk(begin, stop, beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims,
+                          lo, hi, work, room, counts, seen)
         begin, stop = claim(claims, n_beam, worker)
 
 
@@ -374,11 +373,11 @@ def _pack_worker(worker, claims, counts, offsets, room, work, solids):
     n_beam = counts.shape[0] - 1
     begin, stop = claim(claims, n_beam, worker)
     while begin < stop:
-        _pack_chunk_call(begin, stop, counts, offsets, room, work, solids)
+        _pack_chunk(begin, stop, counts, offsets, room, work, solids)
         begin, stop = claim(claims, n_beam, worker)
 
 
-@njit
+@njit_inline
 def _cell_totals_chunk(begin, stop, beam_boxes, cell_offsets, lower, inv_cell, dims, lo, hi, bound):
     beam_boxes, cell_offsets, lower, dims, lo, hi, bound = borrowed(beam_boxes, cell_offsets, lower, dims, lo, hi,
                                                                     bound)
@@ -386,7 +385,7 @@ def _cell_totals_chunk(begin, stop, beam_boxes, cell_offsets, lower, inv_cell, d
         bound[e + 1] = _cell_total(beam_boxes[e], cell_offsets, lower, inv_cell, dims, lo, hi)
 
 
-@njit
+@njit_inline
 def _candidates_chunk(begin, stop, beam_boxes, solid_boxes, cell_offsets, cell_ids, lower, inv_cell, dims, lo, hi, work,
                       room, counts, seen):
     # the caller holds every array for this call: the call per beam element passes them without
@@ -398,16 +397,13 @@ def _candidates_chunk(begin, stop, beam_boxes, solid_boxes, cell_offsets, cell_i
                                             dims, lo, hi, work[room[e]:room[e + 1]], seen, e)
 
 
-@njit
+@njit_inline
 def _pack_chunk(begin, stop, counts, offsets, room, work, solids):
     for e in range(begin, stop):
         for q in range(counts[e + 1]):
             solids[offsets[e] + q] = work[room[e] + q]
 
 
-_cell_totals_chunk_call = unlinked(_cell_totals_chunk)
-_candidates_chunk_call = unlinked(_candidates_chunk)
-_pack_chunk_call = unlinked(_pack_chunk)
 _cell_totals_workers = in_parallel(_cell_totals_worker)
 _candidates_workers = in_parallel(_candidates_worker)
 _pack_workers = in_parallel(_pack_worker)
@@ -530,11 +526,11 @@ def _solid_hulls_worker(worker, claims, points, conn, codes, solid_origin, solid
     C = np.empty((MAX_CONTROL, 3))
     begin, stop = claim(claims, n, worker)
     while begin < stop:
-        _solid_hulls_chunk_call(begin, stop, points, conn, codes, solid_origin, solid_h, margin, hull, X, C)
+        _solid_hulls_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, margin, hull, X, C)
         begin, stop = claim(claims, n, worker)
 
 
-@njit
+@njit_inline
 def _solid_hulls_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, margin, hull, X, C):
     points, conn, codes, solid_origin, solid_h, hull, X, C = borrowed(points, conn, codes, solid_origin, solid_h,
                                                                      hull, X, C)
@@ -561,7 +557,6 @@ def _solid_hulls_chunk(begin, stop, points, conn, codes, solid_origin, solid_h, 
         _hull_planes_call(code, X, C, margin * solid_h[s] * spread + _SHIFT_ROUND_OFF * big, hull[s])
 
 
-_solid_hulls_chunk_call = unlinked(_solid_hulls_chunk)
 _solid_hulls_workers = in_parallel(_solid_hulls_worker)
 #: lazily through a symbol (once per element): a mesh of types without hull planes (hex8) never compiles it
 _hull_planes_call = unlinked(hull_planes, returns=types.none)

@@ -15,10 +15,9 @@ from functools import partial
 import numpy as np
 
 from .._borrowed import borrowed
-from .._config import CHUNK, announce_compilation, njit
+from .._config import CHUNK, announce_compilation, njit, njit_inline
 from .._memory import carve
 from .._parallel import in_parallel
-from .._unlinked import unlinked
 from .._schedule import claim, n_chunks, new_claims, workers
 from ..elements.multiplier import multiplier as multiplier_type
 from ..elements.multiplier import shape as lm_shape
@@ -168,13 +167,13 @@ def _group_operators_worker(worker, claims, group_start, p_beam, p_solid, eta, x
     kg = np.empty(4)
     begin, stop = claim(claims, n_groups, worker)
     while begin < stop:
-        _group_operators_chunk_call(begin, stop, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths,
-                                    n_phi, codes, conn, points, m_offsets, D_local, M_local, kappa_local, Dg, Mg,
-                                    kg, Phi, H, N, nH)
+        _group_operators_chunk(begin, stop, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths,
+                               n_phi, codes, conn, points, m_offsets, D_local, M_local, kappa_local, Dg, Mg,
+                               kg, Phi, H, N, nH)
         begin, stop = claim(claims, n_groups, worker)
 
 
-@njit
+@njit_inline
 def _group_operators_chunk(begin, stop, group_start, p_beam, p_solid, eta, xi, weight, beam_code, lengths, n_phi,
                            codes, conn, points, m_offsets, D_local, M_local, kappa_local, Dg, Mg, kg, Phi, H, N, nH):
     # the caller holds every array for this call: the calls per point pass them without reference
@@ -215,9 +214,8 @@ def _group_operators_chunk(begin, stop, group_start, p_beam, p_solid, eta, xi, w
                 M_local[base + a] = Mg[j, a]
 
 
-#: the loop body of :func:`_group_operators` (per claimed chunk), optimised once: called through a symbol
-_group_operators_chunk_call = unlinked(_group_operators_chunk)
-#: the kernel's workers run on the package's one parallel loop (see mortar1d3d._parallel)
+#: the kernel's workers run on the package's one parallel loop (see mortar1d3d._parallel); the worker, compiled
+#: on its own and called through a symbol, inlines its loop body (``njit_inline``), which is optimised once
 _group_operators_workers = in_parallel(_group_operators_worker)
 
 

@@ -10,11 +10,10 @@ copy of the gathered entries: less memory to fault in).
 import numpy as np
 import scipy.sparse as sp
 
-from .._config import CHUNK, njit
+from .._config import CHUNK, njit, njit_inline
 from .._parallel import in_parallel
 from .._memory import carve
 from .._schedule import claim, n_chunks, new_claims, workers
-from .._unlinked import unlinked
 
 
 #: rows with up to this many distinct columns are ordered by counting (m² comparisons without branches),
@@ -106,12 +105,12 @@ def _fill_rows_worker(worker, claims, src_offsets, src, n_phi, beam_groups, entr
     rank = np.empty(max_unique, dtype=np.int64)
     begin, stop = claim(claims, n_rows, worker)
     while begin < stop:
-        _fill_rows_chunk_call(begin, stop, src_offsets, src, n_phi, beam_groups, entry_start, width, col_table,
-                              col_row, vals, first, block, indices, data, cols, vs, slot, rank)
+        _fill_rows_chunk(begin, stop, src_offsets, src, n_phi, beam_groups, entry_start, width, col_table,
+                         col_row, vals, first, block, indices, data, cols, vs, slot, rank)
         begin, stop = claim(claims, n_rows, worker)
 
 
-@njit
+@njit_inline
 def _fill_rows_chunk(begin, stop, src_offsets, src, n_phi, beam_groups, entry_start, width, col_table, col_row, vals,
                      first, block, indices, data, cols, vs, slot, rank):
     """The rows ``begin:stop`` of :func:`_fill_rows` (its loop body per claimed chunk; ``cols``, ``vs``,
@@ -165,8 +164,8 @@ def _fill_rows_chunk(begin, stop, src_offsets, src, n_phi, beam_groups, entry_st
                 data[out + rank[t]] = vs[t]
 
 
-#: the loop body of :func:`_fill_rows` (per claimed chunk), optimised once: called through a symbol
-_fill_rows_chunk_call = unlinked(_fill_rows_chunk)
+#: the worker (compiled on its own, called through a symbol by the package's one parallel loop) inlines its
+#: loop body (``njit_inline``), which is thus optimised once
 _fill_rows_workers = in_parallel(_fill_rows_worker)
 
 
