@@ -148,3 +148,32 @@ def test_polish_from_the_residual_left_by_the_locators(element):
                 polished += not np.array_equal(xi, before)
     # the step changed some points, so the comparison is not vacuous (a tet4 is affine: at round-off at once)
     assert polished > 0 or element == "tetra"
+
+
+@pytest.mark.parametrize("element", [n for n, d in SOLID_ELEMENTS.items() if n != "hexahedron"])
+def test_map_and_jacobian_in_one_call_have_the_bits_of_the_separate_calls(element):
+    """The Newton iterations of every type but hex8 take x(ξ) and J(ξ) from one call where they need
+    both (``_map_jacobian_other``; hex27 shares the contractions of the two): the same bits as
+    ``map_point`` and ``jacobian``, for moved nodes (rational types: weights 0.4 to 2.5) and ξ inside
+    and beyond the element. x and J are checked against a central difference of the map too, so the
+    12 values are x and J in that order."""
+    from mortar1d3d.geometry import projection as pr
+
+    d = SOLID_ELEMENTS[element]
+    rng = np.random.default_rng(5)
+    X, N, dN, _, _, _, _ = pr.point_buffers()
+    for _ in range(5):
+        X[: d.n_nodes, :3] = d.reference_nodes + rng.uniform(-0.1, 0.1, (d.n_nodes, 3))
+        X[: d.n_nodes, 3] = rng.uniform(0.4, 2.5, d.n_nodes) if d.rational else 1.0
+        for xi in rng.uniform(-1.2, 1.2, (8, 3)):
+            both = pr._map_jacobian_other(d.code, X, xi, N, dN)
+            x = pr.map_point(d.code, X, xi, N)
+            J = pr.jacobian(d.code, X, xi, N, dN)
+            assert both == x + J            # tuples of floats: bit for bit
+            step = 1e-6
+            for k in range(3):
+                e = np.zeros(3)
+                e[k] = step
+                fd = (np.subtract(pr.map_point(d.code, X, xi + e, N), pr.map_point(d.code, X, xi - e, N))
+                      / (2 * step))
+                np.testing.assert_allclose(np.array(J).reshape(3, 3)[:, k], fd, rtol=0, atol=1e-6)

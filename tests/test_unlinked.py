@@ -390,7 +390,8 @@ OTHERS_RUN = textwrap.dedent("""
     solid = m.generate.distort(solid, 0.1)
     ops = [m.assemble_mortar(beams, solid, integration=i, n_gauss=4) for i in ("segment", "element")]
     out = {f.__name__: len(f.signatures)
-           for f in (projection._project_other, projection._polish_other, intersection._intersect_other)}
+           for f in (projection._project_other, projection._polish_other, intersection._intersect_other,
+                     projection._map_jacobian_other)}
     out["crossings"] = ops[0].diagnostics["face_crossings"]
     out["embedded"] = [o.embedded_length / o.beam_length for o in ops]
     print(json.dumps(out))
@@ -407,8 +408,8 @@ def test_a_distorted_hex8_scene_never_compiles_the_other_types_newton_versions(t
     out = json.loads(done.stdout.strip().splitlines()[-1])
     assert out["crossings"] > 0     # the face Newton ran (and every point of the distorted cube is a projection)
     assert out["embedded"] == pytest.approx([1.0, 1.0], rel=1e-12)
-    assert {k: out[k] for k in ("_project_other", "_polish_other", "_intersect_other")} == \
-        {"_project_other": 0, "_polish_other": 0, "_intersect_other": 0}
+    assert {k: out[k] for k in ("_project_other", "_polish_other", "_intersect_other", "_map_jacobian_other")} == \
+        {"_project_other": 0, "_polish_other": 0, "_intersect_other": 0, "_map_jacobian_other": 0}
 
 
 WARMED_RUN = textwrap.dedent("""

@@ -12,7 +12,7 @@ from .._config import NEWTON_MAX_ITERATIONS, NEWTON_RESIDUAL_TOL, njit, njit_inl
 from .._unlinked import unlinked
 from .beam import beam_point
 from .linalg import norm3, solve3
-from .projection import _HEX8, CONVERGED, FAILED, jacobian, map_point
+from .projection import _HEX8, CONVERGED, FAILED, _map_jacobian_other_call, jacobian, map_point
 
 #: step halvings of the line search. A beam that enters a face at a grazing angle (tangent to it
 #: a little outside) makes the Jacobian nearly singular near the tangency: the Newton step then
@@ -51,6 +51,18 @@ def _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face, eta, u, v, 
     return norm3(f0, f1, f2), f0, f1, f2, d0, d1, d2
 
 
+@njit_inline
+def _residual_jacobian(solid_code, X, beam_code, Q, length, s0, s1, s2, face, eta, u, v, xi, N, dN, H, dH):
+    """:func:`_residual` of a type but hex8 and the solid's Jacobian at the same ξ (one call,
+    :func:`~mortar1d3d.geometry.projection._map_jacobian_other`): its 7 values, then J row by row."""
+    for i in range(3):
+        xi[i] = face[0, i] + u * face[1, i] + v * face[2, i]
+    x0, x1, x2, j00, j01, j02, j10, j11, j12, j20, j21, j22 = _map_jacobian_other_call(solid_code, X, xi, N, dN)
+    r0, r1, r2, d0, d1, d2 = beam_point(beam_code, Q, length, s0, s1, s2, eta, H, dH)
+    f0, f1, f2 = x0 - r0, x1 - r1, x2 - r2
+    return (norm3(f0, f1, f2), f0, f1, f2, d0, d1, d2, j00, j01, j02, j10, j11, j12, j20, j21, j22)
+
+
 @njit
 def intersect_face(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH):
     """Newton on F(η, u, v) = 0 from the start ``z`` = (η, u, v); result in ``z`` and ``xi``.
@@ -83,10 +95,22 @@ _intersect_other_call = unlinked(_intersect_other, returns=types.int64)
 
 @njit_inline
 def _face_newton(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi, N, dN, H, dH):
-    """The iteration of :func:`intersect_face` (inlined into it and into :func:`_intersect_other`)."""
+    """The iteration of :func:`intersect_face` (inlined into it and into :func:`_intersect_other`).
+
+    Every type but hex8 (``paired``, a constant after the test of :func:`intersect_face`) gets the
+    solid's Jacobian with the residual at the start and at each trial whose step exceeds
+    ``_POLISH_STEP`` (:func:`_residual_jacobian`): an accepted one needs a further step. The same
+    iteration and values as hex8's, which evaluates the Jacobian at the top of each step."""
     tol = NEWTON_RESIDUAL_TOL * h
-    fn, f0, f1, f2, d0, d1, d2 = _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face,
-                                           z[0], z[1], z[2], xi, N, H, dH)
+    paired = solid_code != _HEX8
+    fresh = paired      # whether (j00 ... j22) is the solid's Jacobian at xi
+    if paired:
+        fn, f0, f1, f2, d0, d1, d2, j00, j01, j02, j10, j11, j12, j20, j21, j22 = _residual_jacobian(
+            solid_code, X, beam_code, Q, length, s0, s1, s2, face, z[0], z[1], z[2], xi, N, dN, H, dH)
+    else:
+        fn, f0, f1, f2, d0, d1, d2 = _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face,
+                                               z[0], z[1], z[2], xi, N, H, dH)
+        j00 = j01 = j02 = j10 = j11 = j12 = j20 = j21 = j22 = 0.0
     last_step = np.inf
     for it in range(NEWTON_MAX_ITERATIONS + _POLISH_ITERATIONS):
         converged = fn <= tol
@@ -94,7 +118,8 @@ def _face_newton(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi
             return CONVERGED
         if not converged and it >= NEWTON_MAX_ITERATIONS:
             return FAILED
-        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(solid_code, X, xi, N, dN)
+        if not fresh:
+            j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(solid_code, X, xi, N, dN)
         a, b = face[1], face[2]
         det, s_eta, s_u, s_v = solve3(
             -d0, j00 * a[0] + j01 * a[1] + j02 * a[2], j00 * b[0] + j01 * b[1] + j02 * b[2],
@@ -103,14 +128,20 @@ def _face_newton(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi
             -f0, -f1, -f2)
         if det == 0.0:
             return CONVERGED if converged else FAILED
+        full = max(abs(s_eta), abs(s_u), abs(s_v))
         step = 1.0
         accepted = False
         for _b in range(_BACKTRACKS):
             e_t = z[0] + step * s_eta
             u_t = z[1] + step * s_u
             v_t = z[2] + step * s_v
-            ft, g0, g1, g2, c0, c1, c2 = _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face,
-                                                   e_t, u_t, v_t, xi, N, H, dH)
+            fresh = paired and step * full > _POLISH_STEP
+            if fresh:
+                ft, g0, g1, g2, c0, c1, c2, j00, j01, j02, j10, j11, j12, j20, j21, j22 = _residual_jacobian(
+                    solid_code, X, beam_code, Q, length, s0, s1, s2, face, e_t, u_t, v_t, xi, N, dN, H, dH)
+            else:
+                ft, g0, g1, g2, c0, c1, c2 = _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face,
+                                                       e_t, u_t, v_t, xi, N, H, dH)
             if ft < fn or ft <= tol:
                 accepted = True
                 break
@@ -118,7 +149,7 @@ def _face_newton(solid_code, X, h, beam_code, Q, length, s0, s1, s2, face, z, xi
         if not accepted:
             _residual(solid_code, X, beam_code, Q, length, s0, s1, s2, face, z[0], z[1], z[2], xi, N, H, dH)
             return CONVERGED if fn <= 1e3 * tol else FAILED
-        last_step = step * max(abs(s_eta), abs(s_u), abs(s_v))
+        last_step = step * full
         z[0], z[1], z[2] = e_t, u_t, v_t
         fn, f0, f1, f2, d0, d1, d2 = ft, g0, g1, g2, c0, c1, c2
         if abs(z[0]) > _MAX_ETA:

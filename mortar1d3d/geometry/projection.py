@@ -146,6 +146,36 @@ _jacobian_other_call = unlinked(_jacobian_other, returns=types.UniTuple(types.fl
 
 
 @njit
+def _map_jacobian_other(code, X, xi, N, dN):
+    """x(ξ) and J at one ξ as a 12-tuple (x0, x1, x2, then J row by row), every type but hex8: the values of
+    :func:`_map_other` and :func:`_jacobian_other` (the same bits) in one call, for the Newton iterations
+    that need both at a point. hex27 shares the contractions of the two (``hex27.map_jacobian_nodes``:
+    x costs nine products more than J alone); the others evaluate them one after the other."""
+    if code == _HEX27:
+        return hex27.map_jacobian_nodes(X, xi)
+    if code == _TET10:
+        x0, x1, x2 = tet10.map_nodes(X, xi)
+        j00, j01, j02, j10, j11, j12, j20, j21, j22 = tet10.jacobian_nodes(X, xi)
+    elif code == _NURBS27:
+        x0, x1, x2 = nurbs27.map_nodes(X, xi)
+        j00, j01, j02, j10, j11, j12, j20, j21, j22 = nurbs27.jacobian_nodes(X, xi)
+    else:
+        x0, x1, x2 = _map_other(code, X, xi, N)
+        j00, j01, j02, j10, j11, j12, j20, j21, j22 = _jacobian_other(code, X, xi, N, dN)
+    return x0, x1, x2, j00, j01, j02, j10, j11, j12, j20, j21, j22
+
+
+#: called through a symbol, lazily, as :func:`_map_other`
+_map_jacobian_other_call = unlinked(_map_jacobian_other, returns=types.UniTuple(types.float64, 12))
+#: a Newton iterate whose residual |x(ξ) - p| exceeds this times h is not expected to be the last: from
+#: it, the types but hex8 evaluate the map at the next iterate together with the Jacobian there
+#: (:func:`_map_jacobian_other`), which the step after it needs (quadratic convergence: the residual
+#: after a step from r is about r²/h, above the tolerance 1e-12 h while r > 1e-6 h). A wrong guess costs
+#: one evaluation, never a bit: the values are those of the separate calls
+_PAIRED_ABOVE = 1e-6
+
+
+@njit
 def project_point(code, X, p0, p1, p2, h, xi, trial, N, dN):
     """Newton iteration for x(ξ) = p with a backtracking line search on |x(ξ) - p|.
 
@@ -178,9 +208,20 @@ _project_other_call = unlinked(_project_other, returns=types.int64)
 
 @njit_inline
 def _newton(code, X, p0, p1, p2, h, xi, trial, N, dN):
-    """The iteration of :func:`project_point` (inlined into it and into :func:`_project_other`)."""
+    """The iteration of :func:`project_point` (inlined into it and into :func:`_project_other`).
+
+    hex8 evaluates the map at each iterate and the Jacobian at the top of each step. Every other type
+    (``paired``, a constant after the test of :func:`project_point`) gets both from one call at the
+    start and at each iterate expected to need a further step (see ``_PAIRED_ABOVE``); the iteration
+    and its values are the same."""
     tol = NEWTON_RESIDUAL_TOL * h
-    x0, x1, x2 = map_point(code, X, xi, N)
+    paired = code != _HEX8
+    fresh = paired      # whether (j00 ... j22) is the Jacobian at xi
+    if paired:
+        x0, x1, x2, j00, j01, j02, j10, j11, j12, j20, j21, j22 = _map_jacobian_other_call(code, X, xi, N, dN)
+    else:
+        x0, x1, x2 = map_point(code, X, xi, N)
+        j00 = j01 = j02 = j10 = j11 = j12 = j20 = j21 = j22 = 0.0
     r0, r1, r2 = p0 - x0, p1 - x1, p2 - x2
     rn = norm3(r0, r1, r2)
     status = FAILED
@@ -188,10 +229,12 @@ def _newton(code, X, p0, p1, p2, h, xi, trial, N, dN):
         if rn <= tol:
             status = CONVERGED
             break
-        j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, N, dN)
+        if not fresh:
+            j00, j01, j02, j10, j11, j12, j20, j21, j22 = jacobian(code, X, xi, N, dN)
         det, d0, d1, d2 = solve3(j00, j01, j02, j10, j11, j12, j20, j21, j22, r0, r1, r2)
         if det == 0.0:
             return FAILED
+        fresh = paired and rn > _PAIRED_ABOVE * h
         step = 1.0
         rt = rn
         accepted = False
@@ -199,7 +242,11 @@ def _newton(code, X, p0, p1, p2, h, xi, trial, N, dN):
             trial[0] = xi[0] + step * d0
             trial[1] = xi[1] + step * d1
             trial[2] = xi[2] + step * d2
-            x0, x1, x2 = map_point(code, X, trial, N)
+            if fresh:
+                x0, x1, x2, j00, j01, j02, j10, j11, j12, j20, j21, j22 = _map_jacobian_other_call(code, X, trial,
+                                                                                                   N, dN)
+            else:
+                x0, x1, x2 = map_point(code, X, trial, N)
             t0, t1, t2 = p0 - x0, p1 - x1, p2 - x2
             rt = norm3(t0, t1, t2)
             if rt < rn or rt <= tol:
