@@ -502,9 +502,7 @@ def _beyond(faces, zs, k):
     """How far beyond the farthest face plane the linearised image of sample k lies (negative: inside)."""
     out = -np.inf
     for f in range(faces.shape[0]):
-        face = faces[f]
-        out = max(out, face[3, 0] * (zs[k, 0] - face[0, 0]) + face[3, 1] * (zs[k, 1] - face[0, 1])
-                  + face[3, 2] * (zs[k, 2] - face[0, 2]))
+        out = max(out, _face_side(faces[f], zs[k]))
     return out
 
 
