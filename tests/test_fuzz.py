@@ -444,7 +444,7 @@ CUT_DEPTH = 1e-11
 
 def test_a_long_beam_cutting_an_edge_of_a_curved_hex20_keeps_its_piece():
     """An example :func:`corner_cuts` drew (seed 3911, hexahedron20 curved by half its validity limit, an
-    edge of the solid cut 1e-8 deep by a beam element 91 long): the embedded piece is 3e-10 long in η and
+    edge of the solid cut 1e-8 deep by a beam element 148 long): the embedded piece is 3e-10 long in η and
     lies between two samples 15 away from the element. Found when the crossing search stopped projecting
     the samples the linearised map rules out: the two it kept followed branches of the map folded far
     from the element and the cubic model between them missed a face crossing; the samples are now moved
@@ -459,6 +459,7 @@ def test_a_long_beam_cutting_an_edge_of_a_curved_hex20_keeps_its_piece():
     depth = -hc.containment(solid, (0.5 * (a + b))[None]).min()
     assert 1e-9 < depth < 1e-7
     ops = check_scene(beams, solid)
+    assert ops.beam_length == pytest.approx(147.7, abs=0.05)
     s = ops.segments
     assert len(s) == 1 and s["eta_start"][0] < 0.0 < s["eta_end"][0] and s["eta_end"][0] - s["eta_start"][0] < 1e-9
 

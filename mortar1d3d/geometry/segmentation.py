@@ -299,10 +299,7 @@ def _faces_in_linear_reach(code, h, s, linear, errors, beam_code, Qe, length, s0
     for c in range(1, 4):
         for i in range(3):
             spread = max(spread, abs(Y[c, i] - Y[0, i]))
-    size = 0.0
-    for i in range(3):
-        size = max(size, abs(linear[s, i, 0]) + abs(linear[s, i, 1]) + abs(linear[s, i, 2]))
-    pad = _REACH_MARGIN * (1.0 + spread + size * h)
+    pad = _reach_pad(linear, s, spread, h)
     faces = solid.faces(code)
     any_face = False
     for f in range(faces.shape[0]):
@@ -330,11 +327,19 @@ def _interval_pad(linear, s, zs, eta_s, h):
     """``_REACH_MARGIN`` scaled by the size of the samples' linearised images ``zs`` and of the element (h)."""
     S = eta_s.shape[0]
     spread = 0.0
+    for i in range(3):
+        for k in range(S):
+            spread = max(spread, abs(zs[k, i] - zs[0, i]) + (eta_s[S - 1] - eta_s[0]) * abs(zs[k, 3 + i]))
+    return _reach_pad(linear, s, spread, h)
+
+
+@njit
+def _reach_pad(linear, s, spread, h):
+    """``_REACH_MARGIN`` scaled by ``spread`` (the extent of the linearised images, parameter units) and by
+    the element's size h in parameter units."""
     size = 0.0
     for i in range(3):
         size = max(size, abs(linear[s, i, 0]) + abs(linear[s, i, 1]) + abs(linear[s, i, 2]))
-        for k in range(S):
-            spread = max(spread, abs(zs[k, i] - zs[0, i]) + (eta_s[S - 1] - eta_s[0]) * abs(zs[k, 3 + i]))
     return _REACH_MARGIN * (1.0 + spread + size * h)
 
 
