@@ -235,6 +235,26 @@ def shape_values(name, xi):
     return np.prod(pw, axis=2) @ C, np.einsum("mpi,pa->mai", dmono, C)
 
 
+def linear_map_deviation(name, X, L, x_c, xi):
+    """|ζ(x(ξ)) - ξ| (m, 3) at the parameters ``xi`` (m, 3) of an element with nodes ``X`` (n_nodes, 3): the
+    distance per component between ξ and the parameters ζ = ξ_c + L (x - x_c) its point x(ξ) gets from the
+    element's map linearised at its centre (``L`` (3, 3), ``x_c`` (3,) the rows of ``KernelInput.linear``)."""
+    N, _ = shape_values(name, xi)
+    return np.abs(descriptor(name).centre + (N @ X - x_c) @ L.T - xi)
+
+
+def monomial_error_bound(name, X, L, radius):
+    """Σ_q |(L a_q)_i| radius^|α_q| (3,): the remainder of the linearised map bounded term by term over the box
+    |ξ - ξ_c|∞ <= radius, from the coefficients a_q of x(ξ) = Σ_q a_q (ξ - ξ_c)^α_q (solved from the nodes
+    ``X``) over the monomials of degree >= 2."""
+    d = descriptor(name)
+    exps = np.array(_BASES[name], dtype=int)
+    y = d.reference_nodes - d.centre
+    a = np.linalg.solve(np.prod(y[:, None, :] ** exps[None, :, :], axis=2), X)
+    degree = exps.sum(axis=1)
+    return (np.abs(a[degree >= 2] @ L.T) * radius ** degree[degree >= 2, None]).sum(axis=0)
+
+
 def solid_functions(solid, element, xi):
     """N (n_nodes,) of solid element ``element`` at ξ through the element module's njit function,
     and the element's global node ids (for :func:`operators_from_points`, which checks the sums)."""

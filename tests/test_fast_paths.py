@@ -293,6 +293,35 @@ def element_bounds(ctx):
     return errors
 
 
+def test_curved_tetrahedra_bound_their_linearised_map_by_bernstein_coefficients():
+    """The bound ε of a curved tet10 (``segmentation._linear_error``: the Bernstein coefficients of the remainder
+    of its map linearised at the centre) holds at 2000 random parameters of each of the 48 elements of a distorted
+    cube (0.15 cells), 500 up to 2.5e-5 outside the simplex (the growth the bound covers: ``_BERNSTEIN_GROWTH`` 1e-4
+    of the centre's distance 1/4 to each face) and its nodes: the largest deviation sampled comes to 86 % of
+    ε on average (48 % at least). The sum of the monomial terms over the box |ξ - ξ_c|∞ <= 3/4 (the bound
+    before) is 5 times larger on average (ε is 0.19 of it), and larger on every element (ε 0.64 of it at most)."""
+    import naive
+    from mortar1d3d.geometry import segmentation
+    assert segmentation._BERNSTEIN_GROWTH == 1e-4
+    solid = generate.distort(generate.box((0.0, 0.0, 0.0), (1.0, 1.0, 1.0), (2, 2, 2), "tetra10"), 0.15, seed=1)
+    ctx = KernelInput(generate.random_curved_beams(1, 2, seed=1), solid)
+    assert (ctx.linear[:, 4, 0] == 0.0).all()
+    errors = element_bounds(ctx)
+    rng = np.random.default_rng(0)
+    xi = np.vstack([naive.random_parameters("tet", rng, 2000),
+                    naive.random_parameters("tet", rng, 500, low=0.0, high=2.5e-5, grow=1e-4),
+                    SOLID_ELEMENTS["tetra10"].reference_nodes])
+    sampled, tighter = [], []
+    for s in range(solid.n_elements):
+        X = solid.points[solid.connectivity[s]] - solid.points[solid.connectivity[s, 0]]
+        deviation = naive.linear_map_deviation("tetra10", X, ctx.linear[s, :3], ctx.linear[s, 3], xi).max(axis=0)
+        assert np.all(deviation <= errors[s])
+        sampled.append(deviation / errors[s])
+        tighter.append(errors[s] / naive.monomial_error_bound("tetra10", X, ctx.linear[s, :3], 0.75 * (1.0 + 1e-6)))
+    assert np.mean(sampled) > 0.85 and np.min(sampled) > 0.45
+    assert np.mean(tighter) < 0.2 and np.max(tighter) < 0.65
+
+
 @pytest.mark.parametrize("element, inside", [("hexahedron", 500), ("hexahedron27", 300), ("tetra10", 10)])
 def test_linear_side_agrees_with_the_locator(element, inside):
     """Points the linearised map decides (``segmentation._linear_side``: inside, or outside, for certain)

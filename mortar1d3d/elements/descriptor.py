@@ -152,6 +152,14 @@ class SolidElementType:
         skip Newton projections. True unless the planes cost more than they save (hex8: its box is
         tight for a brick-like element, and the planes dropped 6 % of the pairs of the distorted
         benchmark cube while adding 9 % to its kernels' instructions).
+    bernstein_error : bool
+        Whether the segmentation bounds how far the element's map linearised at its centre strays
+        from the map by the Bernstein coefficients of the remainder on the element (``bounding_matrix``
+        applied to its monomials, :data:`mortar1d3d.elements.solid.dispatch.BERNSTEIN_MONOMIALS`)
+        rather than by its monomial terms summed over the box about the centre
+        (:func:`mortar1d3d.geometry.segmentation._linear_error`). True where the box is much larger than
+        the element (tet10: the box |ξ - ξ_c|∞ <= 3/4 has 20 times the simplex's volume); the types
+        left False keep their bounds, and their counts, unchanged.
     """
 
     name: str
@@ -166,6 +174,7 @@ class SolidElementType:
     dim: int = 3
     rational: bool = False
     hull_test: bool = True
+    bernstein_error: bool = False
 
     def __post_init__(self):
         exps = np.asarray(self.monomials, dtype=np.int64)

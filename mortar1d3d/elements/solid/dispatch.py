@@ -223,6 +223,38 @@ def _curved_monomials():
 #: bounds of :mod:`mortar1d3d.geometry.projection` sum): their number, indices k in ascending order
 #: and degrees |α| (tet10: 6 of 10, hex27: 23 of 27)
 N_CURVED, CURVED_MONOMIALS, CURVED_DEGREE = _curved_monomials()
+
+
+def _bernstein_monomials():
+    """Per code: for the types with ``bernstein_error``, the number of control points and the Bernstein
+    coefficients on the reference element of every monomial y^α of degree >= 2 (row k: control point k of
+    ``bounding_matrix``; column q: the monomial ``CURVED_MONOMIALS[code, q]``); 0 and zeros for the others.
+
+    Every type's ``bounding_matrix`` takes the nodal values of a function of its space to its Bernstein
+    coefficients (the nodes themselves for the linear types), whose range contains the function's on
+    the element; a monomial's nodal values are y^α at the reference nodes, y = ξ - ξ_c.
+    """
+    chosen = [d for d in BY_CODE.values() if d.bernstein_error]
+    for d in chosen:
+        if d.rational:
+            raise ImportError(f"{d.name}: the Bernstein error bound is for polynomial types")
+    count = np.zeros(_N_CODES, dtype=np.int64)
+    table = np.zeros((_N_CODES, max([d.bounding_matrix.shape[0] for d in chosen], default=1),
+                      max([N_CURVED[d.code] for d in chosen], default=1)))
+    for d in chosen:
+        y = d.reference_nodes - d.centre
+        curved = d.monomials[CURVED_MONOMIALS[d.code, : N_CURVED[d.code]]]
+        values = np.prod(y[:, None, :] ** curved[None, :, :], axis=2)     # [node, curved monomial]
+        coefficients = d.bounding_matrix @ values
+        count[d.code] = coefficients.shape[0]
+        table[d.code, : coefficients.shape[0], : coefficients.shape[1]] = coefficients
+    return count, table
+
+
+#: per code: the Bernstein coefficients of the curved monomials on the element (:func:`_bernstein_monomials`)
+#: and their number of rows, 0 for the types without ``bernstein_error`` (tet10: 10 × 6), for the segmentation's
+#: bound on the linearised map (:func:`mortar1d3d.geometry.segmentation._linear_error`)
+N_BERNSTEIN, BERNSTEIN_MONOMIALS = _bernstein_monomials()
 #: the nonzero entries of every type's ``TO_MONOMIAL`` block (:func:`_sparse_rows`), for
 #: :func:`monomial_coefficients` and, with the weights, :func:`mortar1d3d.geometry.rational.rational_coefficients`
 #: (hex27 and nurbs27: 216 of 729 entries, tet10: 43 of 100)

@@ -99,5 +99,5 @@ DESCRIPTOR = SolidElementType(
     name="tetra10", code=4, n_nodes=10, degree=2, family_type=TETRAHEDRON,
     reference_nodes=REFERENCE_NODES, bounding_matrix=_bounding_matrix(),
     monomials=[(i, j, k) for i in range(3) for j in range(3) for k in range(3) if i + j + k <= 2],   # quadratic
-    quadrature=tetrahedron_rule(4),
+    quadrature=tetrahedron_rule(4), bernstein_error=True,
 )
