@@ -36,6 +36,7 @@ search points, or bisection of the owner along η), for the one fallback loop of
 :func:`mortar1d3d.integration.points.checked_segment_points`.
 """
 import numpy as np
+from numba import types
 
 from .._borrowed import borrowed
 from .._config import MERGE_TOL, PARAMETER_TOL, SEGMENT_OWNER_TOL, TOUCH_TOL, njit
@@ -47,6 +48,7 @@ from ..elements.solid import dispatch as solid
 from .beam import beam_point, beams_affine
 from .intersection import face_coordinates, intersect_face
 from .linalg import norm3, solve3
+from .rational import linearisation_error
 from .projection import (ANY_CANDIDATE, CONVERGED, NOT_CONVERGED, certified_outside, first_containing,
                          in_box, is_affine, jacobian, linear_image, linear_parameters, load_element, locate_outside,
                          locate_point, point_buffers, project_point, search_buffers)
@@ -219,15 +221,19 @@ def _faces_in_reach(code, X, h, box, origin, C, reach):
 def _linear_error(code, X, s, linear, a, out):
     """ε of element s (local nodes ``X``; ``a``: scratch of :func:`.projection.search_buffers`) into ``out``
     (3,): how far the linearised parameters ζ of a point of the element may lie from its ξ, per component
-    (see :func:`_faces_in_linear_reach`); NaN for a rational type or an element without a linearisation.
+    (see :func:`_faces_in_linear_reach`); NaN for an element without a linearisation (or a rational one whose
+    weight function has no positive lower bound, :func:`_rational_linear_error`).
 
     With y = ξ - ξ_c, a polynomial map is x(ξ) = x_c + J_c y + Σ_q a_q y^α_q over its monomials of degree
     >= 2, so ζ(x) = ξ_c + L (x - x_c) (``linear``: L = J_c⁻¹) of the point x(ξ) differs from ξ by at most
     ε_i = Σ_q |(L a_q)_i| R^|α_q| in component i, for |y|∞ <= R (the element's radius, grown by
     ``_REACH_MARGIN``: also for ξ within that much outside the element).
     """
-    if solid.RATIONAL[code] or not linear[s, 4, 0] >= 0.0:
+    if not linear[s, 4, 0] >= 0.0:
         out[0] = out[1] = out[2] = np.nan
+        return
+    if solid.RATIONAL[code]:
+        _rational_linear_error(code, X, s, linear, a, out)
         return
     solid.monomial_coefficients(code, X, a)
     radius = solid.RADIUS[code] * (1.0 + _REACH_MARGIN)
@@ -239,6 +245,18 @@ def _linear_error(code, X, s, linear, a, out):
         e1 += abs(linear[s, 1, 0] * a[k, 0] + linear[s, 1, 1] * a[k, 1] + linear[s, 1, 2] * a[k, 2]) * scale
         e2 += abs(linear[s, 2, 0] * a[k, 0] + linear[s, 2, 1] * a[k, 1] + linear[s, 2, 2] * a[k, 2]) * scale
     out[0], out[1], out[2] = e0, e1, e2
+
+
+@njit
+def _rational_linear_error(code, X, s, linear, a, out):
+    """:func:`_linear_error` of a rational element: :func:`.rational.linearisation_error` on the same region (the
+    element grown by ``_REACH_MARGIN``), compiled when a scene first has a rational element."""
+    _linearisation_error_call(code, X, linear[s, :3], linear[s, 3, 0], linear[s, 3, 1], linear[s, 3, 2],
+                              solid.RADIUS[code] * (1.0 + _REACH_MARGIN), a, out)
+
+
+#: lazily through a symbol: compiled when a scene first has a rational element
+_linearisation_error_call = unlinked(linearisation_error, returns=types.float64)
 
 
 @njit
