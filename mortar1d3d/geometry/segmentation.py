@@ -301,8 +301,9 @@ def _faces_in_linear_reach(code, h, s, linear, errors, beam_code, Qe, length, s0
     face; farther on its outer side, it cannot reach the element at all. The margin (``_REACH_MARGIN``
     scaled by the sizes in parameter units, the element's by its size ``h``) lies far above the
     tolerances with which crossings are accepted (their ξ within 1e-9 of the element, η within 1e-9 of [-1, 1],
-    the residual within 1e-9 h), so clearing such faces changes no crossing found. Rational types and elements without
-    a linearisation (ε NaN) keep their ``reach`` unchanged.
+    the residual within 1e-9 h), so clearing such faces changes no crossing found. Elements without a bound (ε NaN: no
+    linearisation, or a rational one whose weight function has no positive lower bound) keep their ``reach``
+    unchanged.
     """
     if not errors[s, 0] >= 0.0:
         return True
@@ -371,7 +372,7 @@ def _live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need
     hull of four Bézier control points, from ζ and dζ/dη = L r' at the interval's ends; as for the whole
     beam element (:func:`_faces_in_linear_reach`, the same bound and margins), a face whose plane all four
     miss by more than Σ_i |n_i| ε_i has no crossing there, and none has where they lie that far beyond
-    one face's plane. Elements without a bound (rational, no linearisation) and affine ones (whose samples
+    one face's plane. Elements without a bound (ε NaN) and affine ones (whose samples
     cost no Newton) keep every interval of a face in ``reach``.
     """
     S = eta_s.shape[0]
