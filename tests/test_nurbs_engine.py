@@ -322,6 +322,5 @@ def test_linearised_map_error_bound_of_rational_elements(degree, jitter):
         deviation = np.abs(zeta - xi).max(axis=0)
         assert np.all(deviation <= errors[s]), (s, deviation, errors[s])
         ratios.append(errors[s].max() / deviation.max())
-    # the bound's largest component over the samples' largest deviation: 1.2-1.5 on the exact spans of
-    # degree 2, up to 4.4 on the jittered ones of degree 4
+    # the bound's largest component over the samples' largest deviation (largest on jittered weights, degree 4)
     assert max(ratios) < 6.0, max(ratios)
