@@ -276,3 +276,51 @@ def test_certificate_bound_about_the_centre_summed_by_degree(degree, jitter):
         computed.append(pr.certified_margin(codes[s], X, table[s, :3].copy(), scratch))
     np.testing.assert_array_equal(computed, margins)
     assert sorted(set(margins)) == ([-1.0] if jitter else [0.5, 1.0])
+
+
+@pytest.mark.parametrize("degree", [2, 3, 4])
+@pytest.mark.parametrize("jitter", [0.0, 0.2])
+def test_linearised_map_error_bound_of_rational_elements(degree, jitter):
+    """The segmentation's bound of the linearised map on rational elements (``segmentation._linear_error``,
+    :func:`mortar1d3d.geometry.rational.linearisation_error`): for random ξ in the element grown by the
+    reach margin (inside, on its faces and corners, and up to the margin beyond), the linearised parameters
+    ζ = ξ_c + L (x(ξ) - x_c) lie within ε_i of ξ_i, on the spans of a pipe (six around, 60° each) with control
+    points moved by up to 4 % of the wall and weights scaled by 1 - jitter … 1 + 1.25 jitter: genuinely
+    rational, curved elements. The bound is finite and not far above what the samples reach (a factor
+    below 6; these spans are strongly curved: ζ - ξ reaches about 1 across the wall)."""
+    from mortar1d3d.elements.solid import dispatch
+    from mortar1d3d.geometry import projection as pr
+    from mortar1d3d.geometry import segmentation
+    from mortar1d3d.geometry.search import solid_frames
+
+    rng = np.random.default_rng(10 * degree + int(10 * jitter))
+    patch = nurbs.hollow_cylinder(0.1, 0.2, 0.3, angle=360.0, elements=(2, 6, 2), degree=degree).patches[0]
+    control = patch.control + rng.uniform(-0.004, 0.004, patch.control.shape)
+    control[:, -1] = control[:, 0]                   # keep the seam closed
+    weights = patch.weights * rng.uniform(1.0 - jitter, 1.0 + 1.25 * jitter, patch.weights.shape)
+    weights[:, -1] = weights[:, 0]
+    mesh = nurbs.bezier_mesh(nurbs.NurbsSolid([nurbs.NurbsPatch(control, weights, patch.knots,
+                                                                patch.degrees)])).solid
+    points, conn, codes = mesh.kernel_points, mesh.connectivity, mesh.element_codes
+    _, h, origin = solid_frames(mesh)
+    table = np.empty((mesh.n_elements, 5, 3))
+    pr.linear_maps(points, conn, codes, origin, h, table, 1)
+    assert np.all(table[:, 4, 0] == 0.0)             # curved: every element has a linearisation, none affine
+    errors = np.full((mesh.n_elements, 3), np.nan)
+    segmentation._linear_errors(np.arange(mesh.n_elements), codes, conn, points, origin, table, errors)
+    assert np.all(np.isfinite(errors)) and np.all(errors > 0.0)
+    X, N, _, _, _, _, _ = pr.point_buffers()
+    grown = 1.0 + segmentation._REACH_MARGIN
+    ratios = []
+    for s in range(mesh.n_elements):
+        code = codes[s]
+        pr.load_element(points, conn, s, code, origin, X)
+        xi = rng.uniform(-grown, grown, (400, 3))
+        xi[:100, 0] = rng.choice([-grown, grown], 100)                   # on the grown box's faces
+        xi[100:150] = rng.choice([-grown, grown], (50, 3))               # and its corners
+        zeta = np.array([pr.linear_image(code, table, s, *pr.map_point(code, X, p, N)) for p in xi])
+        deviation = np.abs(zeta - xi).max(axis=0)
+        assert np.all(deviation <= errors[s]), (s, deviation, errors[s])
+        ratios.append(errors[s].max() / deviation.max())
+    # the bound's largest component over the samples' largest deviation (largest on jittered weights, degree 4)
+    assert max(ratios) < 6.0, max(ratios)

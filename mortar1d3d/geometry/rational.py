@@ -184,3 +184,54 @@ def uniform_weights(code, X):
         if X[a, 3] != X[0, 3]:
             return False
     return True
+
+
+@njit
+def linearisation_error(code, X, L, x0, x1, x2, radius, a, out):
+    """ε (into ``out`` (3,)) of a rational Bézier hexahedron with local control points ``X[:, :3]`` and weights
+    ``X[:, 3]`` > 0: for every ξ with |ξ - ξ_c|∞ <= ``radius`` (at least the element's radius), the linearised
+    parameters ζ = ξ_c + L (x(ξ) - x_c) of its point (``L``: the inverse Jacobian at the centre, (x0, x1, x2) =
+    x_c: the element's linearisation, :func:`~.projection.linear_maps`) satisfy |ζ_i - ξ_i| <= ε_i. Returns the
+    lower bound of W used (ε NaN where it is not positive). ``a``: scratch (n_nodes, 4).
+
+    With y = ξ - ξ_c, x = X̃ / W and Z = L (X̃ - x_c W) (:func:`normalise_coefficients`), ζ - ξ = (Z - y W) / W:
+    the numerator is a polynomial whose coefficient of y^β in component i is Z_i's minus W's of y^(β - e_i)
+    (``MONOMIAL_BELOW``), plus W's coefficients shifted past the type's monomials (``MONOMIAL_ABOVE`` false).
+    Its constant and linear terms vanish up to round-off (Z(0) = 0, DZ(0) = W(0) I) and are kept in the sum,
+    so |ζ_i - ξ_i| <= Σ_β |n_β,i| ρ^|β| / W_min on the box (ρ = ``radius``). W is bounded below by the better of
+    its expansion about the centre (c_0 - Σ_{α≠0} |c_α| ρ^|α|) and its Bernstein coefficients: inside the
+    element W >= min_a w_a, and a point of the box lies within ρ - r (r the element's radius) of the element in
+    every direction, so W >= min_a w_a - (ρ - r) Σ_α |c_α| |α| ρ^(|α|-1) (the mean value theorem with the
+    bound of Σ_j |∂_j W| of :mod:`this module <mortar1d3d.geometry.rational>`).
+    """
+    rational_coefficients(code, X, a)
+    normalise_coefficients(code, a, L, x0, x1, x2, a)
+    out[0] = out[1] = out[2] = 0.0
+    w_centre = w_rest = w_slope = 0.0
+    w_least = np.inf
+    for k in range(solid.n_nodes(code)):
+        w_least = min(w_least, X[k, 3])
+        degree = solid.MONOMIALS[code, k, 0] + solid.MONOMIALS[code, k, 1] + solid.MONOMIALS[code, k, 2]
+        scale = radius ** degree
+        c = a[k, 3]
+        if degree == 0:
+            w_centre += c
+        else:
+            w_rest += abs(c) * scale
+            w_slope += abs(c) * degree * radius ** (degree - 1)
+        for i in range(3):
+            v = a[k, i]
+            below = solid.MONOMIAL_BELOW[code, k, i]
+            if below >= 0:
+                v -= a[below, 3]
+            out[i] += abs(v) * scale
+            if not solid.MONOMIAL_ABOVE[code, k, i]:
+                out[i] += abs(c) * scale * radius
+    w_min = max(w_centre - w_rest, w_least - (radius - solid.RADIUS[code]) * w_slope)
+    if not w_min > 0.0:
+        out[0] = out[1] = out[2] = np.nan
+        return w_min
+    out[0] /= w_min
+    out[1] /= w_min
+    out[2] /= w_min
+    return w_min

@@ -36,6 +36,7 @@ search points, or bisection of the owner along η), for the one fallback loop of
 :func:`mortar1d3d.integration.points.checked_segment_points`.
 """
 import numpy as np
+from numba import types
 
 from .._borrowed import borrowed
 from .._config import MERGE_TOL, PARAMETER_TOL, SEGMENT_OWNER_TOL, TOUCH_TOL, njit
@@ -47,6 +48,7 @@ from ..elements.solid import dispatch as solid
 from .beam import beam_point, beams_affine
 from .intersection import face_coordinates, intersect_face
 from .linalg import norm3, solve3
+from .rational import linearisation_error
 from .projection import (ANY_CANDIDATE, CONVERGED, NOT_CONVERGED, certified_outside, first_containing,
                          in_box, is_affine, jacobian, linear_image, linear_parameters, load_element, locate_outside,
                          locate_point, point_buffers, project_point, search_buffers)
@@ -226,7 +228,8 @@ _BERNSTEIN_GROWTH = 1e-4
 def _linear_error(code, X, s, linear, a, out):
     """ε of element s (local nodes ``X``; ``a``: scratch of :func:`.projection.search_buffers`) into ``out``
     (3,): how far the linearised parameters ζ of a point of the element may lie from its ξ, per component
-    (see :func:`_faces_in_linear_reach`); NaN for a rational type or an element without a linearisation.
+    (see :func:`_faces_in_linear_reach`); NaN for an element without a linearisation (or a rational one whose
+    weight function has no positive lower bound, :func:`_rational_linear_error`).
 
     With y = ξ - ξ_c, a polynomial map is x(ξ) = x_c + J_c y + Σ_q a_q y^α_q over its monomials of degree
     >= 2, so ζ(x) = ξ_c + L (x - x_c) (``linear``: L = J_c⁻¹) of the point x(ξ) differs from ξ by the
@@ -234,8 +237,11 @@ def _linear_error(code, X, s, linear, a, out):
     coefficients (:func:`_bernstein_error`), the others by ε_i = Σ_q |(L a_q)_i| R^|α_q| for |y|∞ <= R
     (the element's radius, grown by ``_REACH_MARGIN``: also for ξ within that much outside the element).
     """
-    if solid.RATIONAL[code] or not linear[s, 4, 0] >= 0.0:
+    if not linear[s, 4, 0] >= 0.0:
         out[0] = out[1] = out[2] = np.nan
+        return
+    if solid.RATIONAL[code]:
+        _rational_linear_error(code, X, s, linear, a, out)
         return
     solid.monomial_coefficients(code, X, a)
     for q in range(solid.N_CURVED[code]):
@@ -292,6 +298,15 @@ def _bernstein_error(code, a, out):
     out[0] += b0
     out[1] += b1
     out[2] += b2
+def _rational_linear_error(code, X, s, linear, a, out):
+    """:func:`_linear_error` of a rational element: :func:`.rational.linearisation_error` on the same region (the
+    element grown by ``_REACH_MARGIN``), compiled when a scene first has a rational element."""
+    _linearisation_error_call(code, X, linear[s, :3], linear[s, 3, 0], linear[s, 3, 1], linear[s, 3, 2],
+                              solid.RADIUS[code] * (1.0 + _REACH_MARGIN), a, out)
+
+
+#: lazily through a symbol: compiled when a scene first has a rational element
+_linearisation_error_call = unlinked(linearisation_error, returns=types.float64)
 
 
 @njit
@@ -336,8 +351,9 @@ def _faces_in_linear_reach(code, h, s, linear, errors, beam_code, Qe, length, s0
     face; farther on its outer side, it cannot reach the element at all. The margin (``_REACH_MARGIN``
     scaled by the sizes in parameter units, the element's by its size ``h``) lies far above the
     tolerances with which crossings are accepted (their ξ within 1e-9 of the element, η within 1e-9 of [-1, 1],
-    the residual within 1e-9 h), so clearing such faces changes no crossing found. Rational types and elements without
-    a linearisation (ε NaN) keep their ``reach`` unchanged.
+    the residual within 1e-9 h), so clearing such faces changes no crossing found. Elements without a bound (ε NaN: no
+    linearisation, or a rational one whose weight function has no positive lower bound) keep their ``reach``
+    unchanged.
     """
     if not errors[s, 0] >= 0.0:
         return True
@@ -406,7 +422,7 @@ def _live_intervals(code, s, h, linear, errors, eta_s, rs, reach, zs, live, need
     hull of four Bézier control points, from ζ and dζ/dη = L r' at the interval's ends; as for the whole
     beam element (:func:`_faces_in_linear_reach`, the same bound and margins), a face whose plane all four
     miss by more than Σ_i |n_i| ε_i has no crossing there, and none has where they lie that far beyond
-    one face's plane. Elements without a bound (rational, no linearisation) and affine ones (whose samples
+    one face's plane. Elements without a bound (ε NaN) and affine ones (whose samples
     cost no Newton) keep every interval of a face in ``reach``.
     """
     S = eta_s.shape[0]

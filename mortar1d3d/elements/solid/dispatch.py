@@ -255,6 +255,27 @@ def _bernstein_monomials():
 #: and their number of rows, 0 for the types without ``bernstein_error`` (tet10: 10 × 6), for the segmentation's
 #: bound on the linearised map (:func:`mortar1d3d.geometry.segmentation._linear_error`)
 N_BERNSTEIN, BERNSTEIN_MONOMIALS = _bernstein_monomials()
+def _monomial_shifts():
+    """Per code: the index of the monomial y^(α_k - e_i) of every monomial k and direction i (-1 if an
+    exponent would be negative or the type has no such monomial), and whether y^(α_k + e_i) is one of the
+    type's monomials."""
+    below = np.full((_N_CODES, MAX_NODES, 3), -1, dtype=np.int64)
+    above = np.zeros((_N_CODES, MAX_NODES, 3), dtype=np.bool_)
+    for c, d in BY_CODE.items():
+        index = {tuple(int(e) for e in alpha): k for k, alpha in enumerate(d.monomials)}
+        for k, alpha in enumerate(d.monomials):
+            for i in range(3):
+                step = np.eye(3, dtype=np.int64)[i]
+                below[c, k, i] = index.get(tuple(int(e) for e in np.asarray(alpha) - step), -1)
+                above[c, k, i] = tuple(int(e) for e in np.asarray(alpha) + step) in index
+    return below, above
+
+
+#: per code: ``MONOMIAL_BELOW[c, k, i]`` the index of the monomial y^(α_k - e_i) (-1: none) and
+#: ``MONOMIAL_ABOVE[c, k, i]`` whether y^(α_k + e_i) is a monomial of the type: how the coefficients of
+#: y_i P(y) fall on the type's monomials (the rational types' linearisation error,
+#: :func:`mortar1d3d.geometry.rational.linearisation_error`)
+MONOMIAL_BELOW, MONOMIAL_ABOVE = _monomial_shifts()
 #: the nonzero entries of every type's ``TO_MONOMIAL`` block (:func:`_sparse_rows`), for
 #: :func:`monomial_coefficients` and, with the weights, :func:`mortar1d3d.geometry.rational.rational_coefficients`
 #: (hex27 and nurbs27: 216 of 729 entries, tet10: 43 of 100)
