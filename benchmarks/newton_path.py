@@ -20,7 +20,8 @@ Printed:
    (``check_tiling``) and the points of the segments (``segment_points``).
 2. **Counts**, from a counting copy of the kernels' decisions (this script's kernels, built from the
    library's own Newton step, inside tests and locators; the library's kernels hold no counters):
-   candidate pairs per beam element, the one-to-one certificates the library's kernels computed
+   candidate pairs per beam element, the box pairs before the hull planes and how many solid elements they
+   hold (a type with hull planes), the one-to-one certificates the library's kernels computed
    (element- and segment-based: a checkout that computes them on first use), element-based
    candidates tested per point (box test passed,
    and how many of those a hull plane rejects before Newton), Newton projections and iterations, points that needed the rare path (restart from the centre,
@@ -546,6 +547,11 @@ def main(argv=None):
 
     pairs = np.diff(ctx.pair_offsets)
     print(f"candidate pairs per beam element: mean {pairs.mean():.2f}, max {pairs.max()}")
+    if solid.HULL_TEST[ctx.codes].any():
+        from mortar1d3d.geometry.search import find_candidate_pairs
+        boxed = find_candidate_pairs(ctx.beam_boxes, ctx.solid_boxes)[1]
+        print(f"box pairs before the hull planes: {len(boxed)}, their solid elements (those that need planes) "
+              f"{len(np.unique(boxed))} of {len(ctx.codes)}")
     if PENDING is not None:
         # the library's own kernels, on contexts of their own: the element-based points, and the segmentation's
         # parts above (ctx); a certificate is computed once, where a decision needs it

@@ -9,12 +9,14 @@ of ``newton_path.py``'s distorted cubes (hex8, hex27, tet10), 1 thread. Prints t
 maps (with the one-to-one certificates of curved elements, in checkouts that compute them there
 rather than on first use), the beam frames (coefficients and boxes), the candidate pairs, and,
 where the checkout has them, the hull planes and the pairs they drop (``solid_hulls``,
-``hull_pairs``), and their sum. The ``search`` stage of ``throughput.py`` is about that sum; this
+``hull_pairs``; the planes of the elements the kernel input asks for: every element, or in a checkout
+whose ``solid_hulls`` takes ``elements`` those of the box pairs), and their sum. The ``search`` stage of ``throughput.py`` is about that sum; this
 says which part moved. To compare two versions run it alternately with ``--package`` naming each
 checkout (as ``throughput.py``); the best of many calls moves little with the machine's load, but
 alternate the runs anyway.
 """
 import argparse
+import inspect
 import sys
 import time
 
@@ -74,8 +76,12 @@ def main(argv=None):
         hull = search.solid_hulls(points, solid.connectivity, solid.element_codes, origin, size)
         Q, beam_origin, beam_boxes, _ = search.beam_frames(beams)
         offsets, pair_solid = search.find_candidate_pairs(beam_boxes, boxes)
+        # a checkout whose kernel input asks for the planes of its box pairs' elements only is timed so
+        hulls_of = {}
+        if "elements" in inspect.signature(search.solid_hulls).parameters:
+            hulls_of["elements"] = pair_solid
         parts["solid_hulls"] = lambda: search.solid_hulls(points, solid.connectivity, solid.element_codes, origin,
-                                                          size)
+                                                          size, **hulls_of)
         parts["hull_pairs"] = lambda: search.hull_pairs(offsets, pair_solid, hull, origin, beams.element_type.code, Q,
                                                         beams.lengths, beam_origin, beam_boxes)
     print(f"package {m13.__file__.rsplit('/', 2)[0]}: scene {args.scene}, fibre_cube({args.n}, {args.fibres}, 20), "

@@ -121,7 +121,7 @@ def test_planes_of_rational_spans_keep_their_points():
     assert rejected > 0.5 * 60 * bm.solid.n_elements, rejected
 
 
-def no_planes(points, conn, codes, solid_origin, solid_h, margin=None):
+def no_planes(points, conn, codes, solid_origin, solid_h, margin=None, elements=None):
     """Planes that bound nothing (normal 0, offset 0): every pair and point goes to Newton, as before them."""
     return np.zeros((conn.shape[0], MAX_FACES, 4))
 
@@ -208,10 +208,33 @@ def test_a_mesh_without_hull_types_gets_the_kernels_zeros_without_it():
     _, h, origin = solid_frames(solid)
     args = (solid.kernel_points, solid.connectivity, solid.element_codes, origin, h)
     kernel = np.full((solid.n_elements, MAX_FACES, 4), np.nan)
-    search._solid_hulls(*args, HULL_MARGIN, kernel, 1)
+    search._solid_hulls(*args, HULL_MARGIN, np.ones(solid.n_elements, dtype=np.bool_), kernel, 1)
     skipped = solid_hulls(*args)
     assert skipped.shape == kernel.shape and not np.isnan(kernel).any()
     assert skipped.tobytes() == kernel.tobytes() == bytes(kernel.nbytes)
     tet = generate.box((0, 0, 0), (1, 1, 1), (1, 1, 1), "tetra")
     hull, _, _ = hulls(tet)
     assert np.count_nonzero(hull[:, :4, :3]) > 0
+
+
+def test_the_kernel_input_has_planes_for_its_candidate_elements_only():
+    """:class:`KernelInput` asks :func:`solid_hulls` for the elements of its box pairs only (no kernel
+    tests another element's hull): their rows are the planes of every element's, bit for bit, and the
+    rows of every other element are 0, 0, 0, 0 (no bound). ``elements`` may repeat an element; the
+    beams here run through part of the cube only, so some elements have no pair."""
+    beams, _ = generate.fibre_cube(4, 3, 4)
+    solid = generate.distort(generate.box((0, 0, 0), (1, 1, 1), (4, 4, 4), "tetra10"), 0.1, seed=1)
+    full, _, _ = hulls(solid)
+    ctx = context.KernelInput(beams, solid)
+    boxes = context.find_candidate_pairs(ctx.beam_boxes, ctx.solid_boxes)[1]
+    used = np.zeros(solid.n_elements, dtype=bool)
+    used[boxes] = True
+    assert 0 < used.sum() < 0.8 * solid.n_elements and len(boxes) > used.sum()
+    assert ctx.hull[used].tobytes() == full[used].tobytes()
+    assert not ctx.hull[~used].any() and full[~used][:, :4].any()
+    # the pairs the planes keep, and the result, are those of the planes of every element
+    offsets, pairs = context.hull_pairs(*context.find_candidate_pairs(ctx.beam_boxes, ctx.solid_boxes), full,
+                                        ctx.solid_origin, ctx.beam_code, ctx.Q, ctx.lengths, ctx.beam_origin,
+                                        ctx.beam_boxes)
+    np.testing.assert_array_equal(ctx.pair_offsets, offsets)
+    np.testing.assert_array_equal(ctx.pair_solid, pairs)

@@ -44,7 +44,8 @@ class KernelInput:
         Half-spaces n·x <= c (unit normal, offset; local frame) containing each solid element with a
         margin, one along each face (:func:`~.search.solid_hulls`): a tighter bound than the box for
         elements oblique to the axes, tested per pair and per point before a Newton projection
-        (zero rows, no bound, for the types whose descriptor sets ``hull_test`` False: hex8).
+        (zero rows, no bound, for the types whose descriptor sets ``hull_test`` False: hex8, and for
+        the elements of no box pair, which no kernel tests).
     linear : (n, 5, 3) float64
         Each element's map linearised at its centre and inverted (exact for affine elements):
         the table of :func:`~mortar1d3d.geometry.projection.linear_maps`, whose certificate entries
@@ -73,8 +74,9 @@ class KernelInput:
     -----
     Built in this order: solid frames (boxes, sizes, origins; :func:`~.search.solid_frames`),
     linear maps (:func:`~.projection.linear_maps`), beam frames (:func:`~.search.beam_frames`),
-    candidate pairs from the boxes (:func:`~.search.find_candidate_pairs`), less those the solid
-    hulls separate (:func:`~.search.solid_hulls`, :func:`~.search.hull_pairs`).
+    candidate pairs from the boxes (:func:`~.search.find_candidate_pairs`), the hulls of the elements
+    of those pairs (:func:`~.search.solid_hulls`), and the pairs less those the hulls separate
+    (:func:`~.search.hull_pairs`).
     """
 
     def __init__(self, beams, solid):
@@ -87,8 +89,10 @@ class KernelInput:
         self.Q, self.beam_origin, self.beam_boxes, _ = beam_frames(beams)
         self.lengths = beams.lengths
         self.beam_code = beams.element_type.code
-        self.hull = solid_hulls(self.points, self.conn, self.codes, self.solid_origin, self.solid_h)
         self.pair_offsets, self.pair_solid = find_candidate_pairs(self.beam_boxes, self.solid_boxes)
+        # planes only for the elements of candidate pairs: no kernel tests another element's hull
+        self.hull = solid_hulls(self.points, self.conn, self.codes, self.solid_origin, self.solid_h,
+                                elements=self.pair_solid)
         if HULL_TEST[self.codes].any():
             self.pair_offsets, self.pair_solid = hull_pairs(self.pair_offsets, self.pair_solid, self.hull,
                                                             self.solid_origin, self.beam_code, self.Q, self.lengths,
