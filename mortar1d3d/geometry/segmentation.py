@@ -298,6 +298,9 @@ def _bernstein_error(code, a, out):
     out[0] += b0
     out[1] += b1
     out[2] += b2
+
+
+@njit
 def _rational_linear_error(code, X, s, linear, a, out):
     """:func:`_linear_error` of a rational element: :func:`.rational.linearisation_error` on the same region (the
     element grown by ``_REACH_MARGIN``), compiled when a scene first has a rational element."""
