@@ -322,7 +322,8 @@ def test_4c_beam3r_mortar_files_pass_with_the_twist_gauge(name):
     twist: read as a twist support, with a note (measured 1.8e-11, 3.7e-11, 2.0e-11, 3.9e-11 and
     3.5e-12 against the tolerance 1e-10). The same code gave 5.003e-11 for line3 on another machine
     (AMD EPYC; OpenBLAS chooses its kernels by CPU): the deviations move with the machine, presumably
-    the round-off of a stiff penalty solve (not measured further), so the bound below leaves 1.5x room over the largest seen, still below the files' 1e-10."""
+    the round-off of a stiff penalty solve (not measured further), so the bound below leaves 1.5x
+    room over the largest seen, still below the files' 1e-10."""
     with pytest.warns(UserWarning, match=r"rotation components \[5\] .* read as twist = true"):
         scene, _ = scene_from_4c(FOLDER / f"{R}{name}.4C.yaml")
     twist = [d for d in scene.dirichlet if d["twist"]]
