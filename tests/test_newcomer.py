@@ -128,6 +128,10 @@ elements = 4
 section = { EA = 1.0, EI = 0.01 }
 [[dirichlet]]
 on = "solid:x_min"
+[[load]]
+type = "point"
+on = "beam:0:end"
+value = [0, 0, -1e-3]
 [analysis]
 kinematics = "linear"
 """)
